@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import ast
 import keyword
+import warnings
 from collections.abc import Callable, Iterable
 
 import sympy as sp
@@ -383,15 +384,19 @@ def parse_expression(
             raise ValueError(f"`functions` may only name allowlisted functions, got {unknown}")
     if not text.strip():
         raise ValueError("expression is empty")
+    # parenthesised so that an expression may span several lines (e.g. in a TOML file)
+    source = "(" + text.strip() + "\n)"
     try:
-        tree = ast.parse(text.strip(), mode="eval")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SyntaxWarning)
+            tree = ast.parse(source, mode="eval")
     except SyntaxError as exc:
         raise ValueError(f"cannot parse expression {text[:60]!r}: {exc.msg}") from None
     except (ValueError, RecursionError, MemoryError, OverflowError) as exc:
         raise ValueError(
             f"cannot parse expression: nested too deeply or too complex ({type(exc).__name__})"
         ) from None
-    builder = _Builder(text.strip(), table, allowed)
+    builder = _Builder(source, table, allowed)
     try:
         result = builder.expr(tree.body)
     except RecursionError:
@@ -400,4 +405,6 @@ def parse_expression(
         raise ValueError(f"expression {text[:60]!r} is not a scalar expression")
     if result.has(sp.zoo, sp.oo, -sp.oo, sp.nan):
         raise ValueError(f"expression {text[:60]!r} evaluates to an infinite or undefined value")
+    if result.has(sp.I):
+        raise ValueError(f"expression {text[:60]!r} holds a complex number")
     return result
