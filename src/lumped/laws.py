@@ -563,17 +563,22 @@ def herschel_bulkley() -> ElementLaw:
 
     ``gamma > 0``, ``tau = mu_s N_f >= 0``, ``n > 0`` (``n < 1`` shear thinning,
     ``n > 1`` shear thickening).  Written branch by branch so that the power is only
-    taken of a positive number::
+    taken of a non-negative number::
 
         R = q - Piecewise((gamma*(F - tau)**n,   F > tau),
                           (-gamma*(-F - tau)**n, F < -tau),
                           (0, True))
 
-    A rate-valued residual with ``dR/dq = 1``.  For ``n != 1`` the step equation is
-    truly nonlinear in ``F`` (Newton needed).  At ``|F| = tau`` the stuck branch is
-    taken, so ``dR/dF = 0`` there even for ``n < 1``, where the slip branch's slope
-    ``gamma n (|F| - tau)^(n-1)`` is unbounded as ``|F| -> tau``.  With ``n = 1`` it
-    is :func:`bingham` exactly: same values and same Jacobian, kinks included.
+    (plus a tie-break for ``tau = 0``, below).  A rate-valued residual with
+    ``dR/dq = 1``.  For ``n != 1`` the step equation is truly nonlinear in ``F``
+    (Newton needed).  At ``|F| = tau > 0`` the stuck branch is taken, so ``dR/dF = 0``
+    there even for ``n < 1``, where the slip branch's slope ``gamma n (|F| - tau)^(n-1)``
+    is unbounded as ``|F| -> tau``.  With ``tau = 0`` and ``n >= 1`` the stuck set is the
+    single point ``F = 0``, where the law is differentiable, so the slip branch is taken
+    there (``dR/dF = -gamma`` for ``n = 1``; the conditions on ``tau`` and ``n`` are
+    resolved when the parameters are bound and vanish from the generated code).  With
+    ``n = 1`` it is :func:`bingham` exactly: same values and same Jacobian, kinks
+    included.
 
     Examples
     --------
@@ -586,7 +591,10 @@ def herschel_bulkley() -> ElementLaw:
     return ElementLaw(
         "herschel_bulkley",
         "dashpot",
-        "q - Piecewise((gamma*(F - tau)**n, F > tau), (-gamma*(-F - tau)**n, F < -tau), (0, True))",
+        "q - Piecewise("
+        "(gamma*(F - tau)**n, F > tau or (F >= tau and tau <= 0 and n >= 1)),"
+        " (-gamma*(-F - tau)**n, F < -tau or (F <= -tau and tau <= 0 and n >= 1)),"
+        " (0, True))",
         ["gamma", "tau", "n"],
         description="Herschel-Bulkley dashpot q = gamma sgn(F) max(|F| - tau, 0)^n",
         domains={"gamma": "positive", "tau": "nonnegative", "n": "positive"},
