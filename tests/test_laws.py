@@ -5,6 +5,8 @@ from __future__ import annotations
 import doctest
 import math
 import pickle
+import runpy
+from pathlib import Path
 
 import pytest
 import sympy as sp
@@ -475,3 +477,12 @@ def test_every_builtin_has_a_docstring_with_an_example(name):
 def test_doctests_pass(module):
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_the_custom_law_example_runs(capsys):
+    path = Path(__file__).resolve().parents[1] / "examples" / "custom_law.py"
+    runpy.run_path(str(path), run_name="__main__")
+    out = capsys.readouterr().out
+    assert "quadratic_drag (dashpot): F - c*q*Abs(q) = 0" in out
+    assert "0.0 -2.0 1.0" in out
+    assert "def kernel(q, F):" in out

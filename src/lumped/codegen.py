@@ -10,8 +10,8 @@ Steps
 -----
 1. The parameters are substituted as float constants.
 2. Every kink is rewritten as an explicit ``Piecewise`` (see *Generalised Jacobian*).
-3. ``dR/dq`` and ``dR/dF`` are taken symbolically; sympy differentiates a
-   ``Piecewise`` branch by branch, keeping the conditions.
+3. ``dR/dq`` and ``dR/dF`` are taken symbolically, every ``Piecewise`` branch by
+   branch with its conditions kept (:func:`diff_branchwise`).
 4. Code is emitted for ``(R, dR/dq, dR/dF)`` together.  Each ``Piecewise`` becomes an
    ``if``/``else`` block that evaluates *only* the active branch (so ``sqrt`` of a
    negative number, ``log(0)`` or a division by zero in an inactive branch is never
@@ -34,14 +34,16 @@ and the derivative always come from the same smooth piece.  The rewrites are::
 
 For ``Max``/``Min`` the argument that depends on ``(q, F)`` is put first, so at a tie
 with a constant it wins: the kink of ``clip(F, -tau, tau) = Min(Max(F, -tau), tau)``
-belongs to its sloped (identity) piece.  For the friction laws this means that *at*
-the threshold the Jacobian is the one of the stuck branch (Bingham: ``dR/dq = 1,
-dR/dF = 0``).  Between two arguments that both depend on ``(q, F)`` sympy's canonical
-argument order decides; ``Abs`` takes the right-hand slope at 0.  The derivative so
-chosen is the gradient of an active smooth piece: an element of the B-subdifferential
-(hence of Clarke's generalised Jacobian) whenever that piece is active on a set with
-non-empty interior next to the kink, which is the case for every built-in law, and in
-all cases a valid Newton derivative for semismooth Newton.
+belongs to its sloped (identity) piece (a clip with constant bounds is emitted as one
+three-way chain ``lo if x < lo else hi if x > hi else x``, same rule).  For the
+friction laws this means that *at* the threshold the Jacobian is the one of the stuck
+branch (Bingham: ``dR/dq = 1, dR/dF = 0``).  Between two arguments that both depend
+on ``(q, F)`` sympy's canonical argument order decides; ``Abs`` takes the right-hand
+slope at 0.  The derivative so chosen is the gradient of an active smooth piece: an
+element of the B-subdifferential (hence of Clarke's generalised Jacobian) whenever that
+piece is active on a set with non-empty interior next to the kink, which is the case
+for every built-in law, and in all cases a valid Newton derivative for semismooth
+Newton.
 
 Failure values
 --------------
@@ -59,7 +61,14 @@ from collections.abc import Callable, Iterator, Mapping
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
-__all__ = ["Kernel", "check_supported", "compile_kernel", "prepare", "rewrite_kinks"]
+__all__ = [
+    "Kernel",
+    "check_supported",
+    "compile_kernel",
+    "diff_branchwise",
+    "prepare",
+    "rewrite_kinks",
+]
 
 #: ``kernel(q, F) -> (R, dR/dq, dR/dF)``.
 Kernel = Callable[[float, float], tuple[float, float, float]]
@@ -143,6 +152,65 @@ def _max(args: list[sp.Expr], ge: Callable[[sp.Expr, sp.Expr], sp.Basic]) -> sp.
     return sp.Piecewise((head, ge(head, rest)), (rest, True), evaluate=False)
 
 
+def _as_clip(e: sp.Basic) -> tuple[sp.Expr, sp.Expr, sp.Expr] | None:
+    """``(x, lo, hi)`` if ``e`` is ``Min(Max(x, lo), hi)`` or ``Max(Min(x, hi), lo)``
+    with numbers ``lo <= hi`` and ``x`` depending on ``(q, F)``, else ``None``."""
+    if not isinstance(e, sp.Min | sp.Max) or len(e.args) != 2:
+        return None
+    inner_type = sp.Max if isinstance(e, sp.Min) else sp.Min
+    inner = [a for a in e.args if isinstance(a, inner_type) and len(a.args) == 2]
+    outer = [a for a in e.args if isinstance(a, sp.Number)]
+    if len(inner) != 1 or len(outer) != 1:
+        return None
+    xs = [a for a in inner[0].args if _depends(a)]
+    bounds = [a for a in inner[0].args if isinstance(a, sp.Number)]
+    if len(xs) != 1 or len(bounds) != 1:
+        return None
+    lo, hi = (bounds[0], outer[0]) if isinstance(e, sp.Min) else (outer[0], bounds[0])
+    if not bool(lo <= hi):
+        return None
+    return xs[0], lo, hi
+
+
+def diff_branchwise(expr: sp.Expr, x: sp.Symbol) -> sp.Expr:
+    """``d expr / dx``, differentiating every ``Piecewise`` branch by branch.
+
+    Unlike :func:`sympy.diff`, the derivative of a ``Piecewise`` keeps exactly the
+    conditions of the original (sympy merges neighbouring branches whose derivatives
+    coincide), so a value and its derivatives can share one ``if`` chain.
+    """
+    pieces: list[sp.Piecewise] = []
+
+    def visit(e: sp.Basic) -> None:
+        if isinstance(e, sp.Piecewise):
+            if e not in pieces:
+                pieces.append(e)
+            return
+        for a in e.args:
+            visit(a)
+
+    visit(expr)
+    if not pieces:
+        return sp.diff(expr, x)
+    dummies = [sp.Dummy(f"pw{i}") for i in range(len(pieces))]
+    opaque = expr.xreplace(dict(zip(pieces, dummies, strict=True)))
+    back = dict(zip(dummies, pieces, strict=True))
+    total = sp.diff(opaque, x).xreplace(back)
+    for pw, d in zip(pieces, dummies, strict=True):
+        outer = sp.diff(opaque, d)
+        if outer == 0:
+            continue
+        branches = [diff_branchwise(e, x) for e, _ in pw.args]
+        if all(b == branches[0] for b in branches):
+            inner = branches[0]  # the same on every branch (e.g. 0): no chain needed
+        else:
+            inner = sp.Piecewise(
+                *[(b, c) for b, (_, c) in zip(branches, pw.args, strict=True)], evaluate=False
+            )
+        total += outer.xreplace(back) * inner
+    return total
+
+
 def rewrite_kinks(expr: sp.Basic) -> sp.Basic:
     """Rewrite ``Max, Min, Abs, sign, Heaviside`` as explicit ``Piecewise`` (bottom-up).
 
@@ -154,7 +222,12 @@ def rewrite_kinks(expr: sp.Basic) -> sp.Basic:
         hit = cache.get(e)
         if hit is not None:
             return hit
-        if not e.args:
+        clip = _as_clip(e)
+        if clip is not None:
+            x, lo, hi = clip
+            x = walk(x)
+            out = sp.Piecewise((lo, sp.Lt(x, lo)), (hi, sp.Gt(x, hi)), (x, True), evaluate=False)
+        elif not e.args:
             out = e
         else:
             args = tuple(walk(a) for a in e.args)
@@ -412,7 +485,7 @@ def prepare(
     if expr.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
         raise ValueError(f"residual is undefined with these parameters: {expr}")
     expr = rewrite_kinks(expr)
-    return expr, sp.diff(expr, qq), sp.diff(expr, FF)
+    return expr, diff_branchwise(expr, qq), diff_branchwise(expr, FF)
 
 
 def compile_kernel(
