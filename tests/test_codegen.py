@@ -12,8 +12,9 @@ import sympy as sp
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from lumped.codegen import check_supported, compile_kernel, rewrite_kinks
+from lumped.codegen import check_supported, compile_function, compile_kernel, rewrite_kinks
 from lumped.expressions import parse_expression
+from lumped.forcing import paper_F2
 
 q, F, a, b = sp.symbols("q F a b")
 
@@ -200,3 +201,43 @@ def test_integral_parameter_values_are_exact_integers_in_the_code():
     assert "pow" not in kernel_of("q - F**n", n=1.0).__source__
     assert "F**2" in kernel_of("q - F**n", n=2.0).__source__
     assert "pow" in kernel_of("q - F**n", n=0.5).__source__
+
+
+# ---------------------------------------------------------------------------------------
+# Structure of the generated code, and scalar functions (forcing terms)
+# ---------------------------------------------------------------------------------------
+def test_a_value_and_its_derivatives_share_one_if_chain():
+    # Bingham: one three-way clip chain, not one per output
+    kernel = kernel_of("q - gamma*(F - clip(F, -tau, tau))", gamma=2.0, tau=1.0)
+    assert kernel.__source__.count("if ") == 2
+    assert kernel(0.0, 0.5) == (0.0, 1.0, 0.0)
+    assert kernel(1.0, 1.5) == (0.0, 1.0, -2.0)
+
+
+def test_piecewise_without_fallback_is_nan_where_no_condition_holds():
+    kernel = kernel_of("Piecewise((q - F, F > 0))")
+    assert kernel(1.0, 1.0) == (0.0, 1.0, -1.0)
+    assert all(math.isnan(v) for v in kernel(1.0, -1.0))
+
+
+@given(st.floats(-1.0, 3.0))
+def test_compiled_forcing_expression_matches_the_paper_forcing(time):
+    t = sp.Symbol("t")
+    A = sp.Symbol("A")
+    expr = parse_expression("Piecewise((A*sin(5*pi*t), t <= 1), (0, True))", ["t", "A"])
+    force = compile_function(expr, [t], {A: 10.0})
+    expected = paper_F2(time) if time >= 0 else 10.0 * math.sin(5 * math.pi * time)
+    assert force(time) == pytest.approx(expected, rel=1e-12, abs=1e-14)
+    assert type(force(time)) is float
+
+
+def test_compile_function_errors_and_nan():
+    t = sp.Symbol("t")
+    with pytest.raises(ValueError, match="w"):
+        compile_function(t * sp.Symbol("w"), [t])
+    with pytest.raises(TypeError):
+        compile_function(t, [t, t])
+    root = compile_function(sp.sqrt(t), [t])
+    assert root(4.0) == 2.0 and math.isnan(root(-1.0))
+    two = compile_function(sp.Max(q, F), [q, F])
+    assert two(1.0, 2.0) == 2.0 and "def function(x0, x1)" in two.__source__

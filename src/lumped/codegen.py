@@ -56,7 +56,7 @@ A ``Piecewise`` without a ``True`` fallback is ``nan`` where no condition holds.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
@@ -64,6 +64,7 @@ from sympy.printing.pycode import PythonCodePrinter
 __all__ = [
     "Kernel",
     "check_supported",
+    "compile_function",
     "compile_kernel",
     "diff_branchwise",
     "prepare",
@@ -201,7 +202,7 @@ def diff_branchwise(expr: sp.Expr, x: sp.Symbol) -> sp.Expr:
         if outer == 0:
             continue
         branches = [diff_branchwise(e, x) for e, _ in pw.args]
-        if all(b == branches[0] for b in branches):
+        if pw.args[-1].cond is sp.true and all(b == branches[0] for b in branches):
             inner = branches[0]  # the same on every branch (e.g. 0): no chain needed
         else:
             inner = sp.Piecewise(
@@ -457,6 +458,14 @@ _CACHE: dict[tuple, Kernel] = {}
 _NAMESPACE_BUILTINS = {"ArithmeticError": ArithmeticError, "ValueError": ValueError}
 
 
+def _constant(sym: sp.Symbol, value: float) -> sp.Number:
+    x = float(value)
+    if not math.isfinite(x):
+        raise ValueError(f"parameter `{sym}` must be finite, got {x!r}")
+    # integral values become sympy Integers, so that e.g. n = 1 gives x**1 = x exactly
+    return sp.Integer(int(x)) if x.is_integer() and abs(x) < 2**53 else sp.Float(x)
+
+
 def prepare(
     residual: sp.Expr, q: sp.Symbol, F: sp.Symbol, params: Mapping[sp.Symbol, float]
 ) -> tuple[sp.Expr, sp.Expr, sp.Expr]:
@@ -470,13 +479,7 @@ def prepare(
     if not isinstance(q, sp.Symbol) or not isinstance(F, sp.Symbol) or q == F:
         raise TypeError("`q` and `F` must be two distinct sympy symbols")
     check_supported(residual)
-    values: dict[sp.Symbol, sp.Float] = {}
-    for sym, value in params.items():
-        x = float(value)
-        if not math.isfinite(x):
-            raise ValueError(f"parameter `{sym}` must be finite, got {x!r}")
-        # integral values become sympy Integers, so that e.g. n = 1 gives x**1 = x exactly
-        values[sym] = sp.Integer(int(x)) if x.is_integer() and abs(x) < 2**53 else sp.Float(x)
+    values = {sym: _constant(sym, value) for sym, value in params.items()}
     qq, FF = sp.Symbol("q"), sp.Symbol("F")
     expr = residual.xreplace(values).xreplace({q: qq, F: FF})
     unbound = sorted(str(s) for s in expr.free_symbols - {qq, FF})
@@ -529,18 +532,85 @@ def compile_kernel(
     if hit is not None:
         return hit
     exprs = prepare(residual, q, F, params)
+    kernel = _build("kernel", ["q", "F"], list(exprs))
+    kernel.expressions = exprs  # type: ignore[attr-defined]
+    _CACHE[key] = kernel
+    return kernel
+
+
+def _build(name: str, args: list[str], exprs: list[sp.Expr]) -> Callable:
+    """Generate, compile and return ``def name(*args): return exprs`` (see module doc)."""
     emitter = _Emitter()
-    emitter.emit(0, "def kernel(q, F):")
+    emitter.emit(0, f"def {name}({', '.join(args)}):")
     emitter.emit(1, "try:")
-    codes = emitter.region(list(exprs), 2, _Scope({}, {}))
-    emitter.emit(2, f"return ({codes[0]}, {codes[1]}, {codes[2]})")
-    emitter.emit(1, "except (ArithmeticError, ValueError):")
-    emitter.emit(2, "return (math.nan, math.nan, math.nan)")
+    codes = emitter.region(exprs, 2, _Scope({}, {}))
+    nans = ", ".join(["math.nan"] * len(codes))
+    if len(codes) == 1:
+        emitter.emit(2, f"return {codes[0]}")
+        emitter.emit(1, "except (ArithmeticError, ValueError):")
+        emitter.emit(2, "return math.nan")
+    else:
+        emitter.emit(2, f"return ({', '.join(codes)})")
+        emitter.emit(1, "except (ArithmeticError, ValueError):")
+        emitter.emit(2, f"return ({nans})")
     source = "\n".join(emitter.lines) + "\n"
     namespace: dict[str, object] = {"math": math, "__builtins__": dict(_NAMESPACE_BUILTINS)}
-    exec(compile(source, "<lumped kernel>", "exec"), namespace)  # noqa: S102 (our own source)
-    kernel = namespace["kernel"]
-    kernel.__source__ = source  # type: ignore[attr-defined]
-    kernel.expressions = exprs  # type: ignore[attr-defined]
-    _CACHE[key] = kernel  # type: ignore[assignment]
-    return kernel  # type: ignore[return-value]
+    exec(compile(source, f"<lumped {name}>", "exec"), namespace)  # noqa: S102 (our own source)
+    function = namespace[name]
+    function.__source__ = source  # type: ignore[attr-defined]
+    return function  # type: ignore[return-value]
+
+
+_FUNCTION_CACHE: dict[tuple, Callable] = {}
+
+
+def compile_function(
+    expr: sp.Expr,
+    args: Sequence[sp.Symbol],
+    params: Mapping[sp.Symbol, float] | None = None,
+) -> Callable[..., float]:
+    """Compile a scalar sympy expression into a plain Python function of ``args``.
+
+    For forcing terms and other scalar functions (e.g. ``F(t)`` parsed from a scene
+    file).  Same rules as :func:`compile_kernel`: parameters substituted as floats,
+    kinks as ``if`` chains evaluating only the active branch, ``math`` only, ``nan``
+    where undefined, source in ``function.__source__``, compiled once per input.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from lumped.expressions import parse_expression
+    >>> t, A = sp.symbols("t A")
+    >>> expr = parse_expression("Piecewise((A*sin(5*pi*t), t <= 1), (0, True))", ["t", "A"])
+    >>> force = compile_function(expr, [t], {A: 0.5})
+    >>> force(0.1), force(2.0)
+    (0.5, 0.0)
+    """
+    params = dict(params or {})
+    args = list(args)
+    if not all(isinstance(a, sp.Symbol) for a in args) or len(set(args)) != len(args):
+        raise TypeError("`args` must be distinct sympy symbols")
+    key = (
+        expr,
+        tuple(args),
+        tuple(sorted(((str(s), s, repr(float(v))) for s, v in params.items()), key=str)),
+    )
+    hit = _FUNCTION_CACHE.get(key)
+    if hit is not None:
+        return hit
+    expr = sp.sympify(expr) if not isinstance(expr, sp.Basic) else expr
+    if not isinstance(expr, sp.Expr):
+        raise TypeError(f"`expr` must be a sympy expression, got {type(expr).__name__}")
+    check_supported(expr)
+    values = {sym: _constant(sym, v) for sym, v in params.items()}
+    names = [f"x{i}" for i in range(len(args))]
+    plain = {a: sp.Symbol(n) for a, n in zip(args, names, strict=True)}
+    expr = expr.xreplace(values).xreplace(plain)
+    unbound = sorted(str(s) for s in expr.free_symbols - set(plain.values()))
+    if unbound:
+        raise ValueError(f"expression has symbols without a value: {', '.join(unbound)}")
+    if expr.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
+        raise ValueError(f"expression is undefined with these parameters: {expr}")
+    function = _build("function", names, [rewrite_kinks(expr)])
+    _FUNCTION_CACHE[key] = function
+    return function
