@@ -8,6 +8,7 @@ import pickle
 import runpy
 from pathlib import Path
 
+import numpy as np
 import pytest
 import sympy as sp
 from hypothesis import assume, given
@@ -16,6 +17,7 @@ from hypothesis import strategies as st
 import lumped.codegen
 import lumped.expressions
 import lumped.laws
+from lumped.bingham import bdf1_step
 from lumped.laws import (
     BUILTIN_LAWS,
     BoundLaw,
@@ -486,3 +488,29 @@ def test_the_custom_law_example_runs(capsys):
     assert "quadratic_drag (dashpot): F - c*q*Abs(q) = 0" in out
     assert "0.0 -2.0 1.0" in out
     assert "def kernel(q, F):" in out
+
+
+@given(
+    m=st.sampled_from([1.0, 2.5]), k=st.sampled_from([10.0, 100.0]),
+    h=st.sampled_from([1e-3, 1e-2]), tau=st.sampled_from([0.5, 1.0]),
+    x_n=st.floats(-0.1, 0.1), v_n=st.floats(-2.0, 2.0), force=st.floats(-20.0, 20.0),
+    start=st.lists(st.floats(-5.0, 5.0), min_size=4, max_size=4),
+)
+def test_coulomb_with_r_from_the_predictor_solves_a_bdf1_step_in_two_newton_iterations(
+    m, k, h, tau, x_n, v_n, force, start
+):
+    # The docstring's claim: with r = m/h + h k, semismooth Newton on one BDF1 step of
+    # mass + linear spring + Coulomb pad converges in at most two iterations, from any
+    # start, to the closed-form step with 1/gamma = 0.
+    kernel = get_law("coulomb").bind(tau=tau, r=m / h + h * k).kernel
+    z = np.array(start)  # x, v, F_s, F_d
+    for _ in range(2):
+        x, v, F_s, F_d = z
+        R, dq, dF = kernel(v, F_d)
+        G = np.array([m * (v - v_n) / h - force + F_s + F_d, x - x_n - h * v, F_s - k * x, R])
+        J = np.array([[0, m / h, 1, 1], [1, -h, 0, 0], [-k, 0, 1, 0], [0, dq, 0, dF]])
+        z = z - np.linalg.solve(J, G)
+    x_c, v_c, F_c, _ = bdf1_step(m, k, 0.0, tau, h, x_n, v_n, force)
+    assert z[1] == pytest.approx(v_c, abs=1e-9 * (1 + abs(force)))
+    assert z[3] == pytest.approx(F_c, abs=1e-9 * (1 + abs(force)))
+    assert z[0] == pytest.approx(x_c, abs=1e-9)

@@ -539,9 +539,12 @@ def coulomb() -> ElementLaw:
     complementarity problem) has bounded derivatives: ``(dR/dq, dR/dF) = (-r, 0)``
     stuck and ``(0, 1)`` slipping.  ``r`` only decides which branch a Newton iterate
     tries first; a good value is the stiffness the element sees during a step, e.g.
-    ``r = m / h + h k`` for one mass on a spring (``h`` the effective step), for which
-    ``F + r q`` is exactly the paper's predictor ``F~`` and Newton converges in one
-    iteration.  At ``|F + r q| = tau`` the stuck branch's Jacobian is returned.
+    ``r = m / h + h k`` for one mass on a spring (``h`` the effective step): wherever
+    the step's linear equations (momentum, spring) hold, ``F + r q`` is then exactly
+    the paper's predictor ``F~`` (Algorithm 1), so after one Newton step (which makes
+    the linear equations hold) the right branch is known, and semismooth Newton
+    converges in at most two iterations.  At ``|F + r q| = tau`` the stuck branch's
+    Jacobian is returned.
 
     Examples
     --------
