@@ -492,7 +492,12 @@ def prepare(
 
 
 def compile_kernel(
-    residual: sp.Expr, q: sp.Symbol, F: sp.Symbol, params: Mapping[sp.Symbol, float]
+    residual: sp.Expr,
+    q: sp.Symbol,
+    F: sp.Symbol,
+    params: Mapping[sp.Symbol, float],
+    *,
+    guard: bool = True,
 ) -> Kernel:
     """Compile ``residual`` into ``kernel(q, F) -> (R, dR/dq, dR/dF)`` on Python floats.
 
@@ -505,6 +510,11 @@ def compile_kernel(
     params
         A value for every other free symbol of ``residual``; substituted as float
         constants into the generated source.
+    guard
+        Wrap the body in ``try: ... except (ArithmeticError, ValueError): return nans``
+        (the default).  ``guard=False`` emits the bare body, which raises Python's
+        exceptions instead; that is the form to hand to a JIT such as numba, whose
+        ``error_model="numpy"`` turns domain errors into ``inf``/``nan`` by itself.
 
     Returns
     -------
@@ -527,32 +537,33 @@ def compile_kernel(
         q,
         F,
         tuple(sorted(((str(s), s, repr(float(v))) for s, v in params.items()), key=str)),
+        bool(guard),
     )
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
     exprs = prepare(residual, q, F, params)
-    kernel = _build("kernel", ["q", "F"], list(exprs))
+    kernel = _build("kernel", ["q", "F"], list(exprs), guard=guard)
     kernel.expressions = exprs  # type: ignore[attr-defined]
     _CACHE[key] = kernel
     return kernel
 
 
-def _build(name: str, args: list[str], exprs: list[sp.Expr]) -> Callable:
+def _build(name: str, args: list[str], exprs: list[sp.Expr], *, guard: bool = True) -> Callable:
     """Generate, compile and return ``def name(*args): return exprs`` (see module doc)."""
     emitter = _Emitter()
     emitter.emit(0, f"def {name}({', '.join(args)}):")
-    emitter.emit(1, "try:")
-    codes = emitter.region(exprs, 2, _Scope({}, {}))
-    nans = ", ".join(["math.nan"] * len(codes))
-    if len(codes) == 1:
-        emitter.emit(2, f"return {codes[0]}")
+    depth = 1
+    if guard:
+        emitter.emit(1, "try:")
+        depth = 2
+    codes = emitter.region(exprs, depth, _Scope({}, {}))
+    result = codes[0] if len(codes) == 1 else f"({', '.join(codes)})"
+    nans = "math.nan" if len(codes) == 1 else f"({', '.join(['math.nan'] * len(codes))})"
+    emitter.emit(depth, f"return {result}")
+    if guard:
         emitter.emit(1, "except (ArithmeticError, ValueError):")
-        emitter.emit(2, "return math.nan")
-    else:
-        emitter.emit(2, f"return ({', '.join(codes)})")
-        emitter.emit(1, "except (ArithmeticError, ValueError):")
-        emitter.emit(2, f"return ({nans})")
+        emitter.emit(2, f"return {nans}")
     source = "\n".join(emitter.lines) + "\n"
     namespace: dict[str, object] = {"math": math, "__builtins__": dict(_NAMESPACE_BUILTINS)}
     exec(compile(source, f"<lumped {name}>", "exec"), namespace)  # noqa: S102 (our own source)
