@@ -426,6 +426,9 @@ def test_bound_law_is_immutable_and_copies_its_parameters():
     assert bound == get_law("linear_spring").bind(k=100)
     assert "k=100.0" in repr(bound) and "linear_spring" in str(bound)
     assert bound.expression() == F_ - sp.Float(100.0) * q_
+    bound.kernel(1.0, 1.0)
+    copy = pickle.loads(pickle.dumps(bound))
+    assert copy == bound and copy.kernel(0.5, 1.0) == bound.kernel(0.5, 1.0)
     assert isinstance(bound, BoundLaw)
 
 
