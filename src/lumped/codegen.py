@@ -8,7 +8,10 @@ function as ``kernel.__source__``.
 
 Steps
 -----
-1. The parameters are substituted as float constants.
+1. The parameters are substituted as float constants, with sympy's automatic
+   distribution of numbers over sums switched off, so ``gamma*(F - p)`` is evaluated
+   as written and not as ``gamma*F - gamma*p`` (which loses ``gamma * eps * |F|`` to
+   cancellation when ``gamma`` is large).
 2. Every kink is rewritten as an explicit ``Piecewise`` (see *Generalised Jacobian*).
 3. ``dR/dq`` and ``dR/dF`` are taken symbolically, every ``Piecewise`` branch by
    branch with its conditions kept (:func:`diff_branchwise`).
@@ -59,6 +62,7 @@ import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 
 import sympy as sp
+from sympy.core.parameters import distribute
 from sympy.printing.pycode import PythonCodePrinter
 
 __all__ = [
@@ -481,14 +485,16 @@ def prepare(
     check_supported(residual)
     values = {sym: _constant(sym, value) for sym, value in params.items()}
     qq, FF = sp.Symbol("q"), sp.Symbol("F")
-    expr = residual.xreplace(values).xreplace({q: qq, F: FF})
+    with distribute(False):
+        expr = residual.xreplace(values).xreplace({q: qq, F: FF})
     unbound = sorted(str(s) for s in expr.free_symbols - {qq, FF})
     if unbound:
         raise ValueError(f"residual has symbols without a value: {', '.join(unbound)}")
     if expr.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
         raise ValueError(f"residual is undefined with these parameters: {expr}")
-    expr = rewrite_kinks(expr)
-    return expr, diff_branchwise(expr, qq), diff_branchwise(expr, FF)
+    with distribute(False):
+        expr = rewrite_kinks(expr)
+        return expr, diff_branchwise(expr, qq), diff_branchwise(expr, FF)
 
 
 def compile_kernel(
@@ -542,8 +548,9 @@ def compile_kernel(
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
-    exprs = prepare(residual, q, F, params)
-    kernel = _build("kernel", ["q", "F"], list(exprs), guard=guard)
+    with distribute(False):  # keep gamma*(F - p) as written: no gamma*F - gamma*p
+        exprs = prepare(residual, q, F, params)
+        kernel = _build("kernel", ["q", "F"], list(exprs), guard=guard)
     kernel.expressions = exprs  # type: ignore[attr-defined]
     _CACHE[key] = kernel
     return kernel
@@ -616,12 +623,14 @@ def compile_function(
     values = {sym: _constant(sym, v) for sym, v in params.items()}
     names = [f"x{i}" for i in range(len(args))]
     plain = {a: sp.Symbol(n) for a, n in zip(args, names, strict=True)}
-    expr = expr.xreplace(values).xreplace(plain)
+    with distribute(False):
+        expr = expr.xreplace(values).xreplace(plain)
     unbound = sorted(str(s) for s in expr.free_symbols - set(plain.values()))
     if unbound:
         raise ValueError(f"expression has symbols without a value: {', '.join(unbound)}")
     if expr.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
         raise ValueError(f"expression is undefined with these parameters: {expr}")
-    function = _build("function", names, [rewrite_kinks(expr)])
+    with distribute(False):
+        function = _build("function", names, [rewrite_kinks(expr)])
     _FUNCTION_CACHE[key] = function
     return function
