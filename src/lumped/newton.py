@@ -9,17 +9,28 @@ terms that make up each row, used by the residual test)::
 
 Iteration ``k`` solves ``J_k du = -G_k`` by dense LU with partial pivoting (plain Python
 floats up to :data:`DENSE_PYTHON_MAX` unknowns, numpy above), then damps the step by
-backtracking on the max-norm of the residual: ``u_{k+1} = u_k + lam du`` with ``lam = 1,
+backtracking (after ``free_steps`` full steps, see :class:`NewtonOptions`):
+``u_{k+1} = u_k + lam du`` with ``lam = 1,
 1/2, 1/4, ...`` until ``phi(u_{k+1}) <= (1 - 1e-4 lam) phi(u_k)``, where the merit
-``phi(u) = max_i |G_i(u)| / (S_i(u) + atol / rtol)`` is the largest *relative* residual:
-rows in different units (forces, velocities) weigh alike.
+``phi(u) = max_i |G_i(u)| / (S_i(u_k) + atol / rtol)`` is the largest residual relative
+to the row scales at the current iterate: rows in different units (forces, velocities)
+weigh alike, and the weights stay fixed within one line search.
 
 Convergence needs **both** tests:
 
 * residual: ``|G_i(u_{k+1})| <= rtol * S_i + atol`` for every row ``i``;
-* update: the next correction ``delta = -J_k^{-1} G(u_{k+1})`` (a simplified-Newton step
-  that reuses the LU factors of ``J_k``: a back-substitution, no new factorisation) obeys
-  ``|delta_j| <= rtol * |u_j| + atol`` for every unknown ``j``.
+* update: the next Newton correction ``delta = -J(u_{k+1})^{-1} G(u_{k+1})`` obeys
+  ``|delta_j| <= rtol * |u_j| + atol`` for every unknown ``j``. When ``J(u_{k+1})`` equals
+  ``J_k`` (the same pieces of piecewise laws), the LU factors of ``J_k`` are reused: a
+  back-substitution, no new factorisation. A stale Jacobian from another piece is never
+  used for this test (it could call a wrong piece's residual small). When the residual
+  passes but the update does not, the test is retried once with the Jacobian of the
+  piece the Newton step points into (evaluated a hair along the step): at a kink the
+  solution may be exact up to rounding while the piece on the other side proposes a
+  long step.
+
+On success the last (small) correction is applied too: it costs nothing more and makes
+the result exact up to rounding on piecewise-linear pieces.
 
 On a piecewise-linear system whose active pieces are guessed right (a time step started
 from the previous step's solution), the first Newton step is exact, so one iteration
@@ -74,12 +85,18 @@ class NewtonOptions:
         Newton iterations (factorisations) allowed per solve.
     max_backtracks : int
         Halvings of the step allowed in the line search of one iteration.
+    free_steps : int
+        The first ``free_steps`` iterations take the full Newton step whenever it is
+        finite, even if the residual grows (a watchdog: on a piecewise-linear law the
+        full step from a wrong piece lands on the right one, where the next step is
+        exact, while a line search would creep along the wrong piece).
     """
 
     rtol: float = 1e-10
     atol: float = 1e-12
     max_iters: int = 25
     max_backtracks: int = 12
+    free_steps: int = 2
 
     def __post_init__(self) -> None:
         from ._validate import as_int_at_least, as_positive
@@ -88,6 +105,7 @@ class NewtonOptions:
         as_positive("atol", self.atol)
         as_int_at_least("max_iters", self.max_iters, 1)
         as_int_at_least("max_backtracks", self.max_backtracks, 0)
+        as_int_at_least("free_steps", self.free_steps, 0)
 
 
 @dataclass
@@ -254,9 +272,19 @@ def newton_solve(
         return result(NewtonCode.NON_FINITE)
     floor = atol / rtol
     norm = _merit(G, S, floor)
+    solve_prev = None
+    J_prev: list[list[float]] | None = None
     while True:
         if not all(finite(row) for row in J):
             return result(NewtonCode.NON_FINITE)
+        res_ok = _residual_ok(G, S, rtol, atol)
+        if res_ok and solve_prev is not None and J == J_prev:
+            # same Jacobian as the last factorisation (same pieces of piecewise laws): the
+            # next correction costs a back-substitution only
+            delta = solve_prev(G)
+            if finite(delta) and _update_ok(delta, u, rtol, atol):
+                u = [ui - di for ui, di in zip(u, delta, strict=True)]
+                return result(NewtonCode.SUCCESS)
         n_jac += 1
         solve = _factor(J)
         n_fact += 1
@@ -265,8 +293,26 @@ def newton_solve(
         du = solve(G)  # J du = G; the step is -du
         if not finite(du):
             return result(NewtonCode.NON_FINITE)
-        if iters == 0 and _converged(G, S, du, u, rtol, atol):
-            return result(NewtonCode.SUCCESS)  # u0 already solves the system
+        if res_ok:
+            if _update_ok(du, u, rtol, atol):
+                u = [ui - di for ui, di in zip(u, du, strict=True)]
+                return result(NewtonCode.SUCCESS)
+            # At a kink the residual can be zero up to rounding while the Jacobian of the
+            # piece on one side proposes a long step (no floating-point root exists on
+            # either piece). Retry the update test with the Jacobian of the piece the
+            # step points into: a directional (B-)derivative, evaluated a hair along -du.
+            probe = [ui - 1e-8 * di for ui, di in zip(u, du, strict=True)]
+            _, J_dir, _ = evaluate(probe)
+            n_res += 1
+            if J_dir != J and all(finite(row) for row in J_dir):
+                n_jac += 1
+                solve_dir = _factor(J_dir)
+                n_fact += 1
+                if solve_dir is not None:
+                    d2 = solve_dir(G)
+                    if finite(d2) and _update_ok(d2, u, rtol, atol):
+                        u = [ui - di for ui, di in zip(u, d2, strict=True)]
+                        return result(NewtonCode.SUCCESS)
         if iters >= options.max_iters:
             return result(NewtonCode.MAX_ITERS)
         lam = 1.0
@@ -274,9 +320,21 @@ def newton_solve(
             u_new = [ui - lam * di for ui, di in zip(u, du, strict=True)]
             G_new, J_new, S_new = evaluate(u_new)
             n_res += 1
+            if (lam == 1.0 and J_new != J and finite(G_new)
+                    and not _residual_ok(G_new, S_new, rtol, atol)):
+                # The step left the piece it was computed on and missed. If that piece's
+                # root lies on its own boundary (a kink; in floating point the root can
+                # sit within rounding of it), a hair short of the full step stays on the
+                # piece and solves the system: try it.
+                u_alt = [ui - (1.0 - 1e-12) * di for ui, di in zip(u, du, strict=True)]
+                G_alt, J_alt, S_alt = evaluate(u_alt)
+                n_res += 1
+                if finite(G_alt) and _residual_ok(G_alt, S_alt, rtol, atol):
+                    u_new, G_new, J_new, S_new = u_alt, G_alt, J_alt, S_alt
             if finite(G_new):
-                norm_new = _merit(G_new, S_new, floor)
-                if norm_new <= (1.0 - 1e-4 * lam) * norm or _residual_ok(G_new, S_new, rtol, atol):
+                norm_new = _merit(G_new, S, floor)  # weights of the current iterate
+                if (iters < options.free_steps or norm_new <= (1.0 - 1e-4 * lam) * norm
+                        or _residual_ok(G_new, S_new, rtol, atol)):
                     break
             lam *= 0.5
         else:
@@ -285,12 +343,10 @@ def newton_solve(
             u, G, J, S = u_new, G_new, J_new, S_new
             iters += 1
             return result(NewtonCode.DIVERGED)
-        u, G, J, S, norm = u_new, G_new, J_new, S_new, norm_new
+        solve_prev, J_prev = solve, J
+        u, G, J, S = u_new, G_new, J_new, S_new
+        norm = _merit(G, S, floor)
         iters += 1
-        if _residual_ok(G, S, rtol, atol):
-            delta = solve(G)  # simplified-Newton correction with the factors of J_k
-            if finite(delta) and _update_ok(delta, u, rtol, atol):
-                return result(NewtonCode.SUCCESS)
 
 
 def _merit(G: Sequence[float], S: Sequence[float], floor: float) -> float:
