@@ -356,3 +356,37 @@ def test_failed_newton_raises_or_returns_partial():
     sol = simulate(sc, method="bdf1", dt=1e-2, t_end=2.0, throw=False)
     assert sol.status is Status.NON_FINITE
     assert 1 < len(sol.t) < 201 and np.isfinite(sol.data).all()
+
+
+# ---------------------------------------------------------------------------------------
+# the built-in S-shaped law under a slowly rising load
+
+
+def builtin_s_scene(ramp, t_start=-3.0):
+    """Start on the branch ``t < -1`` of the built-in curve and raise the load: the
+    branch ends at the force maximum ``F_max = (2 q0, F0)``."""
+    from lumped.laws import s_shaped_point
+
+    q_start, F_start = s_shaped_point(t_start)
+    return Scene([Mass("mass", 0.01, x0=q_start)],
+                 [Element("s", law("s_shaped", q0=1.0, F0=1.0), "ground", "mass"),
+                  Element("damper", law("newtonian", c=0.05), "ground", "mass")],
+                 {"mass": (lambda t: F_start + ramp * t)})
+
+
+@pytest.mark.parametrize("formula", ["bdf1", "bdf2"])
+@pytest.mark.parametrize("dt", [1e-3, 2e-2])
+def test_builtin_s_shaped_follows_or_stops_never_jumps(formula, dt):
+    from lumped.laws import s_shaped_turning_points
+
+    F_max = s_shaped_turning_points()["F_max"][1]
+    ramp = 2.0  # the load passes F_max = 1 at t = 5
+    before = simulate(builtin_s_scene(ramp), method=formula, dt=dt, t_end=4.0)
+    F = before.column("F_s")
+    assert np.abs(np.diff(F)).max() < 50 * ramp * dt  # continuous along its branch
+    with pytest.raises(SolverError, match=r"t = \d"):
+        simulate(builtin_s_scene(ramp), method=formula, dt=dt, t_end=8.0)
+    sol = simulate(builtin_s_scene(ramp), method=formula, dt=dt, t_end=8.0, throw=False)
+    F = sol.column("F_s")
+    assert not sol.ok and (F <= F_max + 1e-6).all()  # never on the far branch
+    assert np.abs(np.diff(F)).max() < 50 * ramp * dt

@@ -149,25 +149,21 @@ def as_forcing(spec: object, *, where: str = "forcing") -> Forcing:
         value = as_finite(where, spec)
         return _Constant(value)
     if isinstance(spec, str):
-        import sympy
-
         from .expressions import parse_expression
 
-        t = sympy.Symbol("t", real=True)
-        spec = parse_expression(spec, {"t": t})
-    try:
-        import sympy
-    except ImportError:  # pragma: no cover - sympy is a dependency
-        sympy = None
-    if sympy is not None and isinstance(spec, sympy.Basic):
-        free = {s.name for s in spec.free_symbols}
+        spec = parse_expression(spec, ["t"])
+    import sympy
+
+    if isinstance(spec, sympy.Basic):
+        free = {sym.name for sym in spec.free_symbols}
         if not free <= {"t"}:
             raise ValueError(
                 f"{where}: expression {spec} may only depend on `t`, found {sorted(free - {'t'})}"
             )
+        from .codegen import compile_function
+
         t_sym = next(iter(spec.free_symbols)) if free else sympy.Symbol("t")
-        fn = sympy.lambdify(t_sym, spec, modules="math")
-        return _Expression(fn, spec, where)
+        return _Expression(compile_function(spec, [t_sym]), spec, where)
     if callable(spec):
         return spec  # type: ignore[return-value]
     raise TypeError(
@@ -189,7 +185,7 @@ class _Constant:
 
 
 class _Expression:
-    """A sympy expression in ``t`` compiled to plain float code (``lambdify``, math module)."""
+    """A sympy expression in ``t`` compiled to plain float code (:mod:`lumped.codegen`)."""
 
     __slots__ = ("fn", "expr", "where")
 

@@ -183,12 +183,10 @@ def _forcing(spec: object, key: str, fail) -> object:
     if isinstance(spec, (int, float)) and not isinstance(spec, bool):
         return _number(spec, key, fail)
     if isinstance(spec, str):
-        import sympy
-
         from .expressions import parse_expression
 
         try:
-            return parse_expression(spec, {"t": sympy.Symbol("t", real=True)})
+            return parse_expression(spec, ["t"])
         except (TypeError, ValueError, SyntaxError) as err:
             raise fail(key, f"bad expression {spec!r}: {err}") from None
     if isinstance(spec, dict):
