@@ -207,3 +207,15 @@ def test_compare_reports_differences_and_ratio(capsys):
     maxwell, _ = load_scene(EXAMPLES / "maxwell.toml")
     with pytest.raises(ValueError, match="does not cover"):
         compare(maxwell, dt=1e-2, t_end=0.1)
+
+
+def test_custom_law_example_runs(tmp_path, monkeypatch, capsys):
+    import runpy
+
+    path = EXAMPLES / "custom_law_simulate.py"
+    assert len(path.read_text().splitlines()) < 20
+    monkeypatch.chdir(tmp_path)
+    runpy.run_path(str(path), run_name="__main__")
+    assert capsys.readouterr().out.startswith("success")
+    header = (tmp_path / "custom_law.csv").read_text().splitlines()[0]
+    assert header == "t,x_mass,v_mass,F_spring,F_drag"
