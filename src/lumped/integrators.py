@@ -43,7 +43,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from .newton import NewtonCode, NewtonOptions, NewtonResult, newton_solve
+from .newton import FactorCache, NewtonCode, NewtonOptions, NewtonResult, newton_solve
 from .scene import Junction, Mass, Scene
 
 __all__ = [
@@ -465,6 +465,7 @@ def run_bdf(
     prev_q = scene.elongations(x, v)
     prev_d = [el.law.kernel(prev_q[e], F[e]) for e, el in enumerate(scene.elements)]
 
+    cache1, cache2 = FactorCache(), FactorCache()
     rows = [[0.0, *_interleave(x, v), *F]]
     total_it = res_ev = jac_ev = facts = 0
     max_it = 0
@@ -491,7 +492,7 @@ def run_bdf(
             for i in range(N):
                 x_hat[i] = (4.0 * x[i] - x_prev[i]) / 3.0
                 uref[i] = (4.0 * v[i] - v_prev[i]) / 3.0
-        res = newton_solve(evaluate, v + F, options)
+        res = newton_solve(evaluate, v + F, options, cache1 if h == h1 else cache2)
         total_it += res.iterations
         res_ev += res.residual_evals
         jac_ev += res.jacobian_evals

@@ -51,6 +51,7 @@ __all__ = [
     "NewtonCode",
     "NewtonOptions",
     "NewtonResult",
+    "FactorCache",
     "newton_solve",
     "lu_factor",
     "lu_solve",
@@ -226,8 +227,26 @@ def _factor(J: list[list[float]]):
         return None
 
 
+class FactorCache:
+    """The last factorised Jacobian and its solver, shared by consecutive solves.
+
+    Piecewise-linear laws give the same Jacobian step after step (same pieces, fixed
+    ``dt``); a solve whose Jacobian equals the cached one (entrywise) reuses the factors
+    and counts no factorisation.
+    """
+
+    __slots__ = ("J", "solve")
+
+    def __init__(self) -> None:
+        self.J: list[list[float]] | None = None
+        self.solve = None
+
+
 def newton_solve(
-    evaluate: Evaluate, u0: Sequence[float], options: NewtonOptions = NewtonOptions()
+    evaluate: Evaluate,
+    u0: Sequence[float],
+    options: NewtonOptions = NewtonOptions(),
+    cache: FactorCache | None = None,
 ) -> NewtonResult:
     """Solve ``G(u) = 0`` from ``u0`` by damped semismooth Newton (see the module notes).
 
@@ -239,6 +258,8 @@ def newton_solve(
         Initial guess (for a time step: the previous step's solution).
     options : NewtonOptions
         Tolerances and budgets.
+    cache : FactorCache, optional
+        Reuse LU factors of an identical Jacobian across solves (e.g. time steps).
 
     Returns
     -------
@@ -263,10 +284,8 @@ def newton_solve(
         return NewtonResult(u, code, iters, n_res, n_jac, n_fact, G, worst, J)
 
     def finite(vals: Sequence[float]) -> bool:
-        for x in vals:
-            if not isfinite(x):
-                return False
-        return True
+        # a NaN or an infinity anywhere makes the sum NaN or infinite
+        return isfinite(sum(vals))
 
     if not (finite(G) and finite(u)):
         return result(NewtonCode.NON_FINITE)
@@ -275,7 +294,7 @@ def newton_solve(
     solve_prev = None
     J_prev: list[list[float]] | None = None
     while True:
-        if not all(finite(row) for row in J):
+        if not isfinite(sum(map(sum, J))):
             return result(NewtonCode.NON_FINITE)
         res_ok = _residual_ok(G, S, rtol, atol)
         if res_ok and solve_prev is not None and J == J_prev:
@@ -286,10 +305,15 @@ def newton_solve(
                 u = [ui - di for ui, di in zip(u, delta, strict=True)]
                 return result(NewtonCode.SUCCESS)
         n_jac += 1
-        solve = _factor(J)
-        n_fact += 1
-        if solve is None:
-            return result(NewtonCode.SINGULAR)
+        if cache is not None and cache.J == J:
+            solve = cache.solve
+        else:
+            solve = _factor(J)
+            n_fact += 1
+            if solve is None:
+                return result(NewtonCode.SINGULAR)
+            if cache is not None:
+                cache.J, cache.solve = J, solve
         du = solve(G)  # J du = G; the step is -du
         if not finite(du):
             return result(NewtonCode.NON_FINITE)
