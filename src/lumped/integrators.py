@@ -63,7 +63,8 @@ GENERIC_METHODS = ("bdf1", "bdf2")
 
 #: Built-in laws whose graph is monotone (no folds); their branch check is skipped.
 MONOTONE_BUILTINS = frozenset(
-    {"linear_spring", "string_spring", "newtonian", "bingham", "coulomb", "herschel_bulkley"}
+    {"linear_spring", "string_spring", "newtonian", "bingham", "coulomb", "herschel_bulkley",
+     "implicit_spring"}
 )
 
 

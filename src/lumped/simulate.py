@@ -45,6 +45,7 @@ __all__ = [
     "METHODS",
     "METHOD_REGISTRY",
     "closed_form_oscillator",
+    "resolve_method",
 ]
 
 
