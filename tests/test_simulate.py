@@ -390,3 +390,52 @@ def test_builtin_s_shaped_follows_or_stops_never_jumps(formula, dt):
     F = sol.column("F_s")
     assert not sol.ok and (F <= F_max + 1e-6).all()  # never on the far branch
     assert np.abs(np.diff(F)).max() < 50 * ramp * dt
+
+
+# ---------------------------------------------------------------------------------------
+# a network of several masses against its exact solution
+
+
+def chain_scene(forcing=None):
+    """ground -k1- m1 -k2- m2, with a Newtonian dashpot c between m1 and m2 (drawn from
+    m2 to m1, the other orientation) and a force on m2."""
+    return Scene(
+        [Mass("m1", 1.0, x0=0.2), Mass("m2", 2.0, v0=-0.5)],
+        [Element("k1", law("linear_spring", k=30.0), "ground", "m1"),
+         Element("k2", law("linear_spring", k=20.0), "m1", "m2"),
+         Element("c", law("newtonian", c=0.7), "m2", "m1")],
+        {"m2": forcing} if forcing is not None else None,
+    )
+
+
+def chain_exact(t):
+    # state (x1, v1, x2, v2); dashpot from m2 to m1: q = v1 - v2, +F on m2, -F on m1
+    k1, k2, c, m1, m2 = 30.0, 20.0, 0.7, 1.0, 2.0
+    A = np.array([
+        [0, 1, 0, 0],
+        [(-k1 - k2) / m1, -c / m1, k2 / m1, c / m1],
+        [0, 0, 0, 1],
+        [k2 / m2, c / m2, -k2 / m2, -c / m2],
+    ])
+    step = scipy.linalg.expm(A * (t[1] - t[0]))
+    out = [np.array([0.2, 0.0, 0.0, -0.5])]
+    for _ in t[1:]:
+        out.append(step @ out[-1])
+    return np.array(out)
+
+
+@pytest.mark.parametrize("formula, order", [("bdf1", 1), ("bdf2", 2)])
+def test_two_mass_chain_converges_to_its_exact_solution(formula, order):
+    errors, dts = [], [4e-3, 2e-3, 1e-3]
+    for dt in dts:
+        sol = simulate(chain_scene(), method=formula, dt=dt, t_end=1.0)
+        ex = chain_exact(sol.t)
+        got = np.column_stack([sol.column(c) for c in ("x_m1", "v_m1", "x_m2", "v_m2")])
+        errors.append(np.abs(got - ex).max())
+        # element forces obey their laws and orientation at every step
+        np.testing.assert_allclose(sol.column("F_k2"), 20.0 * (got[:, 2] - got[:, 0]),
+                                   atol=1e-10)
+        np.testing.assert_allclose(sol.column("F_c"), 0.7 * (got[:, 1] - got[:, 3]),
+                                   atol=1e-10)
+    slope = np.polyfit(np.log(dts), np.log(errors), 1)[0]
+    assert abs(slope - order) < 0.2, (errors, slope)
