@@ -439,3 +439,25 @@ def test_two_mass_chain_converges_to_its_exact_solution(formula, order):
                                    atol=1e-10)
     slope = np.polyfit(np.log(dts), np.log(errors), 1)[0]
     assert abs(slope - order) < 0.2, (errors, slope)
+
+
+@given(st.lists(st.floats(-10.0, 10.0), min_size=10, max_size=10),
+       st.sampled_from(["paper", "maxwell", "chain"]), st.sampled_from([1e-3, 2e-3 / 3]))
+@settings(max_examples=100)
+def test_generated_step_system_equals_the_generic_one(vals, which, h):
+    from lumped.integrators import _generate_evaluate, _make_evaluate
+
+    scene = {"paper": paper_scene(x0=0.1), "maxwell": maxwell_scene(),
+             "chain": chain_scene()}[which]
+    N, E = len(scene.nodes), len(scene.elements)
+    uref, x_hat, f = vals[:N], vals[N:2 * N], [vals[-1]] * N
+    outs = []
+    for make in ("generic", "generated"):
+        qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
+        if make == "generic":
+            ev = _make_evaluate(scene, h, [m / h for m in scene.masses], [0.0] * N, [1.0] * N,
+                                uref, x_hat, f, qs, rq, rf)
+        else:
+            ev = _generate_evaluate(scene, h, uref, x_hat, f, qs, rq, rf)
+        outs.append((ev(vals[2 * N:2 * N + N + E]), qs, rq, rf))
+    assert outs[0] == outs[1]

@@ -275,6 +275,8 @@ def newton_solve(
 
     def result(code: NewtonCode) -> NewtonResult:
         worst, worst_ratio = 0, -1.0
+        if code is NewtonCode.SUCCESS:
+            return NewtonResult(u, code, iters, n_res, n_jac, n_fact, G, worst, J)
         for i in range(n):
             r = abs(G[i]) / (rtol * S[i] + atol)
             if not r <= worst_ratio:  # NaN counts as worst
@@ -290,7 +292,7 @@ def newton_solve(
     if not (finite(G) and finite(u)):
         return result(NewtonCode.NON_FINITE)
     floor = atol / rtol
-    norm = _merit(G, S, floor)
+    norm = -1.0  # the merit of the current iterate, computed when a line search needs it
     solve_prev = None
     J_prev: list[list[float]] | None = None
     while True:
@@ -340,6 +342,8 @@ def newton_solve(
         if iters >= options.max_iters:
             return result(NewtonCode.MAX_ITERS)
         lam = 1.0
+        if iters >= options.free_steps and norm < 0.0:
+            norm = _merit(G, S, floor)
         for _ in range(options.max_backtracks + 1):
             u_new = [ui - lam * di for ui, di in zip(u, du, strict=True)]
             G_new, J_new, S_new = evaluate(u_new)
@@ -369,7 +373,7 @@ def newton_solve(
             return result(NewtonCode.DIVERGED)
         solve_prev, J_prev = solve, J
         u, G, J, S = u_new, G_new, J_new, S_new
-        norm = _merit(G, S, floor)
+        norm = -1.0
         iters += 1
 
 
