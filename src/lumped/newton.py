@@ -345,7 +345,10 @@ def newton_solve(
         if iters >= options.free_steps and norm < 0.0:
             norm = _merit(G, S, floor)
         for _ in range(options.max_backtracks + 1):
-            u_new = [ui - lam * di for ui, di in zip(u, du, strict=True)]
+            if lam == 1.0:
+                u_new = [ui - di for ui, di in zip(u, du, strict=True)]
+            else:
+                u_new = [ui - lam * di for ui, di in zip(u, du, strict=True)]
             G_new, J_new, S_new = evaluate(u_new)
             n_res += 1
             if (lam == 1.0 and J_new != J and finite(G_new)
@@ -360,9 +363,10 @@ def newton_solve(
                 if finite(G_alt) and _residual_ok(G_alt, S_alt, rtol, atol):
                     u_new, G_new, J_new, S_new = u_alt, G_alt, J_alt, S_alt
             if finite(G_new):
-                norm_new = _merit(G_new, S, floor)  # weights of the current iterate
-                if (iters < options.free_steps or norm_new <= (1.0 - 1e-4 * lam) * norm
-                        or _residual_ok(G_new, S_new, rtol, atol)):
+                if iters < options.free_steps or _residual_ok(G_new, S_new, rtol, atol):
+                    break
+                # sufficient decrease of the merit, with the weights of the current iterate
+                if _merit(G_new, S, floor) <= (1.0 - 1e-4 * lam) * norm:
                     break
             lam *= 0.5
         else:
