@@ -95,8 +95,8 @@ class NewtonOptions:
 
     rtol: float = 1e-10
     atol: float = 1e-12
-    max_iters: int = 25
-    max_backtracks: int = 12
+    max_iters: int = 50
+    max_backtracks: int = 40
     free_steps: int = 2
 
     def __post_init__(self) -> None:
