@@ -258,6 +258,10 @@ def _newton_failure(scene: Scene, res: NewtonResult, t: float, step: int) -> Sol
         f"Newton failed ({res.code.value}) at t = {t!r} (step {step}) after "
         f"{res.iterations} iterations: largest residual {r!r} in the {where}"
     )
+    if res.code is NewtonCode.SINGULAR:
+        msg += (" (singular step Jacobian: the laws do not determine all forces and "
+                "velocities, e.g. two rigid or stuck elements in parallel, or a junction "
+                "whose elements are all stuck)")
     return SolverError(msg, status=Status(res.code.value), t=t, where=where, residual=r)
 
 
