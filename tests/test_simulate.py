@@ -488,3 +488,22 @@ def test_generated_step_system_equals_the_generic_one(vals, which, h):
             ev = _generate_evaluate(scene, h, uref, x_hat, f, qs, rq, rf)
         outs.append((ev(vals[2 * N:2 * N + N + E]), qs, rq, rf))
     assert outs[0] == outs[1]
+
+
+@pytest.mark.parametrize("formula", ["bdf1", "bdf2"])
+@pytest.mark.parametrize("which", ["paper", "maxwell", "chain"])
+def test_fast_path_is_newton_exactly(formula, which, monkeypatch):
+    """The step loop's shortcut takes Newton's own path: same numbers, same counters."""
+    import lumped.integrators as integ
+
+    def scene():
+        return {"paper": paper_scene(x0=0.5, forcing=paper_F2), "maxwell": maxwell_scene(),
+                "chain": chain_scene(SineBurst(3.0, 7.0, 0.5))}[which]
+
+    fast = simulate(scene(), method=formula, dt=1e-3, t_end=1.5)
+    monkeypatch.setattr(integ, "_fast_step", lambda *args: None)
+    slow = simulate(scene(), method=formula, dt=1e-3, t_end=1.5)
+    np.testing.assert_array_equal(fast.data, slow.data)
+    for key in ("steps", "newton_iterations", "residual_evals", "jacobian_evals",
+                "factorizations", "max_newton_iterations"):
+        assert fast.stats[key] == slow.stats[key], key

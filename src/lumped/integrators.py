@@ -43,7 +43,15 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from .newton import FactorCache, NewtonCode, NewtonOptions, NewtonResult, newton_solve
+from .newton import (
+    FactorCache,
+    NewtonCode,
+    NewtonOptions,
+    NewtonResult,
+    _residual_ok,
+    _update_ok,
+    newton_solve,
+)
 from .scene import Junction, Mass, Scene
 
 __all__ = [
@@ -525,6 +533,8 @@ def run_bdf(
     prev_d = [el.law.kernel(prev_q[e], F[e]) for e, el in enumerate(scene.elements)]
 
     cache1, cache2 = FactorCache(), FactorCache()
+    rtol, atol = options.rtol, options.atol
+    fast = options.free_steps >= 1
     rows = [[0.0, *_interleave(x, v), *F]]
     total_it = res_ev = jac_ev = facts = 0
     max_it = 0
@@ -551,20 +561,30 @@ def run_bdf(
             for i in range(N):
                 x_hat[i] = (4.0 * x[i] - x_prev[i]) / 3.0
                 uref[i] = (4.0 * v[i] - v_prev[i]) / 3.0
-        res = newton_solve(evaluate, v + F, options, cache1 if h == h1 else cache2)
-        total_it += res.iterations
-        res_ev += res.residual_evals
-        jac_ev += res.jacobian_evals
-        facts += res.factorizations
-        if res.iterations > max_it:
-            max_it = res.iterations
-        if res.code is not NewtonCode.SUCCESS:
-            err = _newton_failure(scene, res, t, step)
-            if throw:
-                raise err
-            status, message = err.status, str(err)
-            break
-        u = res.u
+        cache = cache1 if h == h1 else cache2
+        u = _fast_step(evaluate, v + F, cache, rtol, atol) if fast else None
+        if u is not None:  # the common case, counted as newton_solve would count it
+            it = u.pop()
+            total_it += it
+            res_ev += 1 + it
+            jac_ev += 1
+            if it > max_it:
+                max_it = it
+        else:
+            res = newton_solve(evaluate, v + F, options, cache)
+            total_it += res.iterations
+            res_ev += res.residual_evals
+            jac_ev += res.jacobian_evals
+            facts += res.factorizations
+            if res.iterations > max_it:
+                max_it = res.iterations
+            if res.code is not NewtonCode.SUCCESS:
+                err = _newton_failure(scene, res, t, step)
+                if throw:
+                    raise err
+                status, message = err.status, str(err)
+                break
+            u = res.u
         v_new = u[:N]
         x_new = [x_hat[i] + h * v_new[i] for i in range(N)]
         F_prev, F = F, u[N:]
@@ -603,6 +623,42 @@ def run_bdf(
         "initial_newton_iterations": ic_stats["newton_iterations"],
     }
     return RunResult(rows, stats, status, message)
+
+
+def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,
+               atol: float) -> list[float] | None:
+    """The common step of :func:`~lumped.newton.newton_solve`, without its bookkeeping.
+
+    When the Jacobian at ``u0`` equals the cached one (the laws stay on the same pieces),
+    Newton's path is: accept ``u0`` (0 iterations) or take the full step and accept it
+    after the simplified-Newton check with the same factors (1 iteration). This function
+    follows exactly that path -- same operations, same result -- and returns the solution
+    with the iteration count appended, or ``None`` when anything else would happen
+    (then the caller runs ``newton_solve`` from ``u0``).
+    """
+    G, J, S = evaluate(u0)
+    if J != cache.J or not math.isfinite(sum(G)):
+        return None
+    solve = cache.solve
+    du = solve(G)
+    if not math.isfinite(sum(du)):
+        return None
+    if _residual_ok(G, S, rtol, atol):
+        if _update_ok(du, u0, rtol, atol):
+            out = [ui - di for ui, di in zip(u0, du, strict=True)]
+            out.append(0)
+            return out
+        return None  # newton_solve would try a directional Jacobian here
+    u1 = [ui - di for ui, di in zip(u0, du, strict=True)]
+    G1, J1, S1 = evaluate(u1)
+    if J1 != J or not math.isfinite(sum(G1)) or not _residual_ok(G1, S1, rtol, atol):
+        return None
+    d = solve(G1)
+    if not (math.isfinite(sum(d)) and _update_ok(d, u1, rtol, atol)):
+        return None
+    out = [ui - di for ui, di in zip(u1, d, strict=True)]
+    out.append(1)
+    return out
 
 
 def _interleave(x: Sequence[float], v: Sequence[float]) -> list[float]:
