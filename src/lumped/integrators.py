@@ -639,7 +639,7 @@ def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,
     G, J, S = evaluate(u0)
     if J != cache.J or not math.isfinite(sum(G)):
         return None
-    solve = cache.solve
+    solve = cache.hit()
     du = solve(G)
     if not math.isfinite(sum(du)):
         return None
