@@ -106,12 +106,30 @@ class InconsistentInitialForce(ValueError):
 
 @dataclass
 class RunResult:
-    """Raw output of :func:`run_bdf`: rows ``[t, x_1, v_1, ..., F_1, ...]`` and counters."""
+    """Raw output of :func:`run_bdf`: per sample the node displacements ``xs``, velocities
+    ``vs`` and element forces ``Fs`` (``t_n = n dt``), and the counters."""
 
-    rows: list[list[float]]
+    dt: float
+    xs: list[list[float]]
+    vs: list[list[float]]
+    Fs: list[list[float]]
     stats: dict = field(default_factory=dict)
     status: Status = Status.SUCCESS
     message: str = ""
+
+    def as_array(self):
+        """``(n, 1 + 2 N + E)`` array: ``t``, then ``x_i, v_i`` per node, then ``F_e``."""
+        import numpy as np
+
+        n = len(self.xs)
+        x, v = np.array(self.xs, dtype=float), np.array(self.vs, dtype=float)
+        N, E = x.shape[1], len(self.Fs[0])
+        out = np.empty((n, 1 + 2 * N + E))
+        out[:, 0] = np.arange(n, dtype=float) * self.dt
+        out[:, 1:1 + 2 * N:2] = x
+        out[:, 2:2 + 2 * N:2] = v
+        out[:, 1 + 2 * N:] = np.array(self.Fs, dtype=float).reshape(n, E)
+        return out
 
 
 # ---------------------------------------------------------------------------------------
@@ -505,9 +523,10 @@ def run_bdf(
 ) -> RunResult:
     """Advance ``scene`` by ``n_steps`` fixed steps of BDF1 or BDF2 (first step BDF1).
 
-    Returns the rows ``[t, x_1, v_1, ..., x_N, v_N, F_1, ..., F_E]`` for ``t_n = n dt``
-    and the counters. On a failed step: raise :class:`SolverError` (``throw=True``) or
-    return the rows so far with ``status`` and ``message`` set.
+    Returns the samples (see :class:`RunResult`; ``as_array()`` gives the columns ``t``,
+    ``x_i, v_i`` per node, ``F_e`` per element) and the counters. On a failed step: raise
+    :class:`SolverError` (``throw=True``) or return the samples so far with ``status`` and
+    ``message`` set.
     """
     if method not in GENERIC_METHODS:
         raise ValueError(f"`method` must be one of {GENERIC_METHODS}, got {method!r}")
@@ -535,7 +554,7 @@ def run_bdf(
     cache1, cache2 = FactorCache(), FactorCache()
     rtol, atol = options.rtol, options.atol
     fast = options.free_steps >= 1
-    rows = [[0.0, *_interleave(x, v), *F]]
+    xs, vs, Fs = [x], [v], [F]
     total_it = res_ev = jac_ev = facts = 0
     max_it = 0
     status, message = Status.SUCCESS, ""
@@ -611,8 +630,10 @@ def run_bdf(
         if status is not Status.SUCCESS:
             break
         x_prev, v_prev, x, v = x, v, x_new, v_new
-        rows.append([t, *_interleave(x, v), *F])
-    steps = len(rows) - 1
+        xs.append(x)
+        vs.append(v)
+        Fs.append(F)
+    steps = len(xs) - 1
     stats = {
         "steps": steps,
         "newton_iterations": total_it,
@@ -622,7 +643,7 @@ def run_bdf(
         "max_newton_iterations": max_it,
         "initial_newton_iterations": ic_stats["newton_iterations"],
     }
-    return RunResult(rows, stats, status, message)
+    return RunResult(dt, xs, vs, Fs, stats, status, message)
 
 
 def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,
@@ -658,14 +679,6 @@ def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,
         return None
     out = [ui - di for ui, di in zip(u1, d, strict=True)]
     out.append(1)
-    return out
-
-
-def _interleave(x: Sequence[float], v: Sequence[float]) -> list[float]:
-    out = []
-    for xi, vi in zip(x, v, strict=True):
-        out.append(xi)
-        out.append(vi)
     return out
 
 

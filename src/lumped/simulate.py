@@ -206,7 +206,7 @@ def _run_generic(formula: str):
                options: NewtonOptions | None):
         out = run_bdf(scene, method=formula, dt=dt, n_steps=n_steps, options=options,
                       throw=throw)
-        return np.array(out.rows, dtype=float), out.stats, out.status, out.message
+        return out.as_array(), out.stats, out.status, out.message
 
     return runner
 
