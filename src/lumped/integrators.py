@@ -139,9 +139,12 @@ class RunResult:
 def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[float],
                    vscale: Sequence[float], uref: list[float], x_hat: list[float],
                    f: list[float], qs: list[float], rq: list[float], rf: list[float]):
-    """Build ``evaluate(u) -> (G, J, S)`` for one step size; ``uref, x_hat, f`` are read
-    at call time (the step loop updates them in place); ``qs, rq, rf`` receive each
-    element's ``q, dR/dq, dR/dF`` at the last evaluated point."""
+    """Build ``evaluate(u) -> (G, J, S)`` for one step size.
+
+    ``uref, x_hat, f`` are read at call time (the step loop updates them in place);
+    ``qs, rq, rf`` receive each element's ``q, dR/dq, dR/dF`` at the last evaluated point.
+    This loop version is the readable reference of the step system; the step loop runs its
+    generated twin :func:`_generate_evaluate` (tested equal)."""
     N = len(scene.nodes)
     E = len(scene.elements)
     n = N + E
