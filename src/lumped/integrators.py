@@ -106,13 +106,16 @@ class InconsistentInitialForce(ValueError):
 
 @dataclass
 class RunResult:
-    """Raw output of :func:`run_bdf`: per sample the node displacements ``xs``, velocities
-    ``vs`` and element forces ``Fs`` (``t_n = n dt``), and the counters."""
+    """Raw output of :func:`run_bdf`: the node displacements ``xs``, velocities ``vs`` and
+    element forces ``Fs`` of all samples (``t_n = n dt``), each flat (sample-major, so the
+    step loop creates no lasting containers for the garbage collector), and the counters."""
 
     dt: float
-    xs: list[list[float]]
-    vs: list[list[float]]
-    Fs: list[list[float]]
+    n_nodes: int
+    n_elements: int
+    xs: list[float]
+    vs: list[float]
+    Fs: list[float]
     stats: dict = field(default_factory=dict)
     status: Status = Status.SUCCESS
     message: str = ""
@@ -121,13 +124,12 @@ class RunResult:
         """``(n, 1 + 2 N + E)`` array: ``t``, then ``x_i, v_i`` per node, then ``F_e``."""
         import numpy as np
 
-        n = len(self.xs)
-        x, v = np.array(self.xs, dtype=float), np.array(self.vs, dtype=float)
-        N, E = x.shape[1], len(self.Fs[0])
+        N, E = self.n_nodes, self.n_elements
+        n = len(self.xs) // N
         out = np.empty((n, 1 + 2 * N + E))
         out[:, 0] = np.arange(n, dtype=float) * self.dt
-        out[:, 1:1 + 2 * N:2] = x
-        out[:, 2:2 + 2 * N:2] = v
+        out[:, 1:1 + 2 * N:2] = np.array(self.xs, dtype=float).reshape(n, N)
+        out[:, 2:2 + 2 * N:2] = np.array(self.vs, dtype=float).reshape(n, N)
         out[:, 1 + 2 * N:] = np.array(self.Fs, dtype=float).reshape(n, E)
         return out
 
@@ -557,7 +559,7 @@ def run_bdf(
     cache1, cache2 = FactorCache(), FactorCache()
     rtol, atol = options.rtol, options.atol
     fast = options.free_steps >= 1
-    xs, vs, Fs = [x], [v], [F]
+    xs, vs, Fs = list(x), list(v), list(F)
     total_it = res_ev = jac_ev = facts = 0
     max_it = 0
     status, message = Status.SUCCESS, ""
@@ -633,10 +635,10 @@ def run_bdf(
         if status is not Status.SUCCESS:
             break
         x_prev, v_prev, x, v = x, v, x_new, v_new
-        xs.append(x)
-        vs.append(v)
-        Fs.append(F)
-    steps = len(xs) - 1
+        xs += x
+        vs += v
+        Fs += F
+    steps = len(xs) // N - 1
     stats = {
         "steps": steps,
         "newton_iterations": total_it,
@@ -646,7 +648,7 @@ def run_bdf(
         "max_newton_iterations": max_it,
         "initial_newton_iterations": ic_stats["newton_iterations"],
     }
-    return RunResult(dt, xs, vs, Fs, stats, status, message)
+    return RunResult(dt, N, E, xs, vs, Fs, stats, status, message)
 
 
 def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,
