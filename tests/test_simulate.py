@@ -485,8 +485,8 @@ def test_generated_step_system_equals_the_generic_one(vals, which, h):
             ev = _make_evaluate(scene, h, [m / h for m in scene.masses], [0.0] * N, [1.0] * N,
                                 uref, x_hat, f, qs, rq, rf)
         else:
-            ev = _generate_evaluate(scene, h, uref, x_hat, f, qs, rq, rf)
-        outs.append((ev(vals[2 * N:2 * N + N + E]), qs, rq, rf))
+            ev = _generate_evaluate(scene, h, uref, x_hat, f)
+        outs.append(ev(vals[2 * N:2 * N + N + E]))
     assert outs[0] == outs[1]
 
 

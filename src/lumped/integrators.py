@@ -215,8 +215,9 @@ def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[
 
 
 def _generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[float],
-                       f: list[float], qs: list[float], rq: list[float], rf: list[float]):
-    """The step system of :func:`_make_evaluate` (regular steps: ``v = u``) as generated,
+                       f: list[float]):
+    """The step system of :func:`_make_evaluate` (regular steps: ``v = u``; without the
+    per-element side outputs) as generated,
     unrolled straight-line Python for this scene: no loops, no index lookups, constants
     inlined. Only indices and float literals enter the source (never a name from the
     scene), so a scene file cannot inject code. The source is kept in ``__source__``."""
@@ -256,14 +257,12 @@ def _generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[fl
             lines += [f"    G{b} += u{k}", f"    S{b} += abs(u{k})"]
             J[b, k] = "1.0"
             J[k, b] = f"g{e}"
-        lines += [f"    qs[{e}] = q", f"    rq[{e}] = Rq", f"    rf[{e}] = RF"]
     rows = ", ".join("[" + ", ".join(J.get((r, c), "0.0") for c in range(n)) + "]"
                      for r in range(n))
     lines += ["    return ([" + ", ".join(f"G{i}" for i in range(n)) + "], [" + rows + "], ["
               + ", ".join(f"S{i}" for i in range(n)) + "])"]
     src = "\n".join(lines) + "\n"
-    namespace: dict = {"uref": uref, "xh": x_hat, "f": f, "qs": qs, "rq": rq, "rf": rf,
-                       "abs": abs, "__builtins__": {}}
+    namespace: dict = {"uref": uref, "xh": x_hat, "f": f, "abs": abs, "__builtins__": {}}
     for e, el in enumerate(scene.elements):
         namespace[f"k{e}"] = el.law.kernel
     exec(compile(src, "<lumped step system>", "exec"), namespace)  # noqa: S102 - our own code
@@ -542,14 +541,13 @@ def run_bdf(
     forcing = [(i, fn) for i, fn in enumerate(scene.forcing) if fn is not None]
     isfinite = math.isfinite
 
-    qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
     x_hat, uref, f = [0.0] * N, [0.0] * N, [0.0] * N
     h1 = dt
     h2 = 2.0 * dt / 3.0
-    ev1 = _generate_evaluate(scene, h1, uref, x_hat, f, qs, rq, rf)
+    ev1 = _generate_evaluate(scene, h1, uref, x_hat, f)
     ev2 = None
     if method == "bdf2":
-        ev2 = _generate_evaluate(scene, h2, uref, x_hat, f, qs, rq, rf)
+        ev2 = _generate_evaluate(scene, h2, uref, x_hat, f)
 
     # branch bookkeeping: q, dR/dq, dR/dF at the last accepted point of checked elements
     checked = [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)]
@@ -612,26 +610,28 @@ def run_bdf(
         v_new = u[:N]
         x_new = [x_hat[i] + h * v_new[i] for i in range(N)]
         F_prev, F = F, u[N:]
+        q_new = scene.elongations(x_new, v_new) if checked else ()
         for e in checked:
             q0, d0 = prev_q[e], prev_d[e]
-            if _left_branch(scene.elements[e].law.kernel, q0, F_prev[e], d0[1], d0[2],
-                            qs[e], F[e], rq[e], rf[e]):
+            kernel = scene.elements[e].law.kernel
+            d1 = kernel(q_new[e], F[e])  # at the accepted point
+            if _left_branch(kernel, q0, F_prev[e], d0[1], d0[2], q_new[e], F[e], d1[1], d1[2]):
                 el = scene.elements[e]
                 msg = (
                     f"element {el.name!r} (law {el.law_name!r}) left its branch at t = {t!r} "
                     f"(step {step}): from (q, F) = ({q0!r}, {F_prev[e]!r}) to "
-                    f"({qs[e]!r}, {F[e]!r}) the law's dR/dq or dR/dF changes sign -- a fold; "
+                    f"({q_new[e]!r}, {F[e]!r}) the law's dR/dq or dR/dF changes sign -- a fold; "
                     "there is no solution continuous with the past at this step"
                 )
                 err = BranchError(msg, status=Status.BRANCH_LOST, t=t,
                                   where=f"law {el.law_name!r} of element {el.name!r}",
-                                  residual=res.residual[N + e])
+                                  residual=d1[0])
                 if throw:
                     raise err
                 status, message = Status.BRANCH_LOST, msg
                 break
-            prev_q[e] = qs[e]
-            prev_d[e] = (0.0, rq[e], rf[e])
+            prev_q[e] = q_new[e]
+            prev_d[e] = d1
         if status is not Status.SUCCESS:
             break
         x_prev, v_prev, x, v = x, v, x_new, v_new
