@@ -216,11 +216,11 @@ def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[
 
 def _generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[float],
                        f: list[float]):
-    """The step system of :func:`_make_evaluate` (regular steps: ``v = u``; without the
-    per-element side outputs) as generated,
-    unrolled straight-line Python for this scene: no loops, no index lookups, constants
-    inlined. Only indices and float literals enter the source (never a name from the
-    scene), so a scene file cannot inject code. The source is kept in ``__source__``."""
+    """The step system of :func:`_make_evaluate` (regular steps, ``v = u``, without the
+    per-element side outputs) as generated, unrolled straight-line Python for this scene:
+    no loops, no index lookups, constants inlined. Only indices and float literals enter
+    the source (never a name from the scene), so a scene file cannot inject code. The
+    source is kept in ``__source__``."""
     N, E = len(scene.nodes), len(scene.elements)
     n = N + E
     masses = scene.masses
