@@ -232,7 +232,9 @@ class _SlipArc:
     # -- sampling for root brackets -------------------------------------------------------------
     def sample_times(self, t_stop: float):
         """Yield chunks of increasing sample times in ``(t0, t_stop]``, ending at ``t_stop``."""
-        fast_rate = self.w0 if self.regime == "under" else max(self.w0, -self.r2)
+        fast_rate = {"under": self.w0, "critical": self.a}.get(self.regime)
+        if fast_rate is None:
+            fast_rate = -self.r2
         h_fast = 1.0 / (_SAMPLES_PER_HALF_PERIOD * fast_rate)
         steps = []
         if self.regime == "under":
@@ -472,13 +474,14 @@ def _as_times(t, name: str) -> np.ndarray:
     if arr.ndim != 1 or arr.size == 0:
         raise ValueError(f"`{name}` must be a non-empty 1-D array of times, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
-        bad = arr[~np.isfinite(arr)][0]
+        bad = float(arr[~np.isfinite(arr)][0])
         raise ValueError(f"`{name}` must be finite, got {bad!r}")
     if arr[0] < 0.0:
-        raise ValueError(f"`{name}` must be non-negative, got {arr[0]!r}")
+        raise ValueError(f"`{name}` must be non-negative, got {float(arr[0])!r}")
     if arr.size > 1 and np.any(np.diff(arr) < 0.0):
         i = int(np.flatnonzero(np.diff(arr) < 0.0)[0])
-        raise ValueError(f"`{name}` must be non-decreasing, got {arr[i]!r} before {arr[i + 1]!r}")
+        raise ValueError(f"`{name}` must be non-decreasing, got {float(arr[i])!r} "
+                         f"before {float(arr[i + 1])!r}")
     return arr
 
 
