@@ -644,14 +644,16 @@ def _zero_of_v(arc: _SlipArc, t_stop: float) -> float | None:
         for j in range(ts.size):
             tj, svj = float(ts[j]), float(sv[j])
             if not started:
-                if svj > noise:
-                    started = True
-                elif svj <= 0.0 and tj > t0:
-                    # v did not become positive at the first sample: look closer to t0.
+                if svj <= 0.0:
+                    # back to v <= 0 before v was clearly positive at a sample: look closer.
                     tp = _first_positive(arc, t0, tj, noise)
                     if tp is None:
-                        return tj if svj == 0.0 else _refine_root(arc, t0, tj)
+                        # The motion is below round-off (e.g. a break-out by a few ulps):
+                        # end the arc where s v drops below -noise, so that the event loop
+                        # advances without letting v run the wrong way.
+                        return _below_noise(arc, t0, tj, noise)
                     return _refine_root(arc, tp, tj)
+                started = svj > noise
                 prev_t, prev_sv = tj, svj
                 continue
             if svj <= 0.0:
@@ -669,15 +671,27 @@ def _zero_of_v(arc: _SlipArc, t_stop: float) -> float | None:
 
 
 def _first_positive(arc: _SlipArc, t0: float, t1: float, noise: float) -> float | None:
+    """A time in ``(t0, t1)`` where ``s v > noise`` (dense and geometric sampling), or ``None``."""
+    span = t1 - t0
+    rel = np.unique(np.concatenate([np.geomspace(1e-12, 1.0, 49), np.linspace(0.0, 1.0, 257)]))
+    ts = t0 + span * rel[(rel > 0.0) & (rel < 1.0)]
+    ts = ts[ts > t0]
+    if ts.size == 0:
+        return None
+    sv = arc.s * arc.state(ts, np)[1]
+    hits = np.flatnonzero(sv > noise)
+    return float(ts[hits[0]]) if hits.size else None
+
+
+def _below_noise(arc: _SlipArc, t0: float, t1: float, noise: float) -> float:
     s = arc.s
-    h = t1 - t0
-    for _ in range(60):
-        h *= 0.5
-        if h <= 4.0 * _EPS * max(abs(t0), 1e-300):
-            return None
-        if s * arc.v_scalar(t0 + h) > 0.0:
-            return t0 + h
-    return None
+
+    def f(t):
+        return s * arc.v_scalar(t) + noise
+
+    if f(t1) >= 0.0:
+        return t1
+    return brentq(f, t0, t1, xtol=1e-300, rtol=4.0 * _EPS, maxiter=200)
 
 
 def _refine_root(arc: _SlipArc, lo: float, hi: float) -> float:
