@@ -150,7 +150,7 @@ class _SlipArc:
     r"""Closed-form solution of ``m x'' + c x' + k x = F(t) - s tau`` from ``(t0, x0, v0)``."""
 
     def __init__(self, p: _Params, s: int, forced: bool, t0: float, x0: float, v0: float):
-        self.p, self.s, self.forced, self.t0 = p, s, forced, t0
+        self.p, self.s, self.forced, self.t0, self.v0 = p, s, forced, t0, v0
         m, k, c = p.m, p.k, p.c
         self.x_eq = -s * p.tau / k
         a = c / (2.0 * m)
@@ -224,6 +224,12 @@ class _SlipArc:
     def v_scalar(self, t: float) -> float:
         return self.state(t, math)[1]
 
+    def accel(self, t: np.ndarray, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """``v'`` from the balance of momentum at the samples ``(t, x, v)`` of this arc."""
+        p = self.p
+        F = p.A * np.sin(p.w * t) if self.forced else 0.0
+        return (F - p.k * x - self.s * p.tau - p.c * v) / p.m
+
     def accel_scalar(self, t: float) -> float:
         x, v = self.state(t, math)
         p = self.p
@@ -231,50 +237,43 @@ class _SlipArc:
 
     # -- sampling for root brackets -------------------------------------------------------------
     def sample_times(self, t_stop: float):
-        """Yield chunks of increasing sample times in ``(t0, t_stop]``, ending at ``t_stop``."""
+        """Yield chunks of increasing sample times in ``(t0, t_stop]``, ending at ``t_stop``.
+
+        Spacing: 1/16 of the homogeneous half period ``pi / w_d`` and 1/32 of the forcing
+        period, preceded by a geometric ramp from 1/16 of the fastest time scale (a fast
+        over-damped transient).  Unforced and not oscillating, ``v`` is a sum of two
+        exponentials (at most one sign change) and the geometric ramp alone suffices.
+        """
+        span = t_stop - self.t0
+        if span <= 0.0:
+            yield np.array([t_stop])
+            return
         fast_rate = {"under": self.w0, "critical": self.a}.get(self.regime)
         if fast_rate is None:
             fast_rate = -self.r2
         h_fast = 1.0 / (_SAMPLES_PER_HALF_PERIOD * fast_rate)
+        a0 = self.accel_scalar(self.t0)
+        if self.v0 * a0 < 0.0:  # decelerating: v may reach 0 after about |v0 / a0|
+            h_fast = min(h_fast, 0.25 * abs(self.v0 / a0))
         steps = []
         if self.regime == "under":
             steps.append(math.pi / self.wd / _SAMPLES_PER_HALF_PERIOD)
         if self.w != 0.0:
-            steps.append(2.0 * math.pi / self.w / _SAMPLES_PER_FORCING_PERIOD)
-        span = t_stop - self.t0
-        if steps:
-            h = min(steps)
-            head = np.empty(0)
-            if h_fast < h:  # resolve a fast transient (heavy damping) geometrically first
-                head = np.geomspace(h_fast, h, int(math.ceil(math.log2(h / h_fast))) + 1)[:-1]
-            start = 0
-            if head.size and head[-1] >= span:
-                head = head[head < span]
-            rel_head = head
-            n_uniform = int(math.ceil(span / h))
-            emitted_head = False
-            while True:
-                stop = min(start + _CHUNK, n_uniform)
-                rel = (np.arange(start + 1, stop + 1) * h)
-                if not emitted_head:
-                    rel = np.concatenate([rel_head, rel])
-                    emitted_head = True
-                rel = rel[rel < span]
-                last = stop >= n_uniform
-                ts = self.t0 + rel
-                if last:
-                    ts = np.append(ts, t_stop)
-                yield ts
-                if last:
-                    return
-                start = stop
-        else:
-            # No oscillation at all (over/critically damped, unforced): v has at most one
-            # sign change, so a geometric grid brackets it.
-            n = max(int(math.ceil(math.log2(max(span / h_fast, 2.0)))) + 1, 2)
-            rel = np.geomspace(h_fast, max(span, h_fast), n)
-            rel = rel[rel < span]
-            yield np.append(self.t0 + rel, t_stop)
+            steps.append(2.0 * math.pi / abs(self.w) / _SAMPLES_PER_FORCING_PERIOD)
+        h = min(steps) if steps else span
+        if h_fast < h:
+            ramp = np.geomspace(h_fast, h, int(math.ceil(math.log2(h / h_fast))) + 1)[:-1]
+            ramp = ramp[ramp < span]
+            if ramp.size:
+                yield self.t0 + ramp
+        n_uniform = int(math.ceil(span / h))
+        for start in range(0, n_uniform, _CHUNK):
+            stop = min(start + _CHUNK, n_uniform)
+            rel = np.arange(start + 1, stop + 1) * h
+            ts = self.t0 + rel[rel < span]
+            if stop == n_uniform:
+                ts = np.append(ts, t_stop)
+            yield ts
 
 
 @dataclass
@@ -629,20 +628,26 @@ def _breakout(p: _Params, t0: float, x: float, t_stop: float, forced: bool):
 
 
 def _zero_of_v(arc: _SlipArc, t_stop: float) -> float | None:
-    """First ``t`` in ``(t0, t_stop]`` with ``v(t) = 0`` on a slip arc, or ``None``."""
+    """First ``t`` in ``(t0, t_stop]`` with ``v(t) = 0`` on a slip arc, or ``None``.
+
+    A sign change of ``s v`` between samples is refined by ``brentq``.  A sign change
+    of the acceleration ``s v'`` from ``-`` to ``+`` between samples means a local
+    minimum of ``s v`` in between, which is located and checked (a double root, or two
+    roots closer than the sampling).
+    """
     s = arc.s
     t0 = arc.t0
     noise = 64.0 * _EPS * arc.v_scale
-    prev_t, prev_sv = t0, s * arc.v_scalar(t0)
+    prev_t, prev_sv, prev_sa = t0, s * arc.v_scalar(t0), s * arc.accel_scalar(t0)
     started = prev_sv > noise  # starting from rest: v must first become clearly positive
-    prev2_t = prev2_sv = None
     for ts in arc.sample_times(t_stop):
         if ts.size == 0:
             continue
-        _, v = arc.state(ts, np)
+        x, v = arc.state(ts, np)
         sv = s * v
+        sa = s * arc.accel(ts, x, v)
         for j in range(ts.size):
-            tj, svj = float(ts[j]), float(sv[j])
+            tj, svj, saj = float(ts[j]), float(sv[j]), float(sa[j])
             if not started:
                 if svj <= 0.0:
                     # back to v <= 0 before v was clearly positive at a sample: look closer.
@@ -654,19 +659,13 @@ def _zero_of_v(arc: _SlipArc, t_stop: float) -> float | None:
                         return _below_noise(arc, t0, tj, noise)
                     return _refine_root(arc, tp, tj)
                 started = svj > noise
-                prev_t, prev_sv = tj, svj
-                continue
-            if svj <= 0.0:
-                if svj == 0.0:
-                    return tj
-                return _refine_root(arc, prev_t, tj)
-            # a sampled local minimum of s v: check for a double root (grazing) in between
-            if prev2_t is not None and prev_sv < prev2_sv and prev_sv <= svj:
-                hit = _graze(arc, prev2_t, tj, noise)
+            elif svj <= 0.0:
+                return tj if svj == 0.0 else _refine_root(arc, prev_t, tj)
+            elif prev_sa < 0.0 < saj:
+                hit = _graze(arc, prev_t, tj, noise)
                 if hit is not None:
                     return hit
-            prev2_t, prev2_sv = prev_t, prev_sv
-            prev_t, prev_sv = tj, svj
+            prev_t, prev_sv, prev_sa = tj, svj, saj
     return None
 
 
