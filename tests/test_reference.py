@@ -156,6 +156,21 @@ def test_tau_zero_undamped_resonance():
     np.testing.assert_allclose(sol.trajectory.x, x, rtol=0, atol=1e-12 * np.max(np.abs(x)))
 
 
+@pytest.mark.parametrize("gamma", [1e3, 1e8, 1e12])
+@pytest.mark.parametrize("detune", [0.0, 1e-9, 1e-5, 1e-2])
+def test_tau_zero_near_resonance_keeps_its_digits(gamma, detune):
+    """Light damping driven at (or next to) resonance: the steady sinusoid would be up to
+    1e12 times the motion; the Duhamel form keeps full accuracy."""
+    m, k = 1.0, 100.0
+    w = 10.0 * (1.0 + detune)
+    t = np.linspace(0.0, 5.0, 101)
+    sol = exact_solution(m=m, k=k, gamma=gamma, tau=0.0, x0=0.05, v0=0.3,
+                         forcing=SineBurst(2.0, w, 4.0), t_eval=t)
+    x, v = linear_oscillator_expm(m, k, 1.0 / gamma, 0.05, 0.3, 2.0, w, 4.0, t)
+    assert np.max(np.abs(sol.trajectory.x - x)) <= 1e-12 * np.max(np.abs(x)) * 50
+    assert np.max(np.abs(sol.trajectory.v - v)) <= 1e-12 * np.max(np.abs(v)) * 50
+
+
 @given(
     m=st.floats(0.05, 20.0), k=st.floats(0.5, 2000.0), gamma=st.floats(1e-3, 1e3),
     x0=st.floats(-1.0, 1.0), v0=st.floats(-5.0, 5.0), A=st.floats(-20.0, 20.0),
@@ -254,7 +269,8 @@ def test_coulomb_classical_free_vibration():
     assert abs(k * sol.rest_position()) <= tau
 
 
-@pytest.mark.parametrize("x0,forcing", [(0.5, None), (0.0, paper_F2), (0.02, SineBurst(3.0, 9.0))])
+@pytest.mark.parametrize("x0,forcing", [(0.5, None), (0.0, paper_F2), (0.02, SineBurst(3.0, 9.0)),
+                                       (0.0, SineBurst(1.5, 10.0))])  # the last one resonant
 def test_coulomb_limit_matches_huge_gamma(x0, forcing):
     t = np.linspace(0.0, 5.0, 2001)
     exact_c = exact_solution(m=1.0, k=100.0, tau=1.0, coulomb=True, x0=x0, forcing=forcing,

@@ -71,6 +71,8 @@ _EPS = np.finfo(float).eps
 _SAMPLES_PER_HALF_PERIOD = 16
 _SAMPLES_PER_FORCING_PERIOD = 32
 _CHUNK = 512
+#: Resonance magnification above which the forced response is written as a Duhamel integral.
+_NEAR_RESONANCE = 8.0
 
 
 class ReferenceNotApplicable(ValueError):
@@ -167,33 +169,65 @@ class _SlipArc:
             self.beta = beta
             self.r1 = -self.w0sq / (a + beta)  # slow root, without cancellation
             self.r2 = -(a + beta)
-        # Particular solution u_p = P sin(w t) + Q cos(w t)  (or R t cos(w t) at resonance).
-        self.P = self.Q = self.R = 0.0
+        # Forced response.  Away from resonance: the steady sinusoid
+        # u_p = P sin(w t) + Q cos(w t).  Near resonance (magnification
+        # (k + m w^2) / sqrt(D) > _NEAR_RESONANCE, only possible when under-damped) u_p is
+        # huge and cancels against the free motion, so the response from rest at t0 is
+        # written as a Duhamel integral instead (see _duhamel).
+        self.P = self.Q = 0.0
         self.w = p.w if forced else 0.0
+        self.duhamel = False
+        amp_p = 0.0
         if forced:
-            det = k - m * p.w * p.w
-            D = det * det + (c * p.w) ** 2
-            if D == 0.0:
-                self.R = -p.A / (2.0 * m * p.w)
+            w = p.w
+            det = k - m * w * w
+            D = det * det + (c * w) ** 2
+            if self.regime == "under" and (k + m * w * w) > _NEAR_RESONANCE * math.sqrt(D):
+                self.duhamel = True
+                self.lam = complex(-a, self.wd)
+                amp_p = abs(p.A) / (k + m * w * w)
             else:
                 self.P = p.A * det / D
-                self.Q = -p.A * c * p.w / D
+                self.Q = -p.A * c * w / D
+                amp_p = math.hypot(self.P, self.Q)
         up0, dup0 = self._particular(t0, math)
         self.u0 = x0 - self.x_eq - up0
         self.du0 = v0 - dup0
-        amp_p = math.hypot(self.P, self.Q) + abs(self.R) * (1.0 + abs(self.w * t0))
-        self.v_scale = max(abs(v0), abs(self.du0), w0 * abs(self.u0), amp_p * max(self.w, w0),
-                           1e-300)
+        self.v_scale = max(abs(v0), abs(self.du0), w0 * abs(self.u0),
+                           amp_p * max(abs(self.w), w0), 1e-300)
 
     # -- formulas, generic over ``xp`` in {math, numpy} -------------------------------------
     def _particular(self, t, xp):
+        """Steady response ``(u_p, u_p')`` (zero on unforced or Duhamel arcs)."""
         w = self.w
-        if w == 0.0:
+        if w == 0.0 or self.duhamel:
             return 0.0 * t, 0.0 * t
         sn, cs = xp.sin(w * t), xp.cos(w * t)
-        if self.R != 0.0:
-            return self.R * t * cs, self.R * (cs - w * t * sn)
         return self.P * sn + self.Q * cs, w * (self.P * cs - self.Q * sn)
+
+    def _duhamel(self, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        r"""Response ``(u_f, u_f')`` at ``t0 + h`` to ``A sin(w t) / m`` from rest at ``t0``.
+
+        With ``lambda = -a + i w_d`` and ``g(s) = Im(e^{lambda s}) / w_d`` the impulse
+        response, ``u_f = (A/m) Im(e^{i w t0} J)``, ``J = (K(lambda) - K(conj lambda)) /
+        (2 i w_d)`` and ``K(mu) = int_0^h e^{mu (h - s)} e^{i w s} ds
+        = h e^{mu h} phi1((i w - mu) h)``, ``phi1(z) = expm1(z) / z``: no cancellation
+        however close ``i w`` is to ``lambda`` (exact undamped resonance included, where
+        ``phi1(0) = 1`` gives the secular term).  ``u_f' = (A/m) Im(e^{i w t0} J')`` with
+        ``J' = (lambda K(lambda) - conj(lambda) K(conj lambda)) / (2 i w_d)``.
+        """
+        h = np.asarray(h, dtype=float)
+        lam, lamc, w = self.lam, self.lam.conjugate(), self.w
+
+        def K(mu):
+            z = (1j * w - mu) * h
+            safe = np.where(z == 0, 1.0, z)
+            phi1 = np.where(z == 0, 1.0, np.expm1(safe) / safe)
+            return h * np.exp(mu * h) * phi1
+
+        k1, k2 = K(lam), K(lamc)
+        scale = self.p.A / self.p.m * np.exp(1j * w * self.t0) / (2j * self.wd)
+        return (scale * (k1 - k2)).imag, (scale * (lam * k1 - lamc * k2)).imag
 
     def _propagator(self, h, xp):
         """Entries of ``Phi(h)`` for ``u'' + 2a u' + w0^2 u = 0``."""
@@ -215,8 +249,14 @@ class _SlipArc:
 
     def state(self, t, xp=np):
         """``(x, v)`` at ``t`` (array with ``xp=numpy`` or float with ``xp=math``)."""
-        p11, p12, p21, p22 = self._propagator(t - self.t0, xp)
-        up, dup = self._particular(t, xp)
+        h = t - self.t0
+        p11, p12, p21, p22 = self._propagator(h, xp)
+        if self.duhamel:
+            up, dup = self._duhamel(h)
+            if xp is math:
+                up, dup = float(up), float(dup)
+        else:
+            up, dup = self._particular(t, xp)
         u = p11 * self.u0 + p12 * self.du0 + up
         du = p21 * self.u0 + p22 * self.du0 + dup
         return u + self.x_eq, du
@@ -261,6 +301,7 @@ class _SlipArc:
         if self.w != 0.0:
             steps.append(2.0 * math.pi / abs(self.w) / _SAMPLES_PER_FORCING_PERIOD)
         h = min(steps) if steps else span
+        h_fast = max(h_fast, h * 2.0**-64)
         if h_fast < h:
             ramp = np.geomspace(h_fast, h, int(math.ceil(math.log2(h / h_fast))) + 1)[:-1]
             ramp = ramp[ramp < span]
