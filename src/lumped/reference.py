@@ -24,8 +24,10 @@ a linear ODE with constant coefficients.  With ``u = x - x_eq``, ``x_eq = -s tau
 where ``Phi`` is the 2x2 propagator of the homogeneous equation written in a form
 that is stable in each regime (under-, critically, over-damped; ``expm1`` near
 critical damping, the slow root ``-w0^2 / (a + beta)`` for heavy damping) and
-``u_p = P sin(w t) + Q cos(w t)`` is the steady sinusoidal response
-(``u_p = -A t cos(w t) / (2 m w)`` at exact undamped resonance).
+``u_p = P sin(w t) + Q cos(w t)`` is the steady sinusoidal response.  Near resonance
+(light damping, ``w`` close to ``w0``) ``u_p`` would be huge and cancel against the free
+motion, so the forced part is then written as a Duhamel integral from rest at ``t0``,
+evaluated with ``expm1`` of complex arguments (exact resonance included).
 The slip ends when ``v`` returns to zero: the mass then sticks if
 ``|F(t) - k x| <= tau``, otherwise it reverses.
 
@@ -317,7 +319,7 @@ class _SlipArc:
             yield ts
 
 
-@dataclass
+@dataclass(frozen=True)
 class ExactSolution:
     """The exact solution: its phases, its events, and its values on ``t_eval``.
 
@@ -406,12 +408,22 @@ def exact_solution(
     -----
     *Slip -> stick.*  The zeros of ``v`` are bracketed on samples spaced at most
     1/16 of the half period ``pi / w_d`` of the homogeneous motion and 1/32 of the
-    forcing period (after a geometric start resolving a fast over-damped transient),
-    then refined by ``brentq``.  Between zeros of an unforced arc ``v`` changes sign
-    at every zero, so none is missed.  With forcing, a local minimum of ``|v|`` between
-    samples is refined (a zero of the acceleration) to catch a double root (grazing);
-    two simple zeros closer than the sampling that do not produce a sampled local
-    minimum could in principle be missed.
+    forcing period, after a geometric ramp that resolves a fast over-damped transient
+    and the stopping time ``|v0 / v'(t0)|``; then ``brentq`` refines them to a few
+    ulps.  Unforced, ``v`` changes sign at each of its (evenly spaced, or at most one)
+    zeros, so none is missed.  With forcing, a sign change of the acceleration
+    ``s v'`` from ``-`` to ``+`` between two samples reveals a local minimum of
+    ``s v``, which is located and checked: this catches a double root (grazing, taken
+    as a zero when ``|v|`` is within round-off) and two zeros between samples.
+    What can still be missed: two zeros of ``v`` *and* two zeros of ``v'`` between two
+    samples, i.e. structure faster than 1/32 of the forcing period or 1/16 of the
+    homogeneous half period.  A slip whose velocity never rises above round-off (a
+    break-out by a few ulps) is ended where ``s v`` falls below round-off.
+
+    *Stick -> slip.*  ``F(t) - k x`` is monotone between the extrema of the sine,
+    which are used as sample points, so the first crossing of ``+-tau`` is bracketed
+    exactly; a tangency (``|F - k x|`` touching ``tau`` to within a few ulps) is not a
+    break-out.
 
     *Stick -> slip.*  ``F(t) - k x`` is monotone between the extrema of the sine,
     which are used as sample points, so the first crossing of ``+-tau`` is bracketed
@@ -421,8 +433,15 @@ def exact_solution(
     *Ties.*  When ``|F - k x|`` equals ``tau`` to within a few ulps at a zero of
     ``v`` or at the start, the sign of its time derivative decides (then of the
     second derivative).
+
+    *Accuracy.*  ``x`` is exact up to round-off of order
+    ``eps (|x| + tau / k + |A| / sqrt(D) (1 + |w| t))`` with
+    ``D = (k - m w^2)^2 + (w / gamma)^2`` away from resonance (the steady sinusoid is
+    evaluated at the phase ``w t``); near resonance the Duhamel form has no such
+    amplification.  Event times are found to a relative accuracy of a few ulps of the
+    residual (``v`` or ``|F - k x| - tau``) divided by its slope.
     """
-    p, osc_gamma = _params_from(osc, m, k, gamma, tau, coulomb, forcing)
+    p = _params_from(osc, m, k, gamma, tau, coulomb, forcing)
     x0 = as_finite("x0", x0)
     v0 = as_finite("v0", v0)
     t_eval = _as_times(t_eval, "t_eval")
@@ -469,7 +488,7 @@ def reference_for_grid(
 # input checking
 
 
-def _params_from(osc, m, k, gamma, tau, coulomb, forcing) -> tuple[_Params, float | None]:
+def _params_from(osc, m, k, gamma, tau, coulomb, forcing) -> _Params:
     if not isinstance(coulomb, bool):
         raise TypeError(f"`coulomb` must be True or False, got {coulomb!r}")
     given = {"m": m, "k": k, "gamma": gamma, "tau": tau}
@@ -503,7 +522,7 @@ def _params_from(osc, m, k, gamma, tau, coulomb, forcing) -> tuple[_Params, floa
             "the exact reference covers only forcing=None, lumped.forcing.zero_forcing or a "
             f"lumped.forcing.SineBurst, got `forcing` = {forcing!r}"
         )
-    return _Params(m=m, k=k, c=c, tau=tau, A=A, w=w, t_off=t_off), gamma
+    return _Params(m=m, k=k, c=c, tau=tau, A=A, w=w, t_off=t_off)
 
 
 def _as_times(t, name: str) -> np.ndarray:
