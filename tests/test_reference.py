@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 
+import mpmath  # a dependency of sympy
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -143,6 +144,31 @@ def test_tau_zero_is_damped_linear_oscillator(gamma, regime, forcing):
                                atol=1e-11 * scale * math.sqrt(k / m))
     np.testing.assert_allclose(sol.trajectory.F_d, sol.trajectory.v / gamma, rtol=1e-14)
     assert all(iv.phase == "slip" for iv in sol.intervals)
+
+
+@pytest.mark.parametrize("ratio", [1e-9, 1e-6, 1e-3, 1 - 1e-12, 1 + 1e-12, 1 + 1e-6, 1e3, 1e6, 1e9])
+def test_tau_zero_free_motion_against_high_precision(ratio):
+    """Damping ratio c / (2 sqrt(k m)) from 1e-9 to 1e9, including both sides of critical
+    damping, against the two-exponential solution in 50-digit arithmetic (mpmath).
+    (The 4x4 expm loses up to 8 digits at the heavy end; the closed form must not.)"""
+    mp = mpmath.mp
+    m, k, x0, v0 = 1.0, 100.0, 0.3, -2.0
+    c = ratio * 2.0 * math.sqrt(k * m)
+    t = np.linspace(0.0, 5.0, 11)
+    sol = exact_solution(m=m, k=k, gamma=1.0 / c, tau=0.0, x0=x0, v0=v0, t_eval=t)
+    with mpmath.workdps(50):
+        a = mp.mpf(c) / (2 * m)
+        root = mp.sqrt(a * a - mp.mpf(k) / m)  # complex when under-damped
+        r1, r2 = -a + root, -a - root
+        A1 = (v0 - r2 * x0) / (r1 - r2)
+        A2 = (r1 * x0 - v0) / (r1 - r2)
+        exact_x = [float(mp.re(A1 * mp.exp(r1 * float(s)) + A2 * mp.exp(r2 * float(s))))
+                   for s in t]
+        exact_v = [float(mp.re(r1 * A1 * mp.exp(r1 * float(s)) + r2 * A2 * mp.exp(r2 * float(s))))
+                   for s in t]
+    x_scale = max(abs(x0), abs(v0) / math.sqrt(k / m))
+    np.testing.assert_allclose(sol.trajectory.x, exact_x, rtol=1e-13, atol=1e-15 * x_scale)
+    np.testing.assert_allclose(sol.trajectory.v, exact_v, rtol=1e-13, atol=1e-15 * abs(v0))
 
 
 def test_tau_zero_undamped_resonance():
