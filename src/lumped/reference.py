@@ -774,9 +774,9 @@ def _graze(arc: _SlipArc, lo: float, hi: float, noise: float) -> float | None:
     v_min = s * arc.v_scalar(t_min)
     if v_min > noise:
         return None
-    if v_min <= 0.0 and s * arc.v_scalar(lo) > 0.0 and v_min < 0.0:
+    if v_min < 0.0:  # two zeros in [lo, hi]: the first one (s v(lo) > 0 here)
         return _refine_root(arc, lo, t_min)
-    return t_min
+    return t_min  # touching zero within round-off: a grazing contact
 
 
 # ----------------------------------------------------------------------------------------------
