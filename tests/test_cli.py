@@ -31,9 +31,9 @@ def test_paper_writes_every_scenario_at_full_precision(tmp_path, capsys):
     assert "last stick at" in out and "stick time" in out
 
 
-def test_paper_bdf2_alias_and_figures_when_matplotlib_is_there(tmp_path, capsys):
+def test_paper_closed_bdf2_and_figures_when_matplotlib_is_there(tmp_path, capsys):
     assert main(["paper", "--out", str(tmp_path), "--t-end", "0.2", "--dt", "1e-3",
-                 "--method", "bdf2", "--scenario", "release-0.5"]) == 0
+                 "--method", "closed-bdf2", "--scenario", "release-0.5"]) == 0
     png = tmp_path / "release-0.5.png"
     if have_matplotlib():
         assert png.read_bytes().startswith(b"\x89PNG") and png.stat().st_size > 1000
@@ -75,3 +75,40 @@ def test_console_script_is_installed_and_reports_errors(tmp_path):
     done = subprocess.run([sys.executable, "-m", "lumped", "--version"], capture_output=True,
                           text=True)
     assert done.returncode == 0 and done.stdout.startswith("lumped ")
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2", "auto", "exact"])
+def test_paper_runs_every_method_on_the_same_grid(tmp_path, method):
+    assert main(["paper", "--out", str(tmp_path), "--t-end", "0.3", "--dt", "1e-3",
+                 "--method", method, "--scenario", "forcing-F2"]) == 0
+    header, data = read_csv(tmp_path / "forcing-F2.csv")
+    closed = run_scenario("forcing-F2", method="closed-bdf1", dt=1e-3, t_end=0.3)
+    assert header == "t,x,v,F_s,F_d"
+    assert np.array_equal(data[:, 0], closed.t)
+    # every method approximates the same motion (max |x| about 0.09 by t = 0.3)
+    assert np.abs(data[:, 1] - closed.x).max() < 0.05 * np.abs(closed.x).max()
+
+
+def test_paper_generic_bdf1_matches_algorithm_1(tmp_path):
+    assert main(["paper", "--out", str(tmp_path), "--t-end", "1.0", "--dt", "1e-3",
+                 "--method", "bdf1", "--scenario", "release-0.5"]) == 0
+    _, data = read_csv(tmp_path / "release-0.5.csv")
+    closed = run_scenario("release-0.5", method="closed-bdf1", dt=1e-3, t_end=1.0)
+    for j, col in enumerate(["x", "v", "F_s", "F_d"], start=1):
+        ref = getattr(closed, col)
+        assert np.abs(data[:, j] - ref).max() <= 1e-12 * np.abs(ref).max(), col
+
+
+def test_run_and_compare_are_wired(tmp_path, capsys):
+    from pathlib import Path
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    out = tmp_path / "r.csv"
+    assert main(["run", str(examples / "release-0.5.toml"), "--out", str(out), "--method",
+                 "exact", "--t-end", "0.5"]) == 0
+    assert out.read_text().splitlines()[0] == "t,x_mass,v_mass,F_spring,F_dashpot"
+    assert main(["run", str(examples / "maxwell.toml"), "--out", str(out), "--method",
+                 "exact"]) == 2
+    assert "method 'exact' covers only one mass" in capsys.readouterr().err
+    assert main(["compare", str(examples / "release-0.5.toml"), "--t-end", "0.2"]) == 0
+    assert "ratio" in capsys.readouterr().out

@@ -18,8 +18,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from .bingham import BinghamOscillator, integrate
+from .bingham import BinghamOscillator
 from .forcing import paper_F1, paper_F2, zero_forcing
+from .scene import GROUND, Element, Mass, Scene
+from .simulate import simulate
 from .trajectory import Trajectory
 
 __all__ = [
@@ -28,9 +30,14 @@ __all__ = [
     "PAPER_SCENARIOS",
     "PAPER_DT",
     "PAPER_T_END",
+    "PAPER_METHODS",
     "get_scenario",
     "run_scenario",
+    "scenario_scene",
 ]
+
+#: Methods the paper scenarios run with; the first, the paper's Algorithm 1, is the default.
+PAPER_METHODS = ("closed-bdf1", "closed-bdf2", "bdf1", "bdf2", "auto", "exact")
 
 #: The paper's parameters (Section 3): gamma = 1, mu_s N_f = 1, m = 1, k = 100.
 PAPER_OSCILLATOR = BinghamOscillator(m=1.0, k=100.0, gamma=1.0, tau=1.0)
@@ -74,6 +81,23 @@ def get_scenario(name: str) -> Scenario:
         raise ValueError(f"unknown scenario {name!r}; known scenarios: {known}") from None
 
 
+def scenario_scene(scenario: Scenario | str) -> Scene:
+    """The scenario as a :class:`~lumped.scene.Scene`: a mass ``"mass"`` joined to ground by
+    a ``"spring"`` (``linear_spring``) and a ``"dashpot"`` (``bingham``)."""
+    from .laws import get_law
+
+    s = get_scenario(scenario) if isinstance(scenario, str) else scenario
+    return Scene(
+        [Mass("mass", s.osc.m, x0=s.x0, v0=s.v0)],
+        [
+            Element("spring", get_law("linear_spring").bind(k=s.osc.k), GROUND, "mass"),
+            Element("dashpot", get_law("bingham").bind(gamma=s.osc.gamma, tau=s.osc.tau),
+                    GROUND, "mass"),
+        ],
+        forces={"mass": s.forcing},
+    )
+
+
 def run_scenario(
     scenario: Scenario | str,
     *,
@@ -81,17 +105,17 @@ def run_scenario(
     dt: float = PAPER_DT,
     t_end: float = PAPER_T_END,
 ) -> Trajectory:
-    """Run a scenario with the closed-form ``"closed-bdf1"`` (Algorithm 1) or ``"closed-bdf2"``."""
-    if isinstance(scenario, str):
-        scenario = get_scenario(scenario)
-    runners: dict[str, Callable[[], Trajectory]] = {
-        "closed-bdf1": lambda: _closed(scenario, "bdf1", dt, t_end),
-        "closed-bdf2": lambda: _closed(scenario, "bdf2", dt, t_end),
-    }
-    if method not in runners:
-        raise ValueError(f"`method` must be one of {tuple(runners)}, got {method!r}")
-    return runners[method]()
+    """Run a scenario with any method of :data:`PAPER_METHODS` and return its trajectory.
 
-
-def _closed(s: Scenario, step: str, dt: float, t_end: float) -> Trajectory:
-    return integrate(s.osc, x0=s.x0, v0=s.v0, forcing=s.forcing, dt=dt, t_end=t_end, method=step)
+    ``closed-bdf1`` (the default) is the paper's Algorithm 1, ``closed-bdf2`` its BDF2 twin,
+    ``bdf1``/``bdf2`` the generic Newton solver, ``auto`` what :func:`lumped.simulate`
+    picks, and ``exact`` the event-driven reference of :mod:`lumped.reference`.
+    """
+    s = get_scenario(scenario) if isinstance(scenario, str) else scenario
+    if method not in PAPER_METHODS:
+        raise ValueError(f"`method` must be one of {PAPER_METHODS}, got {method!r}")
+    sol = simulate(scenario_scene(s), method=method, dt=dt, t_end=t_end)
+    return Trajectory(
+        t=sol.t, x=sol.x["mass"], v=sol.v["mass"], F_s=sol.F["spring"], F_d=sol.F["dashpot"],
+        method=sol.method, stats=sol.stats,
+    )

@@ -8,6 +8,9 @@ Methods (the same names on the command line):
     The closed-form steps of :mod:`lumped.bingham` (``closed-bdf1`` is the paper's
     Algorithm 1). Only for a scene that is exactly one mass with one ``linear_spring``
     and one ``bingham`` dashpot, both to ground; any other scene is refused.
+``exact``
+    The event-driven exact reference of :mod:`lumped.reference`, on the same grid; for
+    that same scene with no forcing or a sine burst (``{ kind = "sine", ... }``).
 ``auto`` (default)
     ``closed-bdf2`` for exactly that scene, ``bdf2`` otherwise.
 
@@ -24,6 +27,7 @@ import numpy as np
 
 from ._validate import as_positive
 from .bingham import BinghamOscillator, integrate, steps_for
+from .forcing import zero_forcing
 from .integrators import (
     BranchError,
     InconsistentInitialForce,
@@ -34,6 +38,7 @@ from .integrators import (
 )
 from .newton import NewtonOptions
 from .scene import GROUND, Mass, Scene
+from .trajectory import Trajectory
 
 __all__ = [
     "simulate",
@@ -173,19 +178,18 @@ def closed_form_oscillator(scene: Scene) -> tuple[BinghamOscillator, float, floa
     return osc, s_sign, d_sign
 
 
-def _run_closed(scene: Scene, formula: str, dt: float, n_steps: int, throw: bool,
-                options: NewtonOptions | None):
+def _run_single_mass(scene: Scene, method: str, make: Callable[..., Trajectory],
+                     dt: float, n_steps: int) -> tuple:
+    """Run a single-mass path (closed form or exact reference) and lay it out as the
+    scene's columns; ``make(osc, x0, v0, forcing, dt, n_steps) -> Trajectory``."""
     found = closed_form_oscillator(scene)
     if isinstance(found, str):
-        raise ValueError(f"method 'closed-{formula}' covers only one mass with a linear spring "
+        raise ValueError(f"method {method!r} covers only one mass with a linear spring "
                          f"and a Bingham dashpot to ground: {found}")
     osc, s_sign, d_sign = found
     mass = scene.nodes[0]
     fn = scene.forcing[0]
-    forcing = fn if fn is not None else (lambda t: 0.0)
-    traj = integrate(osc, x0=mass.x0, v0=mass.v0, forcing=forcing, dt=dt, n_steps=n_steps,
-                     method=formula)
-    cols = {"x": traj.x, "v": traj.v}
+    traj = make(osc, mass.x0, mass.v0, fn, dt, n_steps)
     F = np.empty((len(traj.t), 2))
     for e, el in enumerate(scene.elements):
         if el.law_name == "linear_spring":
@@ -195,10 +199,24 @@ def _run_closed(scene: Scene, formula: str, dt: float, n_steps: int, throw: bool
     if any(el.F0 is not None for el in scene.elements):
         _, F0, _ = consistent_initial_state(scene, time_scale=dt)
         F[0, :] = F0
-    data = np.column_stack([traj.t, cols["x"], cols["v"], F])
+    data = np.column_stack([traj.t, traj.x, traj.v, F])
     stats = {"steps": n_steps, "newton_iterations": 0, "residual_evals": 0,
              "jacobian_evals": 0, "factorizations": 0, "max_newton_iterations": 0}
     return data, stats, Status.SUCCESS, ""
+
+
+def _closed_trajectory(formula: str) -> Callable[..., Trajectory]:
+    def make(osc, x0, v0, forcing, dt, n_steps):
+        return integrate(osc, x0=x0, v0=v0, forcing=forcing if forcing is not None else
+                         zero_forcing, dt=dt, n_steps=n_steps, method=formula)
+
+    return make
+
+
+def _exact_trajectory(osc, x0, v0, forcing, dt, n_steps):
+    from .reference import reference_for_grid
+
+    return reference_for_grid(osc, x0=x0, v0=v0, forcing=forcing, dt=dt, t_end=n_steps * dt)
 
 
 def _run_generic(formula: str):
@@ -211,9 +229,9 @@ def _run_generic(formula: str):
     return runner
 
 
-def _closed(formula: str):
+def _single(method: str, make: Callable[..., Trajectory]):
     def runner(scene, dt, n_steps, throw, options):
-        return _run_closed(scene, formula, dt, n_steps, throw, options)
+        return _run_single_mass(scene, method, make, dt, n_steps)
 
     return runner
 
@@ -224,8 +242,9 @@ Runner = Callable[[Scene, float, int, bool, "NewtonOptions | None"], tuple]
 METHOD_REGISTRY: dict[str, Runner] = {
     "bdf1": _run_generic("bdf1"),
     "bdf2": _run_generic("bdf2"),
-    "closed-bdf1": _closed("bdf1"),
-    "closed-bdf2": _closed("bdf2"),
+    "closed-bdf1": _single("closed-bdf1", _closed_trajectory("bdf1")),
+    "closed-bdf2": _single("closed-bdf2", _closed_trajectory("bdf2")),
+    "exact": _single("exact", _exact_trajectory),
 }
 
 #: Every method name :func:`simulate` accepts (shared with ``lumped run --method``).
