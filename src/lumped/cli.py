@@ -80,6 +80,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, TypeError) as exc:
         print(f"lumped {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except (RuntimeError, FloatingPointError) as exc:  # a failed solve: not a usage error
+        print(f"lumped {args.command}: failed: {exc}", file=sys.stderr)
+        return 1
 
 
 def _run_paper(args: argparse.Namespace) -> int:
