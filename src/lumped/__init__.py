@@ -11,7 +11,6 @@ from .bingham import BinghamOscillator, bdf1_step, bdf2_step, integrate
 from .compare import compare
 from .forcing import SineBurst, paper_F1, paper_F2, zero_forcing
 from .laws import BUILTIN_LAWS, BoundLaw, ElementLaw, get_law
-from .reference import ExactSolution, ReferenceNotApplicable, exact_solution, reference_for_grid
 from .scene import GROUND, Element, Junction, Mass, Scene
 from .scenefile import load_scene
 from .simulate import (
@@ -26,6 +25,18 @@ from .simulate import (
 from .trajectory import StickSummary, Trajectory, summarize
 
 __version__ = "0.1.0"
+
+#: Names served lazily: the exact reference pulls in scipy.optimize, which only it needs.
+_LAZY = {name: "reference" for name in
+         ("ExactSolution", "ReferenceNotApplicable", "exact_solution", "reference_for_grid")}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    raise AttributeError(f"module 'lumped' has no attribute {name!r}")
 
 __all__ = [
     "BUILTIN_LAWS",
