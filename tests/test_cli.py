@@ -112,3 +112,14 @@ def test_run_and_compare_are_wired(tmp_path, capsys):
     assert "method 'exact' covers only one mass" in capsys.readouterr().err
     assert main(["compare", str(examples / "release-0.5.toml"), "--t-end", "0.2"]) == 0
     assert "ratio" in capsys.readouterr().out
+
+
+def test_generic_round_off_velocity_counts_as_rest_in_the_summary(capsys):
+    from lumped.scenarios import get_scenario, rest_velocity_tolerance
+    from lumped.trajectory import summarize
+
+    osc = get_scenario("forcing-F1").osc
+    traj = run_scenario("forcing-F1", method="bdf1", dt=1e-3, t_end=0.5)
+    assert np.abs(traj.v).max() <= 1e-30  # eq. (19) up to round-off
+    s = summarize(traj, v_tol=rest_velocity_tolerance(osc))
+    assert s.stick_time == pytest.approx(0.5) and s.last_stick_time is None

@@ -19,7 +19,15 @@ from pathlib import Path
 from . import __version__
 from ._validate import as_positive
 from .plotting import have_matplotlib, plot_trajectory
-from .scenarios import PAPER_DT, PAPER_METHODS, PAPER_SCENARIOS, PAPER_T_END, run_scenario
+from .scenarios import (
+    PAPER_DT,
+    PAPER_METHODS,
+    PAPER_SCENARIOS,
+    PAPER_T_END,
+    get_scenario,
+    rest_velocity_tolerance,
+    run_scenario,
+)
 from .trajectory import StickSummary, _fmt, summarize
 
 __all__ = ["main", "build_parser"]
@@ -108,7 +116,7 @@ def _run_paper(args: argparse.Namespace) -> int:
         traj.to_csv(out / f"{name}.csv")
         if plots:
             plot_trajectory(traj, out / f"{name}.png", title=f"{name} ({method}, dt = {dt:g})")
-        rows.append((name, summarize(traj)))
+        rows.append((name, summarize(traj, v_tol=rest_velocity_tolerance(get_scenario(name).osc))))
     print(format_summary(rows))
     print(f"wrote {len(rows)} scenario(s) to {out} with {method}, dt = {dt:g}, t_end = {t_end:g} "
           f"in {time.perf_counter() - started:.2f} s")
