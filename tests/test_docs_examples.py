@@ -11,13 +11,18 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_readme_python_example_runs(tmp_path, monkeypatch, capsys):
+def test_readme_python_examples_run(tmp_path, monkeypatch, capsys):
     text = (ROOT / "README.md").read_text()
-    block = text.split("```python", 1)[1].split("```", 1)[0]
+    blocks = [b.split("```", 1)[0] for b in text.split("```python")[1:]]
+    assert len(blocks) == 2
     monkeypatch.chdir(tmp_path)
-    exec(compile(block, "README.md", "exec"), {})
+    first = {}
+    exec(compile(blocks[0], "README.md", "exec"), first)
     assert (tmp_path / "F2.csv").exists()
     assert capsys.readouterr().out.strip()
+    second = {}
+    exec(compile(blocks[1], "README.md", "exec"), second)
+    assert second["sol"].ok and second["sol"].x["mass"].shape == (5001,)
 
 
 @pytest.mark.parametrize("script", ["paper_quickstart.py"])
