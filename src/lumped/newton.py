@@ -25,9 +25,9 @@ Convergence needs **both** tests:
   back-substitution, no new factorisation. A stale Jacobian from another piece is never
   used for this test (it could call a wrong piece's residual small). When the residual
   passes but the update does not, the test is retried once with the Jacobian of the
-  piece the Newton step points into (evaluated a hair along the step): at a kink the
-  solution may be exact up to rounding while the piece on the other side proposes a
-  long step.
+  piece the Newton step points into (evaluated a hair along the step, at least one ulp
+  in every moving unknown): at a kink the solution may be exact up to rounding while
+  the piece on the other side proposes a long step.
 
 On success the last (small) correction is applied too: it costs nothing more and makes
 the result exact up to rounding on piecewise-linear pieces.
@@ -366,8 +366,9 @@ def newton_solve(
             # At a kink the residual can be zero up to rounding while the Jacobian of the
             # piece on one side proposes a long step (no floating-point root exists on
             # either piece). Retry the update test with the Jacobian of the piece the
-            # step points into: a directional (B-)derivative, evaluated a hair along -du.
-            probe = [ui - 1e-8 * di for ui, di in zip(u, du, strict=True)]
+            # step points into: a directional (B-)derivative, evaluated a hair (at least
+            # one ulp) along -du.
+            probe = [_hair(ui, di) for ui, di in zip(u, du, strict=True)]
             _, J_dir, _ = evaluate(probe)
             n_res += 1
             if J_dir != J and all(finite(row) for row in J_dir):
@@ -419,6 +420,20 @@ def newton_solve(
         u, G, J, S = u_new, G_new, J_new, S_new
         norm = -1.0
         iters += 1
+
+
+def _hair(u: float, d: float) -> float:
+    """``u - 1e-8 d``, but at least one ulp away from ``u`` (towards ``-d``) when ``d != 0``.
+
+    The probe of the directional Jacobian must leave ``u`` for real: when the Newton
+    correction is below ``1e8`` ulps of ``u`` (e.g. ``F = tau`` exactly with the true
+    root ``1e-35`` beyond it), ``u - 1e-8 d`` rounds back to ``u`` and the probe would
+    read the very piece it is meant to look past.
+    """
+    p = u - 1e-8 * d
+    if p == u and d != 0.0:
+        p = math.nextafter(u, -math.inf if d > 0.0 else math.inf)
+    return p
 
 
 def _merit(G: Sequence[float], S: Sequence[float], floor: float) -> float:
