@@ -20,7 +20,10 @@ Convergence needs **both** tests:
 
 * residual: ``|G_i(u_{k+1})| <= rtol * S_i + atol`` for every row ``i``;
 * update: the next Newton correction ``delta = -J(u_{k+1})^{-1} G(u_{k+1})`` obeys
-  ``|delta_j| <= rtol * |u_j| + atol`` for every unknown ``j``. When ``J(u_{k+1})`` equals
+  ``|delta_j| <= rtol * |u_j| + atol`` for every unknown ``j`` -- or, failing that (and
+  the directional retry below), ``|delta_j| <= rtol * max(|u_j|, T_j) + atol`` with
+  ``T_j = min_i S_i / |J_ij|`` the scale of the terms ``u_j`` enters (no equation
+  changes by more than ``rtol`` of its terms). When ``J(u_{k+1})`` equals
   ``J_k`` (the same pieces of piecewise laws), the LU factors of ``J_k`` are reused: a
   back-substitution, no new factorisation. A stale Jacobian from another piece is never
   used for this test (it could call a wrong piece's residual small). When the residual
@@ -380,6 +383,12 @@ def newton_solve(
                     if finite(d2) and _update_ok(d2, u, rtol, atol):
                         u = [ui - di for ui, di in zip(u, d2, strict=True)]
                         return result(NewtonCode.SUCCESS)
+            # An unknown near zero whose rounding is set by large terms (a velocity
+            # v ~ 0 of a mass under forces ~1e5): its correction is measured against
+            # the terms it enters (see _update_ok_scaled).
+            if _update_ok_scaled(du, u, J, S, rtol, atol):
+                u = [ui - di for ui, di in zip(u, du, strict=True)]
+                return result(NewtonCode.SUCCESS)
         if iters >= options.max_iters:
             return result(NewtonCode.MAX_ITERS)
         lam = 1.0
@@ -456,6 +465,30 @@ def _residual_ok(G: Sequence[float], S: Sequence[float], rtol: float, atol: floa
 def _update_ok(du: Sequence[float], u: Sequence[float], rtol: float, atol: float) -> bool:
     for d, x in zip(du, u, strict=True):
         if not abs(d) <= rtol * abs(x) + atol:
+            return False
+    return True
+
+
+def _update_ok_scaled(du: Sequence[float], u: Sequence[float], J: Sequence[Sequence[float]],
+                      S: Sequence[float], rtol: float, atol: float) -> bool:
+    r"""The update test with the scale of the terms each unknown enters.
+
+    ``|du_j| <= rtol * max(|u_j|, T_j) + atol`` with ``T_j = min_i S_i / |J_ij|`` over
+    the rows ``i`` that contain ``u_j``: a correction that changes no equation by more
+    than ``rtol`` times the size of that equation's terms is negligible, whatever the
+    size of ``u_j`` itself (e.g. ``0``, where ``rtol |u_j|`` vanishes and ``atol`` in
+    the unknown's units may be far below its round-off). Used after the plain test.
+    """
+    for j, (d, x) in enumerate(zip(du, u, strict=True)):
+        a = abs(d)
+        if a <= rtol * abs(x) + atol:
+            continue
+        T = math.inf
+        for row, s in zip(J, S, strict=True):
+            c = abs(row[j])
+            if c > 0.0 and s / c < T:
+                T = s / c
+        if not a <= rtol * T + atol:  # T = inf (an empty column) fails too
             return False
     return True
 
