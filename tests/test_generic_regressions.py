@@ -211,3 +211,37 @@ def test_generic_bdf2_random_stuck_states_are_exact(x0, k, dt):
     assert np.all(sol.column("v_mass") == 0.0)
     assert np.all(F_d[1:] == -(k * x0))
     assert F_d[0] == pytest.approx(-(k * x0), rel=1e-15, abs=0.0)
+
+
+# ---------------------------------------------------------------------------------------
+# 4. further cases of the hard-case suite's random problems (huge gamma, large values)
+
+
+@pytest.mark.parametrize("v0", [0.0011, -0.0011, 2e-4])
+@pytest.mark.parametrize("gamma", [1e12, 1e9])
+def test_initial_force_of_a_moving_dashpot_below_an_ulp_of_tau(v0, gamma):
+    """``F = tau + v0 / gamma`` with ``v0 / gamma`` below an ulp of ``tau``: the law fixes
+    the force (correctly rounded), it is not a free stuck force."""
+    m, k, tau = 1.0, 1e8, 10.0
+    osc = BinghamOscillator(m, k, gamma, tau)
+    sol = simulate(scene_of(m, k, gamma, tau, v0=v0, forcing=zero_forcing), method="bdf2",
+                   dt=1e-5, t_end=1e-3)
+    assert sol.ok and sol.stats["steps"] == 100
+    assert sol.column("F_dashpot")[0] == initial_dashpot_force(osc, 0.0, v0, 0.0)
+    ref = closed(osc, x0=0.0, v0=v0, forcing=zero_forcing, dt=1e-5, n_steps=100,
+                 method="bdf2")
+    assert_close(sol.data[:, :4], ref[:, :4], rel=1e-9)
+    assert_close(sol.data[:, 4:], ref[:, 4:], rel=1e-9)
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_velocity_near_zero_under_large_forces(method):
+    """Forces ~3e5 and a velocity passing through 0: its round-off (~1e-11) is far above
+    ``atol``; the update test measures it against the terms it enters."""
+    osc = BinghamOscillator(1.0, 1.0, 1.0, 1e5)
+    sol = simulate(scene_of(1.0, 1.0, 1.0, 1e5, x0=100001.0, v0=200002.0,
+                            forcing=zero_forcing), method=method, dt=1.0, t_end=100.0)
+    assert sol.ok and sol.stats["steps"] == 100
+    ref = closed(osc, x0=100001.0, v0=200002.0, forcing=zero_forcing, dt=1.0, n_steps=100,
+                 method=method)
+    assert_close(sol.data, ref, rel=1e-9)

@@ -340,9 +340,11 @@ def _newton_failure(scene: Scene, res: NewtonResult, t: float, step: int) -> Sol
 def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
     """Solve ``R(q, F) = 0`` for ``F`` (``q`` fixed) by safeguarded Newton in a bracket.
 
-    Returns ``(F, pinned)``: ``pinned`` is False when the law is flat in ``F`` at the root
-    (``dR/dF = 0``: a set-valued law, e.g. a stuck Bingham dashpot), so that ``F`` is not
-    fixed by the law alone. Raises ValueError if no sign change is found.
+    Returns ``(F, pinned)``: ``pinned`` is False when the law is flat in ``F`` at an
+    exact root (``R = 0`` with ``dR/dF = 0``: a set-valued law, e.g. a stuck Bingham
+    dashpot), so that ``F`` is not fixed by the law alone; a root found only as a sign
+    change between neighbouring floats is isolated, hence pinned. Raises ValueError if
+    no sign change is found.
     """
     R, _, RF = kernel(q, F0)
     if R == 0.0:
@@ -380,8 +382,12 @@ def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
         if F_new == F or not (lo < F_new < hi):
             break
         F = F_new
-    R, _, RF = kernel(q, F)
-    return F, RF != 0.0
+    # No exact zero: the root lies between floating-point neighbours (e.g. a Bingham
+    # force tau + q / gamma with q / gamma below an ulp of tau, at the kink). The sign
+    # change isolates it, so the law fixes F there even if the nearest float sits on a
+    # flat piece: take the candidate with the smallest |R| (the correctly rounded root).
+    best = min((F, lo, hi), key=lambda c: abs(kernel(q, c)[0]))
+    return best, True
 
 
 def consistent_initial_state(
