@@ -5,8 +5,10 @@ One step is one discrete system in all unknowns at ``t_{n+1}``. BDF with fixed s
 ``m (v_{n+1} - v_hat) / h = net force at t_{n+1}``, with
 
 * BDF1 (backward Euler): ``h = dt``, ``x_hat = x_n``, ``v_hat = v_n``;
-* BDF2: ``h = 2 dt / 3``, ``x_hat = (4 x_n - x_{n-1}) / 3``, ``v_hat = (4 v_n - v_{n-1}) / 3``;
-  its first step is a BDF1 step.
+* BDF2: ``h = 2 dt / 3``, ``x_hat = (4 x_n - x_{n-1}) / 3``, ``v_hat = (4 v_n - v_{n-1}) / 3``,
+  computed as ``y_n + (y_n - y_{n-1}) / 3`` (the same value, but exact when
+  ``y_n == y_{n-1}``, so a stuck state stays put bit for bit; as
+  :func:`lumped.bingham.bdf2_step`); its first step is a BDF1 step.
 
 The positions are eliminated (``x_{n+1} = x_hat + h v_{n+1}``), which leaves the unknowns
 ``u = (v_1 .. v_N, F_1 .. F_E)`` -- every node's velocity and every element's force --
@@ -40,6 +42,7 @@ from __future__ import annotations
 
 import enum
 import math
+import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -140,8 +143,12 @@ class RunResult:
 
 def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[float],
                    vscale: Sequence[float], uref: list[float], x_hat: list[float],
-                   f: list[float], qs: list[float], rq: list[float], rf: list[float]):
+                   f: list[float], qs: list[float], rq: list[float], rf: list[float],
+                   roundoff: bool = False):
     """Build ``evaluate(u) -> (G, J, S)`` for one step size.
+
+    The scale of a law row is ``|dR/dq q| + |dR/dF F|``; with ``roundoff`` it is
+    :func:`_law_scale` (at least that, more where the law's terms cancel).
 
     ``uref, x_hat, f`` are read at call time (the step loop updates them in place);
     ``qs, rq, rf`` receive each element's ``q, dR/dq, dR/dF`` at the last evaluated point.
@@ -192,7 +199,8 @@ def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[
             q = qb - qa
             R, Rq, RF = kernel(q, Fe)
             G[k] = R
-            S[k] = abs(Rq * q) + abs(RF * Fe)
+            S[k] = (_law_scale(kernel, q, Fe, R, Rq, RF) if roundoff
+                    else abs(Rq * q) + abs(RF * Fe))
             row = J[k]
             row[k] = RF
             g = Rq * dq
@@ -215,12 +223,12 @@ def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[
 
 
 def _generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[float],
-                       f: list[float]):
+                       f: list[float], roundoff: bool = False):
     """The step system of :func:`_make_evaluate` (regular steps, ``v = u``, without the
     per-element side outputs) as generated, unrolled straight-line Python for this scene:
     no loops, no index lookups, constants inlined. Only indices and float literals enter
     the source (never a name from the scene), so a scene file cannot inject code. The
-    source is kept in ``__source__``."""
+    source is kept in ``__source__``. ``roundoff`` as in :func:`_make_evaluate`."""
     N, E = len(scene.nodes), len(scene.elements)
     n = N + E
     masses = scene.masses
@@ -245,9 +253,10 @@ def _generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[fl
             qb = f"u{b}" if b >= 0 else "0.0"
             qa = f"u{a}" if a >= 0 else "0.0"
             dq = 1.0
+        scale = (f"law_scale(k{e}, q, u{k}, R, Rq, RF)" if roundoff
+                 else f"abs(Rq * q) + abs(RF * u{k})")
         lines += [f"    q = {qb} - {qa}", f"    R, Rq, RF = k{e}(q, u{k})", f"    G{k} = R",
-                  f"    S{k} = abs(Rq * q) + abs(RF * u{k})", f"    g{e} = Rq * {dq!r}",
-                  f"    RF{e} = RF"]
+                  f"    S{k} = {scale}", f"    g{e} = Rq * {dq!r}", f"    RF{e} = RF"]
         J[k, k] = f"RF{e}"
         if a >= 0:
             lines += [f"    G{a} -= u{k}", f"    S{a} += abs(u{k})"]
@@ -262,13 +271,42 @@ def _generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[fl
     lines += ["    return ([" + ", ".join(f"G{i}" for i in range(n)) + "], [" + rows + "], ["
               + ", ".join(f"S{i}" for i in range(n)) + "])"]
     src = "\n".join(lines) + "\n"
-    namespace: dict = {"uref": uref, "xh": x_hat, "f": f, "abs": abs, "__builtins__": {}}
+    namespace: dict = {"uref": uref, "xh": x_hat, "f": f, "abs": abs, "law_scale": _law_scale,
+                       "__builtins__": {}}
     for e, el in enumerate(scene.elements):
         namespace[f"k{e}"] = el.law.kernel
     exec(compile(src, "<lumped step system>", "exec"), namespace)  # noqa: S102 - our own code
     evaluate = namespace["evaluate"]
     evaluate.__source__ = src
     return evaluate
+
+
+#: Unit roundoff of a double (``2**-52``).
+_EPS = sys.float_info.epsilon
+
+
+def _law_scale(kernel, q: float, F: float, R: float, Rq: float, RF: float) -> float:
+    r"""Scale of the terms of a law row ``R(q, F)``, for the residual test.
+
+    ``max(|R_q q| + |R_F F|, rho / eps)``, where ``rho`` is the largest change of ``R``
+    when ``q`` or ``F`` moves to a floating-point neighbour and ``eps = 2**-52``. On a
+    smooth piece ``rho / eps`` is about ``|R_q q| + |R_F F|`` again; where the law's terms
+    cancel it is their size. Example: a Bingham dashpot at ``F = tau`` exactly, stuck
+    piece (``R_F = 0``), with its true root ``1e-17`` beyond ``tau``: the residual is
+    ``gamma * 1e-17`` and only the terms ``gamma F`` and ``gamma tau`` (``rho / eps
+    ~ gamma tau``) show that this is round-off, not an error. Four kernel calls; used
+    where Newton iterates (the initial state, steps off the fast path).
+    """
+    lin = abs(Rq * q) + abs(RF * F)
+    rho = 0.0
+    inf = math.inf
+    for qq, FF in ((math.nextafter(q, -inf), F), (math.nextafter(q, inf), F),
+                   (q, math.nextafter(F, -inf)), (q, math.nextafter(F, inf))):
+        d = abs(kernel(qq, FF)[0] - R)
+        if d > rho and d != inf:  # NaN fails the comparison
+            rho = d
+    ro = rho / _EPS
+    return ro if ro > lin else lin
 
 
 def _where(scene: Scene, row: int) -> str:
@@ -302,9 +340,11 @@ def _newton_failure(scene: Scene, res: NewtonResult, t: float, step: int) -> Sol
 def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
     """Solve ``R(q, F) = 0`` for ``F`` (``q`` fixed) by safeguarded Newton in a bracket.
 
-    Returns ``(F, pinned)``: ``pinned`` is False when the law is flat in ``F`` at the root
-    (``dR/dF = 0``: a set-valued law, e.g. a stuck Bingham dashpot), so that ``F`` is not
-    fixed by the law alone. Raises ValueError if no sign change is found.
+    Returns ``(F, pinned)``: ``pinned`` is False when the law is flat in ``F`` at an
+    exact root (``R = 0`` with ``dR/dF = 0``: a set-valued law, e.g. a stuck Bingham
+    dashpot), so that ``F`` is not fixed by the law alone; a root found only as a sign
+    change between neighbouring floats is isolated, hence pinned. Raises ValueError if
+    no sign change is found.
     """
     R, _, RF = kernel(q, F0)
     if R == 0.0:
@@ -342,8 +382,12 @@ def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
         if F_new == F or not (lo < F_new < hi):
             break
         F = F_new
-    R, _, RF = kernel(q, F)
-    return F, RF != 0.0
+    # No exact zero: the root lies between floating-point neighbours (e.g. a Bingham
+    # force tau + q / gamma with q / gamma below an ulp of tau, at the kink). The sign
+    # change isolates it, so the law fixes F there even if the nearest float sits on a
+    # flat piece: take the candidate with the smallest |R| (the correctly rounded root).
+    best = min((F, lo, hi), key=lambda c: abs(kernel(q, c)[0]))
+    return best, True
 
 
 def consistent_initial_state(
@@ -456,7 +500,7 @@ def consistent_initial_state(
             q = q0[e] + scale * (at(d, b) - at(d, a))
             R, Rq, RF = kernels[e](q, Fe)
             G[k] = R
-            S[k] = abs(Rq * q) + abs(RF * Fe)
+            S[k] = _law_scale(kernels[e], q, Fe, R, Rq, RF)
             row[k] = RF
             if a >= 0:
                 row[a] = -Rq * scale * dd[a]
@@ -544,10 +588,14 @@ def run_bdf(
     x_hat, uref, f = [0.0] * N, [0.0] * N, [0.0] * N
     h1 = dt
     h2 = 2.0 * dt / 3.0
+    # the fast path tests with the linearised row scales; Newton proper (from the same
+    # start, when the fast path declines) with the round-off scales of _law_scale
     ev1 = _generate_evaluate(scene, h1, uref, x_hat, f)
-    ev2 = None
+    full1 = _generate_evaluate(scene, h1, uref, x_hat, f, roundoff=True)
+    ev2 = full2 = None
     if method == "bdf2":
         ev2 = _generate_evaluate(scene, h2, uref, x_hat, f)
+        full2 = _generate_evaluate(scene, h2, uref, x_hat, f, roundoff=True)
 
     # branch bookkeeping: q, dR/dq, dR/dF at the last accepted point of checked elements
     checked = [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)]
@@ -573,16 +621,20 @@ def run_bdf(
             f[i] = val
         if ev2 is None or step == 1:
             h = h1
-            evaluate = ev1
+            evaluate, full = ev1, full1
             for i in range(N):
                 x_hat[i] = x[i]
                 uref[i] = v[i]
         else:
             h = h2
-            evaluate = ev2
+            evaluate, full = ev2, full2
             for i in range(N):
-                x_hat[i] = (4.0 * x[i] - x_prev[i]) / 3.0
-                uref[i] = (4.0 * v[i] - v_prev[i]) / 3.0
+                # (4 y_n - y_{n-1}) / 3 as an increment: exact for a stuck state
+                # (y_n == y_{n-1}), where the textbook form is one ulp off for about one
+                # value in seven; the closed form (bingham.bdf2_step) uses the same formula
+                xi, vi = x[i], v[i]
+                x_hat[i] = xi + (xi - x_prev[i]) / 3.0
+                uref[i] = vi + (vi - v_prev[i]) / 3.0
         cache = cache1 if h == h1 else cache2
         u = _fast_step(evaluate, v + F, cache, rtol, atol) if fast else None
         if u is not None:  # the common case, counted as newton_solve would count it
@@ -593,7 +645,7 @@ def run_bdf(
             if it > max_it:
                 max_it = it
         else:
-            res = newton_solve(evaluate, v + F, options, cache)
+            res = newton_solve(full, v + F, options, cache)
             total_it += res.iterations
             res_ev += res.residual_evals
             jac_ev += res.jacobian_evals

@@ -20,14 +20,17 @@ Convergence needs **both** tests:
 
 * residual: ``|G_i(u_{k+1})| <= rtol * S_i + atol`` for every row ``i``;
 * update: the next Newton correction ``delta = -J(u_{k+1})^{-1} G(u_{k+1})`` obeys
-  ``|delta_j| <= rtol * |u_j| + atol`` for every unknown ``j``. When ``J(u_{k+1})`` equals
+  ``|delta_j| <= rtol * |u_j| + atol`` for every unknown ``j`` -- or, failing that (and
+  the directional retry below), ``|delta_j| <= rtol * max(|u_j|, T_j) + atol`` with
+  ``T_j = min_i S_i / |J_ij|`` the scale of the terms ``u_j`` enters (no equation
+  changes by more than ``rtol`` of its terms). When ``J(u_{k+1})`` equals
   ``J_k`` (the same pieces of piecewise laws), the LU factors of ``J_k`` are reused: a
   back-substitution, no new factorisation. A stale Jacobian from another piece is never
   used for this test (it could call a wrong piece's residual small). When the residual
   passes but the update does not, the test is retried once with the Jacobian of the
-  piece the Newton step points into (evaluated a hair along the step): at a kink the
-  solution may be exact up to rounding while the piece on the other side proposes a
-  long step.
+  piece the Newton step points into (evaluated a hair along the step, at least one ulp
+  in every moving unknown): at a kink the solution may be exact up to rounding while
+  the piece on the other side proposes a long step.
 
 On success the last (small) correction is applied too: it costs nothing more and makes
 the result exact up to rounding on piecewise-linear pieces.
@@ -366,8 +369,9 @@ def newton_solve(
             # At a kink the residual can be zero up to rounding while the Jacobian of the
             # piece on one side proposes a long step (no floating-point root exists on
             # either piece). Retry the update test with the Jacobian of the piece the
-            # step points into: a directional (B-)derivative, evaluated a hair along -du.
-            probe = [ui - 1e-8 * di for ui, di in zip(u, du, strict=True)]
+            # step points into: a directional (B-)derivative, evaluated a hair (at least
+            # one ulp) along -du.
+            probe = [_hair(ui, di) for ui, di in zip(u, du, strict=True)]
             _, J_dir, _ = evaluate(probe)
             n_res += 1
             if J_dir != J and all(finite(row) for row in J_dir):
@@ -379,6 +383,12 @@ def newton_solve(
                     if finite(d2) and _update_ok(d2, u, rtol, atol):
                         u = [ui - di for ui, di in zip(u, d2, strict=True)]
                         return result(NewtonCode.SUCCESS)
+            # An unknown near zero whose rounding is set by large terms (a velocity
+            # v ~ 0 of a mass under forces ~1e5): its correction is measured against
+            # the terms it enters (see _update_ok_scaled).
+            if _update_ok_scaled(du, u, J, S, rtol, atol):
+                u = [ui - di for ui, di in zip(u, du, strict=True)]
+                return result(NewtonCode.SUCCESS)
         if iters >= options.max_iters:
             return result(NewtonCode.MAX_ITERS)
         lam = 1.0
@@ -421,6 +431,20 @@ def newton_solve(
         iters += 1
 
 
+def _hair(u: float, d: float) -> float:
+    """``u - 1e-8 d``, but at least one ulp away from ``u`` (towards ``-d``) when ``d != 0``.
+
+    The probe of the directional Jacobian must leave ``u`` for real: when the Newton
+    correction is below ``1e8`` ulps of ``u`` (e.g. ``F = tau`` exactly with the true
+    root ``1e-35`` beyond it), ``u - 1e-8 d`` rounds back to ``u`` and the probe would
+    read the very piece it is meant to look past.
+    """
+    p = u - 1e-8 * d
+    if p == u and d != 0.0:
+        p = math.nextafter(u, -math.inf if d > 0.0 else math.inf)
+    return p
+
+
 def _merit(G: Sequence[float], S: Sequence[float], floor: float) -> float:
     """Largest relative residual ``|G_i| / (S_i + atol / rtol)`` (unit-free per row)."""
     m = 0.0
@@ -441,6 +465,30 @@ def _residual_ok(G: Sequence[float], S: Sequence[float], rtol: float, atol: floa
 def _update_ok(du: Sequence[float], u: Sequence[float], rtol: float, atol: float) -> bool:
     for d, x in zip(du, u, strict=True):
         if not abs(d) <= rtol * abs(x) + atol:
+            return False
+    return True
+
+
+def _update_ok_scaled(du: Sequence[float], u: Sequence[float], J: Sequence[Sequence[float]],
+                      S: Sequence[float], rtol: float, atol: float) -> bool:
+    r"""The update test with the scale of the terms each unknown enters.
+
+    ``|du_j| <= rtol * max(|u_j|, T_j) + atol`` with ``T_j = min_i S_i / |J_ij|`` over
+    the rows ``i`` that contain ``u_j``: a correction that changes no equation by more
+    than ``rtol`` times the size of that equation's terms is negligible, whatever the
+    size of ``u_j`` itself (e.g. ``0``, where ``rtol |u_j|`` vanishes and ``atol`` in
+    the unknown's units may be far below its round-off). Used after the plain test.
+    """
+    for j, (d, x) in enumerate(zip(du, u, strict=True)):
+        a = abs(d)
+        if a <= rtol * abs(x) + atol:
+            continue
+        T = math.inf
+        for row, s in zip(J, S, strict=True):
+            c = abs(row[j])
+            if c > 0.0 and s / c < T:
+                T = s / c
+        if not a <= rtol * T + atol:  # T = inf (an empty column) fails too
             return False
     return True
 
