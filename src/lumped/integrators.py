@@ -1,0 +1,609 @@
+r"""Generic BDF1 / BDF2 time stepping of a :class:`~lumped.scene.Scene`.
+
+One step is one discrete system in all unknowns at ``t_{n+1}``. BDF with fixed step
+``dt`` reads, for every node, ``x_{n+1} = x_hat + h v_{n+1}`` and (masses)
+``m (v_{n+1} - v_hat) / h = net force at t_{n+1}``, with
+
+* BDF1 (backward Euler): ``h = dt``, ``x_hat = x_n``, ``v_hat = v_n``;
+* BDF2: ``h = 2 dt / 3``, ``x_hat = (4 x_n - x_{n-1}) / 3``, ``v_hat = (4 v_n - v_{n-1}) / 3``;
+  its first step is a BDF1 step.
+
+The positions are eliminated (``x_{n+1} = x_hat + h v_{n+1}``), which leaves the unknowns
+``u = (v_1 .. v_N, F_1 .. F_E)`` -- every node's velocity and every element's force --
+and the equations (rows in that order)::
+
+    mass i:      (m_i / h)(v_i - v_hat_i) - f_i(t) - sum_{a_e = i} F_e + sum_{b_e = i} F_e = 0
+    junction i:                         - f_i(t) - sum_{a_e = i} F_e + sum_{b_e = i} F_e = 0
+    element e:   R_e(q_e, F_e) = 0,   q_e = x_b - x_a (spring) or v_b - v_a (dashpot)
+
+solved by :func:`lumped.newton.newton_solve` from the previous step's solution. The
+Jacobian is assembled from the kernels' ``dR/dq, dR/dF`` (``dq/dv = +-h`` for springs,
+``+-1`` for dashpots). Everything runs on Python floats.
+
+**Consistent initial state.** The same system with a vanishing step ``h = eps`` and the
+masses' accelerations as unknowns (``v_i = v_i(0) + eps a_i``) selects the initial
+forces that the limit ``dt -> 0`` of the implicit steps selects: a stuck dashpot takes
+the force that keeps its mass at rest if its law admits it, else the nearest admissible
+one (for the paper's scene ``clip(F(0) - k x0, -tau, tau)``, as
+:func:`lumped.bingham.initial_dashpot_force`), and junction velocities follow from the
+laws.
+
+**Branches of non-monotone laws.** After each step, every element whose law is not a
+known monotone built-in is checked for a jump between branches: if ``dR/dq`` or
+``dR/dF`` takes strictly opposite signs at the old and new point (or, when the step
+leaves the tangent of the law, at points sampled on the segment between them), the
+step has crossed or skipped a fold. The run stops with :class:`BranchError` (time,
+element, the two points) instead of jumping silently.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from .newton import FactorCache, NewtonCode, NewtonOptions, NewtonResult, newton_solve
+from .scene import Junction, Mass, Scene
+
+__all__ = [
+    "Status",
+    "SolverError",
+    "BranchError",
+    "InconsistentInitialForce",
+    "RunResult",
+    "consistent_initial_state",
+    "run_bdf",
+    "GENERIC_METHODS",
+    "MONOTONE_BUILTINS",
+]
+
+#: Generic step formulas by name.
+GENERIC_METHODS = ("bdf1", "bdf2")
+
+#: Built-in laws whose graph is monotone (no folds); their branch check is skipped.
+MONOTONE_BUILTINS = frozenset(
+    {"linear_spring", "string_spring", "newtonian", "bingham", "coulomb", "herschel_bulkley"}
+)
+
+
+class Status(enum.Enum):
+    """Outcome of a run."""
+
+    SUCCESS = "success"
+    MAX_ITERS = "max_iters"  #: Newton's iteration budget ran out
+    DIVERGED = "diverged"  #: Newton's line search found no decrease
+    SINGULAR = "singular"  #: singular step Jacobian
+    NON_FINITE = "non_finite"  #: NaN or infinity met
+    BRANCH_LOST = "branch_lost"  #: a non-monotone law would have jumped between branches
+
+
+class SolverError(RuntimeError):
+    """A step failed. Attributes: ``status``, ``t``, ``where`` (element or node), ``residual``."""
+
+    def __init__(self, message: str, *, status: Status, t: float, where: str,
+                 residual: float) -> None:
+        super().__init__(message)
+        self.status, self.t, self.where, self.residual = status, t, where, residual
+
+
+class BranchError(SolverError):
+    """A non-monotone law reached a fold: no solution continuous with the past."""
+
+
+class InconsistentInitialForce(ValueError):
+    """A user-supplied initial force breaks its element's law (or a junction balance)."""
+
+
+@dataclass
+class RunResult:
+    """Raw output of :func:`run_bdf`: rows ``[t, x_1, v_1, ..., F_1, ...]`` and counters."""
+
+    rows: list[list[float]]
+    stats: dict = field(default_factory=dict)
+    status: Status = Status.SUCCESS
+    message: str = ""
+
+
+# ---------------------------------------------------------------------------------------
+# the discrete system of one step
+
+
+def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[float],
+                   vscale: Sequence[float], uref: list[float], x_hat: list[float],
+                   f: list[float], qs: list[float], rq: list[float], rf: list[float]):
+    """Build ``evaluate(u) -> (G, J, S)`` for one step size; ``uref, x_hat, f`` are read
+    at call time (the step loop updates them in place); ``qs, rq, rf`` receive each
+    element's ``q, dR/dq, dR/dF`` at the last evaluated point."""
+    N = len(scene.nodes)
+    E = len(scene.elements)
+    n = N + E
+    kernels = tuple(el.law.kernel for el in scene.elements)
+    spring = tuple(el.kind == "spring" for el in scene.elements)
+    ea, eb = scene.elem_a, scene.elem_b
+    cm = tuple(cm)
+    vbase = tuple(vbase)
+    vscale = tuple(vscale)
+    nodes = range(N)
+    elements = tuple(
+        (e, N + e, ea[e], eb[e], spring[e], kernels[e]) for e in range(E)
+    )
+
+    def evaluate(u: list[float]):
+        G = [0.0] * n
+        S = [0.0] * n
+        J = [[0.0] * n for _ in range(n)]
+        vel = [vbase[i] + vscale[i] * u[i] for i in nodes]
+        for i in nodes:
+            c = cm[i]
+            fi = f[i]
+            if c:
+                p = c * u[i]
+                r = c * uref[i]
+                G[i] = (p - r) - fi
+                S[i] = abs(p) + abs(r) + abs(fi)
+                J[i][i] = c
+            else:
+                G[i] = -fi
+                S[i] = abs(fi)
+        for e, k, a, b, is_spring, kernel in elements:
+            Fe = u[k]
+            aF = abs(Fe)
+            if is_spring:
+                qb = x_hat[b] + h * vel[b] if b >= 0 else 0.0
+                qa = x_hat[a] + h * vel[a] if a >= 0 else 0.0
+                dq = h
+            else:
+                qb = vel[b] if b >= 0 else 0.0
+                qa = vel[a] if a >= 0 else 0.0
+                dq = 1.0
+            q = qb - qa
+            R, Rq, RF = kernel(q, Fe)
+            G[k] = R
+            S[k] = abs(Rq * q) + abs(RF * Fe)
+            row = J[k]
+            row[k] = RF
+            g = Rq * dq
+            if a >= 0:
+                G[a] -= Fe
+                S[a] += aF
+                J[a][k] = -1.0
+                row[a] = -g * vscale[a]
+            if b >= 0:
+                G[b] += Fe
+                S[b] += aF
+                J[b][k] = 1.0
+                row[b] = g * vscale[b]
+            qs[e] = q
+            rq[e] = Rq
+            rf[e] = RF
+        return G, J, S
+
+    return evaluate
+
+
+def _where(scene: Scene, row: int) -> str:
+    N = len(scene.nodes)
+    if row < N:
+        node = scene.nodes[row]
+        kind = "momentum balance" if isinstance(node, Mass) else "force balance"
+        return f"{kind} of node {node.name!r}"
+    el = scene.elements[row - N]
+    return f"law {el.law_name!r} of element {el.name!r}"
+
+
+def _newton_failure(scene: Scene, res: NewtonResult, t: float, step: int) -> SolverError:
+    where = _where(scene, res.worst_row)
+    r = res.residual[res.worst_row] if res.residual else math.nan
+    msg = (
+        f"Newton failed ({res.code.value}) at t = {t!r} (step {step}) after "
+        f"{res.iterations} iterations: largest residual {r!r} in the {where}"
+    )
+    return SolverError(msg, status=Status(res.code.value), t=t, where=where, residual=r)
+
+
+# ---------------------------------------------------------------------------------------
+# consistent initial state
+
+
+def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
+    """Solve ``R(q, F) = 0`` for ``F`` (``q`` fixed) by safeguarded Newton in a bracket.
+
+    Returns ``(F, pinned)``: ``pinned`` is False when the law is flat in ``F`` at the root
+    (``dR/dF = 0``: a set-valued law, e.g. a stuck Bingham dashpot), so that ``F`` is not
+    fixed by the law alone. Raises ValueError if no sign change is found.
+    """
+    R, _, RF = kernel(q, F0)
+    if R == 0.0:
+        return F0, RF != 0.0
+    # bracket: expand both ways from F0
+    lo = hi = None
+    step = 1.0 + abs(F0)
+    for _ in range(2000):
+        for cand in (F0 + step, F0 - step):
+            Rc = kernel(q, cand)[0]
+            if Rc == 0.0:
+                _, _, RFc = kernel(q, cand)
+                return cand, RFc != 0.0
+            if (Rc > 0.0) != (R > 0.0):
+                lo, hi = (F0, cand) if cand > F0 else (cand, F0)
+                break
+        if lo is not None or step > 1e300:
+            break
+        step *= 2.0
+    if lo is None:
+        raise ValueError(f"no root of the law in F at q = {q!r}")
+    R_lo = kernel(q, lo)[0]
+    F = F0 if lo <= F0 <= hi else 0.5 * (lo + hi)
+    for _ in range(400):
+        R, _, RF = kernel(q, F)
+        if R == 0.0:
+            return F, RF != 0.0
+        if (R > 0.0) == (R_lo > 0.0):
+            lo, R_lo = F, R
+        else:
+            hi = F
+        F_new = F - R / RF if RF != 0.0 else math.nan
+        if not (lo < F_new < hi):
+            F_new = 0.5 * (lo + hi)
+        if F_new == F or not (lo < F_new < hi):
+            break
+        F = F_new
+    R, _, RF = kernel(q, F)
+    return F, RF != 0.0
+
+
+def consistent_initial_state(
+    scene: Scene, *, time_scale: float = 1.0, options: NewtonOptions | None = None
+) -> tuple[list[float], list[float], dict]:
+    """Initial velocities of all nodes and forces of all elements at ``t = 0``.
+
+    Masses keep their given ``v0``. Then:
+
+    1. every element whose ``q`` is known at ``t = 0`` (all springs; dashpots between
+       masses and ground) gets its force from its own law, ``R(q0, F) = 0``, if the law
+       fixes it there (``dR/dF != 0``);
+    2. the rest -- forces of laws that are flat in ``F`` at ``q0`` (a stuck dashpot),
+       dashpots at junctions, junction velocities -- solve the limit ``h -> 0`` of an
+       implicit step: the masses' accelerations ``a`` are unknowns, a flat law is read
+       at ``q0 + h (a_b - a_a)`` with ``h = 1e-20 * time_scale``, junction balances hold.
+       A stuck dashpot thus takes the force that keeps its mass at rest if its law
+       admits it, else the nearest admissible one (for the paper's scene
+       ``clip(F(0) - k x0, -tau, tau)``, as :func:`lumped.bingham.initial_dashpot_force`).
+
+    User forces ``Element.F0`` are checked against the law at the initial state (and the
+    junction balances), then replace the computed ones.
+
+    Returns
+    -------
+    v, F, stats
+        Node velocities, element forces and Newton counters.
+
+    Raises
+    ------
+    InconsistentInitialForce
+        If a user ``F0`` breaks its element's law or a junction's force balance.
+    SolverError
+        If the algebraic system has no solution Newton can find.
+    """
+    options = options or NewtonOptions()
+    nodes, elements = scene.nodes, scene.elements
+    N, E = len(nodes), len(elements)
+    n = N + E
+    eps = 1e-20 * time_scale
+    is_mass = [isinstance(nd, Mass) for nd in nodes]
+    mass = [nd.m if isinstance(nd, Mass) else 0.0 for nd in nodes]
+    v0 = [nd.v0 if isinstance(nd, Mass) else 0.0 for nd in nodes]
+    x0 = [nd.x0 for nd in nodes]
+    ea, eb = scene.elem_a, scene.elem_b
+    f = scene.external_forces(0.0)
+
+    def at(vals: list[float], i: int) -> float:
+        return vals[i] if i >= 0 else 0.0
+
+    # 1. forces fixed by the laws alone
+    pinned: list[float | None] = [None] * E
+    q0 = [0.0] * E
+    for e, el in enumerate(elements):
+        a, b = ea[e], eb[e]
+        if el.kind == "spring":
+            q0[e] = at(x0, b) - at(x0, a)
+        elif all(i < 0 or is_mass[i] for i in (a, b)):
+            q0[e] = at(v0, b) - at(v0, a)
+        else:
+            continue  # a dashpot at a junction: its rate is unknown
+        guess = el.F0 if el.F0 is not None else 0.0
+        try:
+            F_root, fixed = _scalar_root(el.law.kernel, q0[e], guess)
+        except ValueError as err:
+            raise SolverError(
+                f"no consistent initial state: law {el.law_name!r} of element {el.name!r} "
+                f"has no force at q = {q0[e]!r}: {err}", status=Status.DIVERGED, t=0.0,
+                where=f"element {el.name!r}", residual=math.nan,
+            ) from None
+        if fixed:
+            pinned[e] = F_root
+    # 2. the limit system
+    kernels = [el.law.kernel for el in elements]
+    spring = [el.kind == "spring" for el in elements]
+
+    def evaluate(u: list[float]):
+        G = [0.0] * n
+        S = [0.0] * n
+        J = [[0.0] * n for _ in range(n)]
+        # d_i: the node's velocity increment (eps a for masses, v for junctions)
+        d = [eps * u[i] if is_mass[i] else u[i] for i in range(N)]
+        dd = [eps if is_mass[i] else 1.0 for i in range(N)]
+        for i in range(N):
+            if is_mass[i]:
+                p = mass[i] * u[i]
+                G[i] = p - f[i]
+                S[i] = abs(p) + abs(f[i])
+                J[i][i] = mass[i]
+            else:
+                G[i] = -f[i]
+                S[i] = abs(f[i])
+        for e in range(E):
+            k = N + e
+            Fe = u[k]
+            a, b = ea[e], eb[e]
+            for i, sgn in ((a, -1.0), (b, 1.0)):
+                if i >= 0:
+                    G[i] += sgn * Fe
+                    S[i] += abs(Fe)
+                    J[i][k] = sgn
+            row = J[k]
+            Fp = pinned[e]
+            if Fp is not None:
+                G[k] = Fe - Fp
+                S[k] = abs(Fe) + abs(Fp)
+                row[k] = 1.0
+                continue
+            scale = eps if spring[e] else 1.0  # springs see x0 + eps * v
+            q = q0[e] + scale * (at(d, b) - at(d, a))
+            R, Rq, RF = kernels[e](q, Fe)
+            G[k] = R
+            S[k] = abs(Rq * q) + abs(RF * Fe)
+            row[k] = RF
+            if a >= 0:
+                row[a] = -Rq * scale * dd[a]
+            if b >= 0:
+                row[b] = Rq * scale * dd[b]
+        return G, J, S
+
+    u0 = [0.0] * N + [
+        Fp if Fp is not None else (el.F0 if el.F0 is not None else 0.0)
+        for Fp, el in zip(pinned, elements, strict=True)
+    ]
+    # one solve per run: allow a generous budget (degenerate yields converge linearly)
+    ic_options = NewtonOptions(rtol=options.rtol, atol=options.atol,
+                               max_iters=max(options.max_iters, 200),
+                               max_backtracks=options.max_backtracks,
+                               free_steps=options.free_steps)
+    res = newton_solve(evaluate, u0, ic_options)
+    if res.code is not NewtonCode.SUCCESS:
+        err = _newton_failure(scene, res, 0.0, 0)
+        raise SolverError(
+            f"no consistent initial state: {err}", status=err.status, t=0.0,
+            where=err.where, residual=err.residual,
+        )
+    u = res.u
+    v = [v0[i] if is_mass[i] else u[i] for i in range(N)]
+    F = list(u[N:])
+    user = [e for e, el in enumerate(elements) if el.F0 is not None]
+    if user:
+        q_init = scene.elongations(x0, v)
+        for e in user:
+            el = elements[e]
+            R, Rq, RF = el.law.kernel(q_init[e], el.F0)
+            tol = 1e-9 * (abs(Rq * q_init[e]) + abs(RF * el.F0)) + 1e-12
+            if not abs(R) <= tol:
+                raise InconsistentInitialForce(
+                    f"initial force F0 = {el.F0!r} of element {el.name!r} breaks its law "
+                    f"{el.law_name!r}: R(q={q_init[e]!r}, F={el.F0!r}) = {R!r} != 0"
+                )
+            F[e] = el.F0
+        net = scene.net_forces(0.0, F)
+        for i, node in enumerate(nodes):
+            if isinstance(node, Junction):
+                scale = abs(f[i]) + sum(abs(F[e]) for e in range(E) if i in (ea[e], eb[e]))
+                if not abs(net[i]) <= 1e-9 * scale + 1e-12:
+                    raise InconsistentInitialForce(
+                        f"initial forces break the force balance of junction {node.name!r}: "
+                        f"net force {net[i]!r} != 0"
+                    )
+    stats = {
+        "newton_iterations": res.iterations, "residual_evals": res.residual_evals,
+        "jacobian_evals": res.jacobian_evals, "factorizations": res.factorizations,
+    }
+    return v, F, stats
+
+
+# ---------------------------------------------------------------------------------------
+# the step loop
+
+
+def run_bdf(
+    scene: Scene,
+    *,
+    method: str,
+    dt: float,
+    n_steps: int,
+    options: NewtonOptions | None = None,
+    throw: bool = True,
+) -> RunResult:
+    """Advance ``scene`` by ``n_steps`` fixed steps of BDF1 or BDF2 (first step BDF1).
+
+    Returns the rows ``[t, x_1, v_1, ..., x_N, v_N, F_1, ..., F_E]`` for ``t_n = n dt``
+    and the counters. On a failed step: raise :class:`SolverError` (``throw=True``) or
+    return the rows so far with ``status`` and ``message`` set.
+    """
+    if method not in GENERIC_METHODS:
+        raise ValueError(f"`method` must be one of {GENERIC_METHODS}, got {method!r}")
+    options = options or NewtonOptions()
+    N, E = len(scene.nodes), len(scene.elements)
+    v, F, ic_stats = consistent_initial_state(scene, time_scale=dt, options=options)
+    x = [n.x0 for n in scene.nodes]
+    masses = scene.masses
+    forcing = [(i, fn) for i, fn in enumerate(scene.forcing) if fn is not None]
+    isfinite = math.isfinite
+
+    qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
+    x_hat, uref, f = [0.0] * N, [0.0] * N, [0.0] * N
+    ones, zeros = [1.0] * N, [0.0] * N
+    h1 = dt
+    h2 = 2.0 * dt / 3.0
+    ev1 = _make_evaluate(scene, h1, [m / h1 for m in masses], zeros, ones, uref, x_hat, f,
+                         qs, rq, rf)
+    ev2 = None
+    if method == "bdf2":
+        ev2 = _make_evaluate(scene, h2, [m / h2 for m in masses], zeros, ones, uref, x_hat,
+                             f, qs, rq, rf)
+
+    # branch bookkeeping: q, dR/dq, dR/dF at the last accepted point of checked elements
+    checked = [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)]
+    prev_q = scene.elongations(x, v)
+    prev_d = [el.law.kernel(prev_q[e], F[e]) for e, el in enumerate(scene.elements)]
+
+    cache1, cache2 = FactorCache(), FactorCache()
+    rows = [[0.0, *_interleave(x, v), *F]]
+    total_it = res_ev = jac_ev = facts = 0
+    max_it = 0
+    status, message = Status.SUCCESS, ""
+    x_prev, v_prev = x, v
+    for step in range(1, n_steps + 1):
+        t = step * dt
+        for i, fn in forcing:
+            val = fn(t)
+            if not isfinite(val):
+                raise ValueError(
+                    f"force on node {scene.nodes[i].name!r} returned {val!r} at t = {t!r}"
+                )
+            f[i] = val
+        if ev2 is None or step == 1:
+            h = h1
+            evaluate = ev1
+            for i in range(N):
+                x_hat[i] = x[i]
+                uref[i] = v[i]
+        else:
+            h = h2
+            evaluate = ev2
+            for i in range(N):
+                x_hat[i] = (4.0 * x[i] - x_prev[i]) / 3.0
+                uref[i] = (4.0 * v[i] - v_prev[i]) / 3.0
+        res = newton_solve(evaluate, v + F, options, cache1 if h == h1 else cache2)
+        total_it += res.iterations
+        res_ev += res.residual_evals
+        jac_ev += res.jacobian_evals
+        facts += res.factorizations
+        if res.iterations > max_it:
+            max_it = res.iterations
+        if res.code is not NewtonCode.SUCCESS:
+            err = _newton_failure(scene, res, t, step)
+            if throw:
+                raise err
+            status, message = err.status, str(err)
+            break
+        u = res.u
+        v_new = u[:N]
+        x_new = [x_hat[i] + h * v_new[i] for i in range(N)]
+        F_prev, F = F, u[N:]
+        for e in checked:
+            q0, d0 = prev_q[e], prev_d[e]
+            if _left_branch(scene.elements[e].law.kernel, q0, F_prev[e], d0[1], d0[2],
+                            qs[e], F[e], rq[e], rf[e]):
+                el = scene.elements[e]
+                msg = (
+                    f"element {el.name!r} (law {el.law_name!r}) left its branch at t = {t!r} "
+                    f"(step {step}): from (q, F) = ({q0!r}, {F_prev[e]!r}) to "
+                    f"({qs[e]!r}, {F[e]!r}) the law's dR/dq or dR/dF changes sign -- a fold; "
+                    "there is no solution continuous with the past at this step"
+                )
+                err = BranchError(msg, status=Status.BRANCH_LOST, t=t,
+                                  where=f"law {el.law_name!r} of element {el.name!r}",
+                                  residual=res.residual[N + e])
+                if throw:
+                    raise err
+                status, message = Status.BRANCH_LOST, msg
+                break
+            prev_q[e] = qs[e]
+            prev_d[e] = (0.0, rq[e], rf[e])
+        if status is not Status.SUCCESS:
+            break
+        x_prev, v_prev, x, v = x, v, x_new, v_new
+        rows.append([t, *_interleave(x, v), *F])
+    steps = len(rows) - 1
+    stats = {
+        "steps": steps,
+        "newton_iterations": total_it,
+        "residual_evals": res_ev,
+        "jacobian_evals": jac_ev,
+        "factorizations": facts,
+        "max_newton_iterations": max_it,
+        "initial_newton_iterations": ic_stats["newton_iterations"],
+    }
+    return RunResult(rows, stats, status, message)
+
+
+def _interleave(x: Sequence[float], v: Sequence[float]) -> list[float]:
+    out = []
+    for xi, vi in zip(x, v, strict=True):
+        out.append(xi)
+        out.append(vi)
+    return out
+
+
+def _known_monotone(bound) -> bool:
+    """True for the built-in monotone laws (their graphs have no folds)."""
+    law = getattr(bound, "law", None)
+    name = getattr(law, "name", None)
+    if name not in MONOTONE_BUILTINS:
+        return False
+    try:
+        from .laws import BUILTIN_LAWS
+    except ImportError:  # the law library is not there: check everything
+        return False
+    builtin = BUILTIN_LAWS.get(name) if isinstance(BUILTIN_LAWS, dict) else None
+    return builtin is not None and (law is builtin or law == builtin)
+
+
+def _sign(x: float, scale: float) -> int:
+    if x > 1e-12 * scale:
+        return 1
+    if x < -1e-12 * scale:
+        return -1
+    return 0
+
+
+def _left_branch(kernel, q0: float, F0: float, Rq0: float, RF0: float,
+                 q1: float, F1: float, Rq1: float, RF1: float) -> bool:
+    """Did the step from ``(q0, F0)`` to ``(q1, F1)`` cross or skip a fold of ``R = 0``?
+
+    A fold is where ``dR/dF`` (or ``dR/dq``) changes sign strictly. The partial
+    derivatives at both ends are compared; when the step is not close to the tangent of
+    the law at either end (``|R_q dq + R_F dF|`` above half of ``|R_q dq| + |R_F dF|``),
+    three interior points of the segment are sampled too.
+    """
+    s0 = abs(Rq0) + abs(RF0)
+    s1 = abs(Rq1) + abs(RF1)
+    signs_q = {_sign(Rq0, s0), _sign(Rq1, s1)}
+    signs_F = {_sign(RF0, s0), _sign(RF1, s1)}
+    if {1, -1} <= signs_q or {1, -1} <= signs_F:
+        return True
+    dq, dF = q1 - q0, F1 - F0
+    off = 0.0
+    for Rq, RF in ((Rq0, RF0), (Rq1, RF1)):
+        total = abs(Rq * dq) + abs(RF * dF)
+        if total > 0.0:
+            off = max(off, abs(Rq * dq + RF * dF) / total)
+    if off <= 0.5:
+        return False
+    for s in (0.25, 0.5, 0.75):
+        _, Rq, RF = kernel(q0 + s * dq, F0 + s * dF)
+        sc = abs(Rq) + abs(RF)
+        signs_q.add(_sign(Rq, sc))
+        signs_F.add(_sign(RF, sc))
+        if {1, -1} <= signs_q or {1, -1} <= signs_F:
+            return True
+    return False
