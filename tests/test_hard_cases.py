@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lumped.bingham import BinghamOscillator, integrate
@@ -59,50 +59,131 @@ def _closed(method: str) -> Callable[..., Trajectory]:
 
 
 @dataclass(frozen=True)
+class Tol:
+    """Allowed residual: ``rel * scale + force * (the force-to-units factor of the check)``."""
+
+    rel: float
+    force: float
+
+
+#: The closed form: pure round-off (module docstring).
+ROUNDOFF = Tol(TOL, 0.0)
+
+
+def _newton_tol() -> Tol:
+    """The generic solver: its Newton stops at ``|G_i| <= rtol S_i + atol`` (defaults
+    ``1e-10, 1e-12``, rows in force units); we allow ten times that."""
+    from lumped.newton import NewtonOptions
+
+    opts = NewtonOptions()
+    return Tol(10.0 * opts.rtol, 10.0 * opts.atol)
+
+
+@dataclass(frozen=True)
 class Solver:
     name: str
     order: int  # 1: BDF1 throughout; 2: BDF2 after a BDF1 first step
     run: Callable[..., Trajectory]
+    tol: Tol = ROUNDOFF
+
+
+def _generic(method: str) -> Callable[..., Trajectory]:
+    """The generic semismooth-Newton steps of :func:`lumped.simulate.simulate`."""
+
+    def run(osc, *, x0, v0, forcing, dt, n_steps):
+        from lumped.laws import get_law
+        from lumped.scene import Element, Mass, Scene
+        from lumped.simulate import simulate
+
+        scene = Scene(
+            [Mass("mass", m=osc.m, x0=x0, v0=v0)],
+            [Element("spring", get_law("linear_spring").bind(k=osc.k), "ground", "mass"),
+             Element("dashpot", get_law("bingham").bind(gamma=osc.gamma, tau=osc.tau),
+                     "ground", "mass")],
+            {"mass": forcing},
+        )
+        sol = simulate(scene, method=method, dt=dt, t_end=n_steps * dt, throw=False)
+        assert sol.ok, f"failed solve: {sol.status} {sol.message}"
+        assert sol.stats["steps"] == n_steps
+        x = sol.column("x_mass")
+        return Trajectory(sol.t, x, sol.column("v_mass"), sol.column("F_spring"),
+                          sol.column("F_dashpot"), method=f"generic-{method}",
+                          stats=dict(sol.stats))
+
+    return run
 
 
 SOLVERS = (
     Solver("closed-bdf1", 1, _closed("bdf1")),
     Solver("closed-bdf2", 2, _closed("bdf2")),
+    Solver("generic-bdf1", 1, _generic("bdf1"), _newton_tol()),
+    Solver("generic-bdf2", 2, _generic("bdf2"), _newton_tol()),
 )
 
 
 # --------------------------------------------------------------------------- checks
 
 
-def forcing_values(forcing, dt: float, n: int) -> np.ndarray:
-    """``F(n dt)`` exactly as the steps evaluate it (``i * dt``)."""
-    return np.array([float(forcing(i * dt)) for i in range(n + 1)])
+def forcing_values(forcing, t: np.ndarray) -> np.ndarray:
+    """``F(t_n)`` on the solver's own grid (``t_n = n * dt``, as the steps evaluate it)."""
+    return np.array([float(forcing(float(ti))) for ti in t])
 
 
-def check_law(traj: Trajectory, osc: BinghamOscillator) -> None:
-    """Law (6) at every sample, to ``TOL`` relative to ``|F_d|``."""
-    v, Fd = traj.v, traj.F_d
-    stuck = v == 0.0
-    assert np.all(np.abs(Fd[stuck]) <= osc.tau * (1.0 + TOL)), "stuck beyond the yield force"
-    s = np.sign(v[~stuck])
-    expected = s * (osc.tau + np.abs(v[~stuck]) / osc.gamma)
-    normal = np.abs(expected) >= TINY  # else F_d may underflow to 0
-    assert np.all(np.sign(Fd[~stuck][normal]) == s[normal]), "sgn F_d != sgn v while slipping"
-    bad = np.abs(Fd[~stuck] - expected) > TOL * np.abs(Fd[~stuck]) + TINY
-    assert not np.any(bad), f"law (6) violated at {np.flatnonzero(bad)[:5]}"
+def check_law(
+    traj: Trajectory, osc: BinghamOscillator, F: np.ndarray, tol: Tol = ROUNDOFF,
+) -> None:
+    """Law (6) at every sample, to round-off.
 
+    Every sample must lie on one branch of the law:
 
-def _assert_small(residual, scale, what: str) -> None:
-    bad = np.abs(residual) > TOL * scale + TINY
+    * stick: ``|F_d| <= tau`` and ``v = 0`` -- exactly ``0`` for the closed form; an
+      iterative solver may leave a round-off velocity, accepted when
+      ``m |v| / dt <= TOL * S`` (``S`` the scale of the momentum balance, see
+      :func:`check_balance`: the velocity a round-off force residual produces);
+    * slip: ``sgn F_d = sgn v`` and ``F_d = sgn(v) (tau + |v| / gamma)`` to ``TOL |F_d|``.
+    """
+    m, k, tau = osc.m, osc.k, osc.tau
+    x, v, Fd = traj.x, traj.v, traj.F_d
+    dt = float(traj.t[1])
+    x_prev = np.concatenate([[x[0]], x[:-1]])
+    v_prev = np.concatenate([[v[0]], v[:-1]])
+    S = m * (np.abs(v) + np.abs(v_prev)) / dt + np.abs(F) + k * (np.abs(x) + np.abs(x_prev)) \
+        + np.abs(Fd)
+    within = np.abs(Fd) <= tau * (1.0 + tol.rel) + tol.force
+    stick = within & ((v == 0.0) | (m * np.abs(v) / dt <= tol.rel * S + tol.force + TINY))
+    sv = np.sign(v)
+    expected = sv * (tau + np.abs(v) / osc.gamma)
+    slip = (v != 0.0) & (np.abs(Fd - expected) <= tol.rel * np.abs(Fd) + tol.force + TINY) \
+        & ((np.sign(Fd) == sv) | (np.abs(expected) < TINY))  # F_d may underflow to 0
+    bad = ~(stick | slip)
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
         raise AssertionError(
-            f"{what}: residual {residual[i]!r} > {TOL:.1e} * scale {scale[i]!r} at step {i}"
+            f"law (6) violated at step {i}: v = {v[i]!r}, F_d = {Fd[i]!r}, tau = {tau!r}"
+        )
+    assert np.all(np.abs(Fd[v == 0.0]) <= tau * (1.0 + tol.rel) + tol.force), \
+        "stuck beyond the yield force"
+
+
+def _assert_small(residual, scale, what: str, tol: Tol = ROUNDOFF, force_units=0.0) -> None:
+    """``|residual| <= tol.rel * scale + tol.force * force_units`` (+ the subnormal floor)."""
+    bad = np.abs(residual) > tol.rel * scale + tol.force * force_units + TINY
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        raise AssertionError(
+            f"{what}: residual {residual[i]!r} > {tol.rel:.1e} * scale {scale[i]!r} "
+            f"(+ {tol.force:.1e} in force units) at step {i}"
         )
 
 
-def check_balance(traj: Trajectory, osc: BinghamOscillator, F: np.ndarray, order: int) -> None:
-    """The discrete ``x' = v`` and ``m v' = F - k x - F_d`` of the method, every step."""
+def check_balance(
+    traj: Trajectory, osc: BinghamOscillator, F: np.ndarray, order: int, tol: Tol = ROUNDOFF,
+) -> None:
+    """The discrete ``x' = v`` and ``m v' = F - k x - F_d`` of the method, every step.
+
+    A force residual ``r`` of the solver moves ``v`` by ``dt r / m`` and ``x`` by
+    ``dt^2 r / m``: the factors applied to ``tol.force``.
+    """
     m, k = osc.m, osc.k
     x, v, Fd = traj.x, traj.v, traj.F_d
     dt = float(traj.t[1])  # t_1 = 1 * dt exactly
@@ -110,22 +191,23 @@ def check_balance(traj: Trajectory, osc: BinghamOscillator, F: np.ndarray, order
     last = len(x) if order == 1 else 2
     sl, pr = slice(1, last), slice(0, last - 1)
     _assert_small(x[sl] - x[pr] - dt * v[sl],
-                  np.abs(x[sl]) + np.abs(x[pr]) + dt * np.abs(v[sl]), "BDF1 x' = v")
+                  np.abs(x[sl]) + np.abs(x[pr]) + dt * np.abs(v[sl]), "BDF1 x' = v",
+                  tol, dt * dt / m)
     force = F[sl] - k * x[sl] - Fd[sl]
     _assert_small(m * (v[sl] - v[pr]) / dt - force,
                   m * (np.abs(v[sl]) + np.abs(v[pr])) / dt + np.abs(F[sl])
                   + k * (np.abs(x[sl]) + np.abs(x[pr])) + np.abs(Fd[sl]),
-                  "BDF1 m v' = F - k x - F_d")
+                  "BDF1 m v' = F - k x - F_d", tol, 1.0)
     if order == 2 and len(x) > 2:
         n1, n0, nm = slice(2, None), slice(1, -1), slice(0, -2)
         _assert_small(3 * x[n1] - 4 * x[n0] + x[nm] - 2 * dt * v[n1],
                       3 * np.abs(x[n1]) + 4 * np.abs(x[n0]) + np.abs(x[nm])
-                      + 2 * dt * np.abs(v[n1]), "BDF2 x' = v")
+                      + 2 * dt * np.abs(v[n1]), "BDF2 x' = v", tol, dt * dt / m)
         force = F[n1] - k * x[n1] - Fd[n1]
         _assert_small(m * (3 * v[n1] - 4 * v[n0] + v[nm]) / (2 * dt) - force,
                       m * (3 * np.abs(v[n1]) + 4 * np.abs(v[n0]) + np.abs(v[nm])) / (2 * dt)
                       + np.abs(F[n1]) + k * (np.abs(x[n1]) + 4 * np.abs(x[n0]) + np.abs(x[nm]))
-                      + np.abs(Fd[n1]), "BDF2 m v' = F - k x - F_d")
+                      + np.abs(Fd[n1]), "BDF2 m v' = F - k x - F_d", tol, 1.0)
 
 
 def energy(osc: BinghamOscillator, x, v):
@@ -142,27 +224,38 @@ def g_energy(osc: BinghamOscillator, x1, v1, x0, v0):
     return 0.25 * (osc.k * (x1 * x1 + (2 * x1 - x0) ** 2) + osc.m * (v1 * v1 + (2 * v1 - v0) ** 2))
 
 
-def check_energy(traj: Trajectory, osc: BinghamOscillator, F: np.ndarray, order: int) -> None:
+def check_energy(
+    traj: Trajectory, osc: BinghamOscillator, F: np.ndarray, order: int, tol: Tol = ROUNDOFF,
+) -> None:
     """No energy created beyond the work ``dt F_{n+1} v_{n+1}`` of the forcing.
 
     BDF1 (and BDF2's first step): ``E_{n+1} - E_n = dt (F - F_d) v_{n+1}
     - m (dv)^2 / 2 - k (dx)^2 / 2 <= dt F v_{n+1}`` since ``F_d v >= 0``.
     BDF2 (``n >= 1``): ``Eg_{n+1} - Eg_n = dt (F - F_d) v_{n+1} - |y_{n+1} - 2 y_n
     + y_{n-1}|^2 / 4 <= dt F v_{n+1}``.  Unforced, BDF2 also has ``Eg_1 <= E_0``.
+    A force residual ``r`` of a solver does work of at most ``r`` times the distance
+    ``|x_{n+1}| + |x_n| + dt (|v_{n+1}| + |v_n|)``: the factor applied to ``tol.force``.
+    A round-off velocity left on the stick branch (accepted by :func:`check_law`) makes
+    ``dt F_d v`` of either sign: its size is added to the allowance (it is zero for the
+    closed form, whose stuck velocity is exactly 0).
     """
     x, v = traj.x, traj.v
     dt = float(traj.t[1])
     E = energy(osc, x, v)
     work = dt * F[1:] * v[1:]
+    on_stick = np.abs(traj.F_d[1:]) <= osc.tau * (1.0 + tol.rel) + tol.force
+    work = work + np.where(on_stick, dt * np.abs(traj.F_d[1:] * v[1:]), 0.0)
+    reach = np.abs(x[1:]) + np.abs(x[:-1]) + dt * (np.abs(v[1:]) + np.abs(v[:-1]))
     last = len(x) if order == 1 else 2
     gain = E[1:last] - E[: last - 1] - work[: last - 1]
     scale = E[1:last] + E[: last - 1] + np.abs(work[: last - 1])
-    _assert_small(np.maximum(gain, 0.0), scale, "BDF1 energy created")
+    _assert_small(np.maximum(gain, 0.0), scale, "BDF1 energy created", tol, reach[: last - 1])
     if order == 2 and len(x) > 2:
         Eg = g_energy(osc, x[1:], v[1:], x[:-1], v[:-1])  # Eg[j] pairs (y_{j+1}, y_j)
         gain = Eg[1:] - Eg[:-1] - work[1:]
         scale = Eg[1:] + Eg[:-1] + E[:-2] + E[1:-1] + E[2:] + np.abs(work[1:])
-        _assert_small(np.maximum(gain, 0.0), scale, "BDF2 G-energy created")
+        _assert_small(np.maximum(gain, 0.0), scale, "BDF2 G-energy created", tol,
+                      reach[1:] + reach[:-1])
         if not np.any(F):
             _assert_small(np.array([max(Eg[0] - E[0], 0.0)]), np.array([E[0] + E[1]]),
                           "BDF2 first G-energy above E_0")
@@ -176,15 +269,29 @@ def check_all(
     assert len(traj) == n_steps + 1
     for name in ("x", "v", "F_s", "F_d"):
         assert np.all(np.isfinite(getattr(traj, name))), name
-    F = forcing_values(forcing, dt, n_steps)
-    check_law(traj, osc)
-    check_balance(traj, osc, F, solver.order)
-    check_energy(traj, osc, F, solver.order)
+    F = forcing_values(forcing, traj.t)
+    check_law(traj, osc, F, solver.tol)
+    check_balance(traj, osc, F, solver.order, solver.tol)
+    check_energy(traj, osc, F, solver.order, solver.tol)
     return traj
 
 
 SOLVER_IDS = [s.name for s in SOLVERS]
 solvers = pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+CLOSED = SOLVERS[:2]
+GENERIC = SOLVERS[2:]
+
+
+def known_generic_failure(reason: str, only: str | None = None):
+    """Run the generic solver(s) as strict ``xfail``: a known defect of the generic
+    Newton solver found by these cases (reported to its authors), which turns into a
+    failure as soon as it is fixed, so the mark must then be removed."""
+    params = [pytest.param(s, id=s.name) for s in CLOSED]
+    for s in GENERIC:
+        marks = (pytest.mark.xfail(strict=True, reason=reason)
+                 if only is None or s.name == only else ())
+        params.append(pytest.param(s, id=s.name, marks=marks))
+    return pytest.mark.parametrize("solver", params)
 
 
 # --------------------------------------------------------------------------- cases
@@ -256,13 +363,19 @@ def _steps(levels: list[tuple[float, float]]) -> Callable[[float], float]:
 @solvers
 @pytest.mark.parametrize(
     "forcing",
-    [_square(5.0, 0.37), _square(1.0 + 1e-12, 0.01), _steps([(0.1, 50.0), (0.35, -80.0),
-                                                             (0.6, 0.0), (0.9, 1e6)])],
-    ids=["square", "square-at-yield", "steps"],
+    [_square(5.0, 0.37), _steps([(0.1, 50.0), (0.35, -80.0), (0.6, 0.0), (0.9, 1e6)])],
+    ids=["square", "steps"],
 )
 def test_forcing_with_jumps(solver, forcing):
     osc = BinghamOscillator(1.0, 100.0, 1.0, 1.0)
     check_all(solver, osc, x0=0.0, forcing=forcing, dt=1e-3, n_steps=2000)
+
+
+@known_generic_failure("generic: no consistent initial state when |F(0) - k x0| exceeds "
+                       "tau by 1e-12 (Newton max_iters with a residual of 1e-35)")
+def test_square_forcing_a_hair_above_the_yield_force(solver):
+    osc = BinghamOscillator(1.0, 100.0, 1.0, 1.0)
+    check_all(solver, osc, x0=0.0, forcing=_square(1.0 + 1e-12, 0.01), dt=1e-3, n_steps=2000)
 
 
 @solvers
@@ -278,13 +391,25 @@ def test_rapid_stick_slip(solver, dt):
         assert switches >= 50, switches  # 100 breakouts in 0.5 s, each ending in a stick
 
 
-@solvers
+@pytest.mark.parametrize("solver", CLOSED, ids=[s.name for s in CLOSED])
 @pytest.mark.parametrize("x0", [0.005, 0.1 / 100, 2.1060533511106927e-05, -0.0099999])
 def test_stuck_state_held_without_drift(solver, x0):
     """``|k x0| <= tau``, no forcing: a million steps reproduce ``x0`` bit for bit."""
     osc = BinghamOscillator(1.0, 100.0, 1.0, 1.0)
     n = 1_000_000
     traj = solver.run(osc, x0=x0, v0=0.0, forcing=zero_forcing, dt=1e-3, n_steps=n)
+    assert np.all(traj.x == x0)
+    assert np.all(traj.v == 0.0)
+    assert np.all(traj.F_d == -osc.k * x0)
+
+
+@known_generic_failure("generic BDF2 forms (4 x_n - x_{n-1}) / 3, which moves a stuck state "
+                       "by one ulp for about one x0 in seven", only="generic-bdf2")
+def test_generic_stuck_state_held_without_drift(solver):
+    """As above for the generic solver (1e5 steps: its steps cost ~10 us)."""
+    osc = BinghamOscillator(1.0, 100.0, 1.0, 1.0)
+    x0 = 2.1060533511106927e-05  # (4 x0 - x0) / 3 != x0 in floating point
+    traj = solver.run(osc, x0=x0, v0=0.0, forcing=zero_forcing, dt=1e-3, n_steps=100_000)
     assert np.all(traj.x == x0)
     assert np.all(traj.v == 0.0)
     assert np.all(traj.F_d == -osc.k * x0)
@@ -324,11 +449,19 @@ def hard_problems(draw):
     return BinghamOscillator(m, k, gamma, tau), x0, v0, forcing, dt
 
 
-@solvers
+@pytest.mark.parametrize("solver", CLOSED, ids=[s.name for s in CLOSED])
 @given(problem=hard_problems())
 def test_invariants_hold_on_random_hard_problems(solver, problem):
     osc, x0, v0, forcing, dt = problem
     check_all(solver, osc, x0=x0, v0=v0, forcing=forcing, dt=dt, n_steps=300)
+
+
+@pytest.mark.parametrize("solver", GENERIC, ids=[s.name for s in GENERIC])
+@settings(max_examples=100)  # ~10 us per generic step and a scene per example
+@given(problem=hard_problems())
+def test_invariants_hold_on_random_hard_problems_generic(solver, problem):
+    osc, x0, v0, forcing, dt = problem
+    check_all(solver, osc, x0=x0, v0=v0, forcing=forcing, dt=dt, n_steps=100)
 
 
 # --------------------------------------------------------------------------- the checks can fail
@@ -351,9 +484,13 @@ def test_checks_catch_a_wrong_step():
     with pytest.raises(AssertionError):
         check_balance(tamper(v=v_up), osc, F, 1)
     with pytest.raises(AssertionError):
-        check_law(tamper(F_d=good.F_d * (1.0 + 1e-10)), osc)
+        check_law(tamper(F_d=good.F_d * (1.0 + 1e-10)), osc, F)
     with pytest.raises(AssertionError):
-        check_law(tamper(F_d=-good.F_d), osc)
+        check_law(tamper(F_d=-good.F_d), osc, F)
+    stuck = integrate(osc, x0=0.005, dt=1e-3, n_steps=10)
+    with pytest.raises(AssertionError):  # a stuck mass that creeps
+        check_law(Trajectory(stuck.t, stuck.x, stuck.v + 1e-9, stuck.F_s, stuck.F_d,
+                             method="tampered"), osc, np.zeros(11))
     # A 0.1 % kick to an undamped oscillator (tau = 0, gamma = 1e12), on which BDF1
     # dissipates only ~(w dt)^2 / 2 = 5e-5 of E per step.
     free = BinghamOscillator(1.0, 100.0, 1e12, 0.0)
@@ -370,7 +507,7 @@ def test_checks_catch_a_wrong_step():
         check_balance(good, osc, F, 2)
 
 
-@solvers
+@pytest.mark.parametrize("solver", CLOSED, ids=[s.name for s in CLOSED])
 @given(x0=st.floats(-1.0, 1.0).filter(lambda x: x != 0.0), dt=_log(1e-9, 1.0))
 def test_random_stuck_states_are_exact(solver, x0, dt):
     """Any ``|k x0| <= tau`` is an exact fixed point of both steps (no round-off drift)."""
