@@ -569,6 +569,7 @@ class BenchReport:
     creep: list[dict]
     events: list[dict]
     unit_s: float
+    reference_s: dict[str, float]
     methods: tuple[str, ...]
     scenes: tuple[str, ...]
     wall_s: float = 0.0
@@ -606,8 +607,11 @@ def run_benchmark(
     say = progress or (lambda _msg: None)
     unit = measure_unit()
     runs: list[RunResult] = []
+    ref_s: dict[str, float] = {}
     for scene in scenes:
+        t0 = time.process_time()
         x_ref = reference_grid(scene, grid_dt)
+        ref_s[scene.name] = time.process_time() - t0
         for method in methods:
             for setting in _settings(method, scene, ladders):
                 row = run_one(scene, method, setting, x_ref, unit, ladders, grid_dt)
@@ -624,6 +628,7 @@ def run_benchmark(
         runs = [_rescale(r, unit_after) for r in runs]
         unit = unit_after
     return BenchReport(runs=runs, creep=creep_rows, events=event_rows, unit_s=unit,
+                       reference_s=ref_s,
                        methods=tuple(m.name for m in methods),
                        scenes=tuple(s.name for s in scenes),
                        wall_s=time.perf_counter() - start)
@@ -854,6 +859,12 @@ def markdown_tables(report: BenchReport, targets: Sequence[float] = TARGETS) -> 
                          f"{_ours_vs_scipy(best, scene, tgt, methods, ours)} |")
         lines.append("")
     lines += _overall_table(report, best, targets, ours)
+    if report.reference_s:
+        lines.append("For comparison, the exact event-driven reference on the same "
+                     f"{GRID_DT:g} grid (error at round-off level) took, in yardstick units: "
+                     + ", ".join(f"{k} {v / report.unit_s:.3g}"
+                                 for k, v in report.reference_s.items()) + ".")
+        lines.append("")
     failed = [r for r in report.runs if not r.ok]
     lines.append(f"Failed runs: {len(failed)} of {len(report.runs)}"
                  + (" (listed in the CSV with their messages)." if failed else "."))
