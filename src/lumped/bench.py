@@ -72,6 +72,7 @@ __all__ = [
     "summarize_runs",
     "creep_table",
     "write_csv",
+    "read_csv",
     "write_markdown",
     "write_plot",
     "observed_orders",
@@ -831,6 +832,19 @@ def write_csv(runs: Sequence[RunResult], path: str | Path) -> Path:
     return path
 
 
+def read_csv(path: str | Path) -> list[RunResult]:
+    """The runs written by :func:`write_csv` (to redraw tables or plots)."""
+    kinds = {f.name: f.type for f in fields(RunResult)}
+    out = []
+    with Path(path).open(newline="") as fh:
+        for row in csv.DictReader(fh):
+            out.append(RunResult(**{
+                k: (int(v) if kinds[k] in ("int", int) else
+                    float(v) if kinds[k] in ("float", float) else v)
+                for k, v in row.items()}))
+    return out
+
+
 def _csv_cell(value: object) -> object:
     if isinstance(value, float):
         return repr(value)
@@ -971,6 +985,7 @@ def write_plot(report: BenchReport, path: str | Path) -> str:
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
+        import matplotlib.ticker
     except ImportError:
         return "matplotlib is not installed: no plot written"
     path = Path(path)
@@ -996,6 +1011,7 @@ def write_plot(report: BenchReport, path: str | Path) -> str:
             ax.axhline(tgt, color="0.85", lw=0.5, zorder=0)
         ax.set_title(scene, fontsize=9)
         ax.tick_params(labelsize=7)
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     for ax in axes.flat[n:]:
         ax.axis("off")
     for ax in axes[-1]:
