@@ -24,8 +24,10 @@ a linear ODE with constant coefficients.  With ``u = x - x_eq``, ``x_eq = -s tau
 where ``Phi`` is the 2x2 propagator of the homogeneous equation written in a form
 that is stable in each regime (under-, critically, over-damped; ``expm1`` near
 critical damping, the slow root ``-w0^2 / (a + beta)`` for heavy damping) and
-``u_p = P sin(w t) + Q cos(w t)`` is the steady sinusoidal response
-(``u_p = -A t cos(w t) / (2 m w)`` at exact undamped resonance).
+``u_p = P sin(w t) + Q cos(w t)`` is the steady sinusoidal response.  Near resonance
+(light damping, ``w`` close to ``w0``) ``u_p`` would be huge and cancel against the free
+motion, so the forced part is then written as a Duhamel integral from rest at ``t0``,
+evaluated with ``expm1`` of complex arguments (exact resonance included).
 The slip ends when ``v`` returns to zero: the mass then sticks if
 ``|F(t) - k x| <= tau``, otherwise it reverses.
 
@@ -71,6 +73,8 @@ _EPS = np.finfo(float).eps
 _SAMPLES_PER_HALF_PERIOD = 16
 _SAMPLES_PER_FORCING_PERIOD = 32
 _CHUNK = 512
+#: Resonance magnification above which the forced response is written as a Duhamel integral.
+_NEAR_RESONANCE = 8.0
 
 
 class ReferenceNotApplicable(ValueError):
@@ -150,7 +154,7 @@ class _SlipArc:
     r"""Closed-form solution of ``m x'' + c x' + k x = F(t) - s tau`` from ``(t0, x0, v0)``."""
 
     def __init__(self, p: _Params, s: int, forced: bool, t0: float, x0: float, v0: float):
-        self.p, self.s, self.forced, self.t0 = p, s, forced, t0
+        self.p, self.s, self.forced, self.t0, self.v0 = p, s, forced, t0, v0
         m, k, c = p.m, p.k, p.c
         self.x_eq = -s * p.tau / k
         a = c / (2.0 * m)
@@ -167,33 +171,65 @@ class _SlipArc:
             self.beta = beta
             self.r1 = -self.w0sq / (a + beta)  # slow root, without cancellation
             self.r2 = -(a + beta)
-        # Particular solution u_p = P sin(w t) + Q cos(w t)  (or R t cos(w t) at resonance).
-        self.P = self.Q = self.R = 0.0
+        # Forced response.  Away from resonance: the steady sinusoid
+        # u_p = P sin(w t) + Q cos(w t).  Near resonance (magnification
+        # (k + m w^2) / sqrt(D) > _NEAR_RESONANCE, only possible when under-damped) u_p is
+        # huge and cancels against the free motion, so the response from rest at t0 is
+        # written as a Duhamel integral instead (see _duhamel).
+        self.P = self.Q = 0.0
         self.w = p.w if forced else 0.0
+        self.duhamel = False
+        amp_p = 0.0
         if forced:
-            det = k - m * p.w * p.w
-            D = det * det + (c * p.w) ** 2
-            if D == 0.0:
-                self.R = -p.A / (2.0 * m * p.w)
+            w = p.w
+            det = k - m * w * w
+            D = det * det + (c * w) ** 2
+            if self.regime == "under" and (k + m * w * w) > _NEAR_RESONANCE * math.sqrt(D):
+                self.duhamel = True
+                self.lam = complex(-a, self.wd)
+                amp_p = abs(p.A) / (k + m * w * w)
             else:
                 self.P = p.A * det / D
-                self.Q = -p.A * c * p.w / D
+                self.Q = -p.A * c * w / D
+                amp_p = math.hypot(self.P, self.Q)
         up0, dup0 = self._particular(t0, math)
         self.u0 = x0 - self.x_eq - up0
         self.du0 = v0 - dup0
-        amp_p = math.hypot(self.P, self.Q) + abs(self.R) * (1.0 + abs(self.w * t0))
-        self.v_scale = max(abs(v0), abs(self.du0), w0 * abs(self.u0), amp_p * max(self.w, w0),
-                           1e-300)
+        self.v_scale = max(abs(v0), abs(self.du0), w0 * abs(self.u0),
+                           amp_p * max(abs(self.w), w0), 1e-300)
 
     # -- formulas, generic over ``xp`` in {math, numpy} -------------------------------------
     def _particular(self, t, xp):
+        """Steady response ``(u_p, u_p')`` (zero on unforced or Duhamel arcs)."""
         w = self.w
-        if w == 0.0:
+        if w == 0.0 or self.duhamel:
             return 0.0 * t, 0.0 * t
         sn, cs = xp.sin(w * t), xp.cos(w * t)
-        if self.R != 0.0:
-            return self.R * t * cs, self.R * (cs - w * t * sn)
         return self.P * sn + self.Q * cs, w * (self.P * cs - self.Q * sn)
+
+    def _duhamel(self, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        r"""Response ``(u_f, u_f')`` at ``t0 + h`` to ``A sin(w t) / m`` from rest at ``t0``.
+
+        With ``lambda = -a + i w_d`` and ``g(s) = Im(e^{lambda s}) / w_d`` the impulse
+        response, ``u_f = (A/m) Im(e^{i w t0} J)``, ``J = (K(lambda) - K(conj lambda)) /
+        (2 i w_d)`` and ``K(mu) = int_0^h e^{mu (h - s)} e^{i w s} ds
+        = h e^{mu h} phi1((i w - mu) h)``, ``phi1(z) = expm1(z) / z``: no cancellation
+        however close ``i w`` is to ``lambda`` (exact undamped resonance included, where
+        ``phi1(0) = 1`` gives the secular term).  ``u_f' = (A/m) Im(e^{i w t0} J')`` with
+        ``J' = (lambda K(lambda) - conj(lambda) K(conj lambda)) / (2 i w_d)``.
+        """
+        h = np.asarray(h, dtype=float)
+        lam, lamc, w = self.lam, self.lam.conjugate(), self.w
+
+        def K(mu):
+            z = (1j * w - mu) * h
+            safe = np.where(z == 0, 1.0, z)
+            phi1 = np.where(z == 0, 1.0, np.expm1(safe) / safe)
+            return h * np.exp(mu * h) * phi1
+
+        k1, k2 = K(lam), K(lamc)
+        scale = self.p.A / self.p.m * np.exp(1j * w * self.t0) / (2j * self.wd)
+        return (scale * (k1 - k2)).imag, (scale * (lam * k1 - lamc * k2)).imag
 
     def _propagator(self, h, xp):
         """Entries of ``Phi(h)`` for ``u'' + 2a u' + w0^2 u = 0``."""
@@ -215,14 +251,26 @@ class _SlipArc:
 
     def state(self, t, xp=np):
         """``(x, v)`` at ``t`` (array with ``xp=numpy`` or float with ``xp=math``)."""
-        p11, p12, p21, p22 = self._propagator(t - self.t0, xp)
-        up, dup = self._particular(t, xp)
+        h = t - self.t0
+        p11, p12, p21, p22 = self._propagator(h, xp)
+        if self.duhamel:
+            up, dup = self._duhamel(h)
+            if xp is math:
+                up, dup = float(up), float(dup)
+        else:
+            up, dup = self._particular(t, xp)
         u = p11 * self.u0 + p12 * self.du0 + up
         du = p21 * self.u0 + p22 * self.du0 + dup
         return u + self.x_eq, du
 
     def v_scalar(self, t: float) -> float:
         return self.state(t, math)[1]
+
+    def accel(self, t: np.ndarray, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """``v'`` from the balance of momentum at the samples ``(t, x, v)`` of this arc."""
+        p = self.p
+        F = p.A * np.sin(p.w * t) if self.forced else 0.0
+        return (F - p.k * x - self.s * p.tau - p.c * v) / p.m
 
     def accel_scalar(self, t: float) -> float:
         x, v = self.state(t, math)
@@ -231,51 +279,47 @@ class _SlipArc:
 
     # -- sampling for root brackets -------------------------------------------------------------
     def sample_times(self, t_stop: float):
-        """Yield chunks of increasing sample times in ``(t0, t_stop]``, ending at ``t_stop``."""
-        fast_rate = self.w0 if self.regime == "under" else max(self.w0, -self.r2)
+        """Yield chunks of increasing sample times in ``(t0, t_stop]``, ending at ``t_stop``.
+
+        Spacing: 1/16 of the homogeneous half period ``pi / w_d`` and 1/32 of the forcing
+        period, preceded by a geometric ramp from 1/16 of the fastest time scale (a fast
+        over-damped transient).  Unforced and not oscillating, ``v`` is a sum of two
+        exponentials (at most one sign change) and the geometric ramp alone suffices.
+        """
+        span = t_stop - self.t0
+        if span <= 0.0:
+            yield np.array([t_stop])
+            return
+        fast_rate = {"under": self.w0, "critical": self.a}.get(self.regime)
+        if fast_rate is None:
+            fast_rate = -self.r2
         h_fast = 1.0 / (_SAMPLES_PER_HALF_PERIOD * fast_rate)
+        a0 = self.accel_scalar(self.t0)
+        if self.v0 * a0 < 0.0:  # decelerating: v may reach 0 after about |v0 / a0|
+            h_fast = min(h_fast, 0.25 * abs(self.v0 / a0))
         steps = []
         if self.regime == "under":
             steps.append(math.pi / self.wd / _SAMPLES_PER_HALF_PERIOD)
         if self.w != 0.0:
-            steps.append(2.0 * math.pi / self.w / _SAMPLES_PER_FORCING_PERIOD)
-        span = t_stop - self.t0
-        if steps:
-            h = min(steps)
-            head = np.empty(0)
-            if h_fast < h:  # resolve a fast transient (heavy damping) geometrically first
-                head = np.geomspace(h_fast, h, int(math.ceil(math.log2(h / h_fast))) + 1)[:-1]
-            start = 0
-            if head.size and head[-1] >= span:
-                head = head[head < span]
-            rel_head = head
-            n_uniform = int(math.ceil(span / h))
-            emitted_head = False
-            while True:
-                stop = min(start + _CHUNK, n_uniform)
-                rel = (np.arange(start + 1, stop + 1) * h)
-                if not emitted_head:
-                    rel = np.concatenate([rel_head, rel])
-                    emitted_head = True
-                rel = rel[rel < span]
-                last = stop >= n_uniform
-                ts = self.t0 + rel
-                if last:
-                    ts = np.append(ts, t_stop)
-                yield ts
-                if last:
-                    return
-                start = stop
-        else:
-            # No oscillation at all (over/critically damped, unforced): v has at most one
-            # sign change, so a geometric grid brackets it.
-            n = max(int(math.ceil(math.log2(max(span / h_fast, 2.0)))) + 1, 2)
-            rel = np.geomspace(h_fast, max(span, h_fast), n)
-            rel = rel[rel < span]
-            yield np.append(self.t0 + rel, t_stop)
+            steps.append(2.0 * math.pi / abs(self.w) / _SAMPLES_PER_FORCING_PERIOD)
+        h = min(steps) if steps else span
+        h_fast = max(h_fast, h * 2.0**-64)
+        if h_fast < h:
+            ramp = np.geomspace(h_fast, h, int(math.ceil(math.log2(h / h_fast))) + 1)[:-1]
+            ramp = ramp[ramp < span]
+            if ramp.size:
+                yield self.t0 + ramp
+        n_uniform = int(math.ceil(span / h))
+        for start in range(0, n_uniform, _CHUNK):
+            stop = min(start + _CHUNK, n_uniform)
+            rel = np.arange(start + 1, stop + 1) * h
+            ts = self.t0 + rel[rel < span]
+            if stop == n_uniform:
+                ts = np.append(ts, t_stop)
+            yield ts
 
 
-@dataclass
+@dataclass(frozen=True)
 class ExactSolution:
     """The exact solution: its phases, its events, and its values on ``t_eval``.
 
@@ -364,12 +408,22 @@ def exact_solution(
     -----
     *Slip -> stick.*  The zeros of ``v`` are bracketed on samples spaced at most
     1/16 of the half period ``pi / w_d`` of the homogeneous motion and 1/32 of the
-    forcing period (after a geometric start resolving a fast over-damped transient),
-    then refined by ``brentq``.  Between zeros of an unforced arc ``v`` changes sign
-    at every zero, so none is missed.  With forcing, a local minimum of ``|v|`` between
-    samples is refined (a zero of the acceleration) to catch a double root (grazing);
-    two simple zeros closer than the sampling that do not produce a sampled local
-    minimum could in principle be missed.
+    forcing period, after a geometric ramp that resolves a fast over-damped transient
+    and the stopping time ``|v0 / v'(t0)|``; then ``brentq`` refines them to a few
+    ulps.  Unforced, ``v`` changes sign at each of its (evenly spaced, or at most one)
+    zeros, so none is missed.  With forcing, a sign change of the acceleration
+    ``s v'`` from ``-`` to ``+`` between two samples reveals a local minimum of
+    ``s v``, which is located and checked: this catches a double root (grazing, taken
+    as a zero when ``|v|`` is within round-off) and two zeros between samples.
+    What can still be missed: two zeros of ``v`` *and* two zeros of ``v'`` between two
+    samples, i.e. structure faster than 1/32 of the forcing period or 1/16 of the
+    homogeneous half period.  A slip whose velocity never rises above round-off (a
+    break-out by a few ulps) is ended where ``s v`` falls below round-off.
+
+    *Stick -> slip.*  ``F(t) - k x`` is monotone between the extrema of the sine,
+    which are used as sample points, so the first crossing of ``+-tau`` is bracketed
+    exactly; a tangency (``|F - k x|`` touching ``tau`` to within a few ulps) is not a
+    break-out.
 
     *Stick -> slip.*  ``F(t) - k x`` is monotone between the extrema of the sine,
     which are used as sample points, so the first crossing of ``+-tau`` is bracketed
@@ -379,8 +433,15 @@ def exact_solution(
     *Ties.*  When ``|F - k x|`` equals ``tau`` to within a few ulps at a zero of
     ``v`` or at the start, the sign of its time derivative decides (then of the
     second derivative).
+
+    *Accuracy.*  ``x`` is exact up to round-off of order
+    ``eps (|x| + tau / k + |A| / sqrt(D) (1 + |w| t))`` with
+    ``D = (k - m w^2)^2 + (w / gamma)^2`` away from resonance (the steady sinusoid is
+    evaluated at the phase ``w t``); near resonance the Duhamel form has no such
+    amplification.  Event times are found to a relative accuracy of a few ulps of the
+    residual (``v`` or ``|F - k x| - tau``) divided by its slope.
     """
-    p, osc_gamma = _params_from(osc, m, k, gamma, tau, coulomb, forcing)
+    p = _params_from(osc, m, k, gamma, tau, coulomb, forcing)
     x0 = as_finite("x0", x0)
     v0 = as_finite("v0", v0)
     t_eval = _as_times(t_eval, "t_eval")
@@ -427,7 +488,7 @@ def reference_for_grid(
 # input checking
 
 
-def _params_from(osc, m, k, gamma, tau, coulomb, forcing) -> tuple[_Params, float | None]:
+def _params_from(osc, m, k, gamma, tau, coulomb, forcing) -> _Params:
     if not isinstance(coulomb, bool):
         raise TypeError(f"`coulomb` must be True or False, got {coulomb!r}")
     given = {"m": m, "k": k, "gamma": gamma, "tau": tau}
@@ -461,7 +522,7 @@ def _params_from(osc, m, k, gamma, tau, coulomb, forcing) -> tuple[_Params, floa
             "the exact reference covers only forcing=None, lumped.forcing.zero_forcing or a "
             f"lumped.forcing.SineBurst, got `forcing` = {forcing!r}"
         )
-    return _Params(m=m, k=k, c=c, tau=tau, A=A, w=w, t_off=t_off), gamma
+    return _Params(m=m, k=k, c=c, tau=tau, A=A, w=w, t_off=t_off)
 
 
 def _as_times(t, name: str) -> np.ndarray:
@@ -472,13 +533,14 @@ def _as_times(t, name: str) -> np.ndarray:
     if arr.ndim != 1 or arr.size == 0:
         raise ValueError(f"`{name}` must be a non-empty 1-D array of times, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
-        bad = arr[~np.isfinite(arr)][0]
+        bad = float(arr[~np.isfinite(arr)][0])
         raise ValueError(f"`{name}` must be finite, got {bad!r}")
     if arr[0] < 0.0:
-        raise ValueError(f"`{name}` must be non-negative, got {arr[0]!r}")
+        raise ValueError(f"`{name}` must be non-negative, got {float(arr[0])!r}")
     if arr.size > 1 and np.any(np.diff(arr) < 0.0):
         i = int(np.flatnonzero(np.diff(arr) < 0.0)[0])
-        raise ValueError(f"`{name}` must be non-decreasing, got {arr[i]!r} before {arr[i + 1]!r}")
+        raise ValueError(f"`{name}` must be non-decreasing, got {float(arr[i])!r} "
+                         f"before {float(arr[i + 1])!r}")
     return arr
 
 
@@ -626,55 +688,69 @@ def _breakout(p: _Params, t0: float, x: float, t_stop: float, forced: bool):
 
 
 def _zero_of_v(arc: _SlipArc, t_stop: float) -> float | None:
-    """First ``t`` in ``(t0, t_stop]`` with ``v(t) = 0`` on a slip arc, or ``None``."""
+    """First ``t`` in ``(t0, t_stop]`` with ``v(t) = 0`` on a slip arc, or ``None``.
+
+    A sign change of ``s v`` between samples is refined by ``brentq``.  A sign change
+    of the acceleration ``s v'`` from ``-`` to ``+`` between samples means a local
+    minimum of ``s v`` in between, which is located and checked (a double root, or two
+    roots closer than the sampling).
+    """
     s = arc.s
     t0 = arc.t0
     noise = 64.0 * _EPS * arc.v_scale
-    prev_t, prev_sv = t0, s * arc.v_scalar(t0)
+    prev_t, prev_sv, prev_sa = t0, s * arc.v_scalar(t0), s * arc.accel_scalar(t0)
     started = prev_sv > noise  # starting from rest: v must first become clearly positive
-    prev2_t = prev2_sv = None
     for ts in arc.sample_times(t_stop):
         if ts.size == 0:
             continue
-        _, v = arc.state(ts, np)
+        x, v = arc.state(ts, np)
         sv = s * v
+        sa = s * arc.accel(ts, x, v)
         for j in range(ts.size):
-            tj, svj = float(ts[j]), float(sv[j])
+            tj, svj, saj = float(ts[j]), float(sv[j]), float(sa[j])
             if not started:
-                if svj > noise:
-                    started = True
-                elif svj <= 0.0 and tj > t0:
-                    # v did not become positive at the first sample: look closer to t0.
+                if svj <= 0.0:
+                    # back to v <= 0 before v was clearly positive at a sample: look closer.
                     tp = _first_positive(arc, t0, tj, noise)
                     if tp is None:
-                        return tj if svj == 0.0 else _refine_root(arc, t0, tj)
+                        # The motion is below round-off (e.g. a break-out by a few ulps):
+                        # end the arc where s v drops below -noise, so that the event loop
+                        # advances without letting v run the wrong way.
+                        return _below_noise(arc, t0, tj, noise)
                     return _refine_root(arc, tp, tj)
-                prev_t, prev_sv = tj, svj
-                continue
-            if svj <= 0.0:
-                if svj == 0.0:
-                    return tj
-                return _refine_root(arc, prev_t, tj)
-            # a sampled local minimum of s v: check for a double root (grazing) in between
-            if prev2_t is not None and prev_sv < prev2_sv and prev_sv <= svj:
-                hit = _graze(arc, prev2_t, tj, noise)
+                started = svj > noise
+            elif svj <= 0.0:
+                return tj if svj == 0.0 else _refine_root(arc, prev_t, tj)
+            elif prev_sa < 0.0 < saj:
+                hit = _graze(arc, prev_t, tj, noise)
                 if hit is not None:
                     return hit
-            prev2_t, prev2_sv = prev_t, prev_sv
-            prev_t, prev_sv = tj, svj
+            prev_t, prev_sv, prev_sa = tj, svj, saj
     return None
 
 
 def _first_positive(arc: _SlipArc, t0: float, t1: float, noise: float) -> float | None:
+    """A time in ``(t0, t1)`` where ``s v > noise`` (dense and geometric sampling), or ``None``."""
+    span = t1 - t0
+    rel = np.unique(np.concatenate([np.geomspace(1e-12, 1.0, 49), np.linspace(0.0, 1.0, 257)]))
+    ts = t0 + span * rel[(rel > 0.0) & (rel < 1.0)]
+    ts = ts[ts > t0]
+    if ts.size == 0:
+        return None
+    sv = arc.s * arc.state(ts, np)[1]
+    hits = np.flatnonzero(sv > noise)
+    return float(ts[hits[0]]) if hits.size else None
+
+
+def _below_noise(arc: _SlipArc, t0: float, t1: float, noise: float) -> float:
     s = arc.s
-    h = t1 - t0
-    for _ in range(60):
-        h *= 0.5
-        if h <= 4.0 * _EPS * max(abs(t0), 1e-300):
-            return None
-        if s * arc.v_scalar(t0 + h) > 0.0:
-            return t0 + h
-    return None
+
+    def f(t):
+        return s * arc.v_scalar(t) + noise
+
+    if f(t1) >= 0.0:
+        return t1
+    return brentq(f, t0, t1, xtol=1e-300, rtol=4.0 * _EPS, maxiter=200)
 
 
 def _refine_root(arc: _SlipArc, lo: float, hi: float) -> float:
@@ -698,9 +774,9 @@ def _graze(arc: _SlipArc, lo: float, hi: float, noise: float) -> float | None:
     v_min = s * arc.v_scalar(t_min)
     if v_min > noise:
         return None
-    if v_min <= 0.0 and s * arc.v_scalar(lo) > 0.0 and v_min < 0.0:
+    if v_min < 0.0:  # two zeros in [lo, hi]: the first one (s v(lo) > 0 here)
         return _refine_root(arc, lo, t_min)
-    return t_min
+    return t_min  # touching zero within round-off: a grazing contact
 
 
 # ----------------------------------------------------------------------------------------------
