@@ -1,5 +1,8 @@
-"""Hand-written kernels following the `lumped.laws` contract (R, dR/dq, dR/dF), used by
-the solver tests until the law library lands."""
+"""Hand-written kernels following the `lumped.laws` contract (R, dR/dq, dR/dF).
+
+`law(name, **p)` returns the real built-in law (the tests run against it); `bound(...)`
+gives an independent hand-written kernel, used where a test needs a specific curve (the
+cubic S law ``q = F^3 - F``) or a deliberately broken law."""
 
 from __future__ import annotations
 

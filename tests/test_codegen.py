@@ -241,3 +241,12 @@ def test_compile_function_errors_and_nan():
     assert root(4.0) == 2.0 and math.isnan(root(-1.0))
     two = compile_function(sp.Max(q, F), [q, F])
     assert two(1.0, 2.0) == 2.0 and "def function(x0, x1)" in two.__source__
+
+
+def test_unguarded_kernels_have_no_try_and_raise_python_errors():
+    expr = parse_expression("sqrt(F) - q", ["q", "F"])
+    bare = compile_kernel(expr, q, F, {}, guard=False)
+    assert "try" not in bare.__source__ and "except" not in bare.__source__
+    assert bare(1.0, 4.0) == (1.0, -1.0, 0.25) == compile_kernel(expr, q, F, {})(1.0, 4.0)
+    with pytest.raises(ValueError):
+        bare(0.0, -1.0)

@@ -426,6 +426,9 @@ def test_bound_law_is_immutable_and_copies_its_parameters():
     assert bound == get_law("linear_spring").bind(k=100)
     assert "k=100.0" in repr(bound) and "linear_spring" in str(bound)
     assert bound.expression() == F_ - sp.Float(100.0) * q_
+    bound.kernel(1.0, 1.0)
+    copy = pickle.loads(pickle.dumps(bound))
+    assert copy == bound and copy.kernel(0.5, 1.0) == bound.kernel(0.5, 1.0)
     assert isinstance(bound, BoundLaw)
 
 
@@ -514,3 +517,17 @@ def test_coulomb_with_r_from_the_predictor_solves_a_bdf1_step_in_two_newton_iter
     assert z[1] == pytest.approx(v_c, abs=1e-9 * (1 + abs(force)))
     assert z[3] == pytest.approx(F_c, abs=1e-9 * (1 + abs(force)))
     assert z[0] == pytest.approx(x_c, abs=1e-9)
+
+
+@given(
+    d=st.floats(1e-9, 1e-3), gamma=st.sampled_from([3.3e11, 1e12]), sign=st.sampled_from([1, -1])
+)
+def test_bingham_residual_keeps_gamma_times_the_excess_force_accurate(d, gamma, sign):
+    # R = q - gamma*(F - clip(F)) is evaluated as written: distributing gamma over the
+    # difference (gamma*F - gamma*clip) would lose gamma * eps * |F| to cancellation
+    tau = 1.5
+    F = sign * (tau + d)
+    excess = F - sign * tau  # exact (Sterbenz)
+    q = gamma * excess
+    R = get_law("bingham").bind(gamma=gamma, tau=tau).residual(q, F)
+    assert abs(R) <= 2 * 2.0**-52 * abs(q)

@@ -117,3 +117,27 @@ def test_line_search_rescues_arctan():
 def test_bad_options(kw):
     with pytest.raises(ValueError, match=next(iter(kw))):
         NewtonOptions(**kw)
+
+
+@given(st.integers(1, DENSE_PYTHON_MAX).flatmap(
+    lambda n: st.tuples(st.lists(st.lists(entries, min_size=n, max_size=n), min_size=n,
+                                 max_size=n), st.lists(entries, min_size=n, max_size=n))))
+def test_unrolled_solve_is_lu_solve_bit_for_bit(Ab):
+    from lumped.newton import unrolled_lu_solve
+
+    A, b = Ab
+    f = lu_factor(A)
+    if f is not None:
+        assert unrolled_lu_solve(f)(b) == lu_solve(f, b)
+
+
+def test_factor_cache_reuses_factors_across_solves():
+    from lumped.newton import FactorCache
+
+    cache = FactorCache()
+    ev = _linear([[2.0, 1.0], [1.0, 3.0]], [3.0, 5.0])
+    first = newton_solve(ev, [0.0, 0.0], cache=cache)
+    assert first.factorizations == 1
+    for _ in range(3):
+        again = newton_solve(ev, [0.0, 0.0], cache=cache)
+        assert again.factorizations == 0 and again.u == first.u

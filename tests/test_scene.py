@@ -93,3 +93,16 @@ def test_orientation_of_forces():
     sc = Scene([Mass("m1", 1.0), Mass("m2", 1.0)], [spring("s", a="m1", b="m2")])
     assert sc.net_forces(0.0, [2.0]) == [2.0, -2.0]
     assert sc.elongations([1.0, 1.5], [0.0, 0.0]) == [0.5]
+
+
+@pytest.mark.parametrize("text", ["__import__('os').system('true')", "t.__class__",
+                                  "(lambda: 1)()", "open('x')", "t" + "+t" * 5000,
+                                  "(" * 200 + "t" + ")" * 200])
+def test_hostile_forcing_strings_are_refused(text):
+    with pytest.raises(ValueError, match="force on node 'mass'"):
+        Scene([Mass("mass", 1.0)], [spring()], {"mass": text})
+
+
+def test_forcing_string_is_compiled_safely():
+    sc = Scene([Mass("mass", 1.0)], [spring()], {"mass": "2*sin(3*t) + Abs(t - 1)"})
+    assert sc.forcing[0](0.5) == pytest.approx(2 * math.sin(1.5) + 0.5, rel=1e-15)

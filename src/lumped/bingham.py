@@ -224,8 +224,10 @@ def integrate(
     loop = _run_bdf1 if method == "bdf1" else _run_bdf2
     xs, vs, Fds, Fts = loop(osc, forcing, x0, v0, Fd0, dt, n)
     x_arr = np.array(xs)
+    with np.errstate(over="ignore", invalid="ignore"):  # Trajectory reports non-finite values
+        F_s = osc.k * x_arr
     return Trajectory(
-        t=np.arange(n + 1, dtype=float) * dt, x=x_arr, v=np.array(vs), F_s=osc.k * x_arr,
+        t=np.arange(n + 1, dtype=float) * dt, x=x_arr, v=np.array(vs), F_s=F_s,
         F_d=np.array(Fds), method=f"closed-{method}", stats={"steps": n},
         predictor=np.array(Fts),
     )

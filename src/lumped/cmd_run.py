@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .simulate import METHODS, simulate
+from .simulate import METHODS, SolverError, simulate
 
 __all__ = ["add_arguments", "run"]
 
@@ -28,7 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the scene; exit code 0 on success, 1 when the solver stopped early (the CSV
-    then holds the steps up to the failure). Bad files or settings raise ValueError."""
+    then holds the steps up to the failure) or found no consistent initial state. Bad
+    files, settings or initial forces raise ValueError."""
     from .scenefile import load_scene
 
     scene, settings = load_scene(args.scene)
@@ -39,7 +40,11 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"{args.scene}: no step size: give --dt or [solver] dt")
     if t_end is None:
         raise ValueError(f"{args.scene}: no final time: give --t-end or [solver] t_end")
-    sol = simulate(scene, method=method, dt=dt, t_end=t_end, throw=False)
+    try:
+        sol = simulate(scene, method=method, dt=dt, t_end=t_end, throw=False)
+    except SolverError as err:  # no consistent initial state: nothing to write
+        print(f"lumped run: {err}", file=sys.stderr)
+        return 1
     path = sol.to_csv(args.out)
     st = sol.stats
     print(f"{path}: {len(sol.t)} rows, method {sol.method}, {st['steps']} steps, "

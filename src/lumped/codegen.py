@@ -8,7 +8,10 @@ function as ``kernel.__source__``.
 
 Steps
 -----
-1. The parameters are substituted as float constants.
+1. The parameters are substituted as float constants, with sympy's automatic
+   distribution of numbers over sums switched off, so ``gamma*(F - p)`` is evaluated
+   as written and not as ``gamma*F - gamma*p`` (which loses ``gamma * eps * |F|`` to
+   cancellation when ``gamma`` is large).
 2. Every kink is rewritten as an explicit ``Piecewise`` (see *Generalised Jacobian*).
 3. ``dR/dq`` and ``dR/dF`` are taken symbolically, every ``Piecewise`` branch by
    branch with its conditions kept (:func:`diff_branchwise`).
@@ -59,6 +62,7 @@ import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 
 import sympy as sp
+from sympy.core.parameters import distribute
 from sympy.printing.pycode import PythonCodePrinter
 
 __all__ = [
@@ -481,18 +485,25 @@ def prepare(
     check_supported(residual)
     values = {sym: _constant(sym, value) for sym, value in params.items()}
     qq, FF = sp.Symbol("q"), sp.Symbol("F")
-    expr = residual.xreplace(values).xreplace({q: qq, F: FF})
+    with distribute(False):
+        expr = residual.xreplace(values).xreplace({q: qq, F: FF})
     unbound = sorted(str(s) for s in expr.free_symbols - {qq, FF})
     if unbound:
         raise ValueError(f"residual has symbols without a value: {', '.join(unbound)}")
     if expr.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
         raise ValueError(f"residual is undefined with these parameters: {expr}")
-    expr = rewrite_kinks(expr)
-    return expr, diff_branchwise(expr, qq), diff_branchwise(expr, FF)
+    with distribute(False):
+        expr = rewrite_kinks(expr)
+        return expr, diff_branchwise(expr, qq), diff_branchwise(expr, FF)
 
 
 def compile_kernel(
-    residual: sp.Expr, q: sp.Symbol, F: sp.Symbol, params: Mapping[sp.Symbol, float]
+    residual: sp.Expr,
+    q: sp.Symbol,
+    F: sp.Symbol,
+    params: Mapping[sp.Symbol, float],
+    *,
+    guard: bool = True,
 ) -> Kernel:
     """Compile ``residual`` into ``kernel(q, F) -> (R, dR/dq, dR/dF)`` on Python floats.
 
@@ -505,6 +516,11 @@ def compile_kernel(
     params
         A value for every other free symbol of ``residual``; substituted as float
         constants into the generated source.
+    guard
+        Wrap the body in ``try: ... except (ArithmeticError, ValueError): return nans``
+        (the default).  ``guard=False`` emits the bare body, which raises Python's
+        exceptions instead; that is the form to hand to a JIT such as numba, whose
+        ``error_model="numpy"`` turns domain errors into ``inf``/``nan`` by itself.
 
     Returns
     -------
@@ -527,32 +543,34 @@ def compile_kernel(
         q,
         F,
         tuple(sorted(((str(s), s, repr(float(v))) for s, v in params.items()), key=str)),
+        bool(guard),
     )
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
-    exprs = prepare(residual, q, F, params)
-    kernel = _build("kernel", ["q", "F"], list(exprs))
+    with distribute(False):  # keep gamma*(F - p) as written: no gamma*F - gamma*p
+        exprs = prepare(residual, q, F, params)
+        kernel = _build("kernel", ["q", "F"], list(exprs), guard=guard)
     kernel.expressions = exprs  # type: ignore[attr-defined]
     _CACHE[key] = kernel
     return kernel
 
 
-def _build(name: str, args: list[str], exprs: list[sp.Expr]) -> Callable:
+def _build(name: str, args: list[str], exprs: list[sp.Expr], *, guard: bool = True) -> Callable:
     """Generate, compile and return ``def name(*args): return exprs`` (see module doc)."""
     emitter = _Emitter()
     emitter.emit(0, f"def {name}({', '.join(args)}):")
-    emitter.emit(1, "try:")
-    codes = emitter.region(exprs, 2, _Scope({}, {}))
-    nans = ", ".join(["math.nan"] * len(codes))
-    if len(codes) == 1:
-        emitter.emit(2, f"return {codes[0]}")
+    depth = 1
+    if guard:
+        emitter.emit(1, "try:")
+        depth = 2
+    codes = emitter.region(exprs, depth, _Scope({}, {}))
+    result = codes[0] if len(codes) == 1 else f"({', '.join(codes)})"
+    nans = "math.nan" if len(codes) == 1 else f"({', '.join(['math.nan'] * len(codes))})"
+    emitter.emit(depth, f"return {result}")
+    if guard:
         emitter.emit(1, "except (ArithmeticError, ValueError):")
-        emitter.emit(2, "return math.nan")
-    else:
-        emitter.emit(2, f"return ({', '.join(codes)})")
-        emitter.emit(1, "except (ArithmeticError, ValueError):")
-        emitter.emit(2, f"return ({nans})")
+        emitter.emit(2, f"return {nans}")
     source = "\n".join(emitter.lines) + "\n"
     namespace: dict[str, object] = {"math": math, "__builtins__": dict(_NAMESPACE_BUILTINS)}
     exec(compile(source, f"<lumped {name}>", "exec"), namespace)  # noqa: S102 (our own source)
@@ -605,12 +623,14 @@ def compile_function(
     values = {sym: _constant(sym, v) for sym, v in params.items()}
     names = [f"x{i}" for i in range(len(args))]
     plain = {a: sp.Symbol(n) for a, n in zip(args, names, strict=True)}
-    expr = expr.xreplace(values).xreplace(plain)
+    with distribute(False):
+        expr = expr.xreplace(values).xreplace(plain)
     unbound = sorted(str(s) for s in expr.free_symbols - set(plain.values()))
     if unbound:
         raise ValueError(f"expression has symbols without a value: {', '.join(unbound)}")
     if expr.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
         raise ValueError(f"expression is undefined with these parameters: {expr}")
-    function = _build("function", names, [rewrite_kinks(expr)])
+    with distribute(False):
+        function = _build("function", names, [rewrite_kinks(expr)])
     _FUNCTION_CACHE[key] = function
     return function

@@ -1,7 +1,7 @@
 """Run the generic Newton path and the closed form on the same scene and compare them.
 
-Both paths run in the same process; the time per step of each is the best of
-``repeat`` runs, and the report gives their ratio (generic / closed), which is the
+Both paths run in the same process, interleaved; the time per step of each is the best
+of ``repeat`` runs, and the report gives their ratio (generic / closed), which is the
 project's speed yardstick (target: at most 3).
 """
 
@@ -74,17 +74,16 @@ def compare(scene: Scene, *, dt: float, t_end: float, method: str = "bdf2",
     if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
         raise ValueError(f"`repeat` must be a positive integer, got {repeat!r}")
 
-    def best(m: str) -> tuple[Solution, float]:
-        sol, best_t = None, float("inf")
-        for _ in range(repeat):
+    # interleave the runs so that both paths see the same machine load; keep the best
+    times = {method: float("inf"), f"closed-{method}": float("inf")}
+    sols: dict[str, Solution] = {}
+    for _ in range(repeat):
+        for m in times:
             t0 = time.perf_counter()
-            sol = simulate(scene, method=m, dt=dt, t_end=t_end)
-            best_t = min(best_t, time.perf_counter() - t0)
-        return sol, best_t
-
-    # interleave so both paths see the same machine load
-    gen, t_gen = best(method)
-    closed, t_closed = best(f"closed-{method}")
+            sols[m] = simulate(scene, method=m, dt=dt, t_end=t_end)
+            times[m] = min(times[m], time.perf_counter() - t0)
+    gen, closed = sols[method], sols[f"closed-{method}"]
+    t_gen, t_closed = times[method], times[f"closed-{method}"]
     steps = gen.stats["steps"]
     diff = np.abs(gen.data - closed.data).max(axis=0)
     scale = np.maximum(1.0, np.abs(closed.data).max(axis=0))

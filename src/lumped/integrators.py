@@ -43,7 +43,15 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from .newton import FactorCache, NewtonCode, NewtonOptions, NewtonResult, newton_solve
+from .newton import (
+    FactorCache,
+    NewtonCode,
+    NewtonOptions,
+    NewtonResult,
+    _residual_ok,
+    _update_ok,
+    newton_solve,
+)
 from .scene import Junction, Mass, Scene
 
 __all__ = [
@@ -63,7 +71,8 @@ GENERIC_METHODS = ("bdf1", "bdf2")
 
 #: Built-in laws whose graph is monotone (no folds); their branch check is skipped.
 MONOTONE_BUILTINS = frozenset(
-    {"linear_spring", "string_spring", "newtonian", "bingham", "coulomb", "herschel_bulkley"}
+    {"linear_spring", "string_spring", "newtonian", "bingham", "coulomb", "herschel_bulkley",
+     "implicit_spring"}
 )
 
 
@@ -97,12 +106,32 @@ class InconsistentInitialForce(ValueError):
 
 @dataclass
 class RunResult:
-    """Raw output of :func:`run_bdf`: rows ``[t, x_1, v_1, ..., F_1, ...]`` and counters."""
+    """Raw output of :func:`run_bdf`: the node displacements ``xs``, velocities ``vs`` and
+    element forces ``Fs`` of all samples (``t_n = n dt``), each flat (sample-major, so the
+    step loop creates no lasting containers for the garbage collector), and the counters."""
 
-    rows: list[list[float]]
+    dt: float
+    n_nodes: int
+    n_elements: int
+    xs: list[float]
+    vs: list[float]
+    Fs: list[float]
     stats: dict = field(default_factory=dict)
     status: Status = Status.SUCCESS
     message: str = ""
+
+    def as_array(self):
+        """``(n, 1 + 2 N + E)`` array: ``t``, then ``x_i, v_i`` per node, then ``F_e``."""
+        import numpy as np
+
+        N, E = self.n_nodes, self.n_elements
+        n = len(self.xs) // N
+        out = np.empty((n, 1 + 2 * N + E))
+        out[:, 0] = np.arange(n, dtype=float) * self.dt
+        out[:, 1:1 + 2 * N:2] = np.array(self.xs, dtype=float).reshape(n, N)
+        out[:, 2:2 + 2 * N:2] = np.array(self.vs, dtype=float).reshape(n, N)
+        out[:, 1 + 2 * N:] = np.array(self.Fs, dtype=float).reshape(n, E)
+        return out
 
 
 # ---------------------------------------------------------------------------------------
@@ -112,9 +141,12 @@ class RunResult:
 def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[float],
                    vscale: Sequence[float], uref: list[float], x_hat: list[float],
                    f: list[float], qs: list[float], rq: list[float], rf: list[float]):
-    """Build ``evaluate(u) -> (G, J, S)`` for one step size; ``uref, x_hat, f`` are read
-    at call time (the step loop updates them in place); ``qs, rq, rf`` receive each
-    element's ``q, dR/dq, dR/dF`` at the last evaluated point."""
+    """Build ``evaluate(u) -> (G, J, S)`` for one step size.
+
+    ``uref, x_hat, f`` are read at call time (the step loop updates them in place);
+    ``qs, rq, rf`` receive each element's ``q, dR/dq, dR/dF`` at the last evaluated point.
+    This loop version is the readable reference of the step system; the step loop runs its
+    generated twin :func:`_generate_evaluate` (tested equal)."""
     N = len(scene.nodes)
     E = len(scene.elements)
     n = N + E
@@ -182,6 +214,63 @@ def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[
     return evaluate
 
 
+def _generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[float],
+                       f: list[float]):
+    """The step system of :func:`_make_evaluate` (regular steps, ``v = u``, without the
+    per-element side outputs) as generated, unrolled straight-line Python for this scene:
+    no loops, no index lookups, constants inlined. Only indices and float literals enter
+    the source (never a name from the scene), so a scene file cannot inject code. The
+    source is kept in ``__source__``."""
+    N, E = len(scene.nodes), len(scene.elements)
+    n = N + E
+    masses = scene.masses
+    lines = ["def evaluate(u):"]
+    lines.append("    " + "".join(f"u{j}, " for j in range(n)) + "= u")
+    J: dict[tuple[int, int], str] = {}
+    for i in range(N):
+        c = masses[i] / h
+        if c:
+            lines += [f"    p = {c!r} * u{i}", f"    r = {c!r} * uref[{i}]", f"    fi = f[{i}]",
+                      f"    G{i} = (p - r) - fi", f"    S{i} = abs(p) + abs(r) + abs(fi)"]
+            J[i, i] = repr(c)
+        else:
+            lines += [f"    fi = f[{i}]", f"    G{i} = -fi", f"    S{i} = abs(fi)"]
+    for e, el in enumerate(scene.elements):
+        k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
+        if el.kind == "spring":
+            qb = f"(xh[{b}] + {h!r} * u{b})" if b >= 0 else "0.0"
+            qa = f"(xh[{a}] + {h!r} * u{a})" if a >= 0 else "0.0"
+            dq = h
+        else:
+            qb = f"u{b}" if b >= 0 else "0.0"
+            qa = f"u{a}" if a >= 0 else "0.0"
+            dq = 1.0
+        lines += [f"    q = {qb} - {qa}", f"    R, Rq, RF = k{e}(q, u{k})", f"    G{k} = R",
+                  f"    S{k} = abs(Rq * q) + abs(RF * u{k})", f"    g{e} = Rq * {dq!r}",
+                  f"    RF{e} = RF"]
+        J[k, k] = f"RF{e}"
+        if a >= 0:
+            lines += [f"    G{a} -= u{k}", f"    S{a} += abs(u{k})"]
+            J[a, k] = "-1.0"
+            J[k, a] = f"-g{e}"
+        if b >= 0:
+            lines += [f"    G{b} += u{k}", f"    S{b} += abs(u{k})"]
+            J[b, k] = "1.0"
+            J[k, b] = f"g{e}"
+    rows = ", ".join("[" + ", ".join(J.get((r, c), "0.0") for c in range(n)) + "]"
+                     for r in range(n))
+    lines += ["    return ([" + ", ".join(f"G{i}" for i in range(n)) + "], [" + rows + "], ["
+              + ", ".join(f"S{i}" for i in range(n)) + "])"]
+    src = "\n".join(lines) + "\n"
+    namespace: dict = {"uref": uref, "xh": x_hat, "f": f, "abs": abs, "__builtins__": {}}
+    for e, el in enumerate(scene.elements):
+        namespace[f"k{e}"] = el.law.kernel
+    exec(compile(src, "<lumped step system>", "exec"), namespace)  # noqa: S102 - our own code
+    evaluate = namespace["evaluate"]
+    evaluate.__source__ = src
+    return evaluate
+
+
 def _where(scene: Scene, row: int) -> str:
     N = len(scene.nodes)
     if row < N:
@@ -199,6 +288,10 @@ def _newton_failure(scene: Scene, res: NewtonResult, t: float, step: int) -> Sol
         f"Newton failed ({res.code.value}) at t = {t!r} (step {step}) after "
         f"{res.iterations} iterations: largest residual {r!r} in the {where}"
     )
+    if res.code is NewtonCode.SINGULAR:
+        msg += (" (singular step Jacobian: the laws do not determine all forces and "
+                "velocities, e.g. two rigid or stuck elements in parallel, or a junction "
+                "whose elements are all stuck)")
     return SolverError(msg, status=Status(res.code.value), t=t, where=where, residual=r)
 
 
@@ -434,9 +527,10 @@ def run_bdf(
 ) -> RunResult:
     """Advance ``scene`` by ``n_steps`` fixed steps of BDF1 or BDF2 (first step BDF1).
 
-    Returns the rows ``[t, x_1, v_1, ..., x_N, v_N, F_1, ..., F_E]`` for ``t_n = n dt``
-    and the counters. On a failed step: raise :class:`SolverError` (``throw=True``) or
-    return the rows so far with ``status`` and ``message`` set.
+    Returns the samples (see :class:`RunResult`; ``as_array()`` gives the columns ``t``,
+    ``x_i, v_i`` per node, ``F_e`` per element) and the counters. On a failed step: raise
+    :class:`SolverError` (``throw=True``) or return the samples so far with ``status`` and
+    ``message`` set.
     """
     if method not in GENERIC_METHODS:
         raise ValueError(f"`method` must be one of {GENERIC_METHODS}, got {method!r}")
@@ -444,21 +538,16 @@ def run_bdf(
     N, E = len(scene.nodes), len(scene.elements)
     v, F, ic_stats = consistent_initial_state(scene, time_scale=dt, options=options)
     x = [n.x0 for n in scene.nodes]
-    masses = scene.masses
     forcing = [(i, fn) for i, fn in enumerate(scene.forcing) if fn is not None]
     isfinite = math.isfinite
 
-    qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
     x_hat, uref, f = [0.0] * N, [0.0] * N, [0.0] * N
-    ones, zeros = [1.0] * N, [0.0] * N
     h1 = dt
     h2 = 2.0 * dt / 3.0
-    ev1 = _make_evaluate(scene, h1, [m / h1 for m in masses], zeros, ones, uref, x_hat, f,
-                         qs, rq, rf)
+    ev1 = _generate_evaluate(scene, h1, uref, x_hat, f)
     ev2 = None
     if method == "bdf2":
-        ev2 = _make_evaluate(scene, h2, [m / h2 for m in masses], zeros, ones, uref, x_hat,
-                             f, qs, rq, rf)
+        ev2 = _generate_evaluate(scene, h2, uref, x_hat, f)
 
     # branch bookkeeping: q, dR/dq, dR/dF at the last accepted point of checked elements
     checked = [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)]
@@ -466,7 +555,9 @@ def run_bdf(
     prev_d = [el.law.kernel(prev_q[e], F[e]) for e, el in enumerate(scene.elements)]
 
     cache1, cache2 = FactorCache(), FactorCache()
-    rows = [[0.0, *_interleave(x, v), *F]]
+    rtol, atol = options.rtol, options.atol
+    fast = options.free_steps >= 1
+    xs, vs, Fs = list(x), list(v), list(F)
     total_it = res_ev = jac_ev = facts = 0
     max_it = 0
     status, message = Status.SUCCESS, ""
@@ -492,48 +583,62 @@ def run_bdf(
             for i in range(N):
                 x_hat[i] = (4.0 * x[i] - x_prev[i]) / 3.0
                 uref[i] = (4.0 * v[i] - v_prev[i]) / 3.0
-        res = newton_solve(evaluate, v + F, options, cache1 if h == h1 else cache2)
-        total_it += res.iterations
-        res_ev += res.residual_evals
-        jac_ev += res.jacobian_evals
-        facts += res.factorizations
-        if res.iterations > max_it:
-            max_it = res.iterations
-        if res.code is not NewtonCode.SUCCESS:
-            err = _newton_failure(scene, res, t, step)
-            if throw:
-                raise err
-            status, message = err.status, str(err)
-            break
-        u = res.u
+        cache = cache1 if h == h1 else cache2
+        u = _fast_step(evaluate, v + F, cache, rtol, atol) if fast else None
+        if u is not None:  # the common case, counted as newton_solve would count it
+            it = u.pop()
+            total_it += it
+            res_ev += 1 + it
+            jac_ev += 1
+            if it > max_it:
+                max_it = it
+        else:
+            res = newton_solve(evaluate, v + F, options, cache)
+            total_it += res.iterations
+            res_ev += res.residual_evals
+            jac_ev += res.jacobian_evals
+            facts += res.factorizations
+            if res.iterations > max_it:
+                max_it = res.iterations
+            if res.code is not NewtonCode.SUCCESS:
+                err = _newton_failure(scene, res, t, step)
+                if throw:
+                    raise err
+                status, message = err.status, str(err)
+                break
+            u = res.u
         v_new = u[:N]
         x_new = [x_hat[i] + h * v_new[i] for i in range(N)]
         F_prev, F = F, u[N:]
+        q_new = scene.elongations(x_new, v_new) if checked else ()
         for e in checked:
             q0, d0 = prev_q[e], prev_d[e]
-            if _left_branch(scene.elements[e].law.kernel, q0, F_prev[e], d0[1], d0[2],
-                            qs[e], F[e], rq[e], rf[e]):
+            kernel = scene.elements[e].law.kernel
+            d1 = kernel(q_new[e], F[e])  # at the accepted point
+            if _left_branch(kernel, q0, F_prev[e], d0[1], d0[2], q_new[e], F[e], d1[1], d1[2]):
                 el = scene.elements[e]
                 msg = (
                     f"element {el.name!r} (law {el.law_name!r}) left its branch at t = {t!r} "
                     f"(step {step}): from (q, F) = ({q0!r}, {F_prev[e]!r}) to "
-                    f"({qs[e]!r}, {F[e]!r}) the law's dR/dq or dR/dF changes sign -- a fold; "
+                    f"({q_new[e]!r}, {F[e]!r}) the law's dR/dq or dR/dF changes sign -- a fold; "
                     "there is no solution continuous with the past at this step"
                 )
                 err = BranchError(msg, status=Status.BRANCH_LOST, t=t,
                                   where=f"law {el.law_name!r} of element {el.name!r}",
-                                  residual=res.residual[N + e])
+                                  residual=d1[0])
                 if throw:
                     raise err
                 status, message = Status.BRANCH_LOST, msg
                 break
-            prev_q[e] = qs[e]
-            prev_d[e] = (0.0, rq[e], rf[e])
+            prev_q[e] = q_new[e]
+            prev_d[e] = d1
         if status is not Status.SUCCESS:
             break
         x_prev, v_prev, x, v = x, v, x_new, v_new
-        rows.append([t, *_interleave(x, v), *F])
-    steps = len(rows) - 1
+        xs += x
+        vs += v
+        Fs += F
+    steps = len(xs) // N - 1
     stats = {
         "steps": steps,
         "newton_iterations": total_it,
@@ -543,14 +648,42 @@ def run_bdf(
         "max_newton_iterations": max_it,
         "initial_newton_iterations": ic_stats["newton_iterations"],
     }
-    return RunResult(rows, stats, status, message)
+    return RunResult(dt, N, E, xs, vs, Fs, stats, status, message)
 
 
-def _interleave(x: Sequence[float], v: Sequence[float]) -> list[float]:
-    out = []
-    for xi, vi in zip(x, v, strict=True):
-        out.append(xi)
-        out.append(vi)
+def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,
+               atol: float) -> list[float] | None:
+    """The common step of :func:`~lumped.newton.newton_solve`, without its bookkeeping.
+
+    When the Jacobian at ``u0`` equals the cached one (the laws stay on the same pieces),
+    Newton's path is: accept ``u0`` (0 iterations) or take the full step and accept it
+    after the simplified-Newton check with the same factors (1 iteration). This function
+    follows exactly that path -- same operations, same result -- and returns the solution
+    with the iteration count appended, or ``None`` when anything else would happen
+    (then the caller runs ``newton_solve`` from ``u0``).
+    """
+    G, J, S = evaluate(u0)
+    if J != cache.J or not math.isfinite(sum(G)):
+        return None
+    solve = cache.hit()
+    du = solve(G)
+    if not math.isfinite(sum(du)):
+        return None
+    if _residual_ok(G, S, rtol, atol):
+        if _update_ok(du, u0, rtol, atol):
+            out = [ui - di for ui, di in zip(u0, du, strict=True)]
+            out.append(0)
+            return out
+        return None  # newton_solve would try a directional Jacobian here
+    u1 = [ui - di for ui, di in zip(u0, du, strict=True)]
+    G1, J1, S1 = evaluate(u1)
+    if J1 != J or not math.isfinite(sum(G1)) or not _residual_ok(G1, S1, rtol, atol):
+        return None
+    d = solve(G1)
+    if not (math.isfinite(sum(d)) and _update_ok(d, u1, rtol, atol)):
+        return None
+    out = [ui - di for ui, di in zip(u1, d, strict=True)]
+    out.append(1)
     return out
 
 

@@ -375,6 +375,9 @@ class BoundLaw:
     def __setattr__(self, key: str, value: object) -> None:
         raise AttributeError(f"BoundLaw is immutable (cannot set {key!r})")
 
+    def __reduce__(self):  # pickling: the compiled kernel is rebuilt on first use
+        return (BoundLaw, (self.law, dict(self._params)))
+
     @property
     def params(self) -> dict[str, float]:
         return dict(self._params)

@@ -53,6 +53,7 @@ __all__ = [
     "NewtonResult",
     "FactorCache",
     "newton_solve",
+    "unrolled_lu_solve",
     "lu_factor",
     "lu_solve",
     "DENSE_PYTHON_MAX",
@@ -95,8 +96,8 @@ class NewtonOptions:
 
     rtol: float = 1e-10
     atol: float = 1e-12
-    max_iters: int = 25
-    max_backtracks: int = 12
+    max_iters: int = 50
+    max_backtracks: int = 40
     free_steps: int = 2
 
     def __post_init__(self) -> None:
@@ -220,7 +221,12 @@ def _factor(J: list[list[float]]):
         f = lu_factor(J)
         if f is None:
             return None
-        return lambda b: lu_solve(f, b)
+
+        def solve(b: Sequence[float]) -> list[float]:
+            return lu_solve(f, b)
+
+        solve.factors = f  # type: ignore[attr-defined]
+        return solve
     try:
         return _NumpyLU(J).solve
     except (ZeroDivisionError, ValueError):
@@ -235,11 +241,45 @@ class FactorCache:
     and counts no factorisation.
     """
 
-    __slots__ = ("J", "solve")
+    __slots__ = ("J", "solve", "hits")
 
     def __init__(self) -> None:
         self.J: list[list[float]] | None = None
         self.solve = None
+        self.hits = 0
+
+    def store(self, J: list[list[float]], solve) -> None:
+        self.J, self.solve, self.hits = J, solve, 0
+
+    def hit(self):
+        """The cached solver; from the second reuse on, an unrolled one (same arithmetic)."""
+        self.hits += 1
+        if self.hits == 2 and hasattr(self.solve, "factors"):
+            self.solve = unrolled_lu_solve(self.solve.factors)
+        return self.solve
+
+
+def unrolled_lu_solve(factors: tuple[list[list[float]], list[int]]):
+    """:func:`lu_solve` for fixed factors as generated straight-line code.
+
+    The same operations in the same order as :func:`lu_solve` (so the same results, bit
+    for bit), with the factors inlined as float literals (``repr`` round-trips exactly).
+    Worth its compilation (~0.1 ms) only for factors that are reused many times.
+    """
+    LU, perm = factors
+    n = len(LU)
+    lines = ["def solve(b):"]
+    lines += [f"    y{i} = b[{perm[i]}]" for i in range(n)]
+    for i in range(1, n):
+        terms = "".join(f" - {LU[i][j]!r} * y{j}" for j in range(i))
+        lines.append(f"    y{i} = y{i}{terms}")
+    for i in range(n - 1, -1, -1):
+        terms = "".join(f" - {LU[i][j]!r} * y{j}" for j in range(i + 1, n))
+        lines.append(f"    y{i} = (y{i}{terms}) / {LU[i][i]!r}")
+    lines.append("    return [" + ", ".join(f"y{i}" for i in range(n)) + "]")
+    namespace: dict = {"__builtins__": {}}
+    exec(compile("\n".join(lines) + "\n", "<lumped LU solve>", "exec"), namespace)  # noqa: S102
+    return namespace["solve"]
 
 
 def newton_solve(
@@ -275,6 +315,8 @@ def newton_solve(
 
     def result(code: NewtonCode) -> NewtonResult:
         worst, worst_ratio = 0, -1.0
+        if code is NewtonCode.SUCCESS:
+            return NewtonResult(u, code, iters, n_res, n_jac, n_fact, G, worst, J)
         for i in range(n):
             r = abs(G[i]) / (rtol * S[i] + atol)
             if not r <= worst_ratio:  # NaN counts as worst
@@ -290,7 +332,7 @@ def newton_solve(
     if not (finite(G) and finite(u)):
         return result(NewtonCode.NON_FINITE)
     floor = atol / rtol
-    norm = _merit(G, S, floor)
+    norm = -1.0  # the merit of the current iterate, computed when a line search needs it
     solve_prev = None
     J_prev: list[list[float]] | None = None
     while True:
@@ -306,14 +348,14 @@ def newton_solve(
                 return result(NewtonCode.SUCCESS)
         n_jac += 1
         if cache is not None and cache.J == J:
-            solve = cache.solve
+            solve = cache.hit()
         else:
             solve = _factor(J)
             n_fact += 1
             if solve is None:
                 return result(NewtonCode.SINGULAR)
             if cache is not None:
-                cache.J, cache.solve = J, solve
+                cache.store(J, solve)
         du = solve(G)  # J du = G; the step is -du
         if not finite(du):
             return result(NewtonCode.NON_FINITE)
@@ -340,8 +382,13 @@ def newton_solve(
         if iters >= options.max_iters:
             return result(NewtonCode.MAX_ITERS)
         lam = 1.0
+        if iters >= options.free_steps and norm < 0.0:
+            norm = _merit(G, S, floor)
         for _ in range(options.max_backtracks + 1):
-            u_new = [ui - lam * di for ui, di in zip(u, du, strict=True)]
+            if lam == 1.0:
+                u_new = [ui - di for ui, di in zip(u, du, strict=True)]
+            else:
+                u_new = [ui - lam * di for ui, di in zip(u, du, strict=True)]
             G_new, J_new, S_new = evaluate(u_new)
             n_res += 1
             if (lam == 1.0 and J_new != J and finite(G_new)
@@ -356,9 +403,10 @@ def newton_solve(
                 if finite(G_alt) and _residual_ok(G_alt, S_alt, rtol, atol):
                     u_new, G_new, J_new, S_new = u_alt, G_alt, J_alt, S_alt
             if finite(G_new):
-                norm_new = _merit(G_new, S, floor)  # weights of the current iterate
-                if (iters < options.free_steps or norm_new <= (1.0 - 1e-4 * lam) * norm
-                        or _residual_ok(G_new, S_new, rtol, atol)):
+                if iters < options.free_steps or _residual_ok(G_new, S_new, rtol, atol):
+                    break
+                # sufficient decrease of the merit, with the weights of the current iterate
+                if _merit(G_new, S, floor) <= (1.0 - 1e-4 * lam) * norm:
                     break
             lam *= 0.5
         else:
@@ -369,7 +417,7 @@ def newton_solve(
             return result(NewtonCode.DIVERGED)
         solve_prev, J_prev = solve, J
         u, G, J, S = u_new, G_new, J_new, S_new
-        norm = _merit(G, S, floor)
+        norm = -1.0
         iters += 1
 
 

@@ -151,7 +151,10 @@ def as_forcing(spec: object, *, where: str = "forcing") -> Forcing:
     if isinstance(spec, str):
         from .expressions import parse_expression
 
-        spec = parse_expression(spec, ["t"])
+        try:
+            spec = parse_expression(spec, ["t"])
+        except ValueError as err:
+            raise ValueError(f"{where}: {err}") from None
     import sympy
 
     if isinstance(spec, sympy.Basic):

@@ -45,6 +45,7 @@ __all__ = [
     "METHODS",
     "METHOD_REGISTRY",
     "closed_form_oscillator",
+    "resolve_method",
 ]
 
 
@@ -205,7 +206,7 @@ def _run_generic(formula: str):
                options: NewtonOptions | None):
         out = run_bdf(scene, method=formula, dt=dt, n_steps=n_steps, options=options,
                       throw=throw)
-        return np.array(out.rows, dtype=float), out.stats, out.status, out.message
+        return out.as_array(), out.stats, out.status, out.message
 
     return runner
 
