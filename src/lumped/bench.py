@@ -230,7 +230,7 @@ FULL = Ladders(
     eps=(1e-5, 1e-7, 1e-9, 1e-11),
     rtols=(1e-4, 1e-6, 1e-8, 1e-10, 1e-12),
     max_nfev=50_000,
-    slow_min_dt=1e-4,
+    slow_min_dt=2e-5,
 )
 QUICK = Ladders(
     dts=(1e-2, 1e-3, 1e-4, 1e-5),
