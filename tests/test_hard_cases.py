@@ -282,18 +282,6 @@ CLOSED = SOLVERS[:2]
 GENERIC = SOLVERS[2:]
 
 
-def known_generic_failure(reason: str, only: str | None = None):
-    """Run the generic solver(s) as strict ``xfail``: a known defect of the generic
-    Newton solver found by these cases (reported to its authors), which turns into a
-    failure as soon as it is fixed, so the mark must then be removed."""
-    params = [pytest.param(s, id=s.name) for s in CLOSED]
-    for s in GENERIC:
-        marks = (pytest.mark.xfail(strict=True, reason=reason)
-                 if only is None or s.name == only else ())
-        params.append(pytest.param(s, id=s.name, marks=marks))
-    return pytest.mark.parametrize("solver", params)
-
-
 # --------------------------------------------------------------------------- cases
 
 
@@ -371,8 +359,7 @@ def test_forcing_with_jumps(solver, forcing):
     check_all(solver, osc, x0=0.0, forcing=forcing, dt=1e-3, n_steps=2000)
 
 
-@known_generic_failure("generic: no consistent initial state when |F(0) - k x0| exceeds "
-                       "tau by 1e-12 (Newton max_iters with a residual of 1e-35)")
+@solvers
 def test_square_forcing_a_hair_above_the_yield_force(solver):
     osc = BinghamOscillator(1.0, 100.0, 1.0, 1.0)
     check_all(solver, osc, x0=0.0, forcing=_square(1.0 + 1e-12, 0.01), dt=1e-3, n_steps=2000)
@@ -403,8 +390,7 @@ def test_stuck_state_held_without_drift(solver, x0):
     assert np.all(traj.F_d == -osc.k * x0)
 
 
-@known_generic_failure("generic BDF2 forms (4 x_n - x_{n-1}) / 3, which moves a stuck state "
-                       "by one ulp for about one x0 in seven", only="generic-bdf2")
+@pytest.mark.parametrize("solver", GENERIC, ids=[s.name for s in GENERIC])
 def test_generic_stuck_state_held_without_drift(solver):
     """As above for the generic solver (1e5 steps: its steps cost ~10 us)."""
     osc = BinghamOscillator(1.0, 100.0, 1.0, 1.0)

@@ -24,6 +24,17 @@ Steps
    reused, never recomputed.
 5. The source is compiled once and cached by ``(residual, q, F, parameter values)``.
 
+Magnitude of the terms
+----------------------
+Each kernel also carries ``kernel.magnitude(q, F) -> float``, generated from the same
+prepared expression by :func:`magnitude_expression`: the residual with every sum
+replaced by the sum of its terms' magnitudes (``|a + b| -> |a| + |b|``, products and
+positive powers of magnitudes, ``|f(...)|`` for any other function, the same
+``Piecewise`` conditions).  ``eps * magnitude`` is the size of the residual's
+round-off, also where its terms cancel exactly (Bingham, stuck:
+``q - gamma (F - F) = q``, magnitude ``|q| + 2 gamma |F|``).  The Newton solver uses it
+as the scale of a law row's residual.
+
 Generalised Jacobian at kinks
 -----------------------------
 The kernel returns the derivative *of the branch that supplies the value*: the value
@@ -71,6 +82,7 @@ __all__ = [
     "compile_function",
     "compile_kernel",
     "diff_branchwise",
+    "magnitude_expression",
     "prepare",
     "rewrite_kinks",
 ]
@@ -551,9 +563,57 @@ def compile_kernel(
     with distribute(False):  # keep gamma*(F - p) as written: no gamma*F - gamma*p
         exprs = prepare(residual, q, F, params)
         kernel = _build("kernel", ["q", "F"], list(exprs), guard=guard)
+        magnitude = _build("magnitude", ["q", "F"], [magnitude_expression(exprs[0])],
+                           guard=guard)
     kernel.expressions = exprs  # type: ignore[attr-defined]
+    kernel.magnitude = magnitude  # type: ignore[attr-defined]
     _CACHE[key] = kernel
     return kernel
+
+
+def magnitude_expression(expr: sp.Expr) -> sp.Expr:
+    r"""The magnitude of the terms of ``expr``: the scale of its round-off.
+
+    Built bottom-up on the prepared expression (kinks already ``Piecewise``)::
+
+        M(a + b + ...)  = M(a) + M(b) + ...
+        M(a * b * ...)  = M(a) * M(b) * ...
+        M(a ** p)       = M(a) ** p               (p a positive number)
+        M(Piecewise((e_i, c_i), ...)) = Piecewise((M(e_i), c_i), ...)   (same conditions)
+        M(number)       = |number|,   M(anything else) = |anything else|
+
+    ``M >= |expr|`` everywhere, with equality when no terms cancel; evaluating ``expr``
+    in floating point errs by a few ``eps * M`` (each operation errs by ``eps`` of its
+    result, and every intermediate result is bounded by the ``M`` of its subtree, up to
+    the rounding of non-polynomial functions).  Where terms cancel, ``M`` keeps their
+    size: for Bingham, ``q - gamma (F - clip(F))`` has ``M = |q| + gamma (|F| + |clip F|)``,
+    also on the stuck piece where the residual is exactly ``q``.
+    """
+    cache: dict[sp.Basic, sp.Expr] = {}
+
+    def mag(e: sp.Basic) -> sp.Expr:
+        hit = cache.get(e)
+        if hit is not None:
+            return hit
+        if isinstance(e, sp.Number):
+            out = abs(e)
+        elif isinstance(e, sp.Add):
+            out = sp.Add(*[mag(a) for a in e.args], evaluate=False)
+        elif isinstance(e, sp.Mul):
+            out = sp.Mul(*[mag(a) for a in e.args], evaluate=False)
+        elif (isinstance(e, sp.Pow) and isinstance(e.exp, sp.Number)
+              and bool(e.exp > 0)):
+            out = sp.Pow(mag(e.base), e.exp, evaluate=False)
+        elif isinstance(e, sp.Piecewise):
+            out = sp.Piecewise(*[(mag(v), c) for v, c in e.args], evaluate=False)
+        elif isinstance(e, sp.Symbol):
+            out = sp.Piecewise((e, sp.Ge(e, 0)), (-e, True), evaluate=False)
+        else:
+            out = sp.Piecewise((e, sp.Ge(e, 0)), (-e, True), evaluate=False)
+        cache[e] = out
+        return out
+
+    return mag(expr)
 
 
 def _build(name: str, args: list[str], exprs: list[sp.Expr], *, guard: bool = True) -> Callable:

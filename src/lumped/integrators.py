@@ -288,16 +288,27 @@ _EPS = sys.float_info.epsilon
 def _law_scale(kernel, q: float, F: float, R: float, Rq: float, RF: float) -> float:
     r"""Scale of the terms of a law row ``R(q, F)``, for the residual test.
 
-    ``max(|R_q q| + |R_F F|, rho / eps)``, where ``rho`` is the largest change of ``R``
-    when ``q`` or ``F`` moves to a floating-point neighbour and ``eps = 2**-52``. On a
-    smooth piece ``rho / eps`` is about ``|R_q q| + |R_F F|`` again; where the law's terms
-    cancel it is their size. Example: a Bingham dashpot at ``F = tau`` exactly, stuck
-    piece (``R_F = 0``), with its true root ``1e-17`` beyond ``tau``: the residual is
-    ``gamma * 1e-17`` and only the terms ``gamma F`` and ``gamma tau`` (``rho / eps
-    ~ gamma tau``) show that this is round-off, not an error. Four kernel calls; used
-    where Newton iterates (the initial state, steps off the fast path).
+    ``max(|R_q q| + |R_F F|, M)``, ``M = kernel.magnitude(q, F)`` the magnitude of the
+    residual's terms generated with the kernel (:func:`lumped.codegen.magnitude_expression`):
+    on a smooth piece without cancellation about the linearised scale; where the law's
+    terms cancel, their size. Example: a Bingham dashpot on its stuck piece
+    (``R_F = 0``) with its true root ``1e-17`` beyond ``tau``: the residual is ``q``
+    (``gamma * 1e-17`` away from 0) and only the terms ``gamma F`` and ``gamma clip(F)``
+    (``M = |q| + 2 gamma |F|``) show that this is round-off, not an error -- also a few
+    hundred ulps inside the stuck piece, where a long Newton step lands after
+    cancellation.
+
+    A kernel without ``magnitude`` (hand-written) gets ``rho / eps`` instead of ``M``,
+    ``rho`` the largest change of ``R`` when ``q`` or ``F`` moves to a floating-point
+    neighbour (four kernel calls): the terms as the law's round-off shows them, which
+    sees a cancellation only within an ulp of the kink. Used where Newton iterates (the
+    initial state, steps off the fast path).
     """
     lin = abs(Rq * q) + abs(RF * F)
+    mag = getattr(kernel, "magnitude", None)
+    if mag is not None:
+        M = mag(q, F)
+        return M if M > lin and M != math.inf else lin  # NaN fails the comparison
     rho = 0.0
     inf = math.inf
     for qq, FF in ((math.nextafter(q, -inf), F), (math.nextafter(q, inf), F),

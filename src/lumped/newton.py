@@ -33,7 +33,10 @@ Convergence needs **both** tests:
   the piece on the other side proposes a long step.
 
 On success the last (small) correction is applied too: it costs nothing more and makes
-the result exact up to rounding on piecewise-linear pieces.
+the result exact up to rounding on piecewise-linear pieces. When the last Newton step
+changed the active pieces (a kink was crossed), the corrected point is evaluated and
+kept only if it passes the residual test or stays on the same pieces: a correction
+taken with one piece's Jacobian at a kink may point back across it.
 
 On a piecewise-linear system whose active pieces are guessed right (a time step started
 from the previous step's solution), the first Newton step is exact, so one iteration
@@ -146,6 +149,9 @@ class NewtonResult:
 def lu_factor(A: Sequence[Sequence[float]]) -> tuple[list[list[float]], list[int]] | None:
     """LU factorisation with partial pivoting of a small dense matrix, in plain floats.
 
+    The pivot of column ``k`` is the first *singleton row* (no other nonzero in the
+    columns ``k..n-1``) if there is one, else the largest entry (partial pivoting).
+
     Returns ``(LU, perm)`` (unit lower and upper factors packed in one matrix, and the
     row permutation), or ``None`` when a pivot is exactly zero or not finite.
     """
@@ -159,6 +165,17 @@ def lu_factor(A: Sequence[Sequence[float]]) -> tuple[list[list[float]], list[int
             a = abs(LU[i][k])
             if a > best:
                 best, p = a, i
+        # A singleton row (its only nonzero in the active columns is in column k) is
+        # preferred as the pivot: eliminating with it is an exact substitution (no
+        # growth: it adds nothing to the other rows' entries), and the unknown it fixes
+        # comes out of one division, exactly where the row says so (a stuck dashpot's
+        # row `v = 0` gives `v = 0`, not the round-off of a mixed row).
+        if best > 0.0:
+            for i in range(k, n):
+                ri = LU[i]
+                if ri[k] != 0.0 and not any(ri[k + 1:]):
+                    p, best = i, abs(ri[k])
+                    break
         if not (best > 0.0) or best == math.inf:
             return None
         if p != k:
@@ -364,7 +381,19 @@ def newton_solve(
             return result(NewtonCode.NON_FINITE)
         if res_ok:
             if _update_ok(du, u, rtol, atol):
-                u = [ui - di for ui, di in zip(u, du, strict=True)]
+                u_c = [ui - di for ui, di in zip(u, du, strict=True)]
+                if solve_prev is not None and J != J_prev:
+                    # The last step arrived on another piece (a kink was crossed): the
+                    # final correction, taken with this piece's Jacobian, may cross back
+                    # and leave the solution (e.g. the stuck piece of a Bingham law at
+                    # F = tau pointing into the slipping one). Keep it only if the
+                    # residual test still passes where it lands, or on the same piece.
+                    G_c, J_c, S_c = evaluate(u_c)
+                    n_res += 1
+                    if J_c != J and not (finite(G_c) and _residual_ok(G_c, S_c, rtol, atol)):
+                        return result(NewtonCode.SUCCESS)
+                    G, J, S = G_c, J_c, S_c
+                u = u_c
                 return result(NewtonCode.SUCCESS)
             # At a kink the residual can be zero up to rounding while the Jacobian of the
             # piece on one side proposes a long step (no floating-point root exists on
