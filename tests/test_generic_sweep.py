@@ -136,3 +136,52 @@ def test_lu_pivots_a_singleton_row_first():
     assert y[0] == 0.0
     assert y[1] == 0.3
     assert y[2] == pytest.approx(0.1 - 0.3, rel=1e-15)
+
+
+# ---------------------------------------------------------------------------------------
+# the generated term magnitude
+
+
+@given(q=st.floats(-1e3, 1e3), F=st.floats(-1e3, 1e3), gamma=_log(1e-3, 1e12),
+       tau=st.floats(0.0, 1e3))
+@settings(max_examples=200)
+def test_bingham_magnitude(q, F, gamma, tau):
+    """``|q| + gamma (|F| + |clip F|)``, never below ``|R|``."""
+    kernel = get_law("bingham").bind(gamma=gamma, tau=tau).kernel
+    M = kernel.magnitude(q, F)
+    clip = min(max(F, -tau), tau)
+    assert M == pytest.approx(abs(q) + gamma * (abs(F) + abs(clip)), rel=1e-15)
+    assert abs(kernel(q, F)[0]) <= M * (1.0 + 1e-15)
+
+
+@pytest.mark.parametrize("name, params", [
+    ("linear_spring", {"k": 100.0}), ("newtonian", {"c": 3.0}),
+    ("string_spring", {"k": 50.0, "L": 0.2}),
+    ("herschel_bulkley", {"gamma": 2.0, "tau": 1.0, "n": 0.5}),
+    ("coulomb", {"tau": 1.0, "r": 1.0})])
+@given(q=st.floats(-10.0, 10.0), F=st.floats(-10.0, 10.0))
+@settings(max_examples=100)
+def test_magnitude_bounds_the_residual(name, params, q, F):
+    """Every built-in law: ``M >= |R|`` (``M`` sums the magnitudes of the terms)."""
+    kernel = get_law(name).bind(**params).kernel
+    R = kernel(q, F)[0]
+    M = kernel.magnitude(q, F)
+    if math.isnan(R):
+        return
+    assert M >= abs(R) * (1.0 - 1e-14)
+
+
+def test_initial_force_beyond_tau_by_a_newton_tolerance():
+    """``F(0) - k x0 = tau (1 + 2.5e-10)``: the initial force is ``tau`` (the rounded
+    clip), not ``F(0) - k x0`` (found by the hypothesis test of test_generic_regressions:
+    the solve reached ``tau`` and then applied a last correction taken with the stuck
+    piece's Jacobian, which pointed back across the kink)."""
+    from lumped.bingham import initial_dashpot_force
+
+    m, k, gamma, tau, x0 = 1.0, 1.0, 5.0, 0.00390625, 1.0
+    F0 = k * x0 + tau * (1.0 + 1135745 * 2.0**-52)
+    sol = simulate(scene_of(m, k, gamma, tau, x0, 0.0, F0), method="bdf1", dt=1e-3,
+                   t_end=1e-3)
+    osc = BinghamOscillator(m, k, gamma, tau)
+    assert sol.column("F_dashpot")[0] == initial_dashpot_force(osc, x0, 0.0, F0) == tau
+    assert sol.column("v_mass")[0] == 0.0
