@@ -22,6 +22,10 @@ event-driven exact solution of :mod:`lumped.reference`:
 Methods (see :data:`METHODS`, a registry: adding a method is one entry):
 
 * ``closed-bdf1`` / ``closed-bdf2`` -- :func:`lumped.bingham.integrate` over a ladder of ``dt``;
+* ``generic-bdf1`` / ``generic-bdf2`` -- the semismooth-Newton steps of
+  :func:`lumped.simulate.simulate` on the same scene built from the ``linear_spring`` and
+  ``bingham`` laws (listed only when those modules import), over the ladder of ``dt``
+  down to ``Ladders.slow_min_dt``;
 * ``scipy-Radau`` / ``scipy-BDF`` / ``scipy-LSODA`` -- :func:`scipy.integrate.solve_ivp` on
   the tanh-regularised model ``F_d = v / gamma + tau tanh(v / eps)`` over a ladder of
   ``eps`` and ``rtol`` (``atol = rtol * L`` with ``L`` the scene's displacement scale),
