@@ -15,7 +15,6 @@ name               forcing                                      x(0), v(0)
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -33,7 +32,6 @@ __all__ = [
     "PAPER_T_END",
     "PAPER_METHODS",
     "get_scenario",
-    "rest_velocity_tolerance",
     "run_scenario",
     "scenario_scene",
 ]
@@ -81,17 +79,6 @@ def get_scenario(name: str) -> Scenario:
     except (KeyError, TypeError):
         known = ", ".join(PAPER_SCENARIOS)
         raise ValueError(f"unknown scenario {name!r}; known scenarios: {known}") from None
-
-
-def rest_velocity_tolerance(osc: BinghamOscillator) -> float:
-    """Speed below which a sample counts as *at rest* in the stick/slip summary.
-
-    ``1e-12 tau / sqrt(k m)``: a millionth of a millionth of the speed a mass released from
-    the yield displacement ``tau / k`` reaches.  The closed form and the exact reference
-    give ``v = 0`` exactly while stuck; the generic Newton solver gives ``v`` at round-off
-    level (its linear solve mixes the rows), which this tolerance counts as rest.
-    """
-    return 1e-12 * osc.tau / math.sqrt(osc.k * osc.m)
 
 
 def scenario_scene(scenario: Scenario | str) -> Scene:
