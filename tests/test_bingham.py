@@ -118,7 +118,7 @@ def test_sign_relation_law_and_balance_hold_at_every_step(osc, x0, v0, forcing, 
     slip = ~stuck
     assert np.array_equal(np.sign(v[1:][slip]), np.sign(Fd[1:][slip]))
     lhs = np.abs(Fd[1:][slip]) - tau
-    assert np.all(lhs > 0.0)
+    assert np.all(lhs >= 0.0)  # |F_d| may round to tau when the excess is below an ulp
     assert np.allclose(lhs, np.abs(v[1:][slip]) / g, rtol=64 * EPS,
                        atol=8 * EPS * max(tau, 1.0) + 0.0)
     # the discrete balance (13a-b), or its BDF2 twin, to round-off
