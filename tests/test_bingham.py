@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from _helpers import log_uniform
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
@@ -21,10 +22,6 @@ from lumped.bingham import (
 from lumped.forcing import SineBurst, zero_forcing
 
 EPS = np.finfo(float).eps
-
-
-def log_uniform(lo: float, hi: float) -> st.SearchStrategy[float]:
-    return st.floats(math.log(lo), math.log(hi)).map(math.exp)
 
 
 oscillators = st.builds(

@@ -16,6 +16,7 @@ import math
 import numpy as np
 import pytest
 from _fake_laws import law
+from _helpers import assert_columns_close
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -48,16 +49,6 @@ def square(amplitude: float, period: float):
 def closed(osc, *, x0, v0, forcing, dt, n_steps, method):
     tr = integrate(osc, x0=x0, v0=v0, forcing=forcing, dt=dt, n_steps=n_steps, method=method)
     return np.column_stack([tr.t, tr.x, tr.v, tr.F_s, tr.F_d])
-
-
-def assert_close(a, b, rel=1e-12):
-    """``|a - b| <= rel * max(1, column scale)`` at every step (as test_simulate)."""
-    assert a.shape == b.shape
-    scale = np.maximum(1.0, np.abs(b).max(axis=0))
-    bad = np.abs(a - b) > rel * scale
-    if bad.any():
-        r, c = np.argwhere(bad)[0]
-        raise AssertionError(f"row {r} column {c}: {a[r, c]!r} vs {b[r, c]!r}")
 
 
 # ---------------------------------------------------------------------------------------
@@ -107,8 +98,8 @@ def test_square_forcing_at_the_yield_force_equals_closed_form(method, amplitude)
     assert sol.ok and sol.stats["steps"] == 2000
     ref = closed(osc, x0=0.0, v0=0.0, forcing=F, dt=1e-3, n_steps=2000, method=method)
     assert sol.data[0, 4] == ref[0, 4]  # the initial force: clip(F(0), -tau, tau)
-    assert_close(sol.data[:, :4], ref[:, :4])
-    assert_close(sol.data[:, 4:], ref[:, 4:], rel=1e-9)
+    assert_columns_close(sol.data[:, :4], ref[:, :4])
+    assert_columns_close(sol.data[:, 4:], ref[:, 4:], rel=1e-9)
 
 
 # ---------------------------------------------------------------------------------------
@@ -128,7 +119,7 @@ def test_step_onto_the_kink_with_huge_gamma(method):
                  method=method)
     # v and F_d: both solutions are within round-off of the kink, where v = gamma (F + tau)
     # turns 1 ulp of F into 1e-8 of v
-    assert_close(sol.data[:, [0, 1, 3]], ref[:, [0, 1, 3]])
+    assert_columns_close(sol.data[:, [0, 1, 3]], ref[:, [0, 1, 3]])
     assert np.all(np.abs(sol.column("v_mass") - ref[:, 2]) <= 1e8 * 2.0**-52 * 4)
     assert np.all(np.abs(sol.column("F_dashpot") - ref[:, 4]) <= 1e-12 * 4)
 
@@ -230,8 +221,8 @@ def test_initial_force_of_a_moving_dashpot_below_an_ulp_of_tau(v0, gamma):
     assert sol.column("F_dashpot")[0] == initial_dashpot_force(osc, 0.0, v0, 0.0)
     ref = closed(osc, x0=0.0, v0=v0, forcing=zero_forcing, dt=1e-5, n_steps=100,
                  method="bdf2")
-    assert_close(sol.data[:, :4], ref[:, :4], rel=1e-9)
-    assert_close(sol.data[:, 4:], ref[:, 4:], rel=1e-9)
+    assert_columns_close(sol.data[:, :4], ref[:, :4], rel=1e-9)
+    assert_columns_close(sol.data[:, 4:], ref[:, 4:], rel=1e-9)
 
 
 @pytest.mark.parametrize("method", ["bdf1", "bdf2"])
@@ -244,4 +235,4 @@ def test_velocity_near_zero_under_large_forces(method):
     assert sol.ok and sol.stats["steps"] == 100
     ref = closed(osc, x0=100001.0, v0=200002.0, forcing=zero_forcing, dt=1.0, n_steps=100,
                  method=method)
-    assert_close(sol.data, ref, rel=1e-9)
+    assert_columns_close(sol.data, ref, rel=1e-9)

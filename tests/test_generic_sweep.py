@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 import pytest
+from _helpers import log_uniform
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -79,17 +80,13 @@ def test_hard_case_k1e8_gamma1e12(method):
     assert_agree(gen, ref, m, dt, 1e-9)
 
 
-def _log(lo: float, hi: float):
-    return st.floats(math.log10(lo), math.log10(hi)).map(lambda e: 10.0**e)
-
-
 @st.composite
 def problems(draw):
-    m = draw(_log(1e-3, 1e3))
-    k = draw(_log(1e-3, 1e10))
-    gamma = draw(_log(1e-3, 1e12))
-    tau = draw(st.one_of(st.just(0.0), _log(1e-3, 1e3)))
-    dt = draw(_log(1e-9, 1.0))
+    m = draw(log_uniform(1e-3, 1e3))
+    k = draw(log_uniform(1e-3, 1e10))
+    gamma = draw(log_uniform(1e-3, 1e12))
+    tau = draw(st.one_of(st.just(0.0), log_uniform(1e-3, 1e3)))
+    dt = draw(log_uniform(1e-9, 1.0))
     w = math.sqrt(k / m)
     xs = (tau + 1.0) / k
     x0 = draw(st.floats(-5.0, 5.0)) * xs
@@ -97,7 +94,8 @@ def problems(draw):
     forcing = None
     if draw(st.booleans()):
         forcing = SineBurst(draw(st.floats(0.0, 3.0)) * (tau + 1.0),
-                            draw(_log(1e-2, 1e2)) / dt / 10.0, draw(st.floats(0.0, 30.0)) * dt)
+                            draw(log_uniform(1e-2, 1e2)) / dt / 10.0,
+                            draw(st.floats(0.0, 30.0)) * dt)
     return m, k, gamma, tau, x0, v0, dt, forcing
 
 
@@ -142,7 +140,7 @@ def test_lu_pivots_a_singleton_row_first():
 # the generated term magnitude
 
 
-@given(q=st.floats(-1e3, 1e3), F=st.floats(-1e3, 1e3), gamma=_log(1e-3, 1e12),
+@given(q=st.floats(-1e3, 1e3), F=st.floats(-1e3, 1e3), gamma=log_uniform(1e-3, 1e12),
        tau=st.floats(0.0, 1e3))
 @settings(max_examples=200)
 def test_bingham_magnitude(q, F, gamma, tau):

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 from _fake_laws import bound, law
+from _helpers import assert_columns_close
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -33,16 +34,6 @@ def paper_scene(m=1.0, k=100.0, gamma=1.0, tau=1.0, x0=0.0, v0=0.0, forcing=None
          Element("dashpot", law("bingham", gamma=gamma, tau=tau), "ground", "mass", F0=F0)],
         {"mass": forcing} if forcing is not None else None,
     )
-
-
-def assert_columns_close(a, b, rel=1e-12):
-    """|a - b| <= rel * max(1, scale of the variable), column by column, every step."""
-    assert a.shape == b.shape
-    scale = np.maximum(1.0, np.abs(b).max(axis=0))
-    bad = np.abs(a - b) > rel * scale
-    if bad.any():
-        r, c = np.argwhere(bad)[0]
-        raise AssertionError(f"row {r} column {c}: {a[r, c]!r} vs {b[r, c]!r}")
 
 
 # ---------------------------------------------------------------------------------------
