@@ -236,14 +236,18 @@ def integrate(
 _Columns = tuple[list[float], list[float], list[float], list[float]]
 
 
+def _columns(x0: float, v0: float, Fd0: float, n: int) -> _Columns:
+    """Preallocated ``x, v, F_d, F~`` columns of ``n + 1`` samples, row 0 filled in."""
+    return [x0] * (n + 1), [v0] * (n + 1), [Fd0] * (n + 1), [Fd0] * (n + 1)
+
+
 def _run_bdf1(
     osc: BinghamOscillator, forcing: Callable[[float], float],
     x: float, v: float, Fd0: float, dt: float, n: int,
 ) -> _Columns:
-    """The BDF1 loop on Python floats (Algorithm 1 inlined into a tight loop)."""
+    """The BDF1 loop on Python floats (Algorithm 1 step by step)."""
     m, k, tau, inv_gamma = osc.m, osc.k, osc.tau, 1.0 / osc.gamma
-    xs, vs, Fds = [x] * (n + 1), [v] * (n + 1), [Fd0] * (n + 1)
-    Fts = list(Fds)
+    xs, vs, Fds, Fts = _columns(x, v, Fd0, n)
     isfinite = math.isfinite
     for i in range(1, n + 1):
         F = forcing(i * dt)
@@ -261,8 +265,7 @@ def _run_bdf2(
 ) -> _Columns:
     """The BDF2 loop on Python floats; its first step is BDF1."""
     m, k, tau, inv_gamma = osc.m, osc.k, osc.tau, 1.0 / osc.gamma
-    xs, vs, Fds = [x] * (n + 1), [v] * (n + 1), [Fd0] * (n + 1)
-    Fts = list(Fds)
+    xs, vs, Fds, Fts = _columns(x, v, Fd0, n)
     isfinite = math.isfinite
     x_prev, v_prev = x, v
     x, v, Fds[1], Fts[1] = bdf1_step(m, k, inv_gamma, tau, dt, x, v, _checked_force(forcing, dt))
