@@ -92,12 +92,7 @@ def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>") -> tuple[S
     forces: dict[str, object] = {}
     for name, spec in nodes_tbl.items():
         key = f"[nodes.{name}]"
-        if not isinstance(spec, dict):
-            raise fail(key, f"must be a table, got {spec!r}")
-        extra = set(spec) - _NODE_KEYS
-        if extra:
-            raise fail(f"{key} {sorted(extra)[0]}",
-                       f"unknown key (allowed: {', '.join(sorted(_NODE_KEYS))})")
+        _check_table(spec, key, _NODE_KEYS, fail)
         try:
             x0 = _number(spec.get("x0", 0.0), f"{key} x0", fail)
             if "mass" in spec:
@@ -122,12 +117,7 @@ def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>") -> tuple[S
     elements: list[Element] = []
     for name, spec in elements_tbl.items():
         key = f"[elements.{name}]"
-        if not isinstance(spec, dict):
-            raise fail(key, f"must be a table, got {spec!r}")
-        extra = set(spec) - _ELEMENT_KEYS
-        if extra:
-            raise fail(f"{key} {sorted(extra)[0]}",
-                       f"unknown key (allowed: {', '.join(sorted(_ELEMENT_KEYS))})")
+        _check_table(spec, key, _ELEMENT_KEYS, fail)
         law = _law(spec, key, fail)
         between = spec.get("between")
         if (not isinstance(between, list) or len(between) != 2
@@ -145,6 +135,16 @@ def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>") -> tuple[S
     except (TypeError, ValueError) as err:
         raise SceneFileError(f"{source}: {err}") from None
     return scene, settings
+
+
+def _check_table(spec: object, key: str, allowed: set[str], fail) -> None:
+    """``spec`` must be a TOML table whose keys are all in ``allowed``."""
+    if not isinstance(spec, dict):
+        raise fail(key, f"must be a table, got {spec!r}")
+    extra = set(spec) - allowed
+    if extra:
+        raise fail(f"{key} {sorted(extra)[0]}",
+                   f"unknown key (allowed: {', '.join(sorted(allowed))})")
 
 
 def _settings(tbl: object, fail) -> dict[str, Any]:
