@@ -189,6 +189,24 @@ def _as_clip(e: sp.Basic) -> tuple[sp.Expr, sp.Expr, sp.Expr] | None:
     return xs[0], lo, hi
 
 
+def _outer_piecewise(exprs: list[sp.Expr]) -> list[sp.Piecewise]:
+    """The outermost ``Piecewise`` nodes of ``exprs`` (not those nested inside another),
+    each once, in order of first appearance."""
+    found: list[sp.Piecewise] = []
+
+    def visit(e: sp.Basic) -> None:
+        if isinstance(e, sp.Piecewise):
+            if e not in found:
+                found.append(e)
+            return
+        for a in e.args:
+            visit(a)
+
+    for e in exprs:
+        visit(e)
+    return found
+
+
 def diff_branchwise(expr: sp.Expr, x: sp.Symbol) -> sp.Expr:
     """``d expr / dx``, differentiating every ``Piecewise`` branch by branch.
 
@@ -196,17 +214,7 @@ def diff_branchwise(expr: sp.Expr, x: sp.Symbol) -> sp.Expr:
     conditions of the original (sympy merges neighbouring branches whose derivatives
     coincide), so a value and its derivatives can share one ``if`` chain.
     """
-    pieces: list[sp.Piecewise] = []
-
-    def visit(e: sp.Basic) -> None:
-        if isinstance(e, sp.Piecewise):
-            if e not in pieces:
-                pieces.append(e)
-            return
-        for a in e.args:
-            visit(a)
-
-    visit(expr)
+    pieces = _outer_piecewise([expr])
     if not pieces:
         return sp.diff(expr, x)
     dummies = [sp.Dummy(f"pw{i}") for i in range(len(pieces))]
@@ -362,18 +370,7 @@ class _Emitter:
     def region(self, exprs: list[sp.Expr], indent: int, scope: _Scope) -> list[str]:
         """Emit straight-line code for ``exprs``; return one code string per expression."""
         exprs = [e.xreplace(scope.values) if scope.values else e for e in exprs]
-        found: list[sp.Piecewise] = []
-
-        def visit(e: sp.Basic) -> None:
-            if isinstance(e, sp.Piecewise):
-                if e not in found:
-                    found.append(e)
-                return
-            for a in e.args:
-                visit(a)
-
-        for e in exprs:
-            visit(e)
+        found = _outer_piecewise(exprs)
         # Piecewise with the same conditions (a value and its derivatives) share one chain
         groups: dict[tuple, list[sp.Piecewise]] = {}
         for pw in found:
