@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -48,6 +49,8 @@ class Solution:
     message: str = ""
     events: tuple[Event, ...] = ()
     indeterminate: dict[str, list[tuple[float, float]]] = field(default_factory=dict)
+    dense: Callable[[np.ndarray], np.ndarray] | None = field(default=None, repr=False,
+                                                             compare=False)
 
     def __post_init__(self) -> None:
         if self.data.ndim != 2 or self.data.shape[1] != len(self.columns):
@@ -59,6 +62,19 @@ class Solution:
             raise FloatingPointError(
                 f"non-finite {self.columns[c]} = {self.data[r, c]!r} at row {r}"
             )
+
+    def sol(self, t) -> np.ndarray:
+        """The solution at the times ``t`` (rows laid out like ``data``), from the method's
+        dense output (``radau5``: its collocation polynomials, to the method's order).
+
+        Raises
+        ------
+        ValueError
+            If the method has no dense output, or ``t`` is outside the solved interval.
+        """
+        if self.dense is None:
+            raise ValueError(f"method {self.method!r} has no dense output; use `data`")
+        return self.dense(t)
 
     def column(self, name: str) -> np.ndarray:
         """One column by name, e.g. ``"x_mass"``."""

@@ -89,5 +89,5 @@ def simulate(
         columns=scene.columns(), data=data, node_names=scene.node_names,
         element_names=scene.element_names, method=concrete, stats=dict(raw.stats),
         status=raw.status, message=raw.message, events=tuple(raw.events),
-        indeterminate=dict(raw.indeterminate),
+        indeterminate=dict(raw.indeterminate), dense=raw.dense,
     )

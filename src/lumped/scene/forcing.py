@@ -40,6 +40,12 @@ class SineBurst:
         if not (isinstance(self.t_off, (int, float)) and self.t_off == math.inf):
             as_nonnegative("t_off", self.t_off)
 
+    def breakpoints(self, t0: float, t1: float) -> list[float]:
+        """Times in ``(t0, t1)`` where ``F`` is not smooth: ``[t_off]`` if it lies there.
+
+        An adaptive method steps exactly to them (a time event)."""
+        return [self.t_off] if t0 < self.t_off < t1 else []
+
     def __call__(self, t: float) -> float:
         if t > self.t_off:
             return 0.0

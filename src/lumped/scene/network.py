@@ -201,6 +201,28 @@ class _Expression:
     def __repr__(self) -> str:
         return f"expression({self.expr})"
 
+    def breakpoints(self, t0: float, t1: float) -> list[float]:
+        """Times in ``(t0, t1)`` where the expression may jump or kink: the real roots of
+        the sides of every condition of its kinks (``Piecewise``, ``Abs``, ``Max``, ...)
+        that sympy solves in closed form. An adaptive method steps exactly to them."""
+        import sympy
+
+        from ..codegen.rewrite import rewrite_kinks
+
+        out: set[float] = set()
+        for pw in rewrite_kinks(self.expr).atoms(sympy.Piecewise):
+            for _, cond in pw.args:
+                for rel in cond.atoms(sympy.core.relational.Relational):
+                    gap = rel.lhs - rel.rhs
+                    if len(gap.free_symbols) != 1:
+                        continue
+                    try:
+                        roots = sympy.solve(gap, next(iter(gap.free_symbols)))
+                    except (NotImplementedError, ValueError):  # pragma: no cover
+                        continue
+                    out.update(float(r) for r in roots if r.is_real and t0 < float(r) < t1)
+        return sorted(out)
+
 
 class Scene:
     """Nodes, elements and external forces of a lumped-parameter network.

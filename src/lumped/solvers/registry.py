@@ -237,5 +237,14 @@ def register_method(name: str, runner: Runner, *, fixed_step: bool = False) -> N
 def resolve_method(scene: Scene, method: str) -> str:
     """The concrete method ``auto`` stands for on ``scene`` (others unchanged)."""
     if method == "auto":
-        return "closed-bdf2" if not isinstance(closed_form_oscillator(scene), str) else "bdf2"
+        return "closed-bdf2" if not isinstance(closed_form_oscillator(scene), str) else "radau5"
     return method
+
+
+def _register_adaptive() -> None:
+    from .adaptive import run_radau5
+
+    register_method("radau5", run_radau5)
+
+
+_register_adaptive()

@@ -1,0 +1,473 @@
+r"""``radau5``: adaptive Radau IIA (order 5) with located switching and time events.
+
+The driver of the adaptive method (the step is :mod:`lumped.solvers.radau`, the event
+logic :mod:`lumped.solvers.events`; the reasons are in ``docs/theory.md``):
+
+1. the consistent initial state, and the initial mode by a vanishing implicit step;
+2. steps of Radau IIA with every law held on its mode's branch (a smooth DAE), the step
+   size from RADAU5's filtered error estimate on the differential components (``x`` of
+   every node, ``v`` of every mass) with Gustafsson's predictive controller;
+3. after an accepted step, the branch guards along the collocation polynomial: at the
+   first crossing the step is redone to end on it, the next mode is chosen, and the
+   event is recorded; a break of the forcing in time (``breakpoints(t0, t1)`` of a
+   forcing object) is stepped to exactly and is a time event;
+4. more than ``max_events`` events, or ``zeno_events`` events within ``zeno_window``
+   seconds, stop the run with :attr:`Status.TOO_MANY_EVENTS`; a step below its floor stops
+   it with :attr:`Status.STEP_TOO_SMALL`.
+
+The output holds the accepted step points, or (with ``dt``) the dense output on
+``t_n = n dt``; ``RawRun.dense(t)`` evaluates the collocation polynomials anywhere.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from collections import deque
+
+import numpy as np
+
+from ..scene import Mass, Scene
+from .events import first_crossing, guard_tolerance, hold_rate_locks, select_modes
+from .initial_state import consistent_initial_state
+from .radau import A as _A
+from .radau import C, StageSystem, dense_weights
+from .status import Event, RawRun, SolverError, Status
+
+__all__ = ["run_radau5", "DEFAULT_RTOL", "DEFAULT_ATOL", "EXTRA_OPTIONS"]
+
+DEFAULT_RTOL = 1e-6
+DEFAULT_ATOL = 1e-9
+#: Method-specific keywords of ``radau5`` and their defaults.
+EXTRA_OPTIONS = {"max_events": 10_000, "zeno_events": 50, "zeno_window": None,
+                 "max_steps": 1_000_000, "first_step": None}
+_EPS = 2.220446049250313e-16
+
+
+def _extra(settings) -> dict:
+    out = dict(EXTRA_OPTIONS)
+    for key, val in settings.extra.items():
+        if key not in EXTRA_OPTIONS:
+            raise TypeError(f"method 'radau5' takes no keyword argument {key!r} "
+                            f"(it takes {sorted(EXTRA_OPTIONS)})")
+        out[key] = val
+    for key in ("max_events", "zeno_events", "max_steps"):
+        if isinstance(out[key], bool) or not isinstance(out[key], int) or out[key] < 1:
+            raise ValueError(f"`{key}` must be a positive integer, got {out[key]!r}")
+    for key in ("zeno_window", "first_step"):
+        val = out[key]
+        if val is not None and not (isinstance(val, (int, float)) and math.isfinite(val)
+                                    and val > 0):
+            raise ValueError(f"`{key}` must be a positive number, got {val!r}")
+    return out
+
+
+def _breakpoints(scene: Scene, t_end: float) -> list[float]:
+    out: set[float] = set()
+    for fn in scene.forcing:
+        get = getattr(fn, "breakpoints", None)
+        if get is not None:
+            out.update(float(b) for b in get(0.0, t_end) if 0.0 < b < t_end)
+    return sorted(out)
+
+
+class _Dense:
+    """The collocation polynomials of the accepted steps: ``t -> rows like data``."""
+
+    def __init__(self, N: int, E: int) -> None:
+        self.N, self.E = N, E
+        self.t0: list[float] = []
+        self.h: list[float] = []
+        self.y0: list[list[float]] = []
+        self.D: list[list[list[float]]] = []
+
+    def add(self, t: float, h: float, y0: list[float], Y: list[list[float]]) -> None:
+        self.t0.append(t)
+        self.h.append(h)
+        self.y0.append(y0)
+        self.D.append([[Yk[j] - y0[j] for j in range(len(y0))] for Yk in Y])
+
+    def row(self, i: int, s: float) -> list[float]:
+        l1, l2, l3 = dense_weights(s)
+        y0 = self.y0[i]
+        D1, D2, D3 = self.D[i]
+        return [y0[j] + (l1 * D1[j] + l2 * D2[j] + l3 * D3[j]) for j in range(len(y0))]
+
+    def __call__(self, t) -> np.ndarray:
+        ts = np.atleast_1d(np.asarray(t, dtype=float))
+        N, E = self.N, self.E
+        out = np.empty((len(ts), 1 + 2 * N + E))
+        if not self.t0:
+            raise ValueError("no step was taken: the dense output is empty")
+        t_lo = self.t0[0]
+        t_hi = self.t0[-1] + self.h[-1]
+        for r, tt in enumerate(ts):
+            tt = float(tt)
+            if not (t_lo <= tt <= t_hi):
+                raise ValueError(f"`t` = {tt!r} is outside the solved interval "
+                                 f"[{t_lo!r}, {t_hi!r}]")
+            i = max(bisect.bisect_right(self.t0, tt) - 1, 0)
+            y = self.row(i, (tt - self.t0[i]) / self.h[i])
+            out[r, 0] = tt
+            for p in range(N):
+                out[r, 1 + 2 * p] = y[p]
+                out[r, 2 + 2 * p] = y[N + p]
+            out[r, 1 + 2 * N:] = y[2 * N:]
+        return out
+
+
+def _layout(t: float, x: list[float], v: list[float], F: list[float]) -> list[float]:
+    row = [t]
+    for p in range(len(x)):
+        row += [x[p], v[p]]
+    return row + list(F)
+
+
+def _initial_step(x, v, acc, is_mass, rtol, atol, span) -> float:
+    """A first step from the sizes of the state and its derivative (as scipy does)."""
+    d0 = d1 = 0.0
+    n = 0
+    for i in range(len(x)):
+        sc = atol + rtol * abs(x[i])
+        d0 += (x[i] / sc) ** 2
+        d1 += (v[i] / sc) ** 2
+        n += 1
+        if is_mass[i]:
+            sc = atol + rtol * abs(v[i])
+            d0 += (v[i] / sc) ** 2
+            d1 += (acc[i] / sc) ** 2
+            n += 1
+    d0, d1 = math.sqrt(d0 / n), math.sqrt(d1 / n)
+    h0 = 1e-6 * span if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+    return min(h0, 0.1 * span) * rtol ** 0.2 / 1e-6 ** 0.2 if h0 > 0 else 1e-6 * span
+
+
+def run_radau5(scene: Scene, settings) -> RawRun:
+    """The ``radau5`` runner: ``(scene, RunSettings) -> RawRun`` (see the module notes).
+
+    ``settings.rtol`` / ``atol`` default to :data:`DEFAULT_RTOL` / :data:`DEFAULT_ATOL`;
+    ``settings.dt`` (optional) samples the dense output on ``t_n = n dt``; the keywords of
+    :data:`EXTRA_OPTIONS` come in ``settings.extra``.
+    """
+    from ..codegen.branches import law_branches
+    from .closed_form import steps_for
+
+    rtol = DEFAULT_RTOL if settings.rtol is None else settings.rtol
+    atol = DEFAULT_ATOL if settings.atol is None else settings.atol
+    opts = _extra(settings)
+    dt = settings.dt
+    t_final = settings.t_end if dt is None else max(settings.t_end,
+                                                    steps_for(dt, settings.t_end) * dt)
+    N, E = len(scene.nodes), len(scene.elements)
+    n = N + E
+    is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+    masses = scene.masses
+    system = StageSystem(masses, scene.elem_a, scene.elem_b,
+                         [el.kind == "spring" for el in scene.elements])
+    lbs = [law_branches(el.law) for el in scene.elements]
+    names = scene.element_names
+    x = [float(nd.x0) for nd in scene.nodes]
+    v, F, ic = consistent_initial_state(scene, time_scale=t_final, options=settings.options)
+    breaks = _breakpoints(scene, t_final)
+    zeno_window = opts["zeno_window"] or 1e-6 * t_final
+    events: list[Event] = []
+    recent: deque = deque(maxlen=opts["zeno_events"])
+    dense = _Dense(N, E)
+    rows = [_layout(0.0, x, v, F)]
+    stats = {"steps": 0, "rejected": 0, "newton_iterations": 0, "factorizations": 0,
+             "nfev": 0, "njev": 0, "events": 0, "max_newton_iterations": 0,
+             "initial_newton_iterations": ic["newton_iterations"]}
+    status, message = Status.SUCCESS, ""
+
+    modes = [0] * E
+    kernels: list = [None] * E
+    guards: list = [None] * E
+    watched: list[int] = []
+
+    def set_modes(new: list[int]) -> None:
+        modes[:] = new
+        watched.clear()
+        for e in range(E):
+            kernels[e] = lbs[e].kernel_for(new[e])
+            guards[e] = lbs[e].guards_for(new[e])
+            if lbs[e].count > 1:
+                watched.append(e)
+
+    def change_mode(t: float, h_probe: float, cause: str) -> str:
+        """Choose the mode after ``t`` and record the switches; '' or a failure message."""
+        sel: tuple | str = ""
+        for _ in range(3):
+            sel = select_modes(scene, lbs, t, x, v, F, h_probe, settings.options)
+            if isinstance(sel, str) or sel[0] != modes or cause != "guard":
+                break
+            h_probe *= 1000.0
+        if isinstance(sel, str):
+            return sel
+        new, v_p, F_p = sel
+        for e in range(E):
+            el = scene.elements[e]
+            info = lbs[e].info[new[e]]
+            if new[e] != modes[e] and el.kind == "spring" and info.locks:
+                a, b = scene.elem_a[e], scene.elem_b[e]
+                rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+                if abs(rate) > 1e3 * (atol + rtol * max(abs(vi) for vi in v)):
+                    return (f"impact at t = {t!r}: element {el.name!r} (law {el.law_name!r}) "
+                            f"locks its elongation while it changes at rate {rate!r}; "
+                            "radau5 does not apply impacts yet (use bdf1)")
+        for p in range(N):
+            if not is_mass[p]:
+                v[p] = v_p[p]
+        if cause != "start":  # at t = 0 the consistent initial forces stay
+            F[:] = F_p
+        for e in range(E):
+            if new[e] != modes[e]:
+                events.append(Event(t, names[e], "switch", modes[e], new[e]))
+                recent.append(t)
+        set_modes(new)
+        hold_rate_locks(scene, lbs, modes, v)
+        return ""
+
+    msg = change_mode(0.0, 1e-9 * t_final, "start")
+    events.clear()
+    recent.clear()
+    if msg:
+        raise SolverError(f"radau5: no consistent initial mode: {msg}",
+                          status=Status.INCONSISTENT, t=0.0, where="", residual=math.nan)
+    rows[0] = _layout(0.0, x, v, F)
+
+    def net_at(t: float) -> list[float]:
+        return scene.net_forces(t, F)
+
+    acc0 = [net_at(0.0)[i] / masses[i] if is_mass[i] else 0.0 for i in range(N)]
+    h = opts["first_step"] or _initial_step(x, v, acc0, is_mass, rtol, atol, t_final)
+    h_acc = err_acc = None
+    dF_n: list[float] | None = None  # force slopes at t (None at the start, after events)
+    target: list | None = None  # the guard being landed on and its bracket
+    t = 0.0
+    bi = 0
+    max_newton = 10
+
+    def state_at(U: list[float], h: float, s: float):
+        l1, l2, l3 = dense_weights(s)
+        ls = (l1, l2, l3)
+        xs, vs, Fs = [0.0] * N, [0.0] * N, [0.0] * E
+        for i in range(N):
+            dx = dv = 0.0
+            for k in range(3):
+                Xk = 0.0
+                for j in range(3):
+                    Xk += A_[k][j] * U[j * n + i]
+                dx += ls[k] * (h * Xk)
+                dv += ls[k] * (U[k * n + i] - v[i])
+            xs[i] = x[i] + dx
+            vs[i] = v[i] + dv
+        for e in range(E):
+            dF = 0.0
+            for k in range(3):
+                dF += ls[k] * (U[k * n + N + e] - F[e])
+            Fs[e] = F[e] + dF
+        return xs, vs, Fs
+
+    def crossing(U: list[float], h: float):
+        if not watched:
+            return None
+        cache: dict[float, list] = {}
+
+        def values(s: float) -> list:
+            got = cache.get(s)
+            if got is None:
+                xs, vs, Fs = state_at(U, h, s)
+                q = scene.elongations(xs, vs)
+                got = [(guards[e](q[e], Fs[e]), guard_tolerance(q[e], Fs[e])) for e in watched]
+                cache[s] = got
+            return got
+
+        def guard_at(s: float):
+            best, which = math.inf, (0, 0)
+            for w, (gs, tol) in enumerate(values(s)):
+                for j, g in enumerate(gs):
+                    if g + tol < best:
+                        best, which = g + tol, (w, j)
+            return best, which
+
+        def guard_of(s: float, which) -> float:
+            w, j = which
+            return values(s)[w][0][j]
+
+        return first_crossing(guard_at, guard_of)
+
+    def end_guard(U: list[float], h: float, which) -> tuple[float, float]:
+        xs = [x[i] + h * sum(A_[2][j] * U[j * n + i] for j in range(3)) for i in range(N)]
+        vs = U[2 * n:2 * n + N]
+        Fs = U[2 * n + N:3 * n]
+        e = watched[which[0]]
+        q = scene.elongations(xs, vs)[e]
+        return guards[e](q, Fs[e])[which[1]], guard_tolerance(q, Fs[e])
+
+    A_ = _A
+    while t < t_final:
+        if stats["steps"] >= opts["max_steps"]:
+            status, message = Status.MAX_ITERS, (f"radau5 stopped at t = {t!r}: "
+                                                 f"max_steps = {opts['max_steps']} reached")
+            break
+        t_stop = breaks[bi] if bi < len(breaks) else t_final
+        room = t_stop - t
+        to_stop = False
+        if t + 1.0001 * h >= t_stop or h >= room:
+            h = room
+            to_stop = True
+        h_min = 16.0 * _EPS * max(abs(t), t_final * 1e-3)
+        if h < h_min and target is None:
+            status, message = Status.STEP_TOO_SMALL, (
+                f"radau5: step size {h!r} below its floor {h_min!r} at t = {t!r}")
+            break
+        fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
+        U = (list(v) + list(F)) * 3
+        Fref = max([abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]] + [1e-300])
+        scale = ([atol + rtol * abs(vi) for vi in v]
+                 + [rtol * max(abs(Fe), Fref) + 1e-300 for Fe in F]) * 3
+        sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale, max_iters=max_newton)
+        stats["newton_iterations"] += its
+        stats["factorizations"] += nfac
+        stats["nfev"] += its + 1
+        stats["njev"] += nfac
+        stats["max_newton_iterations"] = max(stats["max_newton_iterations"], its)
+        if sol is None:
+            stats["rejected"] += 1
+            h *= 0.5
+            h_acc = None
+            continue
+        t_n0 = math.nextafter(t, math.inf) if (bi > 0 and t == breaks[bi - 1]) else t
+        net_n = scene.net_forces(t_n0, F)
+        q_n = scene.elongations(x, v)
+        jac_n = [kernels[e](q_n[e], F[e])[1:] for e in range(E)]
+        err = system.error(U, h, x, v, net_n, jac_n)
+        err_norm = math.inf if err is None else system.error_norm(
+            U, h, x, v, F, err, rtol, atol, dF_n, watched, Fref)
+        fac = 0.9 * (2 * max_newton + 1) / (2 * max_newton + its)
+        if not math.isfinite(err_norm):
+            stats["rejected"] += 1
+            h *= 0.2
+            h_acc = None
+            continue
+        quot = max(0.125, min(5.0, err_norm ** 0.25 / fac))
+        if err_norm > 1.0 and target is None:
+            stats["rejected"] += 1
+            h = h / quot
+            h_acc = None
+            continue
+        hit = crossing(sol, h)
+        if target is not None:  # a landing step: bracket the event by end-of-step values
+            if hit is not None and hit[1] != target[0] and hit[0] < 1.0:
+                target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0]
+                h = hit[0] * h
+                continue
+            g_end, tol = end_guard(sol, h, target[0])
+            which, h_lo, g_lo, h_hi, g_hi, count, _ = target
+            width = 8.0 * _EPS * max(1.0, abs(t))
+            if not (abs(g_end) <= tol or h_hi - h_lo <= width or count >= 40):
+                target[5] += 1
+                if g_end < 0.0:
+                    target[3], target[4] = h, g_end
+                    target[6] = -1
+                    h = (hit[0] * h if hit is not None and hit[1] == which and 0.0 < hit[0] < 1.0
+                         else 0.5 * (h_lo + h))
+                else:
+                    if target[6] == 1:  # Illinois: the far end stayed twice, halve its value
+                        target[4] *= 0.5
+                    target[1], target[2], target[6] = h, g_end, 1
+                    h_lo, g_lo, g_hi = h, g_end, target[4]
+                    h = (h_lo + (h_hi - h_lo) * g_lo / (g_lo - g_hi) if g_hi < 0.0
+                         else 0.5 * (h_lo + h_hi))
+                if not target[1] < h < target[3]:
+                    h = 0.5 * (target[1] + target[3])
+                continue
+        elif hit is not None and hit[0] < 1.0:
+            s_hit = hit[0]
+            if s_hit * h <= 16 * _EPS * max(1.0, abs(t)):
+                # the event is at t itself: choose the mode again, no step
+                msg = change_mode(t, max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t))), "guard")
+                stats["events"] = len(events)
+                dF_n = None
+                if msg:
+                    status, message = Status.INCONSISTENT, msg
+                    break
+                if _accumulating(recent, zeno_window) or len(events) > opts["max_events"]:
+                    status, message = _too_many(events, recent, t, opts)
+                    break
+                continue
+            target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0]
+            h = s_hit * h
+            continue
+        # accept
+        Y = []
+        for k in range(3):
+            Xk = []
+            for i in range(N):
+                s_ = 0.0
+                for j in range(3):
+                    s_ += A_[k][j] * sol[j * n + i]
+                Xk.append(x[i] + h * s_)
+            Y.append(Xk + sol[k * n:k * n + N] + sol[k * n + N:k * n + n])
+        dense.add(t, h, x + v + F, Y)
+        dF_n = system.end_slope(sol, h, F)
+        event_here = target is not None
+        target = None
+        t = t_stop if to_stop else t + h
+        x = Y[2][:N]
+        v = Y[2][N:2 * N]
+        F = Y[2][2 * N:]
+        stats["steps"] += 1
+        rows.append(_layout(t, x, v, F))
+        # the step size for the next step (Gustafsson's predictive controller)
+        h_new = h / quot
+        if h_acc is not None and err_norm > 0.0:
+            facgus = (h_acc / h) * (err_norm ** 2 / err_acc) ** 0.25 / 0.9
+            facgus = max(0.125, min(5.0, facgus))
+            h_new = h / max(quot, facgus)
+        h_acc, err_acc = h, max(1e-2, err_norm)
+        h = h_new
+        is_break = to_stop and bi < len(breaks) and t == breaks[bi]
+        if is_break:
+            bi += 1
+            events.append(Event(t, "", "time", -1, -1))
+            recent.append(t)
+        if event_here or is_break:
+            dF_n = None
+            msg = change_mode(t, max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t))),
+                              "guard" if event_here else "time")
+            stats["events"] = len(events)
+            h_acc = None
+            if msg:
+                status, message = Status.INCONSISTENT, msg
+                break
+            if _accumulating(recent, zeno_window) or len(events) > opts["max_events"]:
+                status, message = _too_many(events, recent, t, opts)
+                break
+    stats["events"] = len(events)
+    if status is not Status.SUCCESS and settings.throw:
+        raise SolverError(message, status=status, t=t, where="", residual=math.nan)
+    data = np.array(rows, dtype=float)
+    if dt is not None and dense.t0:
+        n_grid = steps_for(dt, settings.t_end)
+        grid = np.arange(n_grid + 1) * dt
+        grid = grid[grid <= t + 1e-12 * max(1.0, t)]
+        grid[-1] = min(grid[-1], t)
+        data = dense(grid)
+        data[0] = rows[0]
+    return RawRun(data, stats, status, message, events, dense if dense.t0 else None)
+
+
+def _accumulating(recent: deque, window: float) -> bool:
+    return len(recent) == recent.maxlen and recent[-1] - recent[0] <= window
+
+
+def _too_many(events: list[Event], recent: deque, t: float, opts: dict) -> tuple:
+    if len(events) > opts["max_events"]:
+        return Status.TOO_MANY_EVENTS, (
+            f"radau5 stopped at t = {t!r}: more than max_events = {opts['max_events']} events")
+    names = sorted({ev.element for ev in events[-len(recent):]})
+    return Status.TOO_MANY_EVENTS, (
+        f"radau5 stopped at t = {t!r}: {len(recent)} events within "
+        f"{recent[-1] - recent[0]!r} s (elements {names}): an accumulation of events "
+        "(Zeno or chattering)")

@@ -1,0 +1,154 @@
+r"""The event logic of the adaptive method: branch guards along a step, the first crossing,
+and the choice of the next mode.
+
+A *mode* holds every element's law on one smooth branch (:func:`lumped.codegen.branches.
+law_branches`). The branch's guards ``g(q, F) >= 0`` say where it is admissible. After a
+step, the guards are evaluated along the step's collocation polynomial
+(:func:`first_crossing`); the first point where one turns negative is located on the
+polynomial by Brent's method to a few ulps of ``t`` and the step is redone to end there.
+
+At the event the next mode is what the full, nonsmooth laws choose in the limit of a
+vanishing implicit step (:func:`select_modes`): one backward-Euler step of the full laws
+(the semismooth Newton of the fixed-step methods) of a size ``h_p`` far below the
+method's step, read through ``law_branches(...).branch(q, F)``. As ``h_p -> 0`` this is the
+rule of :func:`lumped.solvers.initial_state.consistent_initial_state`: a dashpot that
+reaches ``|F| = tau`` sticks if the rest of the system can be balanced by a force inside
+the cone, else it reverses. A dashpot that enters a rate lock (``q = const``) gets its
+rate set exactly (:func:`hold_rate_locks`), so a stuck velocity is exactly zero.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+from scipy.optimize import brentq
+
+from ..scene import Mass, Scene
+from .newton import NewtonCode, NewtonOptions, newton_solve
+from .step_system import _make_evaluate
+
+__all__ = ["SAMPLES", "first_crossing", "select_modes", "hold_rate_locks"]
+
+#: Points ``s`` in ``(0, 1]`` of a step where the guards are sampled (in order).
+SAMPLES = tuple(k / 8.0 for k in range(1, 9))
+
+
+def first_crossing(
+    guard_at: Callable[[float], tuple[float, int]],
+    guard_of: Callable[[float, int], float],
+    samples: Sequence[float] = SAMPLES,
+) -> tuple[float, int] | None:
+    """The first ``s`` in ``(0, 1]`` where a guard of the step turns negative, if any.
+
+    Parameters
+    ----------
+    guard_at : callable
+        ``s -> (g_min, which)``: the smallest guard value at ``t_n + s h`` (already
+        shifted by its tolerance, so that ``g_min < 0`` means "left the branch") and the
+        index of that guard.
+    guard_of : callable
+        ``(s, which) -> g``: one guard (shifted likewise) along the step.
+    samples : sequence of float
+        Increasing sample points ending at 1.
+
+    Returns
+    -------
+    (s, which) or None
+        The root of the first violated guard, located by Brent's method on
+        ``[s_prev, s]`` to ``|ds| <= 4 eps``; ``None`` if no sample is negative.
+    """
+    prev = 0.0
+    for s in samples:
+        g, which = guard_at(s)
+        if g < 0.0:
+            g0 = guard_of(prev, which)
+            if not g0 > 0.0:
+                return prev, which
+            root = brentq(lambda z, w=which: guard_of(z, w), prev, s, xtol=4e-16, rtol=1e-15)
+            return root, which
+        prev = s
+    return None
+
+
+def select_modes(
+    scene: Scene,
+    branches: Sequence,
+    t: float,
+    x: list[float],
+    v: list[float],
+    F: list[float],
+    h_probe: float,
+    options: NewtonOptions | None = None,
+) -> tuple[list[int], list[float], list[float]] | str:
+    """The branch of every element right after ``t``, by a vanishing implicit step.
+
+    One backward-Euler step of size ``h_probe`` of the full laws from ``(x, v)`` at ``t``
+    (forcing at ``t + h_probe``), solved by the semismooth Newton of the fixed-step
+    methods; each element's branch is ``branches[e].branch(q, F)`` at the result.
+
+    Returns
+    -------
+    (modes, v_probe, F_probe) or str
+        The branch indices, the velocities and forces of the probe step (the right limits
+        at ``t``, up to ``O(h_probe)``), or a message when the step has no solution.
+    """
+    N = len(scene.nodes)
+    cm = [n.m / h_probe if isinstance(n, Mass) else 0.0 for n in scene.nodes]
+    f = scene.external_forces(t + h_probe)
+    uref = list(v)
+    x_hat = list(x)
+    E = len(scene.elements)
+    qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
+    evaluate = _make_evaluate(scene, h_probe, cm, [0.0] * N, [1.0] * N, uref, x_hat, f,
+                              qs, rq, rf, roundoff=True)
+    opts = options or NewtonOptions()
+    res = newton_solve(evaluate, list(v) + list(F),
+                       NewtonOptions(rtol=min(opts.rtol, 1e-12), atol=min(opts.atol, 1e-14),
+                                     max_iters=max(opts.max_iters, 100),
+                                     max_backtracks=opts.max_backtracks,
+                                     free_steps=opts.free_steps))
+    if res.code is not NewtonCode.SUCCESS:
+        return (f"no motion continues from t = {t!r}: the implicit step of the full laws "
+                f"({h_probe!r} s) failed ({res.code.value})")
+    v_p = res.u[:N]
+    F_p = res.u[N:]
+    x_p = [x[i] + h_probe * v_p[i] for i in range(N)]
+    q = scene.elongations(x_p, v_p)
+    modes = [branches[e].branch(q[e], F_p[e]) for e in range(E)]
+    return modes, v_p, F_p
+
+
+def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
+                    v: list[float]) -> list[int]:
+    """Set exactly the rate fixed by every dashpot on a rate-locking branch (``q = L``).
+
+    Only a dashpot between a mass and ground is set here (``v = +-L``, exactly); one
+    between two nodes is left as the probe step found it. Returns the elements set.
+    """
+    done = []
+    for e, el in enumerate(scene.elements):
+        if el.kind != "dashpot":
+            continue
+        info = branches[e].info[modes[e]]
+        if not info.locks or info.lock_value is None:
+            continue
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        L = float(info.lock_value)
+        if a < 0 and b >= 0 and isinstance(scene.nodes[b], Mass):
+            v[b] = L
+        elif b < 0 and a >= 0 and isinstance(scene.nodes[a], Mass):
+            v[a] = -L if L != 0.0 else 0.0
+        else:
+            continue
+        done.append(e)
+    return done
+
+
+def guard_tolerance(q: float, F: float) -> float:
+    """How far below zero a guard may sit from round-off alone at ``(q, F)``."""
+    return 64.0 * 2.220446049250313e-16 * (1.0 + abs(q) + abs(F))
+
+
+def _finite(vals: Sequence[float]) -> bool:
+    return all(math.isfinite(val) for val in vals)

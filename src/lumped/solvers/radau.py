@@ -1,0 +1,328 @@
+r"""One step of the 3-stage Radau IIA method (order 5) on a scene's DAE, one mode held.
+
+The scene's semi-explicit DAE (:mod:`lumped.scene`) in the unknowns node velocities
+``v`` and element forces ``F``, with ``x' = v`` for every node::
+
+    m_i v_i' = net_i(t, F)      (masses)        0 = net_i(t, F)     (junctions)
+    0 = R_e^{(b_e)}(q_e, F_e)   (every element, on its held branch ``b_e``)
+
+``net_i = f_i(t) + sum_{a_e = i} F_e - sum_{b_e = i} F_e``. One step of size ``h`` from
+``(x_n, v_n)`` solves for the stage values ``V_k, F_k`` (``k = 1, 2, 3`` at
+``t_n + c_k h``) with the stage positions ``X_k = x_n + h sum_l a_kl V_l`` and the
+collocation derivative ``V_k' ~ (1/h) sum_l w_kl (V_l - v_n)``, ``W = A^{-1}``::
+
+    m_i / h sum_l w_kl (V_l,i - v_n,i) - net_i(t_n + c_k h, F_k) = 0    (masses)
+                                      - net_i(t_n + c_k h, F_k) = 0    (junctions)
+    R_e^{(b_e)}(q_e(X_k, V_k), F_k,e) = 0                              (elements)
+
+with ``q_e = X_b - X_a`` (springs) or ``V_b - V_a`` (dashpots), ground at 0. The step's
+result is stage 3 (``c_3 = 1``: stiffly accurate), and the stage values with ``y_n`` are
+the nodes of the collocation polynomial (the dense output, :func:`dense_weights`).
+
+Everything here runs on flat lists of Python floats with scalar loops (numba-friendly).
+The unknowns are laid out stage by stage: ``U[k*n + i]`` is ``V_k,i`` for a node ``i < N``
+and ``U[k*n + N + e]`` is ``F_k,e``, ``n = N + E``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+from .linalg import lu_factor, lu_solve
+
+__all__ = ["C", "A", "W", "E_ERR", "MU_REAL", "StageSystem", "dense_weights", "dense_slopes"]
+
+_S6 = math.sqrt(6.0)
+#: Collocation nodes of Radau IIA (3 stages).
+C = ((4.0 - _S6) / 10.0, (4.0 + _S6) / 10.0, 1.0)
+#: The Butcher matrix ``A``.
+A = (
+    ((88.0 - 7.0 * _S6) / 360.0, (296.0 - 169.0 * _S6) / 1800.0, (-2.0 + 3.0 * _S6) / 225.0),
+    ((296.0 + 169.0 * _S6) / 1800.0, (88.0 + 7.0 * _S6) / 360.0, (-2.0 - 3.0 * _S6) / 225.0),
+    ((16.0 - _S6) / 36.0, (16.0 + _S6) / 36.0, 1.0 / 9.0),
+)
+#: Weights of the embedded error estimate (Hairer & Wanner, RADAU5).
+E_ERR = ((-13.0 - 7.0 * _S6) / 3.0, (-13.0 + 7.0 * _S6) / 3.0, -1.0 / 3.0)
+#: The real eigenvalue of ``A^{-1}``: ``3 + 3^(2/3) - 3^(1/3)``.
+MU_REAL = 3.0 + 3.0 ** (2.0 / 3.0) - 3.0 ** (1.0 / 3.0)
+
+
+def _inverse3(M: Sequence[Sequence[float]]) -> tuple[tuple[float, ...], ...]:
+    (a, b, c), (d, e, f), (g, h, i) = M
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    return (
+        ((e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det),
+        ((f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det),
+        ((d * h - e * g) / det, (b * g - a * h) / det, (a * e - b * d) / det),
+    )
+
+
+#: ``W = A^{-1}``: the collocation derivative at the stages.
+W = _inverse3(A)
+
+
+def dense_weights(s: float) -> tuple[float, float, float]:
+    r"""Lagrange weights ``l_k(s)``, ``k = 1..3``, of the collocation polynomial.
+
+    ``y(t_n + s h) = y_n + sum_k l_k(s) (Y_k - y_n)``, ``l_k`` the Lagrange polynomial of
+    the nodes ``0, c_1, c_2, c_3`` that is 1 at ``c_k`` (the weight of the node ``0``
+    multiplies ``y_n - y_n = 0``; this form keeps a held value exactly).
+    """
+    c1, c2, c3 = C
+    return (
+        s * (s - c2) * (s - c3) / (c1 * (c1 - c2) * (c1 - c3)),
+        s * (s - c1) * (s - c3) / (c2 * (c2 - c1) * (c2 - c3)),
+        s * (s - c1) * (s - c2) / (c3 * (c3 - c1) * (c3 - c2)),
+    )
+
+
+def dense_slopes(s: float) -> tuple[float, float, float]:
+    """Derivatives ``l_k'(s)`` of the weights of :func:`dense_weights` (per unit ``s``)."""
+    nodes = (0.0, *C)
+    out = []
+    for k in (1, 2, 3):
+        ck = nodes[k]
+        others = [nodes[j] for j in range(4) if j != k]
+        denom = 1.0
+        for cj in others:
+            denom *= ck - cj
+        total = 0.0
+        for skip in range(3):
+            prod = 1.0
+            for j, cj in enumerate(others):
+                if j != skip:
+                    prod *= s - cj
+            total += prod
+        out.append(total / denom)
+    return out[0], out[1], out[2]
+
+
+#: ``l_k'(1)``: the slope of the collocation polynomial at the end of a step.
+END_SLOPES = dense_slopes(1.0)
+
+
+class StageSystem:
+    """The Radau IIA stage equations of one scene, for the branch kernels of one mode.
+
+    Parameters
+    ----------
+    masses : sequence of float
+        ``m_i`` per node, ``0.0`` for a junction.
+    elem_a, elem_b : sequence of int
+        End nodes of every element (``-1`` for ground).
+    spring : sequence of bool
+        ``True`` where the element's law is in the elongation (else in its rate).
+    """
+
+    def __init__(self, masses: Sequence[float], elem_a: Sequence[int],
+                 elem_b: Sequence[int], spring: Sequence[bool]) -> None:
+        self.N = len(masses)
+        self.E = len(elem_a)
+        self.n = self.N + self.E
+        self.m = [float(mi) for mi in masses]
+        self.ea = list(elem_a)
+        self.eb = list(elem_b)
+        self.spring = list(spring)
+
+    # -- the stage system ----------------------------------------------------------------
+    def evaluate(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
+                 f: list[list[float]], kernels: Sequence[Callable]):
+        """Residual ``G`` and Jacobian ``J`` (list of rows) of the stage system at ``U``.
+
+        ``f[k]`` is the external force per node at ``t_n + c_k h``; ``kernels[e]`` is the
+        held branch's kernel ``(q, F) -> (R, dR/dq, dR/dF)`` of element ``e``.
+        """
+        N, E, n = self.N, self.E, self.n
+        m, ea, eb, spring = self.m, self.ea, self.eb, self.spring
+        size = 3 * n
+        G = [0.0] * size
+        J = [[0.0] * size for _ in range(size)]
+        for k in range(3):
+            base = k * n
+            fk = f[k]
+            Wk = W[k]
+            for i in range(N):
+                row = J[base + i]
+                if m[i] > 0.0:
+                    acc = 0.0
+                    for j in range(3):
+                        acc += Wk[j] * (U[j * n + i] - v_n[i])
+                        row[j * n + i] = m[i] / h * Wk[j]
+                    G[base + i] = m[i] / h * acc - fk[i]
+                else:
+                    G[base + i] = -fk[i]
+            Ak = A[k]
+            for e in range(E):
+                col = base + N + e
+                Fe = U[col]
+                a, b = ea[e], eb[e]
+                # net force: +F on a, -F on b; the balance row holds -net
+                if a >= 0:
+                    G[base + a] -= Fe
+                    J[base + a][col] = -1.0
+                if b >= 0:
+                    G[base + b] += Fe
+                    J[base + b][col] = 1.0
+                if spring[e]:
+                    qb = 0.0
+                    qa = 0.0
+                    if b >= 0:
+                        s = 0.0
+                        for j in range(3):
+                            s += Ak[j] * U[j * n + b]
+                        qb = x_n[b] + h * s
+                    if a >= 0:
+                        s = 0.0
+                        for j in range(3):
+                            s += Ak[j] * U[j * n + a]
+                        qa = x_n[a] + h * s
+                else:
+                    qb = U[base + b] if b >= 0 else 0.0
+                    qa = U[base + a] if a >= 0 else 0.0
+                R, Rq, RF = kernels[e](qb - qa, Fe)
+                lrow = J[col]
+                G[col] = R
+                lrow[col] = RF
+                if spring[e]:
+                    for j in range(3):
+                        g = Rq * h * Ak[j]
+                        if b >= 0:
+                            lrow[j * n + b] += g
+                        if a >= 0:
+                            lrow[j * n + a] -= g
+                else:
+                    if b >= 0:
+                        lrow[base + b] += Rq
+                    if a >= 0:
+                        lrow[base + a] -= Rq
+        return G, J
+
+    def solve(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
+              f: list[list[float]], kernels: Sequence[Callable], scale: list[float],
+              tol: float = 1e-3, max_iters: int = 10) -> tuple[list[float] | None, int, int]:
+        """Newton on the stage system from the guess ``U`` (modified in place).
+
+        Converged when ``max_j |dU_j| / scale_j <= tol``; the Jacobian is refactored when
+        the contraction rate exceeds 1/2 (simplified Newton otherwise). Returns
+        ``(U or None, iterations, factorisations)``; ``None`` when Newton failed (singular,
+        non-finite or no convergence): the caller shrinks the step.
+        """
+        G, J = self.evaluate(U, h, x_n, v_n, f, kernels)
+        fac = lu_factor(J)
+        nfac = 1
+        prev = math.inf
+        for it in range(1, max_iters + 1):
+            if fac is None:
+                return None, it, nfac
+            du = lu_solve(fac, [-g for g in G])
+            worst = 0.0
+            for j in range(len(U)):
+                d = du[j]
+                U[j] += d
+                r = abs(d) / scale[j]
+                if not r <= worst:
+                    worst = r  # NaN lands here too
+            if not math.isfinite(worst):
+                return None, it, nfac
+            if worst <= tol:
+                return U, it, nfac
+            G, J2 = self.evaluate(U, h, x_n, v_n, f, kernels)
+            if worst > 0.5 * prev:
+                fac = lu_factor(J2)
+                nfac += 1
+            prev = worst
+        return None, max_iters, nfac
+
+    # -- the error estimate ---------------------------------------------------------------
+    def error(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
+              net_n: list[float], jac_n: list[tuple[float, float]]) -> list[float] | None:
+        r"""The filtered local error estimate of RADAU5, ``(e_x (N), e_v (N), e_F (E))``.
+
+        Solves ``(mu/h M - J) e = f(y_n) + M sum_k E_k Z_k / h`` with ``Z_k = Y_k - y_n``:
+        rows ``x' = v`` per node, momentum per mass (the junction balances and the laws
+        have ``M = 0`` and right side 0: ``y_n`` is consistent), with the laws
+        linearised at ``y_n`` (``jac_n[e] = (dR/dq, dR/dF)``). ``None`` if singular.
+        """
+        N, E, n = self.N, self.E, self.n
+        m, ea, eb, spring = self.m, self.ea, self.eb, self.spring
+        size = 2 * N + E
+        M = [[0.0] * size for _ in range(size)]
+        rhs = [0.0] * size
+        g = MU_REAL / h
+        for i in range(N):
+            zx = 0.0
+            zv = 0.0
+            for k in range(3):
+                s = 0.0
+                for j in range(3):
+                    s += A[k][j] * U[j * n + i]
+                zx += E_ERR[k] * s  # (X_k - x_n) / h
+                zv += E_ERR[k] * (U[k * n + i] - v_n[i])
+            M[i][i] = g
+            M[i][N + i] = -1.0
+            rhs[i] = v_n[i] + zx
+            if m[i] > 0.0:
+                M[N + i][N + i] = g * m[i]
+                rhs[N + i] = net_n[i] + m[i] * zv / h
+        for e in range(E):
+            col = 2 * N + e
+            a, b = ea[e], eb[e]
+            if a >= 0:
+                M[N + a][col] -= 1.0
+            if b >= 0:
+                M[N + b][col] += 1.0
+            Rq, RF = jac_n[e]
+            off = 0 if spring[e] else N
+            if b >= 0:
+                M[col][off + b] -= Rq
+            if a >= 0:
+                M[col][off + a] += Rq
+            M[col][col] = -RF
+        fac = lu_factor(M)
+        if fac is None:
+            return None
+        return lu_solve(fac, rhs)
+
+    def error_norm(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
+                   F_n: list[float], err: list[float], rtol: float, atol: float,
+                   dF_n: list[float] | None, watched: Sequence[int], F_ref: float) -> float:
+        r"""RMS of the scaled error: ``x`` of every node and ``v`` of every mass from ``err``
+        (:meth:`error`), and the forces of the ``watched`` elements (those whose guards
+        decide the events) when their slope ``dF_n`` at ``t_n`` is known (the previous
+        step's polynomial): ``gamma_0 (h F'_n + sum_k E_k (F_k - F_n))``, the embedded
+        estimate of their polynomial, unfiltered (a force is as smooth as the rates that
+        set it). Scales: ``atol + rtol max(|y_n|, |y_n+1|)``, for forces
+        ``rtol max(|F_n|, |F_n+1|, F_ref)``."""
+        N, n, m = self.N, self.n, self.m
+        A3 = A[2]
+        acc = 0.0
+        cnt = 0
+        for i in range(N):
+            x_new = x_n[i] + h * (A3[0] * U[i] + A3[1] * U[n + i] + A3[2] * U[2 * n + i])
+            sc = atol + rtol * max(abs(x_n[i]), abs(x_new))
+            acc += (err[i] / sc) ** 2
+            cnt += 1
+            if m[i] > 0.0:
+                sc = atol + rtol * max(abs(v_n[i]), abs(U[2 * n + i]))
+                acc += (err[N + i] / sc) ** 2
+                cnt += 1
+        if dF_n is not None:
+            g0 = 1.0 / MU_REAL
+            for e in watched:
+                k0 = N + e
+                Fe = F_n[e]
+                est = h * dF_n[e]
+                for k in range(3):
+                    est += E_ERR[k] * (U[k * n + k0] - Fe)
+                sc = rtol * max(abs(Fe), abs(U[2 * n + k0]), F_ref)
+                acc += (g0 * est / sc) ** 2
+                cnt += 1
+        return math.sqrt(acc / cnt)
+
+    def end_slope(self, U: list[float], h: float, F_n: list[float]) -> list[float]:
+        """``F'`` of every element at the end of the step, from its collocation polynomial."""
+        N, n = self.N, self.n
+        s1, s2, s3 = END_SLOPES
+        return [(s1 * (U[N + e] - F_n[e]) + s2 * (U[n + N + e] - F_n[e])
+                 + s3 * (U[2 * n + N + e] - F_n[e])) / h for e in range(self.E)]

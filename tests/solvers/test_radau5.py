@@ -1,0 +1,218 @@
+"""The adaptive method ``radau5``: tolerance, order, events, exact sticking, bad input.
+
+Accuracy is measured against exact solutions (:mod:`lumped.reference`, a linear
+oscillator, a step load) or an independent high-accuracy scipy run, never against
+another run of ``radau5``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from _helpers import log_uniform
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from lumped import Element, Junction, Mass, Scene, SolverError, Status, get_law, simulate
+from lumped.reference import exact_solution
+from lumped.scenarios import get_scenario, scenario_scene
+from lumped.solvers.radau import A, StageSystem
+
+
+def _reference(name: str, t: np.ndarray):
+    sc = get_scenario(name)
+    return exact_solution(sc.osc, x0=sc.x0, v0=sc.v0, forcing=sc.forcing, t_eval=t)
+
+
+def _error(name: str, rtol: float, t_end: float = 5.0) -> tuple[float, int]:
+    sol = simulate(scenario_scene(name), method="radau5", t_end=t_end, rtol=rtol,
+                   atol=rtol * 1e-3)
+    t = np.linspace(0.0, t_end, 2001)
+    ex = _reference(name, t)
+    got = sol.sol(t)
+    return float(np.max(np.abs(got[:, 1] - ex.trajectory.x))), sol.stats["steps"]
+
+
+@pytest.mark.parametrize("name", ["release-0.5", "forcing-F2"])
+def test_error_falls_in_proportion_to_the_tolerance(name):
+    e5, n5 = _error(name, 1e-5)
+    e8, n8 = _error(name, 1e-8)
+    assert e5 <= 1e-5 * 0.5 and e8 <= 1e-8 * 0.5
+    # 1000 times the tolerance: between 100 and 10^4 times the error
+    assert 1e2 <= e5 / e8 <= 1e4
+    # order across the stick-slip events: a first- or second-order method would need
+    # 1000 or 30 times the steps; fifth-order steps under a fourth-order estimate, 5.6
+    slope = math.log(e5 / e8) / math.log(n8 / n5)
+    assert slope >= 3.5, slope
+
+
+@pytest.mark.parametrize("name", ["release-0.5", "forcing-F2"])
+def test_event_times_match_the_exact_reference(name):
+    sol = simulate(scenario_scene(name), method="radau5", t_end=5.0, rtol=1e-10,
+                   atol=1e-13)
+    ex = _reference(name, np.array([0.0, 5.0]))
+    exact = [ev.t for ev in ex.events if ev.kind != "forcing-off"]
+    ours = [ev for ev in sol.events if ev.kind == "switch"]
+    assert len(ours) == len(exact)
+    for ev, te in zip(ours, exact, strict=True):
+        assert ev.element == "dashpot"
+        assert abs(ev.t - te) <= 1e-10, (ev, te)
+    # the time event of the forcing (t_off = 1) where there is one
+    times = [ev.t for ev in sol.events if ev.kind == "time"]
+    assert times == ([1.0] if name == "forcing-F2" else [])
+
+
+def test_eq19_is_reproduced_exactly():
+    scene = scenario_scene("forcing-F1")
+    sol = simulate(scene, method="radau5", t_end=2.0, rtol=1e-6)
+    assert sol.ok and not [ev for ev in sol.events if ev.kind == "switch"]
+    assert np.all(sol.column("x_mass") == 0.0) and np.all(sol.column("v_mass") == 0.0)
+    assert np.all(sol.column("F_spring") == 0.0)
+    F1 = scene.forcing[0]
+    assert np.array_equal(sol.column("F_dashpot"), [F1(t) for t in sol.t])
+    dense = sol.sol(np.linspace(0.0, 2.0, 777))
+    assert np.all(dense[:, 1] == 0.0) and np.all(dense[:, 2] == 0.0)
+
+
+def _bingham_scene(m, k, gamma, tau, x0, amplitude, omega):
+    from lumped.scene import SineBurst
+
+    return Scene(
+        [Mass("mass", m=m, x0=x0)],
+        [Element("spring", get_law("linear_spring").bind(k=k), "ground", "mass"),
+         Element("dashpot", get_law("bingham").bind(gamma=gamma, tau=tau), "ground", "mass")],
+        forces={"mass": SineBurst(amplitude=amplitude, omega=omega, t_off=1.0)},
+    ), SineBurst(amplitude=amplitude, omega=omega, t_off=1.0)
+
+
+@settings(max_examples=20)
+@given(m=log_uniform(0.3, 3.0), k=log_uniform(10.0, 300.0), gamma=log_uniform(0.1, 10.0),
+       tau=log_uniform(0.3, 3.0), x0=st.floats(-0.05, 0.05),
+       amplitude=st.floats(0.0, 10.0), omega=st.floats(1.0, 20.0))
+def test_exact_sticking_against_the_reference(m, k, gamma, tau, x0, amplitude, omega):
+    from lumped.solvers.closed_form import BinghamOscillator
+
+    scene, forcing = _bingham_scene(m, k, gamma, tau, x0, amplitude, omega)
+    rtol = 1e-8
+    t_end = 2.0
+    sol = simulate(scene, method="radau5", t_end=t_end, rtol=rtol, atol=1e-11)
+    t = np.linspace(0.0, t_end, 401)
+    ex = exact_solution(BinghamOscillator(m=m, k=k, gamma=gamma, tau=tau), x0=x0,
+                        forcing=forcing, t_eval=t)
+    got = sol.sol(t)
+    scale = max(abs(x0), amplitude / k, tau / k, 1e-3)
+    assert np.max(np.abs(got[:, 1] - ex.trajectory.x)) <= 1e3 * rtol * scale
+    # inside every stuck interval of the reference, the velocity is exactly 0
+    for iv in ex.intervals:
+        if iv.phase != "stick":
+            continue
+        lo, hi = iv.t_start, min(iv.t_end, t_end)
+        margin = 1e-6 * (1.0 + hi)
+        if hi - lo <= 2 * margin:
+            continue
+        inner = np.linspace(lo + margin, hi - margin, 23)
+        assert np.all(sol.sol(inner)[:, 2] == 0.0)
+
+
+def test_order_five_on_a_linear_oscillator():
+    """Fixed steps of the Radau IIA stage system (spring + newtonian dashpot): slope 5."""
+    m, k, c = 1.0, 100.0, 0.5
+    system = StageSystem([m], [-1, -1], [0, 0], [True, False])
+    spring = get_law("linear_spring").bind(k=k).kernel
+    dashpot = get_law("newtonian").bind(c=c).kernel
+    x0, T = 0.1, 1.0
+    wd = math.sqrt(k / m - (c / (2 * m)) ** 2)
+    exact = x0 * math.exp(-c * T / (2 * m)) * (math.cos(wd * T)
+                                                + c / (2 * m * wd) * math.sin(wd * T))
+    errs, hs = [], []
+    for n_steps in (20, 40, 80):
+        h = T / n_steps
+        x, v, F = [x0], [0.0], [k * x0, 0.0]
+        zero = [[0.0]] * 3
+        for _ in range(n_steps):
+            U = (v + F) * 3
+            U, _, _ = system.solve(U, h, x, v, zero, (spring, dashpot), [1e-8] * 9, tol=1e-4)
+            x = [x[0] + h * sum(A[2][j] * U[3 * j] for j in range(3))]
+            v, F = [U[6]], U[7:9]
+        errs.append(abs(x[0] - exact))
+        hs.append(h)
+    slope = np.polyfit(np.log(hs), np.log(errs), 1)[0]
+    assert 4.6 <= slope <= 5.6, (slope, errs)
+
+
+def _spring_reference(bound, m, x0, v0, t):
+    """x(t) of a mass on a smooth implicit spring, by DOP853 with F(q) from the law."""
+    def force(q):
+        lo, hi = -1.0, 1.0
+        while bound.residual(q, lo) * bound.residual(q, hi) > 0:
+            lo, hi = 2 * lo, 2 * hi
+        return brentq(lambda F: bound.residual(q, F), lo, hi, xtol=1e-15, rtol=1e-15)
+
+    out = solve_ivp(lambda _t, y: [y[1], -force(y[0]) / m], (0.0, t[-1]), [x0, v0],
+                    method="DOP853", rtol=1e-13, atol=1e-15, t_eval=t)
+    return out.y[0]
+
+
+@pytest.mark.parametrize("law, params, x0", [
+    ("implicit_spring", {"k": 100.0, "L0": 0.01, "F0": 2.0}, 0.1),
+    ("s_shaped", {"q0": 1.0, "F0": 1.0}, 0.8),  # stays on the middle branch (|q| < 2)
+])
+def test_fully_implicit_laws(law, params, x0):
+    bound = get_law(law).bind(**params)
+    scene = Scene([Mass("mass", m=1.0, x0=x0)], [Element("s", bound, "ground", "mass")])
+    sol = simulate(scene, method="radau5", t_end=3.0, rtol=1e-9, atol=1e-12)
+    t = np.linspace(0.0, 3.0, 301)
+    ref = _spring_reference(bound, 1.0, x0, 0.0, t)
+    assert np.max(np.abs(sol.sol(t)[:, 1] - ref)) <= 1e-7
+
+
+def test_a_forcing_with_a_jump_is_a_time_event():
+    k, m, P, t0 = 50.0, 2.0, 3.0, 0.37
+    scene = Scene([Mass("mass", m=m)],
+                  [Element("spring", get_law("linear_spring").bind(k=k), "ground", "mass")],
+                  forces={"mass": f"Piecewise((0, t < {t0!r}), ({P!r}, True))"})
+    sol = simulate(scene, method="radau5", t_end=2.0, rtol=1e-10, atol=1e-13)
+    assert [(ev.t, ev.kind) for ev in sol.events] == [(t0, "time")]
+    t = np.linspace(0.0, 2.0, 1001)
+    w = math.sqrt(k / m)
+    exact = np.where(t < t0, 0.0, P / k * (1.0 - np.cos(w * (t - t0))))
+    assert np.max(np.abs(sol.sol(t)[:, 1] - exact)) <= 1e-9
+
+
+def test_event_accumulation_ends_with_a_clear_status():
+    scene = scenario_scene("forcing-F2")
+    sol = simulate(scene, method="radau5", t_end=5.0, throw=False, zeno_events=3,
+                   zeno_window=1.0)
+    assert sol.status is Status.TOO_MANY_EVENTS
+    assert "accumulation" in sol.message and "dashpot" in sol.message
+    assert sol.t[-1] < 1.0
+    with pytest.raises(SolverError, match="max_events = 2"):
+        simulate(scene, method="radau5", t_end=5.0, max_events=2)
+
+
+def test_dense_output_on_a_grid_and_auto():
+    scene = scenario_scene("release-0.5")
+    grid = simulate(scene, method="radau5", t_end=1.0, dt=0.01, rtol=1e-7)
+    assert len(grid.t) == 101 and grid.t[-1] == pytest.approx(1.0)
+    free = simulate(scene, method="radau5", t_end=1.0, rtol=1e-7)
+    np.testing.assert_allclose(grid.data, free.sol(grid.t), rtol=0, atol=1e-15)
+    maxwell = Scene([Mass("mass", m=1.0, x0=0.1), Junction("j")],
+                    [Element("spring", get_law("linear_spring").bind(k=10.0), "ground", "mass"),
+                     Element("s2", get_law("linear_spring").bind(k=50.0), "j", "mass"),
+                     Element("d", get_law("bingham").bind(gamma=1.0, tau=0.2), "ground", "j")])
+    assert simulate(maxwell, t_end=0.5, dt=0.01).method == "radau5"
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"rtol": -1e-6}, "`rtol` must be positive"),
+    ({"rtol": 0.0}, "`rtol` must be positive"),
+    ({"atol": float("nan")}, "`atol` must be finite"),
+    ({"max_events": 0}, "`max_events` must be a positive integer"),
+])
+def test_bad_tolerances_are_refused(kw, match):
+    with pytest.raises(ValueError, match=match):
+        simulate(scenario_scene("release-0.5"), method="radau5", t_end=1.0, **kw)
