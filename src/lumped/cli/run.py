@@ -1,4 +1,5 @@
-"""``lumped run SCENE.toml --out results.csv [--method ...] [--dt ...] [--t-end ...]``.
+"""``lumped run SCENE.toml --out results.csv [--method ...] [--dt ...] [--t-end ...]
+[--rtol ...] [--atol ...]``.
 
 Loads a scene file (:mod:`lumped.io.scenefile`), runs :func:`lumped.simulate.simulate`
 with the file's ``[solver]`` settings overridden by the command line, and writes the
@@ -11,7 +12,7 @@ import argparse
 import sys
 
 from ..simulate import simulate
-from ..solvers.registry import METHODS
+from ..solvers.registry import FIXED_STEP_METHODS, METHODS, resolve_method
 from ..solvers.status import SolverError
 
 __all__ = ["add_arguments", "run"]
@@ -26,6 +27,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--dt", type=float, default=None, help="step size (overrides the file)")
     parser.add_argument("--t-end", dest="t_end", type=float, default=None,
                         help="final time (overrides the file)")
+    parser.add_argument("--rtol", type=float, default=None,
+                        help="relative tolerance of an adaptive method (overrides the file)")
+    parser.add_argument("--atol", type=float, default=None,
+                        help="absolute tolerance of an adaptive method (overrides the file)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -38,12 +43,15 @@ def run(args: argparse.Namespace) -> int:
     method = args.method or settings.get("method", "auto")
     dt = args.dt if args.dt is not None else settings.get("dt")
     t_end = args.t_end if args.t_end is not None else settings.get("t_end")
-    if dt is None:
+    rtol = args.rtol if args.rtol is not None else settings.get("rtol")
+    atol = args.atol if args.atol is not None else settings.get("atol")
+    if dt is None and resolve_method(scene, method) in FIXED_STEP_METHODS:
         raise ValueError(f"{args.scene}: no step size: give --dt or [solver] dt")
     if t_end is None:
         raise ValueError(f"{args.scene}: no final time: give --t-end or [solver] t_end")
     try:
-        sol = simulate(scene, method=method, dt=dt, t_end=t_end, throw=False)
+        sol = simulate(scene, method=method, dt=dt, t_end=t_end, rtol=rtol, atol=atol,
+                       throw=False)
     except SolverError as err:  # no consistent initial state: nothing to write
         print(f"lumped run: {err}", file=sys.stderr)
         return 1

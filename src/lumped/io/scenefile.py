@@ -37,7 +37,7 @@ from ..scene.forcing import SineBurst
 __all__ = ["load_scene", "scene_from_dict", "SceneFileError", "SETTINGS_KEYS"]
 
 #: Keys of the ``[solver]`` table.
-SETTINGS_KEYS = ("method", "dt", "t_end")
+SETTINGS_KEYS = ("method", "dt", "t_end", "rtol", "atol")
 
 _NODE_KEYS = {"mass", "x0", "v0", "force"}
 _ELEMENT_KEYS = {"law", "between", "parameters", "F0"}
@@ -55,7 +55,8 @@ def load_scene(path: str | Path) -> tuple[Scene, dict[str, Any]]:
     -------
     scene : Scene
     settings : dict
-        The ``[solver]`` table (``method``, ``dt``, ``t_end``; only those given).
+        The ``[solver]`` table (``method``, ``dt``, ``t_end``, ``rtol``, ``atol``; only those
+        given).
 
     Raises
     ------
@@ -161,7 +162,7 @@ def _settings(tbl: object, fail) -> dict[str, Any]:
         if tbl["method"] not in METHODS:
             raise fail("[solver] method", f"must be one of {METHODS}, got {tbl['method']!r}")
         out["method"] = tbl["method"]
-    for k in ("dt", "t_end"):
+    for k in ("dt", "t_end", "rtol", "atol"):
         if k in tbl:
             val = _number(tbl[k], f"[solver] {k}", fail)
             if not val > 0.0:

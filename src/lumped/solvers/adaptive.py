@@ -21,13 +21,13 @@ The output holds the accepted step points, or (with ``dt``) the dense output on
 
 from __future__ import annotations
 
-import bisect
 import math
 from collections import deque
 
 import numpy as np
 
 from ..scene import Mass, Scene
+from .adaptive_output import DenseOutput, initial_step, row_of
 from .events import first_crossing, guard_tolerance, hold_rate_locks, select_modes
 from .initial_state import consistent_initial_state
 from .radau import A as _A
@@ -71,77 +71,6 @@ def _breakpoints(scene: Scene, t_end: float) -> list[float]:
     return sorted(out)
 
 
-class _Dense:
-    """The collocation polynomials of the accepted steps: ``t -> rows like data``."""
-
-    def __init__(self, N: int, E: int) -> None:
-        self.N, self.E = N, E
-        self.t0: list[float] = []
-        self.h: list[float] = []
-        self.y0: list[list[float]] = []
-        self.D: list[list[list[float]]] = []
-
-    def add(self, t: float, h: float, y0: list[float], Y: list[list[float]]) -> None:
-        self.t0.append(t)
-        self.h.append(h)
-        self.y0.append(y0)
-        self.D.append([[Yk[j] - y0[j] for j in range(len(y0))] for Yk in Y])
-
-    def row(self, i: int, s: float) -> list[float]:
-        l1, l2, l3 = dense_weights(s)
-        y0 = self.y0[i]
-        D1, D2, D3 = self.D[i]
-        return [y0[j] + (l1 * D1[j] + l2 * D2[j] + l3 * D3[j]) for j in range(len(y0))]
-
-    def __call__(self, t) -> np.ndarray:
-        ts = np.atleast_1d(np.asarray(t, dtype=float))
-        N, E = self.N, self.E
-        out = np.empty((len(ts), 1 + 2 * N + E))
-        if not self.t0:
-            raise ValueError("no step was taken: the dense output is empty")
-        t_lo = self.t0[0]
-        t_hi = self.t0[-1] + self.h[-1]
-        for r, tt in enumerate(ts):
-            tt = float(tt)
-            if not (t_lo <= tt <= t_hi):
-                raise ValueError(f"`t` = {tt!r} is outside the solved interval "
-                                 f"[{t_lo!r}, {t_hi!r}]")
-            i = max(bisect.bisect_right(self.t0, tt) - 1, 0)
-            y = self.row(i, (tt - self.t0[i]) / self.h[i])
-            out[r, 0] = tt
-            for p in range(N):
-                out[r, 1 + 2 * p] = y[p]
-                out[r, 2 + 2 * p] = y[N + p]
-            out[r, 1 + 2 * N:] = y[2 * N:]
-        return out
-
-
-def _layout(t: float, x: list[float], v: list[float], F: list[float]) -> list[float]:
-    row = [t]
-    for p in range(len(x)):
-        row += [x[p], v[p]]
-    return row + list(F)
-
-
-def _initial_step(x, v, acc, is_mass, rtol, atol, span) -> float:
-    """A first step from the sizes of the state and its derivative (as scipy does)."""
-    d0 = d1 = 0.0
-    n = 0
-    for i in range(len(x)):
-        sc = atol + rtol * abs(x[i])
-        d0 += (x[i] / sc) ** 2
-        d1 += (v[i] / sc) ** 2
-        n += 1
-        if is_mass[i]:
-            sc = atol + rtol * abs(v[i])
-            d0 += (v[i] / sc) ** 2
-            d1 += (acc[i] / sc) ** 2
-            n += 1
-    d0, d1 = math.sqrt(d0 / n), math.sqrt(d1 / n)
-    h0 = 1e-6 * span if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-    return min(h0, 0.1 * span) * rtol ** 0.2 / 1e-6 ** 0.2 if h0 > 0 else 1e-6 * span
-
-
 def run_radau5(scene: Scene, settings) -> RawRun:
     """The ``radau5`` runner: ``(scene, RunSettings) -> RawRun`` (see the module notes).
 
@@ -172,8 +101,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     zeno_window = opts["zeno_window"] or 1e-6 * t_final
     events: list[Event] = []
     recent: deque = deque(maxlen=opts["zeno_events"])
-    dense = _Dense(N, E)
-    rows = [_layout(0.0, x, v, F)]
+    dense = DenseOutput(N, E)
+    rows = [row_of(0.0, x, v, F)]
     stats = {"steps": 0, "rejected": 0, "newton_iterations": 0, "factorizations": 0,
              "nfev": 0, "njev": 0, "events": 0, "max_newton_iterations": 0,
              "initial_newton_iterations": ic["newton_iterations"]}
@@ -233,14 +162,15 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     if msg:
         raise SolverError(f"radau5: no consistent initial mode: {msg}",
                           status=Status.INCONSISTENT, t=0.0, where="", residual=math.nan)
-    rows[0] = _layout(0.0, x, v, F)
+    rows[0] = row_of(0.0, x, v, F)
 
     def net_at(t: float) -> list[float]:
         return scene.net_forces(t, F)
 
     acc0 = [net_at(0.0)[i] / masses[i] if is_mass[i] else 0.0 for i in range(N)]
-    h = opts["first_step"] or _initial_step(x, v, acc0, is_mass, rtol, atol, t_final)
+    h = opts["first_step"] or initial_step(x, v, acc0, is_mass, rtol, atol, t_final)
     h_acc = err_acc = None
+    F_seen = 1e-300
     dF_n: list[float] | None = None  # force slopes at t (None at the start, after events)
     target: list | None = None  # the guard being landed on and its bracket
     t = 0.0
@@ -323,7 +253,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             break
         fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
         U = (list(v) + list(F)) * 3
-        Fref = max([abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]] + [1e-300])
+        # the force scale: the largest force or load met so far (never shrinks to 0)
+        Fref = F_seen = max([F_seen] + [abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]])
         scale = ([atol + rtol * abs(vi) for vi in v]
                  + [rtol * max(abs(Fe), Fref) + 1e-300 for Fe in F]) * 3
         sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale, max_iters=max_newton)
@@ -418,7 +349,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         v = Y[2][N:2 * N]
         F = Y[2][2 * N:]
         stats["steps"] += 1
-        rows.append(_layout(t, x, v, F))
+        rows.append(row_of(t, x, v, F))
         # the step size for the next step (Gustafsson's predictive controller)
         h_new = h / quot
         if h_acc is not None and err_norm > 0.0:

@@ -98,6 +98,9 @@ def dense_slopes(s: float) -> tuple[float, float, float]:
     return out[0], out[1], out[2]
 
 
+#: How much looser the forces of guarded elements are held than ``x`` and ``v``.
+FORCE_TOL_FACTOR = 100.0
+
 #: ``l_k'(1)``: the slope of the collocation polynomial at the end of a step.
 END_SLOPES = dense_slopes(1.0)
 
@@ -293,7 +296,9 @@ class StageSystem:
         step's polynomial): ``gamma_0 (h F'_n + sum_k E_k (F_k - F_n))``, the embedded
         estimate of their polynomial, unfiltered (a force is as smooth as the rates that
         set it). Scales: ``atol + rtol max(|y_n|, |y_n+1|)``, for forces
-        ``rtol max(|F_n|, |F_n+1|, F_ref)``."""
+        ``rtol_F max(|F_n|, |F_n+1|, F_ref)`` with ``rtol_F = min(1e-3, 100 rtol)``: the
+        forces' polynomial only has to show a guard's sign change, whose time is then
+        found on exact end-of-step values."""
         N, n, m = self.N, self.n, self.m
         A3 = A[2]
         acc = 0.0
@@ -309,13 +314,14 @@ class StageSystem:
                 cnt += 1
         if dF_n is not None:
             g0 = 1.0 / MU_REAL
+            rtol_F = min(1e-3, FORCE_TOL_FACTOR * rtol)
             for e in watched:
                 k0 = N + e
                 Fe = F_n[e]
                 est = h * dF_n[e]
                 for k in range(3):
                     est += E_ERR[k] * (U[k * n + k0] - Fe)
-                sc = rtol * max(abs(Fe), abs(U[2 * n + k0]), F_ref)
+                sc = rtol_F * max(abs(Fe), abs(U[2 * n + k0]), F_ref)
                 acc += (g0 * est / sc) ** 2
                 cnt += 1
         return math.sqrt(acc / cnt)
