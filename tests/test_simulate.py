@@ -73,7 +73,7 @@ def test_auto_picks_closed_form_only_for_the_paper_scene():
     sc = Scene([Mass("mass", 1.0, x0=0.1)],
                [Element("spring", law("linear_spring", k=100.0), "ground", "mass"),
                 Element("dashpot", law("newtonian", c=1.0), "ground", "mass")])
-    assert simulate(sc, dt=1e-3, t_end=0.01).method == "bdf2"
+    assert simulate(sc, dt=1e-3, t_end=0.01).method == "radau5"
     with pytest.raises(ValueError, match="closed-bdf1.*linear_spring"):
         simulate(sc, method="closed-bdf1", dt=1e-3, t_end=0.01)
 
@@ -85,7 +85,7 @@ def test_bad_method_names(bad):
 
 
 def test_methods_tuple():
-    assert METHODS == ("auto", "bdf1", "bdf2", "closed-bdf1", "closed-bdf2", "exact")
+    assert METHODS == ("auto", "bdf1", "bdf2", "closed-bdf1", "closed-bdf2", "exact", "radau5")
 
 
 @pytest.mark.parametrize("kw, match", [({"dt": 0.0}, "dt"), ({"dt": math.nan}, "dt"),

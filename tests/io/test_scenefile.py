@@ -93,7 +93,9 @@ def test_lumped_run_writes_partial_csv_and_fails_with_code_1(tmp_path, capsys):
 def test_lumped_run_needs_dt_and_t_end(tmp_path):
     path = tmp_path / "a.toml"
     path.write_text('[nodes.mass]\nmass = 1.0\n')
-    with pytest.raises(ValueError, match="--dt"):
+    with pytest.raises(ValueError, match="--dt"):  # a fixed-step method needs dt
+        _run(tmp_path, str(path), "--out", str(tmp_path / "o.csv"), "--method", "bdf2")
+    with pytest.raises(ValueError, match="--t-end"):  # auto (radau5 here) does not
         _run(tmp_path, str(path), "--out", str(tmp_path / "o.csv"))
     with pytest.raises(ValueError, match="--t-end"):
         _run(tmp_path, str(path), "--out", str(tmp_path / "o.csv"), "--dt", "0.1")
@@ -134,6 +136,8 @@ _DELETE = object()
     "path, value, match",
     [
         (("solver", "dt"), -1.0, r"\[solver\] dt: must be positive, got -1.0"),
+        (("solver", "rtol"), 0.0, r"\[solver\] rtol: must be positive, got 0.0"),
+        (("solver", "atol"), "x", r"\[solver\] atol: must be a number"),
         (("solver", "method"), "euler", r"\[solver\] method: must be one of"),
         (("solver", "tol"), 1.0, r"\[solver\] tol: unknown key"),
         (("nodes", "mass", "mass"), "heavy", r"\[nodes.mass\] mass: must be a number, got 'heavy'"),
@@ -257,3 +261,21 @@ def test_lumped_run_without_consistent_initial_state(tmp_path, capsys):
                 "--t-end", "0.1")
     err = capsys.readouterr().err
     assert code == 1 and "consistent initial state" in err and "t = 0.0" in err
+
+
+def test_tolerances_from_the_file_and_the_command_line(tmp_path, capsys):
+    path = tmp_path / "r.toml"
+    path.write_text('[solver]\nmethod = "radau5"\nt_end = 1.0\nrtol = 1e-3\natol = 1e-6\n'
+                    '[nodes.mass]\nmass = 1.0\nx0 = 0.1\n'
+                    '[elements.spring]\nlaw = "linear_spring"\nbetween = ["ground", "mass"]\n'
+                    'parameters = { k = 10.0 }\n')
+    _, settings = load_scene(path)
+    assert (settings["rtol"], settings["atol"]) == (1e-3, 1e-6)
+    out = tmp_path / "o.csv"
+    assert _run(tmp_path, str(path), "--out", str(out)) == 0
+    loose = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert _run(tmp_path, str(path), "--out", str(out), "--rtol", "1e-9", "--atol", "1e-12") == 0
+    tight = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert len(tight) > len(loose)  # step points: more of them at the tighter tolerance
+    exact = 0.1 * np.cos(math.sqrt(10.0) * tight[:, 0])
+    assert np.max(np.abs(tight[:, 1] - exact)) <= 1e-8
