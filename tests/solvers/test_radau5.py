@@ -216,3 +216,15 @@ def test_dense_output_on_a_grid_and_auto():
 def test_bad_tolerances_are_refused(kw, match):
     with pytest.raises(ValueError, match=match):
         simulate(scenario_scene("release-0.5"), method="radau5", t_end=1.0, **kw)
+
+
+def test_an_impact_stops_cleanly_at_its_time():
+    """Issue 11's impact scene: radau5 does not apply impulses yet; it stops where the
+    string goes taut (t = pi/6) with a message, never a silently wrong answer."""
+    string = get_law("string_spring").bind(k=1.0, L=0.5)
+    scene = Scene([Mass("mass", m=1.0, v0=1.0)], [Element("s", string, "ground", "mass")])
+    sol = simulate(scene, method="radau5", t_end=2.0, rtol=1e-8, throw=False)
+    assert sol.status is Status.INCONSISTENT and "impact" in sol.message and "'s'" in sol.message
+    assert abs(sol.t[-1] - math.pi / 6) <= 1e-9
+    t = np.linspace(0.0, sol.t[-1], 50)
+    assert np.max(np.abs(sol.sol(t)[:, 1] - np.sin(t))) <= 1e-8

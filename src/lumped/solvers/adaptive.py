@@ -170,7 +170,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     acc0 = [net_at(0.0)[i] / masses[i] if is_mass[i] else 0.0 for i in range(N)]
     h = opts["first_step"] or initial_step(x, v, acc0, is_mass, rtol, atol, t_final)
     h_acc = err_acc = None
-    F_seen = 1e-300
+    F_seen = 0.0
+    m_min = min(mi for mi in masses if mi > 0.0)
     dF_n: list[float] | None = None  # force slopes at t (None at the start, after events)
     target: list | None = None  # the guard being landed on and its bracket
     t = 0.0
@@ -254,9 +255,12 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
         U = (list(v) + list(F)) * 3
         # the force scale: the largest force or load met so far (never shrinks to 0)
-        Fref = F_seen = max([F_seen] + [abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]])
+        F_seen = max([F_seen] + [abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]])
+        # ... and at least the force that changes the lightest mass's velocity by its
+        # tolerance over the step (a force error below it does not show in x, v)
+        Fref = max(F_seen, m_min * (max(abs(vi) for vi in v) + atol / rtol) / h)
         scale = ([atol + rtol * abs(vi) for vi in v]
-                 + [rtol * max(abs(Fe), Fref) + 1e-300 for Fe in F]) * 3
+                 + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
         sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale, max_iters=max_newton)
         stats["newton_iterations"] += its
         stats["factorizations"] += nfac
