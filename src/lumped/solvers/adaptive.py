@@ -28,7 +28,13 @@ import numpy as np
 
 from ..scene import Mass, Scene
 from .adaptive_output import DenseOutput, initial_step, row_of
-from .events import first_crossing, guard_tolerance, hold_rate_locks, select_modes
+from .events import (
+    apply_impacts,
+    first_crossing,
+    guard_tolerance,
+    hold_rate_locks,
+    select_modes,
+)
 from .initial_state import consistent_initial_state
 from .radau import A as _A
 from .radau import C, StageSystem, dense_weights
@@ -40,7 +46,7 @@ DEFAULT_RTOL = 1e-6
 DEFAULT_ATOL = 1e-9
 #: Method-specific keywords of ``radau5`` and their defaults.
 EXTRA_OPTIONS = {"max_events": 10_000, "zeno_events": 50, "zeno_window": None,
-                 "max_steps": 1_000_000, "first_step": None}
+                 "max_steps": 1_000_000, "first_step": None, "restitution": 0.0}
 _EPS = 2.220446049250313e-16
 
 
@@ -54,6 +60,9 @@ def _extra(settings) -> dict:
     for key in ("max_events", "zeno_events", "max_steps"):
         if isinstance(out[key], bool) or not isinstance(out[key], int) or out[key] < 1:
             raise ValueError(f"`{key}` must be a positive integer, got {out[key]!r}")
+    e = out["restitution"]
+    if isinstance(e, bool) or not isinstance(e, (int, float)) or not 0.0 <= e <= 1.0:
+        raise ValueError(f"`restitution` must be a number in [0, 1], got {e!r}")
     for key in ("zeno_window", "first_step"):
         val = out[key]
         if val is not None and not (isinstance(val, (int, float)) and math.isfinite(val)
@@ -133,23 +142,28 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         if isinstance(sel, str):
             return sel
         new, v_p, F_p = sel
-        for e in range(E):
-            el = scene.elements[e]
-            info = lbs[e].info[new[e]]
-            if new[e] != modes[e] and el.kind == "spring" and info.locks:
-                a, b = scene.elem_a[e], scene.elem_b[e]
-                rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
-                if abs(rate) > 1e3 * (atol + rtol * max(abs(vi) for vi in v)):
-                    return (f"impact at t = {t!r}: element {el.name!r} (law {el.law_name!r}) "
-                            f"locks its elongation while it changes at rate {rate!r}; "
-                            "radau5 does not apply impacts yet (use bdf1)")
+        scale_v = atol + rtol * max(abs(vi) for vi in v)
+        hit = apply_impacts(scene, lbs, modes, new, x, v, 1e3 * scale_v, opts["restitution"])
+        if isinstance(hit, str):
+            return f"impact at t = {t!r}: {hit}"
+        if hit[0]:
+            for e, impulse in hit[0]:
+                events.append(Event(t, names[e], "impact", modes[e], new[e], impulse=impulse,
+                                    energy_lost=hit[1] if e == hit[0][0][0] else 0.0))
+                recent.append(t)
+            # the mode after the impact, from the velocities after it
+            sel = select_modes(scene, lbs, t, x, v, F, h_probe, settings.options)
+            if isinstance(sel, str):
+                return sel
+            new, v_p, F_p = sel
         for p in range(N):
             if not is_mass[p]:
                 v[p] = v_p[p]
         if cause != "start":  # at t = 0 the consistent initial forces stay
             F[:] = F_p
         for e in range(E):
-            if new[e] != modes[e]:
+            if new[e] != modes[e] and not any(ev.t == t and ev.element == names[e]
+                                              and ev.kind == "impact" for ev in events[-E:]):
                 events.append(Event(t, names[e], "switch", modes[e], new[e]))
                 recent.append(t)
         set_modes(new)

@@ -28,7 +28,7 @@ from ..scene import Mass, Scene
 from .newton import NewtonCode, NewtonOptions, newton_solve
 from .step_system import _make_evaluate
 
-__all__ = ["SAMPLES", "first_crossing", "select_modes", "hold_rate_locks"]
+__all__ = ["SAMPLES", "first_crossing", "select_modes", "hold_rate_locks", "apply_impacts"]
 
 #: Points ``s`` in ``(0, 1]`` of a step where the guards are sampled (in order).
 SAMPLES = tuple(k / 8.0 for k in range(1, 9))
@@ -143,6 +143,54 @@ def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
             continue
         done.append(e)
     return done
+
+
+def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Sequence[int],
+                  x: list[float], v: list[float], threshold: float,
+                  restitution: float = 0.0) -> tuple[list[tuple[int, float]], float] | str:
+    """Apply the impulse of every spring that enters a position lock while its ends approach.
+
+    A spring whose new branch locks ``q`` (:attr:`BranchInfo.locks`) with ``|q'| >
+    threshold`` is an impact: the velocities jump to those of
+    :func:`lumped.solvers.impacts.impact_velocities` over all the locked springs (``v`` is
+    updated in place), and a lock with a known value between a mass and ground gets its
+    position set exactly (``x`` in place).
+
+    Returns
+    -------
+    (hits, energy_lost) or str
+        ``hits``: ``(element, impulse)`` of the impacting elements (empty if none), or a
+        message when impacts are needed and :mod:`lumped.solvers.impacts` is missing.
+    """
+    ea, eb = scene.elem_a, scene.elem_b
+    locked = [e for e, el in enumerate(scene.elements)
+              if el.kind == "spring" and branches[e].info[new[e]].locks]
+    hits = []
+    for e in locked:
+        if new[e] == old[e]:
+            continue
+        a, b = ea[e], eb[e]
+        rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        if abs(rate) > threshold:
+            hits.append(e)
+    if not hits:
+        return [], 0.0
+    try:
+        from .impacts import impact_velocities
+    except ImportError:  # pragma: no cover - until the impact model is merged
+        el = scene.elements[hits[0]]
+        return (f"element {el.name!r} (law {el.law_name!r}) locks its elongation while its "
+                "ends approach: an impact, and lumped.solvers.impacts is not available")
+    v_after, impulses, lost = impact_velocities(scene, x, v, locked, restitution)
+    v[:] = v_after
+    for e in hits:
+        L = branches[e].info[new[e]].lock_value
+        a, b = ea[e], eb[e]
+        if L is not None and a < 0 and b >= 0:  # the lock holds q = L and q' = 0 exactly
+            x[b], v[b] = float(L), 0.0
+        elif L is not None and b < 0 and a >= 0:
+            x[a], v[a] = -float(L), 0.0
+    return [(e, impulses[locked.index(e)]) for e in hits], lost
 
 
 def guard_tolerance(q: float, F: float) -> float:
