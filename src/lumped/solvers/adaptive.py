@@ -30,14 +30,14 @@ from ..scene import Mass, Scene
 from .adaptive_output import DenseOutput, initial_step, row_of
 from .events import (
     apply_impacts,
-    first_crossing,
+    first_crossing_on,
     guard_tolerance,
     hold_rate_locks,
     select_modes,
 )
 from .initial_state import consistent_initial_state
 from .radau import A as _A
-from .radau import C, StageSystem, dense_weights
+from .radau import C, StageSystem
 from .status import Event, RawRun, SolverError, Status
 
 __all__ = ["run_radau5", "DEFAULT_RTOL", "DEFAULT_ATOL", "EXTRA_OPTIONS"]
@@ -192,62 +192,16 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     bi = 0
     max_newton = 10
 
-    def state_at(U: list[float], h: float, s: float):
-        l1, l2, l3 = dense_weights(s)
-        ls = (l1, l2, l3)
-        xs, vs, Fs = [0.0] * N, [0.0] * N, [0.0] * E
-        for i in range(N):
-            dx = dv = 0.0
-            for k in range(3):
-                Xk = 0.0
-                for j in range(3):
-                    Xk += A_[k][j] * U[j * n + i]
-                dx += ls[k] * (h * Xk)
-                dv += ls[k] * (U[k * n + i] - v[i])
-            xs[i] = x[i] + dx
-            vs[i] = v[i] + dv
-        for e in range(E):
-            dF = 0.0
-            for k in range(3):
-                dF += ls[k] * (U[k * n + N + e] - F[e])
-            Fs[e] = F[e] + dF
-        return xs, vs, Fs
-
     def crossing(U: list[float], h: float):
         if not watched:
             return None
-        cache: dict[float, list] = {}
-
-        def values(s: float) -> list:
-            got = cache.get(s)
-            if got is None:
-                xs, vs, Fs = state_at(U, h, s)
-                q = scene.elongations(xs, vs)
-                got = [(guards[e](q[e], Fs[e]), guard_tolerance(q[e], Fs[e])) for e in watched]
-                cache[s] = got
-            return got
-
-        def guard_at(s: float):
-            best, which = math.inf, (0, 0)
-            for w, (gs, tol) in enumerate(values(s)):
-                for j, g in enumerate(gs):
-                    if g + tol < best:
-                        best, which = g + tol, (w, j)
-            return best, which
-
-        def guard_of(s: float, which) -> float:
-            w, j = which
-            return values(s)[w][0][j]
-
-        return first_crossing(guard_at, guard_of)
+        nodes = [system.element_nodes(U, h, x, v, F, e) for e in watched]
+        return first_crossing_on(nodes, [guards[e] for e in watched])
 
     def end_guard(U: list[float], h: float, which) -> tuple[float, float]:
-        xs = [x[i] + h * sum(A_[2][j] * U[j * n + i] for j in range(3)) for i in range(N)]
-        vs = U[2 * n:2 * n + N]
-        Fs = U[2 * n + N:3 * n]
         e = watched[which[0]]
-        q = scene.elongations(xs, vs)[e]
-        return guards[e](q, Fs[e])[which[1]], guard_tolerance(q, Fs[e])
+        q, Fe = system.element_nodes(U, h, x, v, F, e)
+        return guards[e](q[3], Fe[3])[which[1]], guard_tolerance(q[3], Fe[3])
 
     A_ = _A
     while t < t_final:

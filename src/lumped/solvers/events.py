@@ -26,9 +26,11 @@ from scipy.optimize import brentq
 
 from ..scene import Mass, Scene
 from .newton import NewtonCode, NewtonOptions, newton_solve
+from .radau import dense_weights
 from .step_system import _make_evaluate
 
-__all__ = ["SAMPLES", "first_crossing", "select_modes", "hold_rate_locks", "apply_impacts"]
+__all__ = ["SAMPLES", "first_crossing", "first_crossing_on", "select_modes", "hold_rate_locks",
+           "apply_impacts", "guard_tolerance"]
 
 #: Points ``s`` in ``(0, 1]`` of a step where the guards are sampled (in order).
 SAMPLES = tuple(k / 8.0 for k in range(1, 9))
@@ -69,6 +71,41 @@ def first_crossing(
             return root, which
         prev = s
     return None
+
+
+def first_crossing_on(nodes: Sequence[tuple[tuple[float, ...], tuple[float, ...]]],
+                      guard_fns: Sequence[Callable]) -> tuple[float, tuple[int, int]] | None:
+    """:func:`first_crossing` for one step: ``nodes[w]`` holds the ``(q, F)`` values of a
+    watched element at ``s = 0, c_1, c_2, 1`` (:meth:`StageSystem.element_nodes`) and
+    ``guard_fns[w]`` its branch's guards. Returns ``(s, (w, j))`` (guard ``j`` of element
+    ``w``) or ``None``."""
+    cache: dict[float, list] = {}
+
+    def values(s: float) -> list:
+        got = cache.get(s)
+        if got is None:
+            l1, l2, l3 = dense_weights(s)
+            got = []
+            for (q, F), guards in zip(nodes, guard_fns, strict=True):
+                qs = q[0] + (l1 * (q[1] - q[0]) + l2 * (q[2] - q[0]) + l3 * (q[3] - q[0]))
+                Fs = F[0] + (l1 * (F[1] - F[0]) + l2 * (F[2] - F[0]) + l3 * (F[3] - F[0]))
+                got.append((guards(qs, Fs), guard_tolerance(qs, Fs)))
+            cache[s] = got
+        return got
+
+    def guard_at(s: float):
+        best, which = math.inf, (0, 0)
+        for w, (gs, tol) in enumerate(values(s)):
+            for j, g in enumerate(gs):
+                if g + tol < best:
+                    best, which = g + tol, (w, j)
+        return best, which
+
+    def guard_of(s: float, which) -> float:
+        w, j = which
+        return values(s)[w][0][j]
+
+    return first_crossing(guard_at, guard_of)
 
 
 def select_modes(

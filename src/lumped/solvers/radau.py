@@ -326,6 +326,32 @@ class StageSystem:
                 cnt += 1
         return math.sqrt(acc / cnt)
 
+    def element_nodes(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
+                      F_n: list[float], e: int) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """``(q, F)`` of element ``e`` at the polynomial's nodes ``s = 0, c_1, c_2, 1``.
+
+        ``q`` is linear in the state, so its collocation polynomial has these nodes: the
+        guards along the step need no state vector (:func:`lumped.solvers.events.
+        first_crossing_on`)."""
+        N, n = self.N, self.n
+        a, b = self.ea[e], self.eb[e]
+        if self.spring[e]:
+            def at(i: int, k: int) -> float:
+                if i < 0:
+                    return 0.0
+                if k < 0:
+                    return x_n[i]
+                Ak = A[k]
+                return x_n[i] + h * (Ak[0] * U[i] + Ak[1] * U[n + i] + Ak[2] * U[2 * n + i])
+        else:
+            def at(i: int, k: int) -> float:
+                if i < 0:
+                    return 0.0
+                return v_n[i] if k < 0 else U[k * n + i]
+        q = tuple(at(b, k) - at(a, k) for k in (-1, 0, 1, 2))
+        col = N + e
+        return q, (F_n[e], U[col], U[n + col], U[2 * n + col])
+
     def end_slope(self, U: list[float], h: float, F_n: list[float]) -> list[float]:
         """``F'`` of every element at the end of the step, from its collocation polynomial."""
         N, n = self.N, self.n
