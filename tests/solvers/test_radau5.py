@@ -244,3 +244,62 @@ def test_an_impact_is_applied_or_stops_cleanly():
     t = np.linspace(0.0, 3.0, 601)
     exact = np.where(t < math.pi / 6, np.sin(t), 0.5 * np.cos(t - math.pi / 6))
     assert np.max(np.abs(sol.sol(t)[:, 1] - exact)) <= 1e-6
+
+
+def _linear_network():
+    """Two masses and a Maxwell arm (spring into a junction, newtonian dashpot to ground):
+    a linear DAE whose exact solution is a matrix exponential."""
+    m1, m2, k1, k12, c12, k3, c3 = 1.0, 0.5, 40.0, 25.0, 0.3, 60.0, 2.0
+    lin = get_law("linear_spring")
+    newt = get_law("newtonian")
+    scene = Scene(
+        [Mass("m1", m=m1, x0=0.1), Mass("m2", m=m2, v0=-0.5), Junction("j", x0=0.02)],
+        [Element("k1", lin.bind(k=k1), "ground", "m1"),
+         Element("k12", lin.bind(k=k12), "m1", "m2"),
+         Element("c12", newt.bind(c=c12), "m1", "m2"),
+         Element("k3", lin.bind(k=k3), "j", "m2"),
+         Element("c3", newt.bind(c=c3), "ground", "j")])
+    # y = (x1, v1, x2, v2, xj)
+    M = np.array([
+        [0, 1, 0, 0, 0],
+        [(-k1 - k12) / m1, -c12 / m1, k12 / m1, c12 / m1, 0],
+        [0, 0, 0, 1, 0],
+        [k12 / m2, c12 / m2, (-k12 - k3) / m2, -c12 / m2, k3 / m2],
+        [0, 0, k3 / c3, 0, -k3 / c3]])
+    return scene, M, np.array([0.1, 0.0, 0.0, -0.5, 0.02])
+
+
+def test_a_linear_network_with_a_junction_against_its_exact_solution():
+    from scipy.linalg import expm
+
+    scene, M, y0 = _linear_network()
+    t = np.linspace(0.0, 2.0, 101)
+    exact = np.array([expm(M * tt) @ y0 for tt in t])
+    errs = []
+    for rtol in (1e-6, 1e-9):
+        got = simulate(scene, method="radau5", t_end=2.0, rtol=rtol, atol=1e-3 * rtol).sol(t)
+        cols = [1, 2, 3, 4, 5]  # x_m1, v_m1, x_m2, v_m2, x_j
+        errs.append(np.max(np.abs(got[:, cols] - exact)))
+    assert errs[0] <= 1e-5 and errs[1] <= 1e-8
+    assert 1e2 <= errs[0] / errs[1] <= 1e4
+
+
+def test_a_two_mass_bingham_chain_agrees_with_bdf2():
+    """Stick-slip in a chain, against the fixed-step BDF2 to BDF2's own accuracy."""
+    lin, bing = get_law("linear_spring"), get_law("bingham")
+    scene = Scene(
+        [Mass("a", m=1.0, x0=0.3), Mass("b", m=0.7, x0=-0.1)],
+        [Element("s1", lin.bind(k=50.0), "ground", "a"),
+         Element("d1", bing.bind(gamma=0.5, tau=1.5), "ground", "a"),
+         Element("s2", lin.bind(k=30.0), "a", "b"),
+         Element("d2", bing.bind(gamma=2.0, tau=0.8), "a", "b")])
+    ours = simulate(scene, method="radau5", t_end=1.5, rtol=1e-9, atol=1e-12)
+    assert ours.ok and len([ev for ev in ours.events if ev.kind == "switch"]) >= 4
+    diffs = []
+    for dt in (4e-4, 1e-4):
+        ref = simulate(scene, method="bdf2", dt=dt, t_end=1.5)
+        got = ours.sol(ref.t)
+        cols = [ref.columns.index(c) for c in ("x_a", "x_b")]
+        diffs.append(np.max(np.abs(got[:, cols] - ref.data[:, cols])))
+    # BDF2 converges to radau5's answer as dt shrinks (order 1 to 2 across the events)
+    assert diffs[1] <= 3e-5 and diffs[1] <= 0.4 * diffs[0], diffs
