@@ -192,6 +192,16 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     bi = 0
     max_newton = 10
 
+    def at_event(t: float, h: float, cause: str) -> tuple[Status, str] | None:
+        """The mode after an event at ``t``; ``(status, message)`` if the run must stop."""
+        msg = change_mode(t, max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t))), cause)
+        stats["events"] = len(events)
+        if msg:
+            return Status.INCONSISTENT, msg
+        if _accumulating(recent, zeno_window) or len(events) > opts["max_events"]:
+            return _too_many(events, recent, t, opts)
+        return None
+
     def crossing(U: list[float], h: float):
         if not watched:
             return None
@@ -289,14 +299,10 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             s_hit = hit[0]
             if s_hit * h <= 16 * _EPS * max(1.0, abs(t)):
                 # the event is at t itself: choose the mode again, no step
-                msg = change_mode(t, max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t))), "guard")
-                stats["events"] = len(events)
                 dF_n = None
-                if msg:
-                    status, message = Status.INCONSISTENT, msg
-                    break
-                if _accumulating(recent, zeno_window) or len(events) > opts["max_events"]:
-                    status, message = _too_many(events, recent, t, opts)
+                stop = at_event(t, h, "guard")
+                if stop:
+                    status, message = stop
                     break
                 continue
             target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0]
@@ -336,16 +342,10 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             events.append(Event(t, "", "time", -1, -1))
             recent.append(t)
         if event_here or is_break:
-            dF_n = None
-            msg = change_mode(t, max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t))),
-                              "guard" if event_here else "time")
-            stats["events"] = len(events)
-            h_acc = None
-            if msg:
-                status, message = Status.INCONSISTENT, msg
-                break
-            if _accumulating(recent, zeno_window) or len(events) > opts["max_events"]:
-                status, message = _too_many(events, recent, t, opts)
+            dF_n = h_acc = None
+            stop = at_event(t, h, "guard" if event_here else "time")
+            if stop:
+                status, message = stop
                 break
     stats["events"] = len(events)
     if status is not Status.SUCCESS and settings.throw:
