@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..solvers.closed_form import integrate
-from .scenes import BenchScene, Ladders, generic_scene
+from .scenes import GRID_DT, BenchScene, Ladders, generic_scene
 
 __all__ = [
     "Solved",
@@ -36,9 +36,9 @@ class Method:
     ----------
     name : str
         Column name in the tables.
-    kind : {"step", "scipy"}
+    kind : {"step", "scipy", "adaptive"}
         ``"step"`` methods are swept over ``Ladders.dts``; ``"scipy"`` ones over
-        ``Ladders.eps x Ladders.rtols``.
+        ``Ladders.eps x Ladders.rtols``; ``"adaptive"`` ones over ``Ladders.rtols``.
     solve : callable
         ``solve(scene, setting, ladders) -> callable``; the returned zero-argument
         callable performs the timed solve and returns a :class:`Solved`.
@@ -85,6 +85,26 @@ def _generic(method: str) -> Callable[[BenchScene, dict, Ladders], Callable[[], 
             x = sol.column("x_mass")
             return Solved(sol.t, x, int(sol.stats.get("steps", len(x) - 1)),
                           int(sol.stats.get("residual_evals", 0)))
+
+        return run
+
+    return solve
+
+
+def _adaptive(method: str) -> Callable[[BenchScene, dict, Ladders], Callable[[], Solved]]:
+    """An adaptive method of :func:`lumped.simulate.simulate` on the exact laws, its dense
+    output sampled on the common grid."""
+
+    def solve(scene: BenchScene, setting: dict, ladders: Ladders) -> Callable[[], Solved]:
+        from ..simulate import simulate
+
+        sc = generic_scene(scene)
+
+        def run() -> Solved:
+            sol = simulate(sc, method=method, t_end=scene.t_end, dt=GRID_DT,
+                           rtol=setting["rtol"], atol=setting["atol"], throw=True)
+            return Solved(sol.t, sol.column("x_mass"), int(sol.stats["steps"]),
+                          int(sol.stats.get("nfev", 0)))
 
         return run
 

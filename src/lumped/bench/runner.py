@@ -27,6 +27,8 @@ Methods (see :data:`METHODS`, a registry: adding a method is one entry):
   :func:`lumped.simulate.simulate` on the same scene built from the ``linear_spring`` and
   ``bingham`` laws (listed only when those modules import), over the ladder of ``dt``
   down to ``Ladders.slow_min_dt``;
+* ``radau5`` -- the adaptive method of :func:`lumped.simulate.simulate` on the same scene,
+  over the ladder of ``rtol`` (``atol = 1e-3 rtol L``), its dense output on the grid;
 * ``scipy-Radau`` / ``scipy-BDF`` / ``scipy-LSODA`` -- :func:`scipy.integrate.solve_ivp` on
   the tanh-regularised model ``F_d = v / gamma + tau tanh(v / eps)`` over a ladder of
   ``eps`` and ``rtol`` (``atol = rtol * L`` with ``L`` the scene's displacement scale),
@@ -49,7 +51,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .event_study import event_study
-from .methods import Method, Solved, _closed_form, _generic
+from .methods import Method, Solved, _adaptive, _closed_form, _generic
 from .peers import _scipy, _scipy_solver
 from .scenes import (
     FULL,
@@ -135,6 +137,7 @@ METHODS: tuple[Method, ...] = (
     Method("closed-bdf2", "step", _closed_form("bdf2")),
     Method("generic-bdf1", "step", _generic("bdf1"), slow=True),
     Method("generic-bdf2", "step", _generic("bdf2"), slow=True),
+    Method("radau5", "adaptive", _adaptive("radau5")),
     Method("scipy-Radau", "scipy", _scipy("Radau"), ours=False),
     Method("scipy-BDF", "scipy", _scipy("BDF"), ours=False),
     Method("scipy-LSODA", "scipy", _scipy("LSODA"), ours=False),
@@ -179,6 +182,8 @@ def _settings(method: Method, scene: BenchScene, ladders: Ladders) -> list[dict]
     if method.kind == "step":
         floor = ladders.slow_min_dt if method.slow else 0.0
         return [{"dt": dt} for dt in ladders.dts if dt >= floor * (1.0 - 1e-12)]
+    if method.kind == "adaptive":
+        return [{"rtol": r, "atol": 1e-3 * r * scene.length_scale} for r in ladders.rtols]
     return [{"eps": e, "rtol": r, "atol": r * scene.length_scale}
             for e in ladders.eps for r in ladders.rtols]
 
@@ -186,6 +191,8 @@ def _settings(method: Method, scene: BenchScene, ladders: Ladders) -> list[dict]
 def _label(setting: dict) -> str:
     if "dt" in setting:
         return f"dt={setting['dt']:g}"
+    if "eps" not in setting:
+        return f"rtol={setting['rtol']:g}"
     return f"eps={setting['eps']:g} rtol={setting['rtol']:g}"
 
 
