@@ -78,6 +78,13 @@ def test_eq19_is_reproduced_exactly():
     assert np.all(dense[:, 1] == 0.0) and np.all(dense[:, 2] == 0.0)
 
 
+def test_a_release_below_the_yield_force_never_moves():
+    sol = simulate(scenario_scene("release-0.005"), method="radau5", t_end=5.0, rtol=1e-10)
+    assert sol.ok and not sol.events
+    assert np.all(sol.column("x_mass") == 0.005) and np.all(sol.column("v_mass") == 0.0)
+    assert np.all(sol.sol(np.linspace(0.0, 5.0, 101))[:, 2] == 0.0)
+
+
 def _bingham_scene(m, k, gamma, tau, x0, amplitude, omega):
     from lumped.scene import SineBurst
 
@@ -212,6 +219,7 @@ def test_dense_output_on_a_grid_and_auto():
     ({"rtol": 0.0}, "`rtol` must be positive"),
     ({"atol": float("nan")}, "`atol` must be finite"),
     ({"max_events": 0}, "`max_events` must be a positive integer"),
+    ({"restitution": 1.5}, "`restitution` must be a number in \\[0, 1\\]"),
 ])
 def test_bad_tolerances_are_refused(kw, match):
     with pytest.raises(ValueError, match=match):
