@@ -78,6 +78,27 @@ def test_eq19_is_reproduced_exactly():
     assert np.all(dense[:, 1] == 0.0) and np.all(dense[:, 2] == 0.0)
 
 
+def test_coulomb_friction_against_the_exact_reference():
+    """The projection-form Coulomb law (its slip branches leave q free): events and
+    motion as the exact Coulomb reference."""
+    from lumped.scene import SineBurst
+
+    forcing = SineBurst(amplitude=10.0, omega=5 * math.pi, t_off=1.0)
+    scene = Scene([Mass("mass", m=1.0)],
+                  [Element("s", get_law("linear_spring").bind(k=100.0), "ground", "mass"),
+                   Element("d", get_law("coulomb").bind(tau=1.0, r=10.0), "ground", "mass")],
+                  forces={"mass": forcing})
+    sol = simulate(scene, method="radau5", t_end=3.0, rtol=1e-8, atol=1e-11)
+    t = np.linspace(0.0, 3.0, 601)
+    ex = exact_solution(m=1.0, k=100.0, tau=1.0, coulomb=True, x0=0.0, forcing=forcing,
+                        t_eval=t)
+    assert np.max(np.abs(sol.sol(t)[:, 1] - ex.trajectory.x)) <= 1e-8
+    exact = [ev.t for ev in ex.events if ev.kind != "forcing-off"]
+    ours = [ev.t for ev in sol.events if ev.kind == "switch"]
+    assert len(ours) == len(exact)
+    assert max(abs(a - b) for a, b in zip(ours, exact, strict=True)) <= 1e-8
+
+
 def test_a_release_below_the_yield_force_never_moves():
     sol = simulate(scenario_scene("release-0.005"), method="radau5", t_end=5.0, rtol=1e-10)
     assert sol.ok and not sol.events
