@@ -198,6 +198,25 @@ def test_fully_implicit_laws(law, params, x0):
     assert np.max(np.abs(sol.sol(t)[:, 1] - ref)) <= 1e-7
 
 
+def test_a_fold_of_the_law_stops_the_run():
+    """``s_shaped`` pushed past its turning point (q = 2 q0): no solution continues the
+    branch, so radau5 stops there (BRANCH_LOST), as the fixed-step methods do."""
+    from lumped import BranchError
+
+    scene = Scene([Mass("mass", m=0.01, x0=-6.0)],
+                  [Element("s", get_law("s_shaped").bind(q0=1.0, F0=1.0), "ground", "mass"),
+                   Element("damper", get_law("newtonian").bind(c=0.05), "ground", "mass")],
+                  forces={"mass": "-9 + 2*t"})
+    sol = simulate(scene, method="radau5", t_end=8.0, throw=False)
+    assert sol.status is Status.BRANCH_LOST and "fold" in sol.message
+    # at the elongation fold q = (5/3)^(3/2) q0, where BDF2 stops too (its Newton fails)
+    assert abs(sol.column("x_mass")[-1] - (5.0 / 3.0) ** 1.5) <= 1e-4
+    bdf = simulate(scene, method="bdf2", dt=1e-3, t_end=8.0, throw=False)
+    assert not bdf.ok and abs(sol.t[-1] - bdf.t[-1]) <= 2e-3
+    with pytest.raises(BranchError, match="'s'"):
+        simulate(scene, method="radau5", t_end=8.0)
+
+
 def test_a_forcing_with_a_jump_is_a_time_event():
     k, m, P, t0 = 50.0, 2.0, 3.0, 0.37
     scene = Scene([Mass("mass", m=m)],

@@ -28,9 +28,11 @@ import numpy as np
 
 from ..scene import Mass, Scene
 from .adaptive_output import DenseOutput, initial_step, row_of
+from .branch_check import _known_monotone
 from .events import (
     apply_impacts,
     first_crossing_on,
+    fold_crossed,
     guard_tolerance,
     hold_rate_locks,
     select_modes,
@@ -38,7 +40,7 @@ from .events import (
 from .initial_state import consistent_initial_state
 from .radau import A as _A
 from .radau import C, StageSystem
-from .status import Event, RawRun, SolverError, Status
+from .status import BranchError, Event, RawRun, SolverError, Status
 
 __all__ = ["run_radau5", "DEFAULT_RTOL", "DEFAULT_ATOL", "EXTRA_OPTIONS"]
 
@@ -104,6 +106,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                          [el.kind == "spring" for el in scene.elements])
     lbs = [law_branches(el.law) for el in scene.elements]
     names = scene.element_names
+    checked = [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)]
     x = [float(nd.x0) for nd in scene.nodes]
     v, F, ic = consistent_initial_state(scene, time_scale=t_final, options=settings.options)
     breaks = _breakpoints(scene, t_final)
@@ -308,6 +311,15 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0]
             h = s_hit * h
             continue
+        folded = [e for e in checked
+                  if fold_crossed(kernels[e], *system.element_nodes(sol, h, x, v, F, e))]
+        if folded:
+            el = scene.elements[folded[0]]
+            status, message = Status.BRANCH_LOST, (
+                f"element {el.name!r} (law {el.law_name!r}) reaches a fold of its law "
+                f"between t = {t!r} and {t + h!r}: dR/dq or dR/dF changes sign, there is no "
+                "solution continuous with the past beyond it")
+            break
         # accept
         Y = []
         for k in range(3):
@@ -349,7 +361,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 break
     stats["events"] = len(events)
     if status is not Status.SUCCESS and settings.throw:
-        raise SolverError(message, status=status, t=t, where="", residual=math.nan)
+        error = BranchError if status is Status.BRANCH_LOST else SolverError
+        raise error(message, status=status, t=t, where="", residual=math.nan)
     data = np.array(rows, dtype=float)
     if dt is not None and dense.t0:
         n_grid = steps_for(dt, settings.t_end)

@@ -25,12 +25,13 @@ from collections.abc import Callable, Sequence
 from scipy.optimize import brentq
 
 from ..scene import Mass, Scene
+from .branch_check import _left_branch
 from .newton import NewtonCode, NewtonOptions, newton_solve
 from .radau import dense_weights
 from .step_system import _make_evaluate
 
 __all__ = ["SAMPLES", "first_crossing", "first_crossing_on", "select_modes", "hold_rate_locks",
-           "apply_impacts", "guard_tolerance"]
+           "apply_impacts", "guard_tolerance", "fold_crossed"]
 
 #: Points ``s`` in ``(0, 1]`` of a step where the guards are sampled (in order).
 SAMPLES = tuple(k / 8.0 for k in range(1, 9))
@@ -228,6 +229,18 @@ def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Seq
         elif L is not None and b < 0 and a >= 0:
             x[a], v[a] = -float(L), 0.0
     return [(e, impulses[locked.index(e)]) for e in hits], lost
+
+
+def fold_crossed(kernel: Callable, q: Sequence[float], F: Sequence[float]) -> bool:
+    """Whether the law crosses a fold along a step: ``dR/dq`` or ``dR/dF`` changes sign
+    strictly between consecutive nodes ``(q[k], F[k])`` of the step's polynomial (the test
+    of the fixed-step methods, :mod:`lumped.solvers.branch_check`)."""
+    d = [kernel(qk, Fk) for qk, Fk in zip(q, F, strict=True)]
+    for k in range(len(q) - 1):
+        if _left_branch(kernel, q[k], F[k], d[k][1], d[k][2], q[k + 1], F[k + 1],
+                        d[k + 1][1], d[k + 1][2]):
+            return True
+    return False
 
 
 def guard_tolerance(q: float, F: float) -> float:
