@@ -4,7 +4,6 @@ of ``data``, and the first step size.
 
 from __future__ import annotations
 
-import bisect
 import math
 
 import numpy as np
@@ -23,6 +22,7 @@ class DenseOutput:
         self.h: list[float] = []
         self.y0: list[list[float]] = []
         self.D: list[list[list[float]]] = []
+        self._cache: tuple | None = None
 
     def add(self, t: float, h: float, y0: list[float], Y: list[list[float]]) -> None:
         self.t0.append(t)
@@ -30,32 +30,34 @@ class DenseOutput:
         self.y0.append(y0)
         self.D.append([[Yk[j] - y0[j] for j in range(len(y0))] for Yk in Y])
 
-    def row(self, i: int, s: float) -> list[float]:
-        l1, l2, l3 = dense_weights(s)
-        y0 = self.y0[i]
-        D1, D2, D3 = self.D[i]
-        return [y0[j] + (l1 * D1[j] + l2 * D2[j] + l3 * D3[j]) for j in range(len(y0))]
+    def _arrays(self) -> tuple[np.ndarray, ...]:
+        n = len(self.t0)
+        if self._cache is None or self._cache[0] != n:
+            self._cache = (n, np.array(self.t0), np.array(self.h), np.array(self.y0),
+                           np.array(self.D))
+        return self._cache[1:]
 
     def __call__(self, t) -> np.ndarray:
+        """Rows ``(t, x_i, v_i per node, F_e)`` at the times ``t`` (vectorised). At a step
+        boundary the later step is used (right limits: the forces after an event)."""
         ts = np.atleast_1d(np.asarray(t, dtype=float))
-        N, E = self.N, self.E
-        out = np.empty((len(ts), 1 + 2 * N + E))
+        N = self.N
         if not self.t0:
             raise ValueError("no step was taken: the dense output is empty")
-        t_lo = self.t0[0]
-        t_hi = self.t0[-1] + self.h[-1]
-        for r, tt in enumerate(ts):
-            tt = float(tt)
-            if not (t_lo <= tt <= t_hi):
-                raise ValueError(f"`t` = {tt!r} is outside the solved interval "
-                                 f"[{t_lo!r}, {t_hi!r}]")
-            i = max(bisect.bisect_right(self.t0, tt) - 1, 0)
-            y = self.row(i, (tt - self.t0[i]) / self.h[i])
-            out[r, 0] = tt
-            for p in range(N):
-                out[r, 1 + 2 * p] = y[p]
-                out[r, 2 + 2 * p] = y[N + p]
-            out[r, 1 + 2 * N:] = y[2 * N:]
+        T0, H, Y0, D = self._arrays()
+        t_lo, t_hi = T0[0], T0[-1] + H[-1]
+        bad = ~((ts >= t_lo) & (ts <= t_hi))
+        if bad.any():
+            raise ValueError(f"`t` = {ts[bad][0]!r} is outside the solved interval "
+                             f"[{t_lo!r}, {t_hi!r}]")
+        i = np.clip(np.searchsorted(T0, ts, side="right") - 1, 0, len(T0) - 1)
+        l1, l2, l3 = dense_weights((ts - T0[i]) / H[i])
+        y = Y0[i] + (l1[:, None] * D[i, 0] + l2[:, None] * D[i, 1] + l3[:, None] * D[i, 2])
+        out = np.empty((len(ts), 1 + y.shape[1]))
+        out[:, 0] = ts
+        out[:, 1:1 + 2 * N:2] = y[:, :N]
+        out[:, 2:2 + 2 * N:2] = y[:, N:2 * N]
+        out[:, 1 + 2 * N:] = y[:, 2 * N:]
         return out
 
 
