@@ -198,6 +198,24 @@ def test_fully_implicit_laws(law, params, x0):
     assert np.max(np.abs(sol.sol(t)[:, 1] - ref)) <= 1e-7
 
 
+def test_a_slip_branch_without_continuation_ends_in_an_event():
+    """Herschel-Bulkley with n = 2: its slip branch q = gamma (F - tau)^2 cannot carry the
+    rate through zero (Newton fails on every step past it, with no guard crossing), so the
+    step shrinks to its floor, where the full laws choose the next branch (a reversal).
+    BDF2 converges to the result."""
+    hb = get_law("herschel_bulkley").bind(gamma=1.0, tau=0.5, n=2.0)
+    scene = Scene([Mass("m", m=1.0, x0=0.3, v0=0.5)],
+                  [Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m"),
+                   Element("d", hb, "ground", "m")])
+    sol = simulate(scene, method="radau5", t_end=3.0, rtol=1e-8, atol=1e-11)
+    assert [(ev.from_branch, ev.to_branch) for ev in sol.events] == [(0, 1), (1, 0)]
+    diffs = []
+    for dt in (1e-3, 2.5e-4):
+        ref = simulate(scene, method="bdf2", dt=dt, t_end=3.0)
+        diffs.append(np.max(np.abs(sol.sol(ref.t)[:, 1] - ref.column("x_m"))))
+    assert diffs[1] <= 0.5 * diffs[0] and diffs[1] <= 1e-4, diffs
+
+
 def test_a_fold_of_the_law_stops_the_run():
     """``s_shaped`` pushed past its turning point (q = 2 q0): no solution continues the
     branch, so radau5 stops there (BRANCH_LOST), as the fixed-step methods do."""

@@ -139,9 +139,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         sel: tuple | str = ""
         for _ in range(3):
             sel = select_modes(scene, lbs, t, x, v, F, h_probe, settings.options)
-            if isinstance(sel, str) or sel[0] != modes or cause != "guard":
+            if not isinstance(sel, str) and (sel[0] != modes or cause != "guard"):
                 break
-            h_probe *= 1000.0
+            h_probe *= 1000.0  # a failed or undecided probe: a longer one
         if isinstance(sel, str):
             return sel
         new, v_p, F_p = sel
@@ -186,11 +186,13 @@ def run_radau5(scene: Scene, settings) -> RawRun:
 
     acc0 = [net_at(0.0)[i] / masses[i] if is_mass[i] else 0.0 for i in range(N)]
     h = opts["first_step"] or initial_step(x, v, acc0, is_mass, rtol, atol, t_final)
+    h_good = h
     h_acc = err_acc = None
     F_seen = 0.0
     m_min = min(mi for mi in masses if mi > 0.0)
     dF_n: list[float] | None = None  # force slopes at t (None at the start, after events)
     target: list | None = None  # the guard being landed on and its bracket
+    floor_tried = False  # a mode change was tried at the step floor since the last step
     t = 0.0
     bi = 0
     max_newton = 10
@@ -229,6 +231,19 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h = room
             to_stop = True
         h_min = 16.0 * _EPS * max(abs(t), t_final * 1e-3)
+        if h < h_min and target is None and watched and not floor_tried:
+            # the held branches end here (e.g. a law whose slip branch has no continuation
+            # at zero rate, where Newton fails on every step): let the full laws choose
+            floor_tried = True
+            old = list(modes)
+            dF_n = h_acc = None
+            stop = at_event(t, h_good, "guard")
+            if stop:
+                status, message = stop
+                break
+            if modes != old:
+                h = h_good
+                continue
         if h < h_min and target is None:
             status, message = Status.STEP_TOO_SMALL, (
                 f"radau5: step size {h!r} below its floor {h_min!r} at t = {t!r}")
@@ -347,6 +362,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             facgus = max(0.125, min(5.0, facgus))
             h_new = h / max(quot, facgus)
         h_acc, err_acc = h, max(1e-2, err_norm)
+        h_good, floor_tried = h, False
         h = h_new
         is_break = to_stop and bi < len(breaks) and t == breaks[bi]
         if is_break:
