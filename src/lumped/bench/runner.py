@@ -81,6 +81,7 @@ __all__ = [
     "run_one",
     "BenchReport",
     "run_benchmark",
+    "count_steps",
     "creep_table",
 ]
 
@@ -272,6 +273,9 @@ def run_benchmark(
     """Run every method over its ladder on every scene, plus the creep test and the
     event study (:func:`event_study`, closed forms only).
 
+    ``progress(message)`` is called after every run, after the creep test and after the
+    event study: :func:`count_steps` calls in all.
+
     The yardstick is measured before and after the runs; the smaller value is the unit.
     """
     start = time.perf_counter()
@@ -290,7 +294,7 @@ def run_benchmark(
             for setting in _settings(method, scene, ladders):
                 row = run_one(scene, method, setting, x_ref, unit, ladders, grid_dt)
                 runs.append(row)
-            say(f"{scene.name:18s} {method.name:12s} done")
+                say(f"{scene.name} {method.name} {row.setting}")
     creep_rows = creep_table(ladders, methods) if creep else []
     if creep:
         say("creep done")
@@ -307,6 +311,16 @@ def run_benchmark(
                        scenes=tuple(s.name for s in scenes),
                        wall_s=time.perf_counter() - start,
                        ours=tuple(m.name for m in methods if m.ours))
+
+
+def count_steps(
+    ladders: Ladders, scenes: Iterable[BenchScene], methods: Iterable[Method], *,
+    creep: bool = True, events: bool = True,
+) -> int:
+    """How many times :func:`run_benchmark` reports progress with these arguments."""
+    scenes, methods = tuple(scenes), tuple(methods)
+    runs = sum(len(_settings(m, s, ladders)) for s in scenes for m in methods)
+    return runs + int(creep) + int(events)
 
 
 def _rescale(row: RunResult, unit: float) -> RunResult:
