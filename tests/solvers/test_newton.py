@@ -123,9 +123,9 @@ def test_bad_options(kw):
     lambda n: st.tuples(st.lists(st.lists(entries, min_size=n, max_size=n), min_size=n,
                                  max_size=n), st.lists(entries, min_size=n, max_size=n))))
 def test_unrolled_solve_is_lu_solve_bit_for_bit(Ab):
-    from lumped.solvers.linalg import unrolled_lu_solve
-
     import struct
+
+    from lumped.solvers.linalg import unrolled_lu_solve
 
     def bits(xs):  # bit patterns: NaN == NaN when its bits agree (list == compares NaN by id)
         return [struct.pack("<d", x) for x in xs]
