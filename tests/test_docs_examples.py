@@ -30,3 +30,25 @@ def test_example_script_runs(script, monkeypatch, capsys):
     monkeypatch.setattr(sys, "argv", [script])
     runpy.run_path(str(ROOT / "examples" / script), run_name="__main__")
     assert capsys.readouterr().out.strip()
+
+
+def _python_blocks(text: str) -> list[str]:
+    """The ```python blocks of a Markdown page (indented ones included), dedented."""
+    import re
+    import textwrap
+
+    return [textwrap.dedent(m.group(2)) for m in
+            re.finditer(r"^([ \t]*)```python\n(.*?)^\1```", text, re.M | re.S)]
+
+
+@pytest.mark.parametrize("page", sorted(p.name for p in (ROOT / "docs").glob("*.md")
+                                         if "```python" in p.read_text()))
+def test_docs_python_examples_run(page, tmp_path, monkeypatch):
+    """Every Python example of the documentation pages runs as written (in page order,
+    one namespace per page)."""
+    blocks = _python_blocks((ROOT / "docs" / page).read_text())
+    assert blocks
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    for i, block in enumerate(blocks):
+        exec(compile(block, f"docs/{page} block {i + 1}", "exec"), namespace)
