@@ -193,6 +193,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     dF_n: list[float] | None = None  # force slopes at t (None at the start, after events)
     target: list | None = None  # the guard being landed on and its bracket
     floor_tried = False  # a mode change was tried at the step floor since the last step
+    kept = False  # an event at t kept the mode (since the last step)
     t = 0.0
     bi = 0
     max_newton = 10
@@ -313,15 +314,20 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 if not target[1] < h < target[3]:
                     h = 0.5 * (target[1] + target[3])
                 continue
-        elif hit is not None and hit[0] < 1.0:
+        elif hit is not None and hit[0] < 1.0 and not (
+                kept and hit[0] * h <= 16 * _EPS * max(1.0, abs(t))):
             s_hit = hit[0]
             if s_hit * h <= 16 * _EPS * max(1.0, abs(t)):
                 # the event is at t itself: choose the mode again, no step
                 dF_n = None
+                old = list(modes)
                 stop = at_event(t, h, "guard")
                 if stop:
                     status, message = stop
                     break
+                # the full laws keep the mode at t (a tangency, round-off): the retried
+                # step is accepted unless a guard fails later in it
+                kept = modes == old
                 continue
             target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0]
             h = s_hit * h
@@ -362,7 +368,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             facgus = max(0.125, min(5.0, facgus))
             h_new = h / max(quot, facgus)
         h_acc, err_acc = h, max(1e-2, err_norm)
-        h_good, floor_tried = h, False
+        h_good, floor_tried, kept = h, False, False
         h = h_new
         is_break = to_stop and bi < len(breaks) and t == breaks[bi]
         if is_break:
