@@ -220,7 +220,14 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         return guards[e](q[3], Fe[3])[which[1]], guard_tolerance(q[3], Fe[3])
 
     A_ = _A
+    stalled = 0  # loop passes since the last accepted step (a guard against any cycle)
     while t < t_final:
+        stalled += 1
+        if stalled > 10_000:
+            status, message = Status.STEP_TOO_SMALL, (
+                f"radau5 stopped at t = {t!r}: 10000 attempts without an accepted step "
+                f"(step size {h!r})")
+            break
         if stats["steps"] >= opts["max_steps"]:
             status, message = Status.MAX_ITERS, (f"radau5 stopped at t = {t!r}: "
                                                  f"max_steps = {opts['max_steps']} reached")
@@ -368,7 +375,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             facgus = max(0.125, min(5.0, facgus))
             h_new = h / max(quot, facgus)
         h_acc, err_acc = h, max(1e-2, err_norm)
-        h_good, floor_tried, kept = h, False, False
+        h_good, floor_tried, kept, stalled = h, False, False, 0
         h = h_new
         is_break = to_stop and bi < len(breaks) and t == breaks[bi]
         if is_break:
