@@ -14,8 +14,10 @@ operation for operation, on preallocated arrays:
 * the fold check of :mod:`lumped.solvers.branch_check` on the elements whose law is not a
   known monotone built-in.
 
-The scene enters through three compiled callbacks generated per scene by
-:mod:`lumped.codegen.jit`: ``evaluate(u, p, G, J, S, roundoff)`` (the step system, with
+The scene enters through two compiled callbacks generated per scene by
+:mod:`lumped.codegen.jit` (which copies :func:`run_bdf_core`, :func:`fast_step` and
+:func:`left_branch` into the scene module without their callback arguments):
+``evaluate(u, p, G, J, S, roundoff)`` (the step system, with
 ``p = [h, m_i / h (N), v_hat (N), x_hat (N), f(t) (N)]``), ``element_law(e, q, F)``
 (element ``e``'s kernel) and nothing else: the forcing is read from ``fkind, fpar,
 ftab`` by :func:`forcing_into` (kinds: 0 none, 1 constant ``fpar[i, 0]``, 2 sine burst
@@ -82,7 +84,7 @@ def forcing_into(step, t, fkind, fpar, ftab, f) -> int:
     return -1
 
 
-@njit(inline="always")
+@njit
 def fast_step(evaluate, p, u0, u, cJ, cLU, cperm, cvalid, wv, wm, rtol, atol) -> int:
     """The common step (the reference's ``_fast_step``): returns the Newton iterations it
     took (0 or 1) with the solution in ``u``, or -1 when full Newton must run."""
@@ -131,7 +133,7 @@ def _sign(x: float, scale: float) -> int:
     return 0
 
 
-@njit(inline="always")
+@njit
 def left_branch(element_law, e, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
     """The fold test of :func:`lumped.solvers.branch_check.left_branch` for element ``e``:
     ``dR/dq`` or ``dR/dF`` of strictly opposite signs at the two ends, or at three
@@ -174,7 +176,7 @@ def _elongation(y, a, b) -> float:
     return (y[b] if b >= 0 else 0.0) - (y[a] if a >= 0 else 0.0)
 
 
-@njit(inline="always")
+@njit
 def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0, F0,
                  dt, n_steps, bdf2, rtol, atol, max_iters, max_backtracks, free_steps,
                  fkind, fpar, ftab, xs, vs, Fs, info, finfo, wv, wm, wperm, lw) -> int:

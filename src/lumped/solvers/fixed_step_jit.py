@@ -27,13 +27,13 @@ import numpy as np
 
 from ..scene import Scene
 from .branch_check import _known_monotone
-from .fixed_step import GENERIC_METHODS
 from .initial_state import consistent_initial_state
 from .newton import NewtonCode, NewtonOptions, NewtonResult
 from .status import BranchError, RawRun, Status
 from .step_system import _newton_failure
 
-__all__ = ["JIT_METHODS", "run_bdf_jit", "forcing_arrays", "refuse_position_locks"]
+__all__ = ["JIT_METHODS", "run_bdf_jit", "loop_arguments", "forcing_arrays",
+           "refuse_position_locks"]
 
 #: Compiled method name -> step formula.
 JIT_METHODS = {"jit-bdf1": "bdf1", "jit-bdf2": "bdf2"}
@@ -90,6 +90,33 @@ def refuse_position_locks(scene: Scene, method: str) -> None:
                     f"{JIT_METHODS[method]!r})")
 
 
+def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,
+                   options: NewtonOptions):
+    """``(jit_scene, args, ic_stats)``: the scene's compiled module, the arguments of its
+    ``run_bdf`` for one run (consistent initial state, forcing, outputs, workspaces;
+    ``args[19:25]`` are ``xs, vs, Fs, info, finfo`` and Newton's vector workspace) and
+    the initial state's Newton counters."""
+    from ..codegen.jit import jit_scene
+    from .bdf_jit_core import loop_workspace
+    from .newton_jit import workspace
+
+    js = jit_scene(scene)
+    v, F, ic_stats = consistent_initial_state(scene, time_scale=dt, options=options)
+    N, E = len(scene.nodes), len(scene.elements)
+    fkind, fpar, ftab = forcing_arrays(scene, dt, n_steps)
+    checked = np.array([e for e, el in enumerate(scene.elements)
+                        if not _known_monotone(el.law)], dtype=np.int64)
+    args = (js.masses, js.ea, js.eb, js.spring, checked,
+            np.array([nd.x0 for nd in scene.nodes], dtype=float), np.array(v, dtype=float),
+            np.array(F, dtype=float), float(dt), int(n_steps), formula == "bdf2",
+            options.rtol, options.atol, options.max_iters, options.max_backtracks,
+            options.free_steps, fkind, fpar, ftab,
+            np.empty((n_steps + 1, N)), np.empty((n_steps + 1, N)), np.empty((n_steps + 1, E)),
+            np.zeros(9, dtype=np.int64), np.zeros(6), *workspace(N + E),
+            loop_workspace(N, E))
+    return js, args, ic_stats
+
+
 def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
                 options: NewtonOptions | None = None, throw: bool = True) -> RawRun:
     """Advance ``scene`` by ``n_steps`` compiled BDF steps (``method`` ``jit-bdf1`` or
@@ -104,35 +131,14 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
     SolverError, BranchError
         A failed step, with ``throw=True`` (else the run so far with its status).
     """
-    from ..codegen.jit import jit_scene
-    from .bdf_jit_core import loop_workspace
-    from .newton_jit import workspace
-
     if method not in JIT_METHODS:
         raise ValueError(f"`method` must be one of {tuple(JIT_METHODS)}, got {method!r}")
-    formula = JIT_METHODS[method]
-    assert formula in GENERIC_METHODS
     refuse_position_locks(scene, method)
     options = options or NewtonOptions()
-    js = jit_scene(scene)
-    v, F, ic_stats = consistent_initial_state(scene, time_scale=dt, options=options)
+    js, args, ic_stats = loop_arguments(scene, JIT_METHODS[method], dt, n_steps, options)
+    rows = js.module.run_bdf(*args)
     N, E = len(scene.nodes), len(scene.elements)
-    fkind, fpar, ftab = forcing_arrays(scene, dt, n_steps)
-    xs = np.empty((n_steps + 1, N))
-    vs = np.empty((n_steps + 1, N))
-    Fs = np.empty((n_steps + 1, E))
-    info = np.zeros(9, dtype=np.int64)
-    finfo = np.zeros(6)
-    wv, wm, wperm = workspace(N + E)
-    checked = np.array([e for e, el in enumerate(scene.elements)
-                        if not _known_monotone(el.law)], dtype=np.int64)
-    rows = js.module.run_bdf(
-        js.masses, js.ea, js.eb, js.spring, checked,
-        np.array([nd.x0 for nd in scene.nodes], dtype=float), np.array(v, dtype=float),
-        np.array(F, dtype=float), float(dt), int(n_steps), formula == "bdf2",
-        options.rtol, options.atol, options.max_iters, options.max_backtracks,
-        options.free_steps, fkind, fpar, ftab, xs, vs, Fs, info, finfo, wv, wm, wperm,
-        loop_workspace(N, E))
+    xs, vs, Fs, info, finfo, wv = args[19:25]
     status, message = Status.SUCCESS, ""
     outcome, step = int(info[0]), int(info[1])
     t = float(finfo[1])

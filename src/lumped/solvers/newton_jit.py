@@ -14,16 +14,16 @@ the data layout:
   :func:`workspace` returns them;
 * the system is a callback ``evaluate(u, p, G, J, S, roundoff)`` that writes the
   residual, the generalised Jacobian and the row scales in place (``p``: the step's
-  parameters, see :mod:`lumped.codegen.jit`); a caller compiles :func:`newton` with its
-  own ``evaluate`` (numba specialises on the callback);
+  parameters, see :mod:`lumped.codegen.jit`);
 * systems of any size use the small LU below (the pure-Python solver hands systems above
   8 unknowns to LAPACK, so there the two agree to round-off, not bit for bit).
 
-The functions are plain Python: :mod:`lumped.codegen.jit` wraps them with
-``numba.njit`` inside each generated scene module (compiled code of a function that
-takes another compiled function as an argument is only cached on disk through a caller
-that names it globally). Without numba (or with ``NUMBA_DISABLE_JIT=1``) they run as
-they are, slowly, with the same results.
+The helpers are compiled here and cached on disk. :func:`newton` takes the callback as
+its first argument; :mod:`lumped.codegen.jit` copies its source into each generated
+scene module without that argument, the scene's ``evaluate`` being a global there (numba
+cannot cache a function that hands a compiled function to a callee it does not inline).
+Without numba (or with ``NUMBA_DISABLE_JIT=1``) everything runs as plain Python, slowly,
+with the same results.
 
 Return codes (:data:`CODE_NAMES`): 0 success, 1 max_iters, 2 diverged, 3 singular,
 4 non_finite, the values of :class:`lumped.solvers.newton.NewtonCode`.
@@ -246,7 +246,7 @@ def worst_row(G, S, rtol: float, atol: float) -> int:
     return worst
 
 
-@njit(inline="always")
+@njit
 def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free_steps,
            cJ, cLU, cperm, cvalid, wv, wm, wperm, counts):
     """Solve ``G(u) = 0`` in place from ``u`` (the reference's ``newton_solve``).
