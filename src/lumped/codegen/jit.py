@@ -28,14 +28,16 @@ rate (dashpot), ``F`` its force (sign convention of :mod:`lumped.scene`).
     ``R_e(q_e, F_e)`` with ``q_e = x_hat_b + h v_b - (x_hat_a + h v_a)`` (springs) or
     ``v_b - v_a`` (dashpots). ``roundoff`` selects the law rows' scale
     ``max(|R_q q| + |R_F F|, M)`` (else the first term alone).
+``active_branch(e, q, F) -> int``
+    The index of element ``e``'s active smooth branch at ``(q, F)``, by the kernel's own
+    rules (:meth:`lumped.codegen.branches.LawBranches.branch`; -1 where none holds).
 ``branch_count(e) -> int``, ``branch_law(e, i, q, F) -> (R, dR/dq, dR/dF)``
-    Element ``e``'s law on its smooth branch ``i`` alone (``i < branch_count(e)``), from
-    :func:`lumped.codegen.branches.law_branches` when that module is present; otherwise
-    every law has one branch, its whole kernel.
+    Element ``e``'s law on its smooth branch ``i`` alone (``i < branch_count(e)``;
+    :meth:`~lumped.codegen.branches.LawBranches.kernel_for`), smooth wherever defined.
 ``branch_guards(e, i, q, F, out) -> int``
-    The branch's guard values (each ``>= 0`` while branch ``i`` stays admissible)
-    written to ``out``; returns how many (0 for a smooth law, and when no guards source
-    is available).
+    The branch's guard values (:meth:`~lumped.codegen.branches.LawBranches.guards_for`:
+    all ``> 0`` strictly inside branch ``i``, some ``< 0`` outside; an event is a sign
+    change) written to ``out[0 .. k-1]``; returns ``k`` (0 for a smooth law).
 ``run_bdf(...)``
     :func:`lumped.solvers.bdf_jit_core.run_bdf_core` bound to this scene's callbacks
     (its source, and that of the core functions it calls with a callback, is copied into
@@ -127,36 +129,59 @@ def _core_hash() -> str:
 def _kernel_sources(bound) -> tuple[str, str]:
     """``(kernel, magnitude)`` source of a bound law, unguarded (numba-ready)."""
     from lumped.codegen import compile_kernel
+    from lumped.laws import BoundLaw
 
-    law = getattr(bound, "law", None)
-    if not all(hasattr(law, a) for a in ("residual", "q", "F", "symbols")):
+    if not (isinstance(bound, BoundLaw) and type(bound).kernel is BoundLaw.kernel):
         raise ValueError(
             f"compiled methods need laws given as sympy residuals (ElementLaw.bind); got "
             f"{bound!r}, whose kernel is hand-written")
+    law = bound.law
     params = {law.symbols[p]: v for p, v in bound.params.items()}
     kernel = compile_kernel(law.residual, law.q, law.F, params, guard=False)
     return kernel.__source__, kernel.magnitude.__source__
 
 
+def _exact_powers(source: str) -> str:
+    """Rewrite ``base**n`` (an integer literal ``n``) as ``math.pow(base, n.0)``.
+
+    CPython evaluates ``x**3`` with the C library's ``pow``; numba expands an integer
+    power into multiplications, which can differ in the last bit. ``math.pow`` is the C
+    ``pow`` in both, so the compiled kernels give the Python kernels' numbers bit for bit.
+    ``base`` is a name or a parenthesised group, with the call it belongs to if any.
+    """
+    out = source
+    while True:
+        m = re.search(r"\*\*(\d+)", out)
+        if m is None:
+            return out
+        i = m.start()  # the operand ends just before i
+        j = i
+        if out[j - 1] == ")":
+            depth = 0
+            while True:
+                j -= 1
+                depth += {")": 1, "(": -1}.get(out[j], 0)
+                if depth == 0:
+                    break
+        while j > 0 and (out[j - 1].isalnum() or out[j - 1] in "_."):
+            j -= 1
+        out = f"{out[:j]}math.pow({out[j:i]}, {m.group(1)}.0){out[m.end():]}"
+
+
 def _rename(source: str, name: str) -> str:
-    head, rest = source.split("\n", 1)
+    head, rest = _exact_powers(source).split("\n", 1)
     args = head[head.index("("):]
     return f"@njit(cache=True)\ndef {name}{args}\n{rest}"
 
 
-def _branch_sources(bound) -> list[tuple[str, str | None]]:
-    """Per-branch ``(kernel source, guards source or None)`` of a law, or ``[]`` when
-    :mod:`lumped.codegen.branches` is not there."""
-    try:
-        from lumped.codegen.branches import law_branches
-    except ImportError:
-        return []
+def _branches(bound):
+    """``(selector source, [(kernel source, guard codes), ...])`` of a law's smooth
+    branches (:func:`lumped.codegen.branches.law_branches`)."""
+    from lumped.codegen.branches import law_branches
+
     lb = law_branches(bound)
-    out = []
-    for i in range(lb.count):
-        guards = getattr(lb, "guards_source_for", None)
-        out.append((lb.source_for(i), guards(i) if guards is not None else None))
-    return out
+    return lb.branch.__source__, [(lb.source_for(i), tuple(lb.guards_for(i).codes))
+                                  for i in range(lb.count)]
 
 
 def scene_source(scene) -> tuple[str, list[int]]:
@@ -278,29 +303,22 @@ def _evaluate_source(scene, law_index: list[int]) -> list[str]:
 
 
 def _branch_section(bounds: list, law_index: list[int]) -> list[str]:
-    """``branch_count``, ``branch_law`` and ``branch_guards`` (see the module notes)."""
+    """``active_branch``, ``branch_count``, ``branch_law`` and ``branch_guards``."""
     L: list[str] = []
     counts = []
     for j, bound in enumerate(bounds):
-        branches = _branch_sources(bound)
-        counts.append(max(len(branches), 1))
-        if not branches:
-            L += ["", "@njit(cache=True)", f"def branch_{j}_0(q, F):",
-                  f"    return law_{j}(q, F)", "", "@njit(cache=True)",
-                  f"def guards_{j}_0(q, F, out):", "    return 0"]
-        for i, (ksrc, gsrc) in enumerate(branches):
-            L += ["", _rename(ksrc, f"branch_{j}_{i}")]
-            if gsrc is None:
-                L += ["", "@njit(cache=True)", f"def guards_{j}_{i}(q, F, out):",
-                      "    return 0"]
-            else:
-                L += ["", _rename(gsrc, f"guard_values_{j}_{i}"), "", "@njit(cache=True)",
-                      f"def guards_{j}_{i}(q, F, out):",
-                      f"    g = guard_values_{j}_{i}(q, F)",
-                      "    for m in range(len(g)):", "        out[m] = g[m]",
-                      "    return len(g)"]
+        selector, branches = _branches(bound)
+        counts.append(len(branches))
+        L += ["", _rename(selector, f"select_{j}")]
+        for i, (ksrc, codes) in enumerate(branches):
+            L += ["", _rename(ksrc, f"branch_{j}_{i}"), "", "@njit(cache=True)",
+                  f"def guards_{j}_{i}(q, F, out):"]
+            L += [f"    out[{m}] = {code}" for m, code in enumerate(codes)]
+            L += [f"    return {len(codes)}"]
     E = len(law_index)
-    L += ["", "@njit(cache=True)", "def branch_count(e):"]
+    L += ["", "@njit(cache=True)", "def active_branch(e, q, F):"]
+    L += [f"    if e == {e}:\n        return select_{law_index[e]}(q, F)" for e in range(E)]
+    L += ["    return -1", "", "@njit(cache=True)", "def branch_count(e):"]
     L += [f"    if e == {e}:\n        return {counts[law_index[e]]}" for e in range(E)]
     L += ["    return 0", "", "@njit(cache=True)", "def branch_law(e, i, q, F):"]
     for e in range(E):
