@@ -5,6 +5,9 @@ function at a time); the compiled solver loop is tested in tests/solvers."""
 
 from __future__ import annotations
 
+import hashlib
+from pathlib import Path
+
 import numpy as np
 import pytest
 from hypothesis import given
@@ -81,11 +84,12 @@ def test_same_laws_same_module_and_parameters_are_baked_in(js):
 
 
 def test_module_file_is_named_by_its_source_hash(js):
-    _, j = js
-    path = j.module.__file__
-    assert path.startswith(str(cache_dir() / "jit"))
-    with open(path, encoding="utf-8") as fh:
-        assert "# solver cores: " in fh.read()
+    scene, j = js
+    path = Path(j.module.__file__)
+    assert path.parent == cache_dir() / "jit"
+    source = scene_source(scene)[0]
+    assert path.read_text(encoding="utf-8") == source
+    assert hashlib.sha256(source.encode()).hexdigest()[:24] in path.name
 
 
 def test_cache_dir_from_environment(monkeypatch, tmp_path):

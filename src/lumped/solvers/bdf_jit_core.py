@@ -15,13 +15,15 @@ operation for operation, on preallocated arrays:
   known monotone built-in.
 
 The scene enters through two compiled callbacks generated per scene by
-:mod:`lumped.codegen.jit` (which copies :func:`run_bdf_core`, :func:`fast_step` and
-:func:`left_branch` into the scene module without their callback arguments):
-``evaluate(u, p, G, J, S, roundoff)`` (the step system, with
-``p = [h, m_i / h (N), v_hat (N), x_hat (N), f(t) (N)]``), ``element_law(e, q, F)``
-(element ``e``'s kernel) and nothing else: the forcing is read from ``fkind, fpar,
-ftab`` by :func:`forcing_into` (kinds: 0 none, 1 constant ``fpar[i, 0]``, 2 sine burst
-``fpar[i] = (A, omega, t_off)``, 3 a table ``ftab[step, i]`` computed before the loop).
+:mod:`lumped.codegen.jit`, ``evaluate(u, p, G, J, S, roundoff)`` (the step system, with
+``p = [h, m_i / h (N), v_hat (N), x_hat (N), f(t) (N)]``) and ``element_law(e, q, F)``
+(element ``e``'s kernel), passed as *function pointers* (numba's first-class function
+types, :data:`EVALUATE_TYPE`, :data:`ELEMENT_LAW_TYPE`): the loop is compiled once for
+every scene (:func:`compiled_run_bdf_core`, cached on disk), and a new scene compiles
+only its own small functions. Nothing else comes from the scene: the forcing is read
+from ``fkind, fpar, ftab`` by :func:`forcing_into` (kinds: 0 none, 1 constant ``fpar[i,
+0]``, 2 sine burst ``fpar[i] = (A, omega, t_off)``, 3 a table ``ftab[step, i]`` computed
+before the loop).
 
 ``info`` receives the outcome: ``info[0]`` 0 success, 1 Newton failed, 2 a fold
 (branch lost), 3 a non-finite force; ``info[1]`` the step; ``info[2]`` the Newton code;
@@ -38,7 +40,7 @@ import math
 
 import numpy as np
 
-from ..codegen.jit import njit
+from ..codegen.jit import _numba, njit, numba_enabled
 from .newton_jit import (
     _D2,
     _DU,
@@ -58,7 +60,8 @@ from .newton_jit import (
     worst_row,
 )
 
-__all__ = ["forcing_into", "fast_step", "left_branch", "loop_workspace", "run_bdf_core"]
+__all__ = ["EVALUATE_TYPE", "ELEMENT_LAW_TYPE", "compiled_run_bdf_core", "forcing_into",
+           "fast_step", "left_branch", "loop_workspace", "run_bdf_core"]
 
 FORCE_NONE, FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE = 0, 1, 2, 3
 OK, NEWTON_FAILED, BRANCH_LOST, BAD_FORCE = 0, 1, 2, 3
@@ -84,7 +87,7 @@ def forcing_into(step, t, fkind, fpar, ftab, f) -> int:
     return -1
 
 
-@njit
+@njit(cache=True)
 def fast_step(evaluate, p, u0, u, cJ, cLU, cperm, cvalid, wv, wm, rtol, atol) -> int:
     """The common step (the reference's ``_fast_step``): returns the Newton iterations it
     took (0 or 1) with the solution in ``u``, or -1 when full Newton must run."""
@@ -117,7 +120,8 @@ def fast_step(evaluate, p, u0, u, cJ, cLU, cperm, cvalid, wv, wm, rtol, atol) ->
 
 
 def loop_workspace(N: int, E: int) -> tuple:
-    """The arrays :func:`run_bdf_core` works in, for ``N`` nodes and ``E`` elements."""
+    """The arrays :func:`run_bdf_core` works in (``P, cJ, cLU, cperm, cvalid, counts,
+    vec``), for ``N`` nodes and ``E`` elements."""
     n = N + E
     return (np.zeros((2, 1 + 4 * N)), np.zeros((2, n, n)), np.zeros((2, n, n)),
             np.zeros((2, n), dtype=np.int64), np.zeros((2, 1), dtype=np.int64),
@@ -133,7 +137,7 @@ def _sign(x: float, scale: float) -> int:
     return 0
 
 
-@njit
+@njit(cache=True)
 def left_branch(element_law, e, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
     """The fold test of :func:`lumped.solvers.branch_check.left_branch` for element ``e``:
     ``dR/dq`` or ``dR/dF`` of strictly opposite signs at the two ends, or at three
@@ -176,24 +180,22 @@ def _elongation(y, a, b) -> float:
     return (y[b] if b >= 0 else 0.0) - (y[a] if a >= 0 else 0.0)
 
 
-@njit
 def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0, F0,
                  dt, n_steps, bdf2, rtol, atol, max_iters, max_backtracks, free_steps,
-                 fkind, fpar, ftab, xs, vs, Fs, info, finfo, wv, wm, wperm, lw) -> int:
+                 fkind, fpar, ftab, xs, vs, Fs, info, finfo, wv, wm, wperm, P, cJ, cLU,
+                 cperm, cvalid, counts, vec) -> int:
     """Advance ``n_steps`` fixed steps from ``(x0, v0, F0)``; fill ``xs, vs, Fs`` (rows
     ``0 .. n``) and ``info, finfo`` (see the module notes); return the rows filled.
 
     ``wv, wm, wperm`` is Newton's workspace (:func:`lumped.solvers.newton_jit.workspace`),
-    ``lw`` the loop's (:func:`loop_workspace`): allocated by the caller, since numba
-    cannot cache a caller of this function when it allocates (numba 0.6x gives it
-    "dynamic globals")."""
+    ``P .. vec`` the loop's (:func:`loop_workspace`), both allocated by the caller.
+    Compiled by :func:`compiled_run_bdf_core`."""
     N = x0.shape[0]
     E = F0.shape[0]
     n = N + E
     h1 = dt
     h2 = 2.0 * dt / 3.0
     # step parameters for each step size: [h, m/h, v_hat, x_hat, f]
-    P, cJ, cLU, cperm, cvalid, counts, vec = lw
     for k in range(2):
         h = h1 if k == 0 else h2
         P[k, 0] = h
@@ -320,3 +322,40 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
     info[7] = facts
     info[8] = max_it
     return rows
+
+
+def _signature():
+    from numba import types as T
+
+    f8, i8, b1 = T.float64, T.int64, T.boolean
+    v, m, c = f8[::1], f8[:, ::1], f8[:, :, ::1]
+    iv, im = i8[::1], i8[:, ::1]
+    return T.int64(EVALUATE_TYPE, ELEMENT_LAW_TYPE, v, iv, iv, b1[::1], iv, v, v, v, f8, i8,
+                   b1, f8, f8, i8, i8, i8, iv, m, m, m, m, m, iv, v, m, c, iv, m, c, c, im,
+                   im, iv, m)
+
+
+if _numba is not None:
+    from numba import types as _T
+
+    _f8 = _T.float64
+    #: ``evaluate(u, p, G, J, S, roundoff) -> None`` as a numba function type.
+    EVALUATE_TYPE = _T.FunctionType(_T.none(_f8[::1], _f8[::1], _f8[::1], _f8[:, ::1],
+                                            _f8[::1], _T.boolean))
+    #: ``element_law(e, q, F) -> (R, dR/dq, dR/dF)`` as a numba function type.
+    ELEMENT_LAW_TYPE = _T.FunctionType(_T.UniTuple(_f8, 3)(_T.int64, _f8, _f8))
+else:  # pragma: no cover - without numba
+    EVALUATE_TYPE = ELEMENT_LAW_TYPE = None
+
+_COMPILED: list = []
+
+
+def compiled_run_bdf_core():
+    """:func:`run_bdf_core` compiled for the function-pointer callbacks (once per process,
+    from numba's disk cache after the first time on a machine); the plain function when
+    numba is absent or disabled."""
+    if not numba_enabled():
+        return run_bdf_core
+    if not _COMPILED:
+        _COMPILED.append(njit(_signature(), cache=True)(run_bdf_core))
+    return _COMPILED[0]

@@ -92,10 +92,11 @@ def refuse_position_locks(scene: Scene, method: str) -> None:
 
 def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,
                    options: NewtonOptions):
-    """``(jit_scene, args, ic_stats)``: the scene's compiled module, the arguments of its
-    ``run_bdf`` for one run (consistent initial state, forcing, outputs, workspaces;
-    ``args[19:25]`` are ``xs, vs, Fs, info, finfo`` and Newton's vector workspace) and
-    the initial state's Newton counters."""
+    """``(jit_scene, args, ic_stats)``: the scene's compiled module; the arguments of
+    :func:`lumped.solvers.bdf_jit_core.run_bdf_core` after its two callbacks, for one
+    run (consistent initial state, forcing, outputs, workspaces; ``args[19:25]`` are
+    ``xs, vs, Fs, info, finfo`` and Newton's vector workspace); the initial state's
+    Newton counters."""
     from ..codegen.jit import jit_scene
     from .bdf_jit_core import loop_workspace
     from .newton_jit import workspace
@@ -113,7 +114,7 @@ def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,
             options.free_steps, fkind, fpar, ftab,
             np.empty((n_steps + 1, N)), np.empty((n_steps + 1, N)), np.empty((n_steps + 1, E)),
             np.zeros(9, dtype=np.int64), np.zeros(6), *workspace(N + E),
-            loop_workspace(N, E))
+            *loop_workspace(N, E))
     return js, args, ic_stats
 
 
@@ -135,8 +136,10 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
         raise ValueError(f"`method` must be one of {tuple(JIT_METHODS)}, got {method!r}")
     refuse_position_locks(scene, method)
     options = options or NewtonOptions()
+    from .bdf_jit_core import compiled_run_bdf_core
+
     js, args, ic_stats = loop_arguments(scene, JIT_METHODS[method], dt, n_steps, options)
-    rows = js.module.run_bdf(*args)
+    rows = compiled_run_bdf_core()(js.module.evaluate, js.module.element_law, *args)
     N, E = len(scene.nodes), len(scene.elements)
     xs, vs, Fs, info, finfo, wv = args[19:25]
     status, message = Status.SUCCESS, ""

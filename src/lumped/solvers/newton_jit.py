@@ -18,12 +18,10 @@ the data layout:
 * systems of any size use the small LU below (the pure-Python solver hands systems above
   8 unknowns to LAPACK, so there the two agree to round-off, not bit for bit).
 
-The helpers are compiled here and cached on disk. :func:`newton` takes the callback as
-its first argument; :mod:`lumped.codegen.jit` copies its source into each generated
-scene module without that argument, the scene's ``evaluate`` being a global there (numba
-cannot cache a function that hands a compiled function to a callee it does not inline).
-Without numba (or with ``NUMBA_DISABLE_JIT=1``) everything runs as plain Python, slowly,
-with the same results.
+Everything is compiled here and cached on disk; the scene's ``evaluate`` comes in as a
+function pointer (see :mod:`lumped.solvers.bdf_jit_core`), so one compiled Newton serves
+every scene. Without numba (or with ``NUMBA_DISABLE_JIT=1``) everything runs as plain
+Python, slowly, with the same results.
 
 Return codes (:data:`CODE_NAMES`): 0 success, 1 max_iters, 2 diverged, 3 singular,
 4 non_finite, the values of :class:`lumped.solvers.newton.NewtonCode`.
@@ -246,7 +244,7 @@ def worst_row(G, S, rtol: float, atol: float) -> int:
     return worst
 
 
-@njit
+@njit(cache=True)
 def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free_steps,
            cJ, cLU, cperm, cvalid, wv, wm, wperm, counts):
     """Solve ``G(u) = 0`` in place from ``u`` (the reference's ``newton_solve``).
