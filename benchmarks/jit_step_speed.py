@@ -34,6 +34,7 @@ import time
 from lumped.bench import YARDSTICK_ITERATIONS, measure_unit
 from lumped.scenarios import scenario_scene
 from lumped.simulate import simulate
+from lumped.solvers.bdf_jit_core import compiled_run_bdf_core
 from lumped.solvers.fixed_step import run_bdf
 from lumped.solvers.fixed_step_jit import loop_arguments
 from lumped.solvers.newton import NewtonOptions
@@ -66,10 +67,12 @@ def best_of(fn, repeats: int) -> float:
 def per_step(n: int, repeats: int) -> dict[str, float]:
     scene = scenario_scene(SCENE)
     opts = NewtonOptions()
+    loop = compiled_run_bdf_core()
     variants = {}
     for formula in ("bdf1", "bdf2"):
         js, args, _ = loop_arguments(scene, formula, DT, n, opts)
-        variants[f"jit-{formula}: compiled loop"] = (lambda js=js, a=args: js.module.run_bdf(*a))
+        variants[f"jit-{formula}: compiled loop"] = (
+            lambda m=js.module, a=args: loop(m.evaluate, m.element_law, *a))
         variants[f"jit-{formula}: simulate() end to end"] = (
             lambda f=formula: simulate(scene, method=f"jit-{f}", dt=DT, t_end=n * DT))
         variants[f"jit-{formula}: setup only (loop_arguments)"] = (
