@@ -67,7 +67,7 @@ FORCE_NONE, FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE = 0, 1, 2, 3
 OK, NEWTON_FAILED, BRANCH_LOST, BAD_FORCE = 0, 1, 2, 3
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def forcing_into(step, t, fkind, fpar, ftab, f) -> int:
     """Write ``f_i(t)`` into ``f``; return the first node whose force is not finite, or -1."""
     for i in range(f.shape[0]):
@@ -87,7 +87,7 @@ def forcing_into(step, t, fkind, fpar, ftab, f) -> int:
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def fast_step(evaluate, p, u0, u, cJ, cLU, cperm, cvalid, wv, wm, rtol, atol) -> int:
     """The common step (the reference's ``_fast_step``): returns the Newton iterations it
     took (0 or 1) with the solution in ``u``, or -1 when full Newton must run."""
@@ -128,7 +128,7 @@ def loop_workspace(N: int, E: int) -> tuple:
             np.zeros(4, dtype=np.int64), np.zeros((10, n)))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sign(x: float, scale: float) -> int:
     if x > 1e-12 * scale:
         return 1
@@ -137,7 +137,7 @@ def _sign(x: float, scale: float) -> int:
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def left_branch(element_law, e, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
     """The fold test of :func:`lumped.solvers.branch_check.left_branch` for element ``e``:
     ``dR/dq`` or ``dR/dF`` of strictly opposite signs at the two ends, or at three
@@ -170,12 +170,12 @@ def left_branch(element_law, e, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _bit(s: int) -> int:
     return 1 if s > 0 else (2 if s < 0 else 0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _elongation(y, a, b) -> float:
     return (y[b] if b >= 0 else 0.0) - (y[a] if a >= 0 else 0.0)
 

@@ -120,7 +120,7 @@ def lu_factor_into(A, LU, perm) -> bool:
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def lu_solve_into(LU, perm, b, y) -> None:
     """``y = A^{-1} b`` with the factors of :func:`lu_factor_into` (``y`` may not be ``b``)."""
     n = LU.shape[0]
@@ -138,7 +138,7 @@ def lu_solve_into(LU, perm, b, y) -> None:
         y[i] = s / LU[i, i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def finite_sum(a) -> bool:
     """``isfinite(sum(a))`` in the order Python's ``sum`` adds (the reference's test)."""
     s = 0.0
@@ -147,7 +147,7 @@ def finite_sum(a) -> bool:
     return math.isfinite(s)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def finite_matrix(J) -> bool:
     """``isfinite(sum(map(sum, J)))``: row sums added up, as the reference does."""
     s = 0.0
@@ -159,7 +159,7 @@ def finite_matrix(J) -> bool:
     return math.isfinite(s)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def same(A, B) -> bool:
     """Entrywise equality of two matrices (NaN differs from everything)."""
     for i in range(A.shape[0]):
@@ -169,13 +169,13 @@ def same(A, B) -> bool:
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def copy_into(src, dst) -> None:
     for i in range(src.shape[0]):
         dst[i] = src[i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def residual_ok(G, S, rtol: float, atol: float) -> bool:
     for i in range(G.shape[0]):
         if not abs(G[i]) <= rtol * S[i] + atol:
@@ -183,7 +183,7 @@ def residual_ok(G, S, rtol: float, atol: float) -> bool:
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def update_ok(du, u, rtol: float, atol: float) -> bool:
     for i in range(u.shape[0]):
         if not abs(du[i]) <= rtol * abs(u[i]) + atol:
@@ -191,7 +191,7 @@ def update_ok(du, u, rtol: float, atol: float) -> bool:
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def update_ok_scaled(du, u, J, S, rtol: float, atol: float) -> bool:
     """The update test against ``max(|u_j|, min_i S_i / |J_ij|)`` (the reference's
     ``_update_ok_scaled``)."""
@@ -210,7 +210,7 @@ def update_ok_scaled(du, u, J, S, rtol: float, atol: float) -> bool:
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def merit(G, S, floor: float) -> float:
     m = 0.0
     for i in range(G.shape[0]):
@@ -220,7 +220,7 @@ def merit(G, S, floor: float) -> float:
     return m
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def hair(u: float, d: float) -> float:
     """``u - 1e-8 d``, at least one ulp away from ``u`` when ``d != 0``."""
     p = u - 1e-8 * d
@@ -229,7 +229,7 @@ def hair(u: float, d: float) -> float:
     return p
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def worst_row(G, S, rtol: float, atol: float) -> int:
     """Index of the largest ``|G_i| / (rtol S_i + atol)`` (a NaN counts as largest)."""
     worst = 0
@@ -414,7 +414,7 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
     return code
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def finite_matrix_rows(J) -> bool:
     """``all(finite(row) for row in J)``: every row's sum finite."""
     for i in range(J.shape[0]):
