@@ -209,3 +209,20 @@ def test_disabled_jit_gives_the_same_numbers():
         print(np.array_equal(a.data, b.data) and a.stats == b.stats)
     """, NUMBA_DISABLE_JIT="1")
     assert out.strip() == "True"
+
+
+def test_without_numba_gives_the_same_numbers():
+    """numba not installed (blocked in a child process): the package imports, and the
+    compiled methods run the same code uncompiled, with the same results."""
+    out = _run_child("""
+        import sys
+        sys.modules["numba"] = None  # `import numba` now raises ImportError
+        import numpy as np
+        from lumped import simulate
+        from lumped.scenarios import scenario_scene
+        scene = scenario_scene("release-0.5")
+        a = simulate(scene, method="jit-bdf1", dt=1e-2, t_end=0.3)
+        b = simulate(scene, method="bdf1", dt=1e-2, t_end=0.3)
+        print(np.array_equal(a.data, b.data) and a.stats == b.stats)
+    """)
+    assert out.strip() == "True"

@@ -41,6 +41,7 @@ import math
 import numpy as np
 
 from ..codegen.jit import _numba, njit, numba_enabled
+from .branch_check import _sign as _py_sign
 from .newton_jit import (
     _D2,
     _DU,
@@ -128,13 +129,8 @@ def loop_workspace(N: int, E: int) -> tuple:
             np.zeros(4, dtype=np.int64), np.zeros((10, n)))
 
 
-@njit(cache=True, inline="always")
-def _sign(x: float, scale: float) -> int:
-    if x > 1e-12 * scale:
-        return 1
-    if x < -1e-12 * scale:
-        return -1
-    return 0
+#: The reference's sign with a dead band (:mod:`lumped.solvers.branch_check`), compiled.
+_sign = njit(cache=True, inline="always")(_py_sign)
 
 
 @njit(cache=True, inline="always")
