@@ -54,9 +54,10 @@ The disk cache
 --------------
 Directory: ``$LUMPED_CACHE_DIR``, else ``$XDG_CACHE_HOME/lumped``, else
 ``~/.cache/lumped``; modules in ``jit/``, each named by a hash of its source. Files are
-written to a temporary name and moved into place with :func:`os.replace` (atomic;
-concurrent processes are safe), and never rewritten, so numba's cache index (keyed on
-the file's time stamp) stays valid.
+written to a temporary name and hard-linked into place (atomic, and it never replaces
+a file another process wrote first; :func:`os.replace` where the file system has no
+hard links), and never rewritten, so numba's cache index (keyed on the file's time
+stamp) stays valid.
 
 Without numba, or with ``NUMBA_DISABLE_JIT=1``, the same module runs as plain Python:
 correct and slow.
@@ -289,8 +290,13 @@ def _write_once(path: Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)
-        if not path.exists():  # another process may have won meanwhile: keep its file
-            os.replace(tmp, path)
+        try:  # a hard link never replaces an existing file: the first writer wins
+            os.link(tmp, path)
+        except FileExistsError:
+            pass
+        except OSError:  # no hard links on this file system
+            if not path.exists():
+                os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)

@@ -69,7 +69,9 @@ def forcing_arrays(scene: Scene, dt: float, n_steps: int):
 
 def _constant(fn) -> bool:
     """A constant force of :func:`lumped.scene.as_forcing` (``fn.value`` for every ``t``)."""
-    return type(fn).__name__ == "_Constant" and type(fn).__module__.startswith("lumped.")
+    from ..scene.network import _Constant
+
+    return type(fn) is _Constant
 
 
 def refuse_position_locks(scene: Scene, method: str) -> None:
