@@ -88,6 +88,16 @@ def simulate(
     return Solution(
         columns=scene.columns(), data=data, node_names=scene.node_names,
         element_names=scene.element_names, method=concrete, stats=dict(raw.stats),
-        status=raw.status, message=raw.message, events=tuple(raw.events),
-        indeterminate=dict(raw.indeterminate),
+        status=raw.status, message=raw.message,
+        located_events=_located_events(raw), indeterminate=dict(raw.indeterminate),
+        scene=scene, dense=raw.dense,
     )
+
+
+def _located_events(raw) -> tuple | None:
+    """The runner's events if it locates them (it reports some, or gives its own dense
+    output, as the adaptive method does); ``None`` lets the Solution derive the branch
+    switches from the samples (fixed-step methods)."""
+    if raw.events or raw.dense is not None:
+        return tuple(raw.events)
+    return None
