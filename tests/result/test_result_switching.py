@@ -3,11 +3,15 @@ event-driven reference."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
+from _helpers import log_uniform
+from hypothesis import given
+from hypothesis import strategies as st
 
 from lumped import Element, Junction, Mass, Scene, get_law, simulate
 from lumped.reference import exact_solution
-from lumped.scene import bingham_oscillator, paper_F2
+from lumped.scene import SineBurst, bingham_oscillator, paper_F2
 from lumped.solvers import Event
 
 # the branch machinery (lumped.codegen.branches) lands on branch `branches`
@@ -71,3 +75,20 @@ def test_stick_intervals_of_every_dashpot_and_argument_checks():
         sol.stick_intervals("spring")
     with pytest.raises(ValueError, match="`element`.*'nope'"):
         sol.stick_intervals("nope")
+
+
+@given(m=log_uniform(0.1, 10.0), k=log_uniform(1.0, 1e3), gamma=log_uniform(0.1, 10.0),
+       tau=st.floats(0.0, 5.0), x0=st.floats(-1.0, 1.0), amplitude=st.floats(0.0, 20.0))
+def test_stick_intervals_agree_with_the_velocity_of_the_closed_form(m, k, gamma, tau, x0,
+                                                                     amplitude):
+    """Cross-check: the samples in stick intervals (the law's locking branch) are exactly
+    the samples where the closed form's velocity is 0 with the force within the yield band
+    (Algorithm 1's own stuck test)."""
+    forcing = SineBurst(amplitude, 5.0, 0.5)
+    sol = simulate(bingham_oscillator(m=m, k=k, gamma=gamma, tau=tau, x0=x0, forcing=forcing),
+                   method="closed-bdf1", dt=1e-2, t_end=1.0)
+    stuck = np.zeros(len(sol.t), dtype=bool)
+    for a, b in sol.stick_intervals("dashpot"):
+        stuck[(sol.t >= a) & (sol.t <= b)] = True
+    v, F = sol.v["mass"], sol.F["dashpot"]
+    assert np.array_equal(stuck, (v == 0.0) & (np.abs(F) <= tau))
