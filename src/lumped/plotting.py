@@ -1,12 +1,14 @@
-"""Figures of x, v, F_s and F_d against t (paper Figures 5-14); needs the ``plot`` extra."""
+"""Figures: x, v, F_s and F_d against t (paper Figures 5-14), and x, v and the forces of
+any :class:`~lumped.result.Solution` (:func:`plot_solution`); needs the ``plot`` extra."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from ._optional import require
 from .trajectory import Trajectory
 
-__all__ = ["have_matplotlib", "plot_trajectory"]
+__all__ = ["have_matplotlib", "plot_solution", "plot_trajectory"]
 
 _PANELS = (
     ("x", "displacement x"),
@@ -47,15 +49,6 @@ def plot_trajectory(traj: Trajectory, path: str | Path, title: str = "") -> Path
     return path
 
 
-def _pyplot(what: str):
-    try:
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise ImportError(f"{what} needs matplotlib, which is not installed: "
-                          "python -m pip install -e \".[plot]\" (the `plot` extra)") from None
-    return plt
-
-
 def plot_solution(sol, ax=None, *, title: str = "", shade_sticks: bool = True):
     """Three panels against ``t`` (s): ``x`` (m) and ``v`` (m/s) of every node, and the
     force (N, positive in tension) of every element; the stick intervals of the dashpots
@@ -75,7 +68,7 @@ def plot_solution(sol, ax=None, *, title: str = "", shade_sticks: bool = True):
     """
     import numpy as np
 
-    plt = _pyplot("Solution.plot()")
+    plt = require("matplotlib.pyplot", "Solution.plot()")
     if ax is None:
         _, ax = plt.subplots(3, 1, sharex=True, figsize=(7.0, 7.0), constrained_layout=True)
     axes = np.asarray(ax, dtype=object).ravel()

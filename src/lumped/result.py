@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from ._optional import require
 from .post.dense import check_times, hermite_dense
 from .post.energy import EnergyLedger, energy_ledger
 from .post.switching import branch_history, lock_intervals, locking_branches, switch_events
@@ -27,15 +28,6 @@ __all__ = ["Solution"]
 
 #: scipy-like aliases of the counters (alias -> the key every method fills).
 STAT_ALIASES = {"nfev": "residual_evals", "njev": "jacobian_evals", "nlu": "factorizations"}
-
-
-def _import_pandas(what: str):
-    try:
-        import pandas
-    except ImportError:
-        raise ImportError(f"{what} needs pandas, which is not installed "
-                          "(python -m pip install pandas)") from None
-    return pandas
 
 
 @dataclass(frozen=True, eq=False)
@@ -287,7 +279,7 @@ class Solution:
 
     def to_pandas(self):
         """The samples as a ``pandas.DataFrame`` indexed by ``t`` (needs pandas)."""
-        pd = _import_pandas("Solution.to_pandas()")
+        pd = require("pandas", "Solution.to_pandas()")
         return pd.DataFrame(self.data, columns=list(self.columns)).set_index("t")
 
     def _summary(self) -> list[tuple[str, str]]:

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lumped._optional import require
 from lumped.scene import Mass, Scene
 
 from .columns import F_col, displacements, external_forces, v_col, velocities
@@ -96,9 +97,7 @@ class EnergyLedger:
 
     def to_pandas(self):
         """The ledger as a ``pandas.DataFrame`` indexed by ``t`` (needs pandas)."""
-        from lumped.result import _import_pandas
-
-        pd = _import_pandas("EnergyLedger.to_pandas()")
+        pd = require("pandas", "EnergyLedger.to_pandas()")
         table = self.to_dict()
         return pd.DataFrame(table).set_index("t")
 
