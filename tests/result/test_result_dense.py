@@ -86,3 +86,20 @@ def test_method_dense_output_is_used_when_given():
                      element_names=sol.element_names, method="custom", scene=sol.scene,
                      dense=dense, located_events=())
     assert np.array_equal(other.sol(0.55), sol.data[0]) and len(calls) == 1
+
+
+def test_a_failed_run_is_interpolated_up_to_its_last_good_step():
+    """An S-shaped spring unloaded past its fold: the run stops early (throw=False); sol()
+    covers what was solved and names `t` beyond it, and the result still reports."""
+    from _fake_laws import bound, law
+
+    scene = Scene([Mass("mass", 0.01, x0=1.5**3 - 1.5)],
+                  [Element("s", bound("s_shaped"), "ground", "mass"),
+                   Element("damper", law("newtonian", c=0.02), "ground", "mass")],
+                  {"mass": (lambda t: 1.5 - 0.5 * t)})
+    sol = simulate(scene, method="bdf1", dt=1e-3, t_end=4.0, throw=False)
+    assert not sol.success and sol.t[-1] < 4.0
+    assert np.array_equal(sol.sol(sol.t[-1]), sol.data[-1])
+    with pytest.raises(ValueError, match=r"`t` must lie in \[0\.0, "):
+        sol.sol(4.0)
+    assert sol.status.value in repr(sol) and sol.energy().t[-1] == sol.t[-1]
