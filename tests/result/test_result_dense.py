@@ -91,11 +91,12 @@ def test_method_dense_output_is_used_when_given():
 def test_a_failed_run_is_interpolated_up_to_its_last_good_step():
     """An S-shaped spring unloaded past its fold: the run stops early (throw=False); sol()
     covers what was solved and names `t` beyond it, and the result still reports."""
-    from _fake_laws import bound, law
+    from lumped import ElementLaw
 
+    cubic = ElementLaw("cubic", "spring", "q = F**3 - F", []).bind()   # folds at F = 3**-0.5
     scene = Scene([Mass("mass", 0.01, x0=1.5**3 - 1.5)],
-                  [Element("s", bound("s_shaped"), "ground", "mass"),
-                   Element("damper", law("newtonian", c=0.02), "ground", "mass")],
+                  [Element("s", cubic, "ground", "mass"),
+                   Element("damper", get_law("newtonian").bind(c=0.02), "ground", "mass")],
                   {"mass": (lambda t: 1.5 - 0.5 * t)})
     sol = simulate(scene, method="bdf1", dt=1e-3, t_end=4.0, throw=False)
     assert not sol.success and sol.t[-1] < 4.0

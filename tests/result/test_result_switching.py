@@ -14,8 +14,6 @@ from lumped.reference import exact_solution
 from lumped.scene import SineBurst, bingham_oscillator, paper_F2
 from lumped.solvers import Event
 
-# the branch machinery (lumped.codegen.branches) lands on branch `branches`
-pytest.importorskip("lumped.codegen.branches")
 
 DT, T_END = 1e-3, 5.0
 
@@ -78,12 +76,13 @@ def test_stick_intervals_of_every_dashpot_and_argument_checks():
 
 
 @given(m=log_uniform(0.1, 10.0), k=log_uniform(1.0, 1e3), gamma=log_uniform(0.1, 10.0),
-       tau=st.floats(0.0, 5.0), x0=st.floats(-1.0, 1.0), amplitude=st.floats(0.0, 20.0))
+       tau=st.floats(0.01, 5.0), x0=st.floats(-1.0, 1.0), amplitude=st.floats(0.0, 20.0))
 def test_stick_intervals_agree_with_the_velocity_of_the_closed_form(m, k, gamma, tau, x0,
                                                                      amplitude):
     """Cross-check: the samples in stick intervals (the law's locking branch) are exactly
     the samples where the closed form's velocity is 0 with the force within the yield band
-    (Algorithm 1's own stuck test)."""
+    (Algorithm 1's own stuck test). ``tau > 0``: with ``tau = 0`` the law is Newtonian and
+    has no locking branch (a mass at rest under no force is not stuck)."""
     forcing = SineBurst(amplitude, 5.0, 0.5)
     sol = simulate(bingham_oscillator(m=m, k=k, gamma=gamma, tau=tau, x0=x0, forcing=forcing),
                    method="closed-bdf1", dt=1e-2, t_end=1.0)
