@@ -14,7 +14,6 @@ from lumped.reference import exact_solution
 from lumped.scene import SineBurst, bingham_oscillator, paper_F2
 from lumped.solvers import Event
 
-
 DT, T_END = 1e-3, 5.0
 
 
