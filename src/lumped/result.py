@@ -53,9 +53,9 @@ class Solution:
     message : str
         Empty on success; otherwise what failed, when and where.
     located_events : tuple of Event or None
-        The events the method located itself (adaptive methods), or ``None`` when it
-        does not locate events (fixed-step methods): :attr:`events` then derives the
-        branch switches from the samples.
+        The events the method located itself, or ``None`` when it reported none (the
+        fixed-step methods): :attr:`events` then derives the branch switches from the
+        samples.
     indeterminate : dict
         Element name -> intervals ``(t0, t1)`` on which its force is not unique.
     scene : Scene or None

@@ -95,9 +95,7 @@ def simulate(
 
 
 def _located_events(raw) -> tuple | None:
-    """The runner's events if it locates them (it reports some, or gives its own dense
-    output, as the adaptive method does); ``None`` lets the Solution derive the branch
-    switches from the samples (fixed-step methods)."""
-    if raw.events or raw.dense is not None:
-        return tuple(raw.events)
-    return None
+    """The runner's events if it reports any (a method that locates events); else ``None``,
+    and the Solution reads the branch switches off the samples (the fixed-step methods,
+    or a run in which no event was located: then the samples show none either)."""
+    return tuple(raw.events) if raw.events else None
