@@ -25,7 +25,10 @@ Integrated from ``0`` to ``t`` this is the ledger, each entry a function of time
     ``W_i(t) = int_0^t f_i(t) v_i dt`` per node with a forcing (masses and junctions).
 ``impacts``
     the kinetic energy lost at the impacts a method reported (``Event.energy_lost``),
-    cumulated at the first sample at or after each impact.
+    cumulated at the first sample at or after each impact. An impact event stands for a
+    velocity jump that no force sample carries (two samples at the same time); a method
+    that spreads the impulse over a step as a large force (BDF1 across a lock) already
+    has its loss in the integrals below and must not also report it as an event.
 ``residual``
     ``sum_i (T_i(t) - T_i(0)) + sum U_e + sum D_e + impacts - sum W_i``: zero for the
     exact motion. The integrals use the trapezoidal rule on the samples (exact for a
