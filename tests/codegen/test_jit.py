@@ -116,3 +116,15 @@ def test_position_lock_is_refused():
                   [Element("s", get_law("string_spring").bind(k=10.0, L=0.5), "ground", "m")])
     with pytest.raises(ValueError, match="position lock.*'string_spring'.*element 's'"):
         simulate(scene, method="jit-bdf1", dt=1e-3, t_end=0.01)
+
+
+def test_unwritable_cache_falls_back_to_a_temporary_directory(monkeypatch, tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(blocker))
+    scene = Scene([Mass("m", 3.0)],
+                  [Element("c", CUBIC.bind(k=2.0, c=0.25), "ground", "m")])  # a new module
+    with pytest.warns(UserWarning, match="cannot write the compiled-code cache"):
+        j = jit_scene(scene)
+    assert not Path(j.module.__file__).is_relative_to(blocker)
+    assert j.module.element_law(0, 0.5, 1.0) == scene.elements[0].law.kernel(0.5, 1.0)

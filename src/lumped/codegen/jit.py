@@ -57,7 +57,8 @@ Directory: ``$LUMPED_CACHE_DIR``, else ``$XDG_CACHE_HOME/lumped``, else
 written to a temporary name and hard-linked into place (atomic, and it never replaces
 a file another process wrote first; :func:`os.replace` where the file system has no
 hard links), and never rewritten, so numba's cache index (keyed on the file's time
-stamp) stays valid.
+stamp) stays valid. A cache directory that cannot be written gives a warning and a
+temporary directory (the code is compiled, not kept).
 
 Without numba, or with ``NUMBA_DISABLE_JIT=1``, the same module runs as plain Python:
 correct and slow.
@@ -72,6 +73,7 @@ import re
 import sys
 import tempfile
 import threading
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -312,7 +314,13 @@ def scene_module(scene) -> tuple[ModuleType, list[int]]:
         if module is None:
             name = f"lumped_jit_{digest}"
             path = cache_dir() / "jit" / f"{name}.py"
-            _write_once(path, source)
+            try:
+                _write_once(path, source)
+            except OSError as err:  # an unwritable cache: compile, but nothing is kept
+                warnings.warn(f"lumped: cannot write the compiled-code cache {path.parent} "
+                              f"({err}); using a temporary directory", stacklevel=2)
+                path = Path(tempfile.mkdtemp(prefix="lumped-jit-")) / f"{name}.py"
+                _write_once(path, source)
             spec = importlib.util.spec_from_file_location(name, path)
             module = importlib.util.module_from_spec(spec)
             sys.modules[name] = module
