@@ -4,8 +4,8 @@ Usage, from the repository root (after ``pip install -e ".[test]"``)::
 
     python benchmarks/jit_step_speed.py [--steps 50000] [--repeats 5]
 
-Measured in one process, each the best of ``--repeats`` interleaved runs, reported in
-nanoseconds and in units of one iteration of the benchmark yardstick
+Measured in one process, each the smallest CPU time of ``--repeats`` interleaved runs,
+reported in nanoseconds and in units of one iteration of the benchmark yardstick
 (:func:`lumped.bench.measure_unit`, a pure-Python float loop), since shared machines
 are noisy:
 
@@ -33,6 +33,7 @@ import tempfile
 import time
 
 from lumped.bench import YARDSTICK_ITERATIONS, measure_unit
+from lumped.bench.timing import time_call
 from lumped.scenarios import scenario_scene
 from lumped.simulate import simulate
 from lumped.solvers.bdf_jit_core import compiled_run_bdf_core
@@ -54,15 +55,6 @@ t2 = time.perf_counter()
 simulate(scenario_scene({scene!r}), method="jit-bdf2", dt=1e-4, t_end=1e-3)
 print(t1 - t0, t2 - t1, time.perf_counter() - t2)
 """
-
-
-def best_of(fn, repeats: int) -> float:
-    best = math.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def per_step(n: int, repeats: int) -> dict[str, float]:
@@ -94,20 +86,15 @@ def per_step(n: int, repeats: int) -> dict[str, float]:
     for fn in variants.values():  # compile or load from the cache
         fn()
     best = {name: math.inf for name in variants}
-    for _ in range(repeats):
+    for _ in range(repeats):  # interleaved, CPU time (the machine may be loaded)
         for name, fn in variants.items():
-            best[name] = min(best[name], best_of(fn, 1))
-    # CPU time of the compiled loops too: on a loaded machine wall time includes waits
-    for name, fn in variants.items():
-        for _ in range(repeats):
-            t0 = time.process_time()
-            fn()
-            best[name] = min(best[name], max(time.process_time() - t0, 1e-12))
+            best[name] = min(best[name], time_call(fn, min_time=0.0, max_repeats=1)[1])
     per = {name: t / n for name, t in best.items()}
     n_py = max(n // 10, 1000)
     for formula in ("bdf1", "bdf2"):
-        per[f"{formula}: pure-Python generic step"] = best_of(
-            lambda f=formula: run_bdf(scene, method=f, dt=DT, n_steps=n_py), 3) / n_py
+        per[f"{formula}: pure-Python generic step"] = time_call(
+            lambda f=formula: run_bdf(scene, method=f, dt=DT, n_steps=n_py), min_time=0.0,
+            max_repeats=3)[1] / n_py
     return per
 
 
