@@ -278,6 +278,7 @@ def test_dense_output_on_a_grid_and_auto():
     ({"atol": float("nan")}, "`atol` must be finite"),
     ({"max_events": 0}, "`max_events` must be a positive integer"),
     ({"restitution": 1.5}, "`restitution` must be a number in \\[0, 1\\]"),
+    ({"zeno_window": -1.0}, "`zeno_window` must be a positive number"),
 ])
 def test_bad_tolerances_are_refused(kw, match):
     with pytest.raises(ValueError, match=match):
@@ -369,3 +370,14 @@ def test_a_two_mass_bingham_chain_agrees_with_bdf2():
         diffs.append(np.max(np.abs(got[:, cols] - ref.data[:, cols])))
     # BDF2 converges to radau5's answer as dt shrinks (order 1 to 2 across the events)
     assert diffs[1] <= 3e-5 and diffs[1] <= 0.4 * diffs[0], diffs
+
+
+def test_the_compiled_stage_newton_gives_the_same_run():
+    """``compiled=True``: the stage Newton of :mod:`lumped.solvers.radau_jit` (numba) in
+    place of the pure-Python one, bit for bit."""
+    scene = scenario_scene("forcing-F2")
+    ours = simulate(scene, method="radau5", t_end=1.5, rtol=1e-7)
+    compiled = simulate(scene, method="radau5", t_end=1.5, rtol=1e-7, compiled=True)
+    assert np.array_equal(compiled.data, ours.data) and compiled.stats == ours.stats
+    assert [(ev.t, ev.element) for ev in compiled.events] == [
+        (ev.t, ev.element) for ev in ours.events]

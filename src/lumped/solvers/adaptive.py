@@ -48,7 +48,8 @@ DEFAULT_RTOL = 1e-6
 DEFAULT_ATOL = 1e-9
 #: Method-specific keywords of ``radau5`` and their defaults.
 EXTRA_OPTIONS = {"max_events": 10_000, "zeno_events": 50, "zeno_window": None,
-                 "max_steps": 1_000_000, "first_step": None, "restitution": 0.0}
+                 "max_steps": 1_000_000, "first_step": None, "restitution": 0.0,
+                 "compiled": False}
 _EPS = 2.220446049250313e-16
 
 
@@ -63,6 +64,8 @@ def _extra(settings) -> dict:
         if isinstance(out[key], bool) or not isinstance(out[key], int) or out[key] < 1:
             raise ValueError(f"`{key}` must be a positive integer, got {out[key]!r}")
     e = out["restitution"]
+    if not isinstance(out["compiled"], bool):
+        raise TypeError(f"`compiled` must be True or False, got {out['compiled']!r}")
     if isinstance(e, bool) or not isinstance(e, (int, float)) or not 0.0 <= e <= 1.0:
         raise ValueError(f"`restitution` must be a number in [0, 1], got {e!r}")
     for key in ("zeno_window", "first_step"):
@@ -124,6 +127,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     kernels: list = [None] * E
     guards: list = [None] * E
     watched: list[int] = []
+
+    stage_solve = _compiled_stage_solve(scene, modes) if opts["compiled"] else None
 
     def set_modes(new: list[int]) -> None:
         modes[:] = new
@@ -265,7 +270,12 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         Fref = max(F_seen, m_min * (max(abs(vi) for vi in v) + atol / rtol) / h)
         scale = ([atol + rtol * abs(vi) for vi in v]
                  + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
-        sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale, max_iters=max_newton)
+        if stage_solve is None:
+            sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale,
+                                          max_iters=max_newton)
+        else:
+            sol, its, nfac = stage_solve(U, h, x, v, fk, scale, max_newton)
+            U = sol if sol is not None else U
         stats["newton_iterations"] += its
         stats["factorizations"] += nfac
         stats["nfev"] += its + 1
@@ -416,3 +426,29 @@ def _too_many(events: list[Event], recent: deque, t: float, opts: dict) -> tuple
         f"radau5 stopped at t = {t!r}: {len(recent)} events within "
         f"{recent[-1] - recent[0]!r} s (elements {names}): an accumulation of events "
         "(Zeno or chattering)")
+
+
+def _compiled_stage_solve(scene: Scene, modes: list[int]):
+    """The stage Newton compiled with numba (:mod:`lumped.solvers.radau_jit`, the same
+    operations as :meth:`StageSystem.solve`, bit for bit), on the scene's generated
+    branch kernels; ``(U, h, x, v, f, scale, max_iters) -> (U or None, its, nfac)``."""
+    from ..codegen.jit import jit_scene
+    from .radau import A, W
+    from .radau_jit import compiled_stage_solve, workspace
+
+    js = jit_scene(scene)
+    solve = compiled_stage_solve()
+    ws = workspace(len(scene.nodes), len(scene.elements))
+    A_np, W_np = np.array(A), np.array(W)
+    law = js.module.branch_law
+
+    def run(U, h, x, v, f, scale, max_iters):
+        Ua = np.array(U, dtype=float)
+        ok = solve(law, js.masses, js.ea, js.eb, js.spring, np.array(modes, dtype=np.int64),
+                   A_np, W_np, Ua, h, np.array(x, dtype=float), np.array(v, dtype=float),
+                   np.array(f, dtype=float), np.array(scale, dtype=float), 1e-3, max_iters,
+                   *ws)
+        out = ws[-1]
+        return (Ua.tolist() if ok else None), int(out[0]), int(out[1])
+
+    return run
