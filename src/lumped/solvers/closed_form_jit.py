@@ -52,6 +52,7 @@ __all__ = [
     "FORCE_SAMPLED",
     "SUMMARY_FIELDS",
     "forcing_code",
+    "compiled_columns",
     "run_steps",
     "summary_one",
     "summary_batch",
@@ -247,3 +248,45 @@ def summary_batch_serial(params, dt, n, bdf2, out):
         summary_one(p[0], p[1], p[2], p[3], dt, n, bdf2, p[4], p[5], int(p[6]),
                     p[7], p[8], p[9], out[j])
 
+
+
+def compiled_columns(
+    m: float, k: float, gamma: float, tau: float,
+    forcing: Callable[[float], float] | None,
+    x0: float, v0: float, Fd0: float, dt: float, n: int, method: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The columns ``x, v, F_d, F~`` (``n + 1`` samples, row 0 the initial state) of ``n``
+    closed-form steps, compiled; the drop-in twin of the reference's Python loops.
+
+    ``method`` is ``"bdf1"`` or ``"bdf2"``. A forcing the loop cannot evaluate natively
+    (see :func:`forcing_code`) is sampled on the grid first.
+
+    Raises
+    ------
+    ValueError
+        If the forcing returns a non-finite value (naming the time), as the reference does.
+    FloatingPointError
+        If the state overflows (naming the step and time).
+    """
+    kind, p0, p1, p2 = forcing_code(forcing)
+    samples = np.empty(0)
+    if kind == FORCE_SAMPLED:
+        samples = np.empty(n + 1)
+        for i in range(1, n + 1):
+            F = forcing(i * dt)
+            if not math.isfinite(F):
+                raise ValueError(f"`forcing` returned {F!r} at t = {i * dt!r}")
+            samples[i] = F
+    x = np.empty(n + 1)
+    v = np.empty(n + 1)
+    Fd = np.empty(n + 1)
+    Ft = np.empty(n + 1)
+    x[0], v[0], Fd[0], Ft[0] = x0, v0, Fd0, Fd0
+    done = run_steps(m, k, 1.0 / gamma, tau, dt, method == "bdf2", kind, p0, p1, p2,
+                     samples, x, v, Fd, Ft)
+    if done < n:
+        raise FloatingPointError(
+            f"non-finite state at t = {(done + 1) * dt!r} (step {done + 1}) of the "
+            f"closed-form {method} steps"
+        )
+    return x, v, Fd, Ft

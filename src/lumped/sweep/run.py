@@ -326,7 +326,7 @@ def _with_cluster(client: Any, work: Callable[[Any], Any]) -> Any:
         return work(client)
     from dask.distributed import Client, LocalCluster
 
-    with LocalCluster(processes=False, threads_per_worker=1, dashboard_address=None) as cl, \
+    with LocalCluster(processes=False, threads_per_worker=1, dashboard_address=":0") as cl, \
             Client(cl) as own:
         return work(own)
 

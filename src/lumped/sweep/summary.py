@@ -15,8 +15,9 @@ cover (tested).
 ``x_end.<node>``, ``v_end.<node>``
     The state at the last good step.
 ``at_rest``, ``rest_position.<node>``
-    The system is at rest at the end when every node velocity is exactly zero (the
-    closed form and the generic solver give ``v = 0`` exactly while stuck). Then
+    The system is at rest at the end when the run succeeded and every node velocity is
+    exactly zero (the closed form and the generic solver give ``v = 0`` exactly while
+    stuck). Then
     ``rest_position.<node>`` is the final displacement; otherwise it is missing
     (``<NA>`` in the DataFrame, an empty CSV cell).
 ``stick_time``
@@ -51,7 +52,7 @@ def _record(status: str, message: str, method: str, steps: int, dt: float,
             stick_steps: int, cycles: int, events: int, work: float) -> dict[str, Any]:
     rec: dict[str, Any] = {"status": status, "message": message, "method": method,
                            "steps": int(steps), "t_reached": steps * dt}
-    at_rest = all(vi == 0.0 for vi in v)
+    at_rest = status == "success" and all(vi == 0.0 for vi in v)
     for name, xi, vi in zip(nodes, x, v, strict=True):
         rec[f"x_end.{name}"] = float(xi)
         rec[f"v_end.{name}"] = float(vi)
