@@ -14,9 +14,9 @@ from _helpers import log_uniform
 from hypothesis import given
 from hypothesis import strategies as st
 
-from lumped.bingham import BinghamOscillator, initial_dashpot_force, integrate
-from lumped.forcing import SineBurst, paper_F1, paper_F2, zero_forcing
+from lumped.scene import SineBurst, paper_F1, paper_F2, zero_forcing
 from lumped.solvers import closed_form_jit as J
+from lumped.solvers.closed_form import BinghamOscillator, initial_dashpot_force, integrate
 
 
 def compiled(osc, x0, v0, forcing, dt, n, method):

@@ -1,7 +1,7 @@
 r"""Compiled (numba) closed-form BDF1 (Algorithm 1) and BDF2 steps.
 
 The same model, sign convention and corrector as the pure-Python reference
-(:mod:`lumped.bingham`, ``solvers/closed_form.py`` after the layout move), which stays
+(:mod:`lumped.solvers.closed_form`), which stays
 the readable version::
 
     m v' = F(t) - F_s - F_d,   x' = v,   F_s = k x,   v = gamma (F_d - clip(F_d, -tau, tau))
@@ -29,7 +29,7 @@ The compiled loop takes the forcing as data, a code and three numbers:
 * :data:`FORCE_ZERO` -- ``F = 0``;
 * :data:`FORCE_CONSTANT` -- ``F = p0``;
 * :data:`FORCE_SINE` -- the sine burst ``F = p0 sin(p1 t)`` for ``t <= p2``, ``0`` after
-  (:class:`lumped.forcing.SineBurst`; ``p2 = inf`` means never switched off);
+  (:class:`lumped.scene.SineBurst`; ``p2 = inf`` means never switched off);
 * :data:`FORCE_SAMPLED` -- any other callable, sampled in Python on the grid
   ``t_n = n dt`` first (one Python call per step: slower, same numbers).
 
@@ -80,21 +80,20 @@ SUMMARY_FIELDS = (
 def forcing_code(forcing: Callable[[float], float] | None) -> tuple[int, float, float, float]:
     """``(code, p0, p1, p2)`` for a forcing the compiled loop evaluates natively.
 
-    Recognises ``None`` and :func:`lumped.forcing.zero_forcing` (zero), a constant
-    (an object with a float ``value`` attribute whose type is named ``_Constant``, as
+    Recognises ``None`` and :func:`lumped.scene.zero_forcing` (zero), a constant (what
     :func:`lumped.scene.as_forcing` builds for a number) and
-    :class:`lumped.forcing.SineBurst`. Anything else gives :data:`FORCE_SAMPLED`: the
+    :class:`lumped.scene.SineBurst`. Anything else gives :data:`FORCE_SAMPLED`: the
     caller samples it on the grid.
     """
-    from lumped.forcing import SineBurst, zero_forcing
+    from lumped.scene import SineBurst, zero_forcing
+    from lumped.scene.network import _Constant
 
     if forcing is None or forcing is zero_forcing:
         return FORCE_ZERO, 0.0, 0.0, 0.0
     if isinstance(forcing, SineBurst):
         return FORCE_SINE, float(forcing.amplitude), float(forcing.omega), float(forcing.t_off)
-    if type(forcing).__name__ == "_Constant" and isinstance(getattr(forcing, "value", None),
-                                                            float):
-        return FORCE_CONSTANT, forcing.value, 0.0, 0.0
+    if isinstance(forcing, _Constant):
+        return FORCE_CONSTANT, float(forcing.value), 0.0, 0.0
     return FORCE_SAMPLED, 0.0, 0.0, 0.0
 
 

@@ -42,8 +42,8 @@ class ClosedPlan:
 
 def plan_closed(template: Mapping[str, Any], names: tuple[str, ...]) -> ClosedPlan | None:
     """A :class:`ClosedPlan` when the batched closed form covers the sweep, else ``None``."""
-    from lumped.scenefile import scene_from_dict
-    from lumped.simulate import closed_form_oscillator
+    from lumped.io import scene_from_dict
+    from lumped.solvers import closed_form_oscillator
     from lumped.solvers.closed_form_jit import FORCE_SAMPLED, FORCE_SINE, forcing_code
 
     scene, _ = scene_from_dict(dict(template), source="<template>")
@@ -83,7 +83,7 @@ def closed_parameters(plan: ClosedPlan, template: Mapping[str, Any],
                       sets: ParameterSets) -> np.ndarray:
     """The ``(n_scenes, 10)`` parameter array; every distinct swept value is checked by
     the scene-file reader first (``ValueError`` naming the path and the value)."""
-    from lumped.scenefile import scene_from_dict
+    from lumped.io import scene_from_dict
     from lumped.solvers.closed_form_jit import FORCE_CONSTANT
 
     for name in sets.names:

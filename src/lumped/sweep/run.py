@@ -6,7 +6,7 @@ Two paths, chosen per sweep:
   is one of its numbers (:mod:`lumped.sweep.closed`); the closed-form method
   (``auto``, ``closed-bdf1``, ``closed-bdf2``) runs all scenes as rows of one array in
   compiled code, in parallel over the cores;
-* **per scene**: anything else runs :func:`lumped.simulate.simulate` once per scene, in
+* **per scene**: anything else runs :func:`lumped.simulate` once per scene, in
   a pool of processes (or serially), and summarises each solution.
 
 Either runs on a Dask cluster instead with ``client=`` or ``backend="dask"``.
@@ -68,10 +68,10 @@ def simulate_many(
         ``"nodes.mass.force.amplitude"``, ``"elements.dashpot.parameters.tau"``; with a
         builder they are whatever the builder reads.
     method, dt, t_end
-        As for :func:`lumped.simulate.simulate` (``dt``, ``t_end`` required here or in
+        As for :func:`lumped.simulate` (``dt``, ``t_end`` required here or in
         the template's ``[solver]`` table; ``method`` defaults to it, else ``"auto"``).
     keep_trajectories : bool
-        Also return every :class:`~lumped.simulate.Solution` (runs per scene).
+        Also return every :class:`~lumped.Solution` (runs per scene).
     backend : {"local", "dask"}
         ``"dask"`` without ``client`` starts a ``LocalCluster`` for this call.
     client : dask.distributed.Client, optional
@@ -103,14 +103,13 @@ def simulate_many(
     ... # doctest: +SKIP
     """
     from lumped._validate import as_int_at_least, as_positive
-    from lumped.bingham import steps_for
-    from lumped.simulate import METHODS
+    from lumped.solvers import registry, steps_for
 
     builder, data, settings = _template(template)
     sets = parameter_sets(parameters)
     method = method if method is not None else settings.get("method", "auto")
-    if not isinstance(method, str) or method not in METHODS:
-        raise ValueError(f"`method` must be one of {METHODS}, got {method!r}")
+    if not isinstance(method, str) or method not in registry.METHODS:
+        raise ValueError(f"`method` must be one of {registry.METHODS}, got {method!r}")
     dt = dt if dt is not None else settings.get("dt")
     t_end = t_end if t_end is not None else settings.get("t_end")
     if dt is None or t_end is None:
@@ -160,7 +159,7 @@ def simulate_many(
 
 def _template(template: object) -> tuple[Callable | None, dict | None, dict]:
     """``(builder, scene-file dict, [solver] settings)`` of a template."""
-    from lumped.scenefile import SceneFileError, scene_from_dict
+    from lumped.io import SceneFileError, scene_from_dict
 
     if isinstance(template, (str, Path)):
         path = Path(template)
@@ -184,7 +183,7 @@ def _template(template: object) -> tuple[Callable | None, dict | None, dict]:
 
 def _validate_rows(data: dict, sets: ParameterSets) -> None:
     """Build every scene of a file template once, refusing bad values before any run."""
-    from lumped.scenefile import scene_from_dict
+    from lumped.io import scene_from_dict
 
     for i, values in enumerate(sets.as_dicts()):
         try:
@@ -245,9 +244,8 @@ def _closed_dask(client: Any, params: np.ndarray, dt: float, n: int, bdf2: bool,
 
 def _run_one(job: tuple, values: dict) -> tuple[dict, Any]:
     """Build and simulate one scene; a failed run is a record, not an exception."""
-    from lumped.scene import Scene
-    from lumped.scenefile import scene_from_dict
-    from lumped.simulate import InconsistentInitialForce, SolverError, simulate
+    from lumped import InconsistentInitialForce, Scene, SolverError, simulate
+    from lumped.io import scene_from_dict
 
     source, method, dt, t_end, keep = job
     if callable(source):

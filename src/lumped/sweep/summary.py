@@ -5,7 +5,7 @@ form or :func:`lumped.simulate` per scene); they agree to round-off on the scene
 cover (tested).
 
 ``status``, ``message``
-    ``"success"`` and ``""``, or the :class:`~lumped.simulate.Status` value of a run that
+    ``"success"`` and ``""``, or the :class:`~lumped.Status` value of a run that
     stopped early and what stopped it. ``"inconsistent"``: no consistent initial state
     (an initial force breaks its law); ``"error"``: any other exception of the run, its
     type and text in ``message``. The numbers of such a row are those up to the last good
@@ -80,7 +80,7 @@ def closed_record(out: np.ndarray, n: int, dt: float, method: str, node: str) ->
 
 
 def solution_record(sol: Any, scene: Any, dt: float) -> dict[str, Any]:
-    """A row from a :class:`~lumped.simulate.Solution` of ``scene`` on steps of ``dt``."""
+    """A row from a :class:`~lumped.Solution` of ``scene`` on steps of ``dt``."""
     nodes = scene.node_names
     n_nodes = len(nodes)
     data = sol.data
