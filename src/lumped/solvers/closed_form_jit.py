@@ -9,13 +9,14 @@ the readable version::
 One step with effective step ``h`` (``dt`` for BDF1, ``2 dt / 3`` for BDF2) and history
 ``x_hat, v_hat`` (``x_n, v_n`` for BDF1; ``y_n + (y_n - y_{n-1}) / 3`` for BDF2)::
 
-    c = h / m,   a = 1 + h^2 k / m,   F~ = v_hat / c + F(t_{n+1}) - k x_hat
+    c = h / m,   a = 1 + h^2 k / m,   F~ = (m / h) v_hat + F(t_{n+1}) - k x_hat
     |F~| <= tau:  v = 0, F_d = F~                                  (stick)
-    otherwise:    |v| = c e / (a + c / gamma),  |F_d| = tau + |v| / gamma,
+    otherwise:    |v| = (c / (a + c / gamma)) e,  |F_d| = tau + |v| / gamma,
                   e = |F~| - tau,  sgn(v) = sgn(F_d) = sgn(F~)      (slip, eq. 16)
 
 so ``F_d - sgn(F_d) tau`` is never formed by subtraction (no cancellation as
-``gamma -> infinity``). The first BDF2 step is BDF1.
+``gamma -> infinity``). The first BDF2 step is BDF1. ``m / h`` and ``c / (a + c / gamma)``
+do not change during a run, so the compiler hoists them: a step has no division.
 
 The loops here execute the *same floating-point operations in the same order* as the
 Python reference, so on the same machine they give the same numbers bit for bit
@@ -117,7 +118,7 @@ def _correct(F_tilde, tau, c, a, inv_gamma):
     excess = abs(F_tilde) - tau
     if excess <= 0.0:
         return 0.0, F_tilde
-    speed = c * excess / (a + c * inv_gamma)
+    speed = c / (a + c * inv_gamma) * excess
     if F_tilde > 0.0:
         return speed, tau + speed * inv_gamma
     return -speed, -(tau + speed * inv_gamma)
@@ -131,14 +132,14 @@ def _step(m, k, inv_gamma, tau, dt, bdf2, x, v, x_prev, v_prev, F_next):
     """
     if bdf2:
         h = 2.0 * dt / 3.0
-        x_hat = x + (x - x_prev) / 3.0
-        v_hat = v + (v - v_prev) / 3.0
+        x_hat = x + (x - x_prev) * (1.0 / 3.0)
+        v_hat = v + (v - v_prev) * (1.0 / 3.0)
     else:
         h = dt
         x_hat = x
         v_hat = v
     c = h / m
-    F_tilde = v_hat / c + F_next - k * x_hat
+    F_tilde = m / h * v_hat + F_next - k * x_hat
     v_new, F_d = _correct(F_tilde, tau, c, 1.0 + h * h * k / m, inv_gamma)
     return x_hat + h * v_new, v_new, F_d, F_tilde
 
