@@ -27,7 +27,8 @@ def compiled(osc, x0, v0, forcing, dt, n, method):
 
 
 def assert_identical(osc, x0, v0, forcing, dt, n, method):
-    ref = integrate(osc, x0=x0, v0=v0, forcing=forcing, dt=dt, n_steps=n, method=method)
+    ref = integrate(osc, x0=x0, v0=v0, forcing=forcing, dt=dt, n_steps=n, method=method,
+                    engine="python")
     x, v, Fd, Ft = compiled(osc, x0, v0, forcing, dt, n, method)
     for name, got, want in (("x", x, ref.x), ("v", v, ref.v), ("F_d", Fd, ref.F_d),
                             ("F~", Ft, ref.predictor)):
@@ -161,3 +162,16 @@ def test_non_finite_sampled_forcing_is_refused():
     with pytest.raises(ValueError, match="returned nan at t = 0.002"):
         compiled(PAPER, 0.0, 0.0, lambda t: math.nan if t > 1.5e-3 else 0.0, 1e-3, 10,
                  "bdf1")
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_integrate_engines_agree(method):
+    """integrate() runs compiled by default (numba is installed): the same trajectory."""
+    kw = dict(x0=0.3, v0=-1.0, forcing=paper_F2, dt=1e-3, n_steps=3000, method=method)
+    a = integrate(PAPER, engine="python", **kw)
+    for engine in ("auto", "compiled"):
+        b = integrate(PAPER, engine=engine, **kw)
+        np.testing.assert_array_equal(a.as_array(), b.as_array())
+        np.testing.assert_array_equal(a.predictor, b.predictor)
+    with pytest.raises(ValueError, match="`engine` must be one of"):
+        integrate(PAPER, engine="fortran", **kw)

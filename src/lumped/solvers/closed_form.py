@@ -49,10 +49,14 @@ __all__ = [
     "integrate",
     "steps_for",
     "CLOSED_METHODS",
+    "ENGINES",
 ]
 
 #: Step formulas of the closed form, by the name used on the command line.
 CLOSED_METHODS = ("bdf1", "bdf2")
+
+#: Values of ``integrate(engine=...)``.
+ENGINES = ("auto", "python", "compiled")
 
 
 @dataclass(frozen=True)
@@ -184,6 +188,7 @@ def integrate(
     t_end: float | None = None,
     n_steps: int | None = None,
     method: str = "bdf1",
+    engine: str = "auto",
 ) -> Trajectory:
     """Run the closed-form BDF1 (Algorithm 1) or BDF2 steps on the grid ``t_n = n dt``.
 
@@ -202,6 +207,13 @@ def integrate(
         Give exactly one: the final time or the number of steps.
     method : {"bdf1", "bdf2"}
         BDF2 takes its first step with BDF1.
+    engine : {"auto", "python", "compiled"}
+        ``"python"``: the loops of this module on Python floats (the readable reference);
+        ``"compiled"``: their numba twin :mod:`lumped.solvers.closed_form_jit` (the same
+        operations in the same order, hence the same numbers bit for bit; compiled once
+        per machine and cached on disk); ``"auto"``: compiled when numba is installed.
+        A forcing the compiled loop does not evaluate natively (anything but zero, a
+        constant or a :class:`~lumped.scene.SineBurst`) is sampled on the grid first.
 
     Returns
     -------
@@ -221,11 +233,19 @@ def integrate(
     n = steps_for(dt, t_end) if n_steps is None else as_int_at_least("n_steps", n_steps, 1)
     if not callable(forcing):
         raise TypeError(f"`forcing` must be callable, got {forcing!r}")
+    if engine not in ENGINES:
+        raise ValueError(f"`engine` must be one of {ENGINES}, got {engine!r}")
 
     F0 = _checked_force(forcing, 0.0)
     Fd0 = initial_dashpot_force(osc, x0, v0, F0)
-    loop = _run_bdf1 if method == "bdf1" else _run_bdf2
-    xs, vs, Fds, Fts = loop(osc, forcing, x0, v0, Fd0, dt, n)
+    if engine != "python" and (engine == "compiled" or _have_numba()):
+        from .closed_form_jit import compiled_columns
+
+        xs, vs, Fds, Fts = compiled_columns(osc.m, osc.k, osc.gamma, osc.tau, forcing,
+                                            x0, v0, Fd0, dt, n, method)
+    else:
+        loop = _run_bdf1 if method == "bdf1" else _run_bdf2
+        xs, vs, Fds, Fts = loop(osc, forcing, x0, v0, Fd0, dt, n)
     x_arr = np.array(xs)
     with np.errstate(over="ignore", invalid="ignore"):  # Trajectory reports non-finite values
         F_s = osc.k * x_arr
@@ -235,6 +255,18 @@ def integrate(
         predictor=np.array(Fts),
     )
 
+
+def _have_numba() -> bool:
+    """Whether numba can be imported (checked once)."""
+    global _NUMBA
+    if _NUMBA is None:
+        import importlib.util
+
+        _NUMBA = importlib.util.find_spec("numba") is not None
+    return _NUMBA
+
+
+_NUMBA: bool | None = None
 
 _Columns = tuple[list[float], list[float], list[float], list[float]]
 
