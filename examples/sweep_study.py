@@ -50,8 +50,8 @@ def main() -> None:
     print(f"all ran to the end: {result.ok}; at rest at t = 5 s: "
           f"{int(table['at_rest'].sum())} of {len(table)}")
     never = table[AMPLITUDE] <= 1.0  # |F| <= mu_s N_f: eq. (19), the mass never moves
-    print(f"A <= mu_s N_f = 1: stick time 5 s in {int((table.loc[never, 'stick_time'] == 5.0).sum())}"
-          f" of {int(never.sum())} scenes")
+    still = int((table.loc[never, "stick_time"] == 5.0).sum())
+    print(f"A <= mu_s N_f = 1: stick time 5 s in {still} of {int(never.sum())} scenes")
     rest = table["rest_position.mass"].astype(float)
     print(f"rest positions within the stick band |x| <= tau/k = 0.01: "
           f"{bool((rest.abs() <= 0.01 + 1e-12).all())}")
