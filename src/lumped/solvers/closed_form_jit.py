@@ -18,10 +18,13 @@ so ``F_d - sgn(F_d) tau`` is never formed by subtraction (no cancellation as
 ``gamma -> infinity``). The first BDF2 step is BDF1. ``m / h`` and ``c / (a + c / gamma)``
 do not change during a run, so the compiler hoists them: a step has no division.
 
-The loops here execute the *same floating-point operations in the same order* as the
-Python reference, so on the same machine they give the same numbers bit for bit
-(numba does not contract ``a * b + c`` into fused multiply-adds unless ``fastmath`` is
-on, and ``math.sin`` calls the same C library). The tests hold them to that.
+The step itself is not rewritten here: the reference's ``bdf1_step``, ``bdf2_step`` and
+``correct`` are compiled from their own code, and only the loops (forcing, history,
+storage or summary) are written for numba. So the compiled loops execute the *same
+floating-point operations in the same order* as the Python reference and give the same
+numbers bit for bit (numba does not contract ``a * b + c`` into fused multiply-adds unless
+``fastmath`` is on, and ``math.sin`` calls the same C library). The tests hold them to
+that.
 
 Forcing
 -------
@@ -41,6 +44,7 @@ on disk (``cache=True``), so only the first run on a machine pays for compilatio
 from __future__ import annotations
 
 import math
+import types
 from collections.abc import Callable
 
 import numpy as np
@@ -112,36 +116,39 @@ def _force(kind, p0, p1, p2, samples, i, t):
     return samples[i]
 
 
-@njit(cache=True, nogil=True)
-def _correct(F_tilde, tau, c, a, inv_gamma):
-    """The cancellation-free corrector: ``(v, F_d)`` from the predictor ``F~``."""
-    excess = abs(F_tilde) - tau
-    if excess <= 0.0:
-        return 0.0, F_tilde
-    speed = c / (a + c * inv_gamma) * excess
-    if F_tilde > 0.0:
-        return speed, tau + speed * inv_gamma
-    return -speed, -(tau + speed * inv_gamma)
+def _compile_reference_steps():
+    """numba-compile the reference's own :func:`~lumped.solvers.closed_form.bdf1_step` and
+    :func:`~lumped.solvers.closed_form.bdf2_step` (with their :func:`correct`).
+
+    The compiled steps are built from the reference's code objects, so there is one
+    source for the arithmetic of a step; only the loops around it live here.
+    """
+    from . import closed_form as reference
+
+    namespace = dict(vars(reference))
+    # inline="always": the step is inlined into the loops at numba's IR level, so that
+    # LLVM sees its loop-invariant quotients (m / h, c / (a + c / gamma)) and hoists them
+    namespace["correct"] = njit(cache=True, nogil=True, inline="always")(reference.correct)
+
+    def compile_step(fn):
+        twin = types.FunctionType(fn.__code__, namespace, fn.__name__)
+        return njit(cache=True, nogil=True, inline="always")(twin)
+
+    return compile_step(reference.bdf1_step), compile_step(reference.bdf2_step)
 
 
-@njit(cache=True, nogil=True)
+_bdf1_step, _bdf2_step = _compile_reference_steps()
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _step(m, k, inv_gamma, tau, dt, bdf2, x, v, x_prev, v_prev, F_next):
-    """One step: BDF1 from ``(x, v)`` or BDF2 from ``(x, v)`` and ``(x_prev, v_prev)``.
+    """One step: BDF2 from ``(x, v)`` and ``(x_prev, v_prev)`` if ``bdf2``, else BDF1.
 
-    Returns ``(x, v, F_d, F~)`` at the new time level, with the reference's operations.
+    Returns ``(x, v, F_d, F~)`` at the new time level.
     """
     if bdf2:
-        h = 2.0 * dt / 3.0
-        x_hat = x + (x - x_prev) * (1.0 / 3.0)
-        v_hat = v + (v - v_prev) * (1.0 / 3.0)
-    else:
-        h = dt
-        x_hat = x
-        v_hat = v
-    c = h / m
-    F_tilde = m / h * v_hat + F_next - k * x_hat
-    v_new, F_d = _correct(F_tilde, tau, c, 1.0 + h * h * k / m, inv_gamma)
-    return x_hat + h * v_new, v_new, F_d, F_tilde
+        return _bdf2_step(m, k, inv_gamma, tau, dt, x, v, x_prev, v_prev, F_next)
+    return _bdf1_step(m, k, inv_gamma, tau, dt, x, v, F_next)
 
 
 @njit(cache=True, nogil=True)

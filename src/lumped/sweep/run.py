@@ -18,7 +18,6 @@ import math
 import os
 import pickle
 import sys
-import tomllib
 from collections.abc import Callable, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from multiprocessing import get_context
@@ -159,18 +158,11 @@ def simulate_many(
 
 def _template(template: object) -> tuple[Callable | None, dict | None, dict]:
     """``(builder, scene-file dict, [solver] settings)`` of a template."""
-    from lumped.io import SceneFileError, scene_from_dict
+    from lumped.io import read_scene_file, scene_from_dict
 
     if isinstance(template, (str, Path)):
-        path = Path(template)
-        try:
-            with path.open("rb") as fh:
-                data = tomllib.load(fh)
-        except FileNotFoundError:
-            raise ValueError(f"`template`: no such scene file {str(path)!r}") from None
-        except tomllib.TOMLDecodeError as err:
-            raise SceneFileError(f"{path}: not valid TOML: {err}") from None
-        _, settings = scene_from_dict(data, source=str(path))
+        data = read_scene_file(template)
+        _, settings = scene_from_dict(data, source=str(template))
         return None, data, settings
     if isinstance(template, Mapping):
         _, settings = scene_from_dict(dict(template), source="<template>")
