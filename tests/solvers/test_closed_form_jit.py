@@ -166,7 +166,8 @@ def test_non_finite_sampled_forcing_is_refused():
 
 @pytest.mark.parametrize("method", ["bdf1", "bdf2"])
 def test_integrate_engines_agree(method):
-    """integrate() runs compiled by default (numba is installed): the same trajectory."""
+    """integrate() runs compiled by default once the compiled loops are loaded (they are,
+    in this module): the same trajectory."""
     kw = dict(x0=0.3, v0=-1.0, forcing=paper_F2, dt=1e-3, n_steps=3000, method=method)
     a = integrate(PAPER, engine="python", **kw)
     for engine in ("auto", "compiled"):
@@ -175,3 +176,24 @@ def test_integrate_engines_agree(method):
         np.testing.assert_array_equal(a.predictor, b.predictor)
     with pytest.raises(ValueError, match="`engine` must be one of"):
         integrate(PAPER, engine="fortran", **kw)
+
+
+def test_auto_engine_keeps_short_runs_in_python():
+    """In a fresh process a short run stays in Python (no numba start-up); a run of
+    COMPILED_MIN_STEPS steps loads the compiled loops."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from lumped.solvers.closed_form import COMPILED_MIN_STEPS, BinghamOscillator, "
+        "integrate\n"
+        "osc = BinghamOscillator(1.0, 100.0, 1.0, 1.0)\n"
+        "integrate(osc, x0=0.5, dt=1e-4, n_steps=1000)\n"
+        "print('lumped.solvers.closed_form_jit' in sys.modules)\n"
+        "integrate(osc, x0=0.5, dt=1e-5, n_steps=COMPILED_MIN_STEPS)\n"
+        "print('lumped.solvers.closed_form_jit' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["False", "True"]

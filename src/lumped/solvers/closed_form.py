@@ -31,6 +31,7 @@ where the same formulas hold with ``1 / gamma = 0``.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -49,6 +50,7 @@ __all__ = [
     "integrate",
     "steps_for",
     "CLOSED_METHODS",
+    "COMPILED_MIN_STEPS",
     "ENGINES",
 ]
 
@@ -57,6 +59,11 @@ CLOSED_METHODS = ("bdf1", "bdf2")
 
 #: Values of ``integrate(engine=...)``.
 ENGINES = ("auto", "python", "compiled")
+
+#: ``engine="auto"`` compiles runs of at least this many steps (about 0.7 s of Python
+#: steps, the cost of loading the compiled loops from numba's disk cache), and any run once
+#: the compiled loops are loaded in this process.
+COMPILED_MIN_STEPS = 500_000
 
 
 @dataclass(frozen=True)
@@ -211,7 +218,10 @@ def integrate(
         ``"python"``: the loops of this module on Python floats (the readable reference);
         ``"compiled"``: their numba twin :mod:`lumped.solvers.closed_form_jit` (the same
         operations in the same order, hence the same numbers bit for bit; compiled once
-        per machine and cached on disk); ``"auto"``: compiled when numba is installed.
+        per machine and cached on disk); ``"auto"``: compiled when numba is installed
+        and either the run has at least :data:`COMPILED_MIN_STEPS` steps or the compiled
+        loops are already loaded in this process, else Python (the results are the same;
+        only the speed differs).
         A forcing the compiled loop does not evaluate natively (anything but zero, a
         constant or a :class:`~lumped.scene.SineBurst`) is sampled on the grid first.
 
@@ -238,7 +248,8 @@ def integrate(
 
     F0 = _checked_force(forcing, 0.0)
     Fd0 = initial_dashpot_force(osc, x0, v0, F0)
-    if engine != "python" and (engine == "compiled" or _have_numba()):
+    if engine == "compiled" or (engine == "auto" and _have_numba() and (
+            n >= COMPILED_MIN_STEPS or "lumped.solvers.closed_form_jit" in sys.modules)):
         from .closed_form_jit import compiled_columns
 
         xs, vs, Fds, Fts = compiled_columns(osc.m, osc.k, osc.gamma, osc.tau, forcing,
