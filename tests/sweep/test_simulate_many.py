@@ -115,6 +115,8 @@ def test_bad_parameters_are_refused_naming_them():
         simulate_many(F2, {"nodes.mass.x0": [0.0]}, backend="mpi")
     with pytest.raises(ValueError, match="no-such.toml: no such scene file"):
         simulate_many(EXAMPLES / "no-such.toml", {"nodes.mass.x0": [0.0]})
+    with pytest.raises(ValueError, match="'steps' is also a result column"):
+        simulate_many(_builder, {"steps": [1, 2]}, dt=1e-3, t_end=0.1)
     with pytest.raises(TypeError, match="`template` must be"):
         simulate_many(42, {"nodes.mass.x0": [0.0]})
     with pytest.raises(ValueError, match=r"parameter set 1 .*mass.*must be positive"):

@@ -29,7 +29,7 @@ import numpy as np
 from .closed import CLOSED_METHODS, closed_parameters, plan_closed, run_chunk
 from .params import ParameterSets, apply, parameter_sets
 from .result import SweepResult
-from .summary import closed_record, failed_record, solution_record
+from .summary import RESULT_COLUMNS, closed_record, failed_record, solution_record
 
 __all__ = ["simulate_many", "BACKENDS"]
 
@@ -106,6 +106,9 @@ def simulate_many(
 
     builder, data, settings = _template(template)
     sets = parameter_sets(parameters)
+    clash = [n for n in sets.names if n in RESULT_COLUMNS or n.split(".")[0] in RESULT_COLUMNS]
+    if clash:
+        raise ValueError(f"parameter name {clash[0]!r} is also a result column; rename it")
     method = method if method is not None else settings.get("method", "auto")
     if not isinstance(method, str) or method not in registry.METHODS:
         raise ValueError(f"`method` must be one of {registry.METHODS}, got {method!r}")

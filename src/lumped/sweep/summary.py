@@ -41,10 +41,15 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["QUANTITIES", "closed_record", "solution_record", "failed_record"]
+__all__ = ["QUANTITIES", "RESULT_COLUMNS", "closed_record", "solution_record",
+           "failed_record"]
 
 #: Scalar columns every row has (besides the per-node ones).
 QUANTITIES = ("stick_time", "stick_slip_cycles", "events", "dissipated_energy")
+
+#: Names of result columns (per-node ones as ``<name>.<node>``): no parameter may take them.
+RESULT_COLUMNS = frozenset({"status", "message", "method", "steps", "t_reached", "at_rest",
+                            "x_end", "v_end", "rest_position", *QUANTITIES})
 
 
 def _record(status: str, message: str, method: str, steps: int, dt: float,
