@@ -39,6 +39,10 @@ BACKENDS = ("local", "dask")
 #: Scenes per compiled chunk (one progress-bar update, one Dask task).
 _MIN_CHUNK = 64
 
+#: Scenario-steps below which the compiled batch runs on one thread (starting numba's
+#: thread pool costs more than such a batch).
+_MIN_PARALLEL_WORK = 1_000_000
+
 
 def simulate_many(
     template: str | Path | Mapping[str, Any] | Callable[[dict], Any],
@@ -203,6 +207,8 @@ def _closed_local(params: np.ndarray, dt: float, n: int, bdf2: bool,
     if n_jobs is not None:
         numba.set_num_threads(min(n_jobs, numba.config.NUMBA_NUM_THREADS))
     try:
+        if len(params) < 2 or len(params) * n < _MIN_PARALLEL_WORK:
+            return run_chunk(params, dt, n, bdf2, parallel=False)
         if not show:
             return run_chunk(params, dt, n, bdf2, parallel=True)
         bar = _bar(len(params), show)
@@ -256,6 +262,8 @@ def _run_one(job: tuple, values: dict) -> tuple[dict, Any]:
         return failed_record(scene, method, dt, "inconsistent", str(err)), None
     except SolverError as err:
         return failed_record(scene, method, dt, err.status.value, str(err)), None
+    except FloatingPointError as err:  # a method that raises rather than stopping early
+        return failed_record(scene, method, dt, "non_finite", str(err)), None
     except (ArithmeticError, ValueError, RuntimeError) as err:
         return failed_record(scene, method, dt, "error", f"{type(err).__name__}: {err}"), None
     return solution_record(sol, scene, dt), (sol if keep else None)

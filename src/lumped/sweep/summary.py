@@ -8,8 +8,10 @@ cover (tested).
     ``"success"`` and ``""``, or the :class:`~lumped.Status` value of a run that
     stopped early and what stopped it. ``"inconsistent"``: no consistent initial state
     (an initial force breaks its law); ``"error"``: any other exception of the run, its
-    type and text in ``message``. The numbers of such a row are those up to the last good
-    step (the initial state if there was none) -- never NaN.
+    type and text in ``message``. (A method that raises ``FloatingPointError`` instead of
+    returning its steps so far gives ``"non_finite"`` with the initial state.) The
+    numbers of such a row are those up to the last good step (the initial state if there
+    was none) -- never NaN.
 ``method``, ``steps``, ``t_reached``
     The method that ran, the steps completed, ``steps * dt``.
 ``x_end.<node>``, ``v_end.<node>``
