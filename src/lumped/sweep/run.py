@@ -206,15 +206,14 @@ def _closed_local(params: np.ndarray, dt: float, n: int, bdf2: bool,
     previous = numba.get_num_threads()
     if n_jobs is not None:
         numba.set_num_threads(min(n_jobs, numba.config.NUMBA_NUM_THREADS))
+    parallel = len(params) >= 2 and len(params) * n >= _MIN_PARALLEL_WORK
     try:
-        if len(params) < 2 or len(params) * n < _MIN_PARALLEL_WORK:
-            return run_chunk(params, dt, n, bdf2, parallel=False)
         if not show:
-            return run_chunk(params, dt, n, bdf2, parallel=True)
+            return run_chunk(params, dt, n, bdf2, parallel=parallel)
         bar = _bar(len(params), show)
         parts = []
         for sl in _chunks(len(params), 50):
-            parts.append(run_chunk(params[sl], dt, n, bdf2, parallel=True))
+            parts.append(run_chunk(params[sl], dt, n, bdf2, parallel=parallel))
             bar.update(sl.stop - sl.start)
         bar.close()
         return np.concatenate(parts)
