@@ -43,3 +43,25 @@ def test_sweep_study_runs_small(tmp_path, monkeypatch, capsys):
     assert re.search(r"stick time 5 s in (\d+) of \1 scenes", out)
     assert "within the stick band |x| <= tau/k = 0.01: True" in out
     assert (tmp_path / "sweep_study.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def _python_blocks(text: str) -> list[str]:
+    """The ```python blocks of a Markdown page (indented ones included), dedented."""
+    import re
+    import textwrap
+
+    return [textwrap.dedent(m.group(2)) for m in
+            re.finditer(r"^([ \t]*)```python\n(.*?)^\1```", text, re.M | re.S)]
+
+
+@pytest.mark.parametrize("page", sorted(p.name for p in (ROOT / "docs").glob("*.md")
+                                         if "```python" in p.read_text()))
+def test_docs_python_examples_run(page, tmp_path, monkeypatch):
+    """Every Python example of the documentation pages runs as written (in page order,
+    one namespace per page)."""
+    blocks = _python_blocks((ROOT / "docs" / page).read_text())
+    assert blocks
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    for i, block in enumerate(blocks):
+        exec(compile(block, f"docs/{page} block {i + 1}", "exec"), namespace)
