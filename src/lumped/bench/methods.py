@@ -162,13 +162,15 @@ def tolerance_method(
 def x_on_grid(sol: Any, t_grid: np.ndarray, node: str = "mass") -> np.ndarray:
     """``x_<node>`` of a :class:`~lumped.result.Solution` at the times ``t_grid``.
 
-    Uses the dense output ``sol.sol(t)`` when the solution has one (rows laid out like
-    ``sol.data``); otherwise the samples themselves, which must then be ``t_grid``.
-    Raises ``ValueError`` when neither applies (no interpolation is made up here).
+    Uses the method's own dense output ``sol.sol(t)`` when it has one (rows laid out like
+    ``sol.data``; a :class:`~lumped.result.Solution` has one when ``sol.dense`` is set,
+    its cubic Hermite fallback between fixed-step samples is not used); otherwise the
+    samples themselves, which must then be ``t_grid``. Raises ``ValueError`` when neither
+    applies (no interpolation is made up here).
     """
     col = sol.columns.index(f"x_{node}")
     dense = getattr(sol, "sol", None)
-    if callable(dense):
+    if callable(dense) and getattr(sol, "dense", dense) is not None:
         rows = np.asarray(dense(t_grid), dtype=float)
         if rows.ndim != 2 or rows.shape != (len(t_grid), len(sol.columns)):
             raise ValueError(f"`sol.sol(t)` returned shape {rows.shape}, expected "

@@ -108,6 +108,10 @@ def simulate_many(
     from lumped._validate import as_int_at_least, as_positive
     from lumped.solvers import registry, steps_for
 
+    try:
+        import pandas  # noqa: F401  (the result table; checked before any work)
+    except ImportError:
+        raise ImportError("lumped.sweep needs pandas: pip install 'lumped[sweep]'") from None
     builder, data, settings = _template(template)
     sets = parameter_sets(parameters)
     clash = [n for n in sets.names if n in RESULT_COLUMNS or n.split(".")[0] in RESULT_COLUMNS]
