@@ -181,7 +181,7 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
                  fkind, fpar, ftab, xs, vs, Fs, info, finfo, wv, wm, wperm, P, cJ, cLU,
                  cperm, cvalid, counts, vec) -> int:
     """Advance ``n_steps`` fixed steps from ``(x0, v0, F0)``; fill ``xs, vs, Fs`` (rows
-    ``0 .. n``) and ``info, finfo`` (see the module notes); return the rows filled.
+    ``0`` to ``n``) and ``info, finfo`` (see the module notes); return the rows filled.
 
     ``wv, wm, wperm`` is Newton's workspace (:func:`lumped.solvers.newton_jit.workspace`),
     ``P .. vec`` the loop's (:func:`loop_workspace`), both allocated by the caller.
