@@ -105,3 +105,15 @@ def test_example_script_runs(script, monkeypatch, capsys):
     runpy.run_path(str(ROOT / "examples" / script), run_name="__main__")
     assert capsys.readouterr().out.strip()
 
+
+def test_sweep_study_runs_small(tmp_path, monkeypatch, capsys):
+    pytest.importorskip("matplotlib")
+    monkeypatch.setattr(sys, "argv", ["sweep_study.py", "--small", "--out", str(tmp_path)])
+    runpy.run_path(str(ROOT / "examples" / "sweep_study.py"), run_name="__main__")
+    out = capsys.readouterr().out
+    assert "120 scenes" in out and "all ran to the end: True" in out
+    # eq. (19): below the yield force the mass never moves
+    assert re.search(r"stick time 5 s in (\d+) of \1 scenes", out)
+    assert "within the stick band |x| <= tau/k = 0.01: True" in out
+    assert (tmp_path / "sweep_study.png").read_bytes()[:4] == b"\x89PNG"
+

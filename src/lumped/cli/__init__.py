@@ -4,7 +4,8 @@
 the paper: one CSV (and, with matplotlib, one PNG) per scenario, and a summary table
 on stdout.  ``lumped run SCENE.toml`` simulates a scene file, ``lumped compare SCENE``
 checks the generic solver against the closed form, ``lumped bench --out DIR`` measures
-speed against error.  Usage errors (bad values, unknown
+speed against error, ``lumped sweep SCENE --grid ... --out DIR`` runs a parameter study.
+Usage errors (bad values, unknown
 names, bad files) exit with code 2 and a message naming the argument.
 """
 
@@ -26,6 +27,7 @@ _SUBCOMMANDS = (
     ("run", "run", "simulate a scene file (TOML) and write its CSV"),
     ("compare", "compare", "compare the generic Newton solver with the closed form"),
     ("bench", "bench", "work-precision benchmark against the exact reference and scipy"),
+    ("sweep", "sweep", "run a scene file over a grid of parameters: table and heat map"),
 )
 
 

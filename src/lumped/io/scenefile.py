@@ -34,7 +34,8 @@ from typing import Any
 from ..scene import Element, Junction, Mass, Scene
 from ..scene.forcing import SineBurst
 
-__all__ = ["load_scene", "scene_from_dict", "SceneFileError", "SETTINGS_KEYS"]
+__all__ = ["load_scene", "read_scene_file", "scene_from_dict", "SceneFileError",
+           "SETTINGS_KEYS"]
 
 #: Keys of the ``[solver]`` table.
 SETTINGS_KEYS = ("method", "dt", "t_end", "rtol", "atol")
@@ -63,15 +64,26 @@ def load_scene(path: str | Path) -> tuple[Scene, dict[str, Any]]:
     SceneFileError
         For unreadable TOML or bad content, naming the file, the key and the value.
     """
+    return scene_from_dict(read_scene_file(path), source=str(path))
+
+
+def read_scene_file(path: str | Path) -> dict[str, Any]:
+    """The parsed TOML tables of a scene file, unchecked (for :func:`scene_from_dict`, or
+    to change some values first, as :func:`lumped.sweep.simulate_many` does).
+
+    Raises
+    ------
+    SceneFileError
+        If the file is missing or not valid TOML, naming the file.
+    """
     path = Path(path)
     try:
         with path.open("rb") as fh:
-            data = tomllib.load(fh)
+            return tomllib.load(fh)
     except FileNotFoundError:
         raise SceneFileError(f"{path}: no such scene file") from None
     except tomllib.TOMLDecodeError as err:
         raise SceneFileError(f"{path}: not valid TOML: {err}") from None
-    return scene_from_dict(data, source=str(path))
 
 
 def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>") -> tuple[Scene, dict]:

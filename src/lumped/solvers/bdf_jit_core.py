@@ -21,9 +21,9 @@ The scene enters through two compiled callbacks generated per scene by
 types, :data:`EVALUATE_TYPE`, :data:`ELEMENT_LAW_TYPE`): the loop is compiled once for
 every scene (:func:`compiled_run_bdf_core`, cached on disk), and a new scene compiles
 only its own small functions. Nothing else comes from the scene: the forcing is read
-from ``fkind, fpar, ftab`` by :func:`forcing_into` (kinds: 0 none, 1 constant ``fpar[i,
-0]``, 2 sine burst ``fpar[i] = (A, omega, t_off)``, 3 a table ``ftab[step, i]`` computed
-before the loop).
+from ``fkind, fpar, ftab`` by :func:`forcing_into` (kinds: 0 none, 1 constant
+``fpar[i, 0]``, 2 sine burst ``fpar[i] = (A, omega, t_off)``, 3 a table
+``ftab[step, i]`` computed before the loop).
 
 ``info`` receives the outcome: ``info[0]`` 0 success, 1 Newton failed, 2 a fold
 (branch lost), 3 a non-finite force; ``info[1]`` the step; ``info[2]`` the Newton code;
@@ -181,7 +181,7 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
                  fkind, fpar, ftab, xs, vs, Fs, info, finfo, wv, wm, wperm, P, cJ, cLU,
                  cperm, cvalid, counts, vec) -> int:
     """Advance ``n_steps`` fixed steps from ``(x0, v0, F0)``; fill ``xs, vs, Fs`` (rows
-    ``0 .. n``) and ``info, finfo`` (see the module notes); return the rows filled.
+    ``0`` to ``n``) and ``info, finfo`` (see the module notes); return the rows filled.
 
     ``wv, wm, wperm`` is Newton's workspace (:func:`lumped.solvers.newton_jit.workspace`),
     ``P .. vec`` the loop's (:func:`loop_workspace`), both allocated by the caller.

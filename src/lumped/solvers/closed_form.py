@@ -20,7 +20,7 @@ equation in ``F_d`` (see ``docs/theory.md``).  Write ``h`` for the effective ste
 and ``sgn(F~) = sgn(F_d)`` (eq. 16).  The corrector (Algorithm 1) follows:
 stick (``v = 0, F_d = F~``) when ``|F~| <= tau``, otherwise slip with::
 
-    |v| = c e / (a + c / gamma),   |F_d| = tau + |v| / gamma,   e = |F~| - tau > 0.
+    |v| = (c / (a + c / gamma)) e,   |F_d| = tau + |v| / gamma,   e = |F~| - tau > 0.
 
 This is Algorithm 1's line 8-9 rearranged so that ``F_d - sgn(F_d) tau`` is never
 formed by subtraction: the excess ``e`` is computed once from the known predictor,
@@ -31,6 +31,7 @@ where the same formulas hold with ``1 / gamma = 0``.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -49,10 +50,20 @@ __all__ = [
     "integrate",
     "steps_for",
     "CLOSED_METHODS",
+    "COMPILED_MIN_STEPS",
+    "ENGINES",
 ]
 
 #: Step formulas of the closed form, by the name used on the command line.
 CLOSED_METHODS = ("bdf1", "bdf2")
+
+#: Values of ``integrate(engine=...)``.
+ENGINES = ("auto", "python", "compiled")
+
+#: ``engine="auto"`` compiles runs of at least this many steps (about 0.7 s of Python
+#: steps, the cost of loading the compiled loops from numba's disk cache), and any run once
+#: the compiled loops are loaded in this process.
+COMPILED_MIN_STEPS = 500_000
 
 
 @dataclass(frozen=True)
@@ -102,7 +113,10 @@ def correct(
     excess = abs(F_tilde) - tau
     if excess <= 0.0:
         return 0.0, F_tilde
-    speed = c * excess / (a + c * inv_gamma)
+    # c / (a + c / gamma) and m / h (below) are the same in every step of a run: a
+    # compiled loop (lumped.solvers.closed_form_jit) hoists them, leaving no division
+    # in the step; the compiled twin does these operations in this order, bit for bit.
+    speed = c / (a + c * inv_gamma) * excess
     if F_tilde > 0.0:
         return speed, tau + speed * inv_gamma
     return -speed, -(tau + speed * inv_gamma)
@@ -117,7 +131,7 @@ def bdf1_step(
     Returns ``(x, v, F_d, F~)`` at ``t_{n+1}``; the spring force is ``k x``.
     """
     c = dt / m
-    F_tilde = v_n / c + F_next - k * x_n
+    F_tilde = m / dt * v_n + F_next - k * x_n
     v, F_d = correct(F_tilde, tau, c, 1.0 + dt * dt * k / m, inv_gamma)
     return x_n + dt * v, v, F_d, F_tilde
 
@@ -136,10 +150,10 @@ def bdf2_step(
     # (4 y_n - y_{n-1}) / 3 written as an increment, so that a stuck state
     # (x_n == x_{n-1}, v = 0) is reproduced bit for bit: (4 x - x) / 3 != x in
     # floating point for about one x in seven.
-    x_hat = x_n + (x_n - x_prev) / 3.0
-    v_hat = v_n + (v_n - v_prev) / 3.0
+    x_hat = x_n + (x_n - x_prev) * (1.0 / 3.0)
+    v_hat = v_n + (v_n - v_prev) * (1.0 / 3.0)
     c = h / m
-    F_tilde = v_hat / c + F_next - k * x_hat
+    F_tilde = m / h * v_hat + F_next - k * x_hat
     v, F_d = correct(F_tilde, tau, c, 1.0 + h * h * k / m, inv_gamma)
     return x_hat + h * v, v, F_d, F_tilde
 
@@ -181,6 +195,7 @@ def integrate(
     t_end: float | None = None,
     n_steps: int | None = None,
     method: str = "bdf1",
+    engine: str = "auto",
 ) -> Trajectory:
     """Run the closed-form BDF1 (Algorithm 1) or BDF2 steps on the grid ``t_n = n dt``.
 
@@ -199,6 +214,16 @@ def integrate(
         Give exactly one: the final time or the number of steps.
     method : {"bdf1", "bdf2"}
         BDF2 takes its first step with BDF1.
+    engine : {"auto", "python", "compiled"}
+        ``"python"``: the loops of this module on Python floats (the readable reference);
+        ``"compiled"``: their numba twin :mod:`lumped.solvers.closed_form_jit` (the same
+        operations in the same order, hence the same numbers bit for bit; compiled once
+        per machine and cached on disk); ``"auto"``: compiled when numba is installed
+        and either the run has at least :data:`COMPILED_MIN_STEPS` steps or the compiled
+        loops are already loaded in this process, else Python (the results are the same;
+        only the speed differs).
+        A forcing the compiled loop does not evaluate natively (anything but zero, a
+        constant or a :class:`~lumped.scene.SineBurst`) is sampled on the grid first.
 
     Returns
     -------
@@ -218,11 +243,20 @@ def integrate(
     n = steps_for(dt, t_end) if n_steps is None else as_int_at_least("n_steps", n_steps, 1)
     if not callable(forcing):
         raise TypeError(f"`forcing` must be callable, got {forcing!r}")
+    if engine not in ENGINES:
+        raise ValueError(f"`engine` must be one of {ENGINES}, got {engine!r}")
 
     F0 = _checked_force(forcing, 0.0)
     Fd0 = initial_dashpot_force(osc, x0, v0, F0)
-    loop = _run_bdf1 if method == "bdf1" else _run_bdf2
-    xs, vs, Fds, Fts = loop(osc, forcing, x0, v0, Fd0, dt, n)
+    if engine == "compiled" or (engine == "auto" and _have_numba() and (
+            n >= COMPILED_MIN_STEPS or "lumped.solvers.closed_form_jit" in sys.modules)):
+        from .closed_form_jit import compiled_columns
+
+        xs, vs, Fds, Fts = compiled_columns(osc.m, osc.k, osc.gamma, osc.tau, forcing,
+                                            x0, v0, Fd0, dt, n, method)
+    else:
+        loop = _run_bdf1 if method == "bdf1" else _run_bdf2
+        xs, vs, Fds, Fts = loop(osc, forcing, x0, v0, Fd0, dt, n)
     x_arr = np.array(xs)
     with np.errstate(over="ignore", invalid="ignore"):  # Trajectory reports non-finite values
         F_s = osc.k * x_arr
@@ -232,6 +266,18 @@ def integrate(
         predictor=np.array(Fts),
     )
 
+
+def _have_numba() -> bool:
+    """Whether numba can be imported (checked once)."""
+    global _NUMBA
+    if _NUMBA is None:
+        import importlib.util
+
+        _NUMBA = importlib.util.find_spec("numba") is not None
+    return _NUMBA
+
+
+_NUMBA: bool | None = None
 
 _Columns = tuple[list[float], list[float], list[float], list[float]]
 

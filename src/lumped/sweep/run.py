@@ -1,0 +1,365 @@
+"""``simulate_many``: run a family of scenes and return one tidy table.
+
+Two paths, chosen per sweep:
+
+* **batched and compiled**: the template is the paper's oscillator and every swept path
+  is one of its numbers (:mod:`lumped.sweep.closed`); the closed-form method
+  (``auto``, ``closed-bdf1``, ``closed-bdf2``) runs all scenes as rows of one array in
+  compiled code, in parallel over the cores;
+* **per scene**: anything else runs :func:`lumped.simulate` once per scene, in
+  a pool of processes (or serially), and summarises each solution.
+
+Either runs on a Dask cluster instead with ``client=`` or ``backend="dask"``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import pickle
+import sys
+from collections.abc import Callable, Mapping
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .closed import CLOSED_METHODS, closed_parameters, plan_closed, run_chunk
+from .params import ParameterSets, apply, parameter_sets
+from .result import SweepResult
+from .summary import RESULT_COLUMNS, closed_record, failed_record, solution_record
+
+__all__ = ["simulate_many", "BACKENDS"]
+
+#: Values of ``backend``.
+BACKENDS = ("local", "dask")
+
+#: Scenes per compiled chunk (one progress-bar update, one Dask task).
+_MIN_CHUNK = 64
+
+#: Scenario-steps below which the compiled batch runs on one thread (starting numba's
+#: thread pool costs more than such a batch).
+_MIN_PARALLEL_WORK = 1_000_000
+
+
+def simulate_many(
+    template: str | Path | Mapping[str, Any] | Callable[[dict], Any],
+    parameters: Mapping[str, Any] | list[Mapping[str, Any]],
+    *,
+    method: str | None = None,
+    dt: float | None = None,
+    t_end: float | None = None,
+    keep_trajectories: bool = False,
+    backend: str = "local",
+    client: Any = None,
+    n_jobs: int | None = None,
+    progress: bool | None = None,
+) -> SweepResult:
+    """Simulate every scene of a sweep and tabulate what each did.
+
+    Parameters
+    ----------
+    template : path, dict or callable
+        A scene file (``.toml`` path), the dict of its parsed tables, or a *builder*
+        ``builder(values: dict) -> Scene`` called with each parameter set. A file or
+        dict's ``[solver]`` table gives defaults for ``method``, ``dt``, ``t_end``.
+    parameters : dict or list of dict
+        A grid ``{path: values}`` (Cartesian product; the first path varies slowest) or
+        one ``{path: value}`` per scene. Paths are dotted keys into the scene file, e.g.
+        ``"nodes.mass.force.amplitude"``, ``"elements.dashpot.parameters.tau"``; with a
+        builder they are whatever the builder reads.
+    method, dt, t_end
+        As for :func:`lumped.simulate` (``dt``, ``t_end`` required here or in
+        the template's ``[solver]`` table; ``method`` defaults to it, else ``"auto"``).
+    keep_trajectories : bool
+        Also return every :class:`~lumped.Solution` (runs per scene).
+    backend : {"local", "dask"}
+        ``"dask"`` without ``client`` starts a ``LocalCluster`` for this call.
+    client : dask.distributed.Client, optional
+        Run on this cluster (implies ``backend="dask"``).
+    n_jobs : int, optional
+        Local parallelism: numba threads for the compiled path, processes for the
+        per-scene path. Default: all cores (numba's thread count); the per-scene path
+        stays in this process for fewer than 8 scenes or a builder that cannot be pickled.
+    progress : bool, optional
+        Show a progress bar (tqdm); default: only when stderr is a terminal.
+
+    Returns
+    -------
+    SweepResult
+        ``.table`` (pandas DataFrame, one row per scene), ``.to_xarray()``, ``.write()``,
+        ``.heatmap()``. A scene that fails is a row with its ``status`` and ``message``
+        and its numbers up to the failure; it never stops the sweep.
+
+    Raises
+    ------
+    ValueError, TypeError
+        Bad arguments, or a parameter value the scene (file) refuses, naming it.
+
+    Examples
+    --------
+    >>> from lumped.sweep import simulate_many
+    >>> res = simulate_many("examples/forcing-F2.toml",
+    ...                     {"nodes.mass.force.amplitude": [0.5, 10.0]}, t_end=2.0)
+    ... # doctest: +SKIP
+    """
+    from lumped._validate import as_int_at_least, as_positive
+    from lumped.solvers import registry, steps_for
+
+    try:
+        import pandas  # noqa: F401  (the result table; checked before any work)
+    except ImportError:
+        raise ImportError("lumped.sweep needs pandas: pip install 'lumped[sweep]'") from None
+    builder, data, settings = _template(template)
+    sets = parameter_sets(parameters)
+    clash = [n for n in sets.names if n in RESULT_COLUMNS or n.split(".")[0] in RESULT_COLUMNS]
+    if clash:
+        raise ValueError(f"parameter name {clash[0]!r} is also a result column; rename it")
+    method = method if method is not None else settings.get("method", "auto")
+    if not isinstance(method, str) or method not in registry.METHODS:
+        raise ValueError(f"`method` must be one of {registry.METHODS}, got {method!r}")
+    dt = dt if dt is not None else settings.get("dt")
+    t_end = t_end if t_end is not None else settings.get("t_end")
+    if dt is None or t_end is None:
+        raise ValueError("give `dt` and `t_end` (or a [solver] table in the template)")
+    dt, t_end = as_positive("dt", dt), as_positive("t_end", t_end)
+    n = steps_for(dt, t_end)
+    if backend not in BACKENDS:
+        raise ValueError(f"`backend` must be one of {BACKENDS}, got {backend!r}")
+    if n_jobs is not None:
+        n_jobs = as_int_at_least("n_jobs", n_jobs, 1)
+    if client is not None:
+        backend = "dask"
+    show = sys.stderr.isatty() if progress is None else bool(progress)
+
+    plan = None
+    if builder is None and method in CLOSED_METHODS and not keep_trajectories:
+        plan = plan_closed(data, sets.names)
+    if plan is not None:
+        params = closed_parameters(plan, data, sets)
+        bdf2 = CLOSED_METHODS[method]
+        name = "closed-bdf2" if bdf2 else "closed-bdf1"
+        if backend == "dask":
+            out = _with_cluster(client, lambda c: _closed_dask(c, params, dt, n, bdf2, show))
+            where = "dask/compiled"
+        else:
+            out = _closed_local(params, dt, n, bdf2, n_jobs, show)
+            where = "compiled"
+        records = [closed_record(row, n, dt, name, plan.node) for row in out]
+        trajectories = None
+    else:
+        if builder is None:
+            _validate_rows(data, sets)
+        source = builder if builder is not None else data
+        job = (source, method, dt, t_end, keep_trajectories)
+        if backend == "dask":
+            results = _with_cluster(client, lambda c: _generic_dask(c, job, sets, show))
+            where = "dask/per-scene"
+        else:
+            results, where = _generic_local(job, sets, n_jobs, show)
+        records = [r[0] for r in results]
+        trajectories = [r[1] for r in results] if keep_trajectories else None
+    return SweepResult(_frame(sets, records), sets.names, sets.grid, trajectories, where)
+
+
+# ------------------------------------------------------------------------ template
+
+
+def _template(template: object) -> tuple[Callable | None, dict | None, dict]:
+    """``(builder, scene-file dict, [solver] settings)`` of a template."""
+    from lumped.io import read_scene_file, scene_from_dict
+
+    if isinstance(template, (str, Path)):
+        data = read_scene_file(template)
+        _, settings = scene_from_dict(data, source=str(template))
+        return None, data, settings
+    if isinstance(template, Mapping):
+        _, settings = scene_from_dict(dict(template), source="<template>")
+        return None, dict(template), settings
+    if callable(template):
+        return template, None, {}
+    raise TypeError("`template` must be a scene file path, a scene-file dict or a builder "
+                    f"callable, got {type(template).__name__}")
+
+
+def _validate_rows(data: dict, sets: ParameterSets) -> None:
+    """Build every scene of a file template once, refusing bad values before any run."""
+    from lumped.io import scene_from_dict
+
+    for i, values in enumerate(sets.as_dicts()):
+        try:
+            scene_from_dict(apply(data, values), source="<template>")
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"parameter set {i} {values!r}: {err}") from None
+
+
+# ------------------------------------------------------------------------ compiled path
+
+
+def _chunks(n_rows: int, parts: int) -> list[slice]:
+    size = max(_MIN_CHUNK, math.ceil(n_rows / max(parts, 1)))
+    return [slice(i, min(i + size, n_rows)) for i in range(0, n_rows, size)]
+
+
+def _closed_local(params: np.ndarray, dt: float, n: int, bdf2: bool,
+                  n_jobs: int | None, show: bool) -> np.ndarray:
+    import numba
+
+    previous = numba.get_num_threads()
+    if n_jobs is not None:
+        numba.set_num_threads(min(n_jobs, numba.config.NUMBA_NUM_THREADS))
+    parallel = len(params) >= 2 and len(params) * n >= _MIN_PARALLEL_WORK
+    try:
+        if not show:
+            return run_chunk(params, dt, n, bdf2, parallel=parallel)
+        bar = _bar(len(params), show)
+        parts = []
+        for sl in _chunks(len(params), 50):
+            parts.append(run_chunk(params[sl], dt, n, bdf2, parallel=parallel))
+            bar.update(sl.stop - sl.start)
+        bar.close()
+        return np.concatenate(parts)
+    finally:
+        numba.set_num_threads(previous)
+
+
+def _closed_dask(client: Any, params: np.ndarray, dt: float, n: int, bdf2: bool,
+                 show: bool) -> np.ndarray:
+    from dask.distributed import as_completed as dask_completed
+
+    workers = max(len(client.scheduler_info().get("workers", {})), 1)
+    slices = _chunks(len(params), 4 * workers)
+    futures = {client.submit(run_chunk, params[sl], dt, n, bdf2, False, pure=False): k
+               for k, sl in enumerate(slices)}
+    parts: list = [None] * len(slices)
+    bar = _bar(len(params), show)
+    for fut in dask_completed(futures):
+        k = futures[fut]
+        parts[k] = fut.result()
+        bar.update(slices[k].stop - slices[k].start)
+    bar.close()
+    return np.concatenate(parts)
+
+
+# ------------------------------------------------------------------------ per-scene path
+
+
+def _run_one(job: tuple, values: dict) -> tuple[dict, Any]:
+    """Build and simulate one scene; a failed run is a record, not an exception."""
+    from lumped import InconsistentInitialForce, Scene, SolverError, simulate
+    from lumped.io import scene_from_dict
+
+    source, method, dt, t_end, keep = job
+    if callable(source):
+        scene = source(dict(values))
+        if not isinstance(scene, Scene):
+            raise TypeError(f"the builder must return a Scene, got {type(scene).__name__} "
+                            f"for {values!r}")
+    else:
+        scene, _ = scene_from_dict(apply(source, values), source="<template>")
+    try:
+        sol = simulate(scene, method=method, dt=dt, t_end=t_end, throw=False)
+    except InconsistentInitialForce as err:
+        return failed_record(scene, method, dt, "inconsistent", str(err)), None
+    except SolverError as err:
+        return failed_record(scene, method, dt, err.status.value, str(err)), None
+    except FloatingPointError as err:  # a method that raises rather than stopping early
+        return failed_record(scene, method, dt, "non_finite", str(err)), None
+    except (ArithmeticError, ValueError, RuntimeError) as err:
+        return failed_record(scene, method, dt, "error", f"{type(err).__name__}: {err}"), None
+    return solution_record(sol, scene, dt), (sol if keep else None)
+
+
+def _run_rows(job: tuple, rows: list[dict]) -> list[tuple[dict, Any]]:
+    return [_run_one(job, values) for values in rows]
+
+
+def _generic_local(job: tuple, sets: ParameterSets, n_jobs: int | None,
+                   show: bool) -> tuple[list, str]:
+    rows = sets.as_dicts()
+    workers = n_jobs if n_jobs is not None else (os.cpu_count() or 1)
+    if len(rows) < 8 and n_jobs is None:
+        workers = 1
+    if workers > 1:
+        try:
+            pickle.dumps(job)
+        except Exception:  # a lambda or local builder: stay in this process
+            workers = 1
+    bar = _bar(len(rows), show)
+    results: list = [None] * len(rows)
+    if workers == 1:
+        for i, values in enumerate(rows):
+            results[i] = _run_one(job, values)
+            bar.update(1)
+        bar.close()
+        return results, "serial"
+    # spawn, not fork: numba's threading layer is not fork-safe once it has run
+    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
+        futures = {pool.submit(_run_one, job, values): i for i, values in enumerate(rows)}
+        for fut in as_completed(futures):
+            results[futures[fut]] = fut.result()
+            bar.update(1)
+    bar.close()
+    return results, "processes"
+
+
+def _generic_dask(client: Any, job: tuple, sets: ParameterSets, show: bool) -> list:
+    from dask.distributed import as_completed as dask_completed
+
+    rows = sets.as_dicts()
+    [job_future] = client.scatter([job], broadcast=True)
+    futures = {client.submit(_run_one, job_future, values, pure=False): i
+               for i, values in enumerate(rows)}
+    results: list = [None] * len(rows)
+    bar = _bar(len(rows), show)
+    for fut in dask_completed(futures):
+        results[futures[fut]] = fut.result()
+        bar.update(1)
+    bar.close()
+    return results
+
+
+# ------------------------------------------------------------------------ plumbing
+
+
+def _with_cluster(client: Any, work: Callable[[Any], Any]) -> Any:
+    """Run ``work(client)`` on ``client``, or on a LocalCluster started for this call."""
+    if client is not None:
+        return work(client)
+    from dask.distributed import Client, LocalCluster
+
+    with LocalCluster(processes=False, threads_per_worker=1, dashboard_address=":0") as cl, \
+            Client(cl) as own:
+        return work(own)
+
+
+class _NoBar:
+    def update(self, k: int) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def _bar(total: int, show: bool):
+    if not show:
+        return _NoBar()
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        return _NoBar()
+    return tqdm(total=total, unit="scene", file=sys.stderr)
+
+
+def _frame(sets: ParameterSets, records: list[dict]):
+    import pandas as pd
+
+    frame = pd.DataFrame.from_records(
+        [dict(zip(sets.names, row, strict=True)) | rec
+         for row, rec in zip(sets.rows, records, strict=True)])
+    for col in frame.columns:
+        if col.startswith("rest_position."):
+            frame[col] = frame[col].astype("Float64")
+    return frame
