@@ -28,6 +28,7 @@ import numpy as np
 
 from ..scene import Mass, Scene
 from .adaptive_output import DenseOutput, initial_step, row_of
+from .adaptive_setup import EXTRA_OPTIONS, breakpoints, compiled_stage_solver, read_options
 from .branch_check import _known_monotone
 from .events import (
     apply_impacts,
@@ -46,43 +47,7 @@ __all__ = ["run_radau5", "DEFAULT_RTOL", "DEFAULT_ATOL", "EXTRA_OPTIONS"]
 
 DEFAULT_RTOL = 1e-6
 DEFAULT_ATOL = 1e-9
-#: Method-specific keywords of ``radau5`` and their defaults.
-EXTRA_OPTIONS = {"max_events": 10_000, "zeno_events": 50, "zeno_window": None,
-                 "max_steps": 1_000_000, "first_step": None, "restitution": 0.0,
-                 "compiled": False}
 _EPS = 2.220446049250313e-16
-
-
-def _extra(settings) -> dict:
-    out = dict(EXTRA_OPTIONS)
-    for key, val in settings.extra.items():
-        if key not in EXTRA_OPTIONS:
-            raise TypeError(f"method 'radau5' takes no keyword argument {key!r} "
-                            f"(it takes {sorted(EXTRA_OPTIONS)})")
-        out[key] = val
-    for key in ("max_events", "zeno_events", "max_steps"):
-        if isinstance(out[key], bool) or not isinstance(out[key], int) or out[key] < 1:
-            raise ValueError(f"`{key}` must be a positive integer, got {out[key]!r}")
-    e = out["restitution"]
-    if not isinstance(out["compiled"], bool):
-        raise TypeError(f"`compiled` must be True or False, got {out['compiled']!r}")
-    if isinstance(e, bool) or not isinstance(e, (int, float)) or not 0.0 <= e <= 1.0:
-        raise ValueError(f"`restitution` must be a number in [0, 1], got {e!r}")
-    for key in ("zeno_window", "first_step"):
-        val = out[key]
-        if val is not None and not (isinstance(val, (int, float)) and math.isfinite(val)
-                                    and val > 0):
-            raise ValueError(f"`{key}` must be a positive number, got {val!r}")
-    return out
-
-
-def _breakpoints(scene: Scene, t_end: float) -> list[float]:
-    out: set[float] = set()
-    for fn in scene.forcing:
-        get = getattr(fn, "breakpoints", None)
-        if get is not None:
-            out.update(float(b) for b in get(0.0, t_end) if 0.0 < b < t_end)
-    return sorted(out)
 
 
 def run_radau5(scene: Scene, settings) -> RawRun:
@@ -97,7 +62,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
 
     rtol = DEFAULT_RTOL if settings.rtol is None else settings.rtol
     atol = DEFAULT_ATOL if settings.atol is None else settings.atol
-    opts = _extra(settings)
+    opts = read_options(settings)
     dt = settings.dt
     t_final = settings.t_end if dt is None else max(settings.t_end,
                                                     steps_for(dt, settings.t_end) * dt)
@@ -112,7 +77,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     checked = [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)]
     x = [float(nd.x0) for nd in scene.nodes]
     v, F, ic = consistent_initial_state(scene, time_scale=t_final, options=settings.options)
-    breaks = _breakpoints(scene, t_final)
+    breaks = breakpoints(scene, t_final)
     zeno_window = opts["zeno_window"] or 1e-6 * t_final
     events: list[Event] = []
     recent: deque = deque(maxlen=opts["zeno_events"])
@@ -128,7 +93,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     guards: list = [None] * E
     watched: list[int] = []
 
-    stage_solve = _compiled_stage_solve(scene, modes) if opts["compiled"] else None
+    stage_solve = compiled_stage_solver(scene, modes) if opts["compiled"] else None
 
     def set_modes(new: list[int]) -> None:
         modes[:] = new
@@ -426,29 +391,3 @@ def _too_many(events: list[Event], recent: deque, t: float, opts: dict) -> tuple
         f"radau5 stopped at t = {t!r}: {len(recent)} events within "
         f"{recent[-1] - recent[0]!r} s (elements {names}): an accumulation of events "
         "(Zeno or chattering)")
-
-
-def _compiled_stage_solve(scene: Scene, modes: list[int]):
-    """The stage Newton compiled with numba (:mod:`lumped.solvers.radau_jit`, the same
-    operations as :meth:`StageSystem.solve`, bit for bit), on the scene's generated
-    branch kernels; ``(U, h, x, v, f, scale, max_iters) -> (U or None, its, nfac)``."""
-    from ..codegen.jit import jit_scene
-    from .radau import A, W
-    from .radau_jit import compiled_stage_solve, workspace
-
-    js = jit_scene(scene)
-    solve = compiled_stage_solve()
-    ws = workspace(len(scene.nodes), len(scene.elements))
-    A_np, W_np = np.array(A), np.array(W)
-    law = js.module.branch_law
-
-    def run(U, h, x, v, f, scale, max_iters):
-        Ua = np.array(U, dtype=float)
-        ok = solve(law, js.masses, js.ea, js.eb, js.spring, np.array(modes, dtype=np.int64),
-                   A_np, W_np, Ua, h, np.array(x, dtype=float), np.array(v, dtype=float),
-                   np.array(f, dtype=float), np.array(scale, dtype=float), 1e-3, max_iters,
-                   *ws)
-        out = ws[-1]
-        return (Ua.tolist() if ok else None), int(out[0]), int(out[1])
-
-    return run

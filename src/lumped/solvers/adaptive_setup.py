@@ -1,0 +1,88 @@
+r"""Setup of the adaptive method ``radau5``: its keywords, the forcing's breakpoints and
+the optional compiled stage Newton.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..scene import Scene
+
+__all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "compiled_stage_solver"]
+
+
+#: Method-specific keywords of ``radau5`` and their defaults.
+EXTRA_OPTIONS = {"max_events": 10_000, "zeno_events": 50, "zeno_window": None,
+                 "max_steps": 1_000_000, "first_step": None, "restitution": 0.0,
+                 "compiled": False}
+
+
+def read_options(settings) -> dict:
+    """The keywords of ``settings.extra`` over :data:`EXTRA_OPTIONS`, checked.
+
+    Raises
+    ------
+    TypeError
+        For an unknown keyword or a non-boolean ``compiled``.
+    ValueError
+        For a bad value; the message names the keyword and quotes the value.
+    """
+    out = dict(EXTRA_OPTIONS)
+    for key, val in settings.extra.items():
+        if key not in EXTRA_OPTIONS:
+            raise TypeError(f"method 'radau5' takes no keyword argument {key!r} "
+                            f"(it takes {sorted(EXTRA_OPTIONS)})")
+        out[key] = val
+    for key in ("max_events", "zeno_events", "max_steps"):
+        if isinstance(out[key], bool) or not isinstance(out[key], int) or out[key] < 1:
+            raise ValueError(f"`{key}` must be a positive integer, got {out[key]!r}")
+    e = out["restitution"]
+    if not isinstance(out["compiled"], bool):
+        raise TypeError(f"`compiled` must be True or False, got {out['compiled']!r}")
+    if isinstance(e, bool) or not isinstance(e, (int, float)) or not 0.0 <= e <= 1.0:
+        raise ValueError(f"`restitution` must be a number in [0, 1], got {e!r}")
+    for key in ("zeno_window", "first_step"):
+        val = out[key]
+        if val is not None and not (isinstance(val, (int, float)) and math.isfinite(val)
+                                    and val > 0):
+            raise ValueError(f"`{key}` must be a positive number, got {val!r}")
+    return out
+
+
+def breakpoints(scene: Scene, t_end: float) -> list[float]:
+    """The times in ``(0, t_end)`` where a forcing of ``scene`` jumps or kinks, from the
+    ``breakpoints(t0, t1)`` method of the forcing objects that have one (time events)."""
+    out: set[float] = set()
+    for fn in scene.forcing:
+        get = getattr(fn, "breakpoints", None)
+        if get is not None:
+            out.update(float(b) for b in get(0.0, t_end) if 0.0 < b < t_end)
+    return sorted(out)
+
+
+def compiled_stage_solver(scene: Scene, modes: list[int]):
+    """The stage Newton compiled with numba (:mod:`lumped.solvers.radau_jit`, the same
+    operations as :meth:`StageSystem.solve`, bit for bit), on the scene's generated
+    branch kernels; ``(U, h, x, v, f, scale, max_iters) -> (U or None, its, nfac)``."""
+    from ..codegen.jit import jit_scene
+    from .radau import A, W
+    from .radau_jit import compiled_stage_solve, workspace
+
+    js = jit_scene(scene)
+    solve = compiled_stage_solve()
+    ws = workspace(len(scene.nodes), len(scene.elements))
+    A_np, W_np = np.array(A), np.array(W)
+    law = js.module.branch_law
+
+    def run(U, h, x, v, f, scale, max_iters):
+        Ua = np.array(U, dtype=float)
+        ok = solve(law, js.masses, js.ea, js.eb, js.spring, np.array(modes, dtype=np.int64),
+                   A_np, W_np, Ua, h, np.array(x, dtype=float), np.array(v, dtype=float),
+                   np.array(f, dtype=float), np.array(scale, dtype=float), 1e-3, max_iters,
+                   *ws)
+        out = ws[-1]
+        return (Ua.tolist() if ok else None), int(out[0]), int(out[1])
+
+    return run
