@@ -102,3 +102,33 @@ def test_bench_refuses_an_unknown_method(tmp_path, capsys):
     argv = ["bench", "--out", str(tmp_path), "--quick", "--methods", "closed-bdf2,nope"]
     assert main(argv) == 2
     assert "`--methods`" in capsys.readouterr().err
+
+
+def test_the_ticker_shows_elapsed_time_and_clears_its_line():
+    out = io.StringIO()
+    with progress_mod.Ticker("lumped run s.toml", stream=out, delay=0.0, interval=0.01):
+        import time
+
+        time.sleep(0.1)
+    text = out.getvalue()
+    assert "lumped run s.toml" in text and " s" in text
+    assert text.endswith("\r")  # the line is blanked at the end
+
+
+def test_a_disabled_or_short_ticker_writes_nothing():
+    out = io.StringIO()
+    with progress_mod.Ticker("x", enabled=False, stream=out, delay=0.0, interval=0.01):
+        pass
+    with progress_mod.Ticker("x", stream=out, delay=60.0):  # ends before its delay
+        pass
+    assert out.getvalue() == ""
+
+
+def test_lumped_run_is_quiet_off_a_terminal(tmp_path, capsys):
+    from pathlib import Path
+
+    scene = Path(__file__).resolve().parents[2] / "examples" / "release-0.5.toml"
+    out = tmp_path / "r.csv"
+    assert main(["run", str(scene), "--out", str(out), "--t-end", "0.05"]) == 0
+    captured = capsys.readouterr()
+    assert captured.err == "" and out.exists()

@@ -9,10 +9,11 @@ the work has lasted ``delay`` seconds, so short runs print nothing extra.
 from __future__ import annotations
 
 import sys
+import threading
 import time
 from typing import IO, Any
 
-__all__ = ["PROGRESS_DELAY", "Progress", "progress_wanted"]
+__all__ = ["PROGRESS_DELAY", "Progress", "Ticker", "progress_wanted"]
 
 #: Seconds of work before a bar appears (shorter runs print nothing extra).
 PROGRESS_DELAY = 2.0
@@ -101,3 +102,57 @@ class Progress:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+class Ticker:
+    """Elapsed time of one long call that reports no progress of its own.
+
+    ``lumped run`` is one :func:`lumped.simulate` call, which has no progress hook: while
+    it runs, a background thread rewrites one line on ``stream`` (``desc  12.3 s``)
+    every ``interval`` seconds once ``delay`` seconds have passed, and the line is cleared
+    when the call ends.  It shows that the run is alive and for how long, not how much
+    of it is left.  A disabled ticker (see :func:`progress_wanted`) starts no thread.
+
+    Examples
+    --------
+    >>> with Ticker("run", enabled=False):
+    ...     pass
+    """
+
+    def __init__(self, desc: str, *, enabled: bool = True, stream: IO[str] | None = None,
+                 delay: float | None = None, interval: float = 0.25) -> None:
+        self.desc, self.enabled = desc, bool(enabled)
+        self.stream = sys.stderr if stream is None else stream
+        self.delay = float(PROGRESS_DELAY if delay is None else delay)
+        self.interval = float(interval)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._width = 0
+
+    def _tick(self) -> None:
+        start = time.perf_counter()
+        if self._stop.wait(self.delay):
+            return
+        while True:
+            line = f"\r{self.desc} {time.perf_counter() - start:7.1f} s"
+            self._width = len(line) - 1
+            self.stream.write(line)
+            self.stream.flush()
+            if self._stop.wait(self.interval):
+                return
+
+    def __enter__(self) -> Ticker:
+        if self.enabled:
+            self._thread = threading.Thread(target=self._tick, daemon=True)
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._thread is None:
+            return
+        self._stop.set()
+        self._thread.join()
+        self._thread = None
+        if self._width:
+            self.stream.write("\r" + " " * self._width + "\r")
+            self.stream.flush()

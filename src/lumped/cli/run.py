@@ -1,9 +1,12 @@
 """``lumped run SCENE.toml --out results.csv [--method ...] [--dt ...] [--t-end ...]
-[--rtol ...] [--atol ...]``.
+[--rtol ...] [--atol ...] [--quiet]``.
 
 Loads a scene file (:mod:`lumped.io.scenefile`), runs :func:`lumped.simulate.simulate`
 with the file's ``[solver]`` settings overridden by the command line, and writes the
-CSV (``t``, ``x_<node>``, ``v_<node>`` per node, ``F_<element>`` per element).
+CSV (``t``, ``x_<node>``, ``v_<node>`` per node, ``F_<element>`` per element).  On a
+terminal a line shows the elapsed time once the run has lasted two seconds
+(:class:`lumped.cli.progress.Ticker`); not with ``--quiet`` or when stdout is not a
+terminal.
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ import sys
 from ..simulate import simulate
 from ..solvers.registry import FIXED_STEP_METHODS, METHODS, resolve_method
 from ..solvers.status import SolverError
+from .progress import Ticker, progress_wanted
 
 __all__ = ["add_arguments", "run"]
 
@@ -31,6 +35,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="relative tolerance of an adaptive method (overrides the file)")
     parser.add_argument("--atol", type=float, default=None,
                         help="absolute tolerance of an adaptive method (overrides the file)")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no elapsed-time line on the terminal while the solver runs")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -50,8 +56,10 @@ def run(args: argparse.Namespace) -> int:
     if t_end is None:
         raise ValueError(f"{args.scene}: no final time: give --t-end or [solver] t_end")
     try:
-        sol = simulate(scene, method=method, dt=dt, t_end=t_end, rtol=rtol, atol=atol,
-                       throw=False)
+        with Ticker(f"lumped run {args.scene}",
+                    enabled=progress_wanted(bool(getattr(args, "quiet", False)))):
+            sol = simulate(scene, method=method, dt=dt, t_end=t_end, rtol=rtol, atol=atol,
+                           throw=False)
     except SolverError as err:  # no consistent initial state: nothing to write
         print(f"lumped run: {err}", file=sys.stderr)
         return 1
