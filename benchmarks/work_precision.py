@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 
-from lumped.cmd_bench import add_arguments, run
+from lumped.cli.bench import add_arguments, run
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -1,8 +1,8 @@
 """A new law in one line, simulated: a mass on a spring with a quadratic-drag dashpot."""
 
+from lumped import simulate
 from lumped.laws import ElementLaw, get_law
 from lumped.scene import Element, Mass, Scene
-from lumped.simulate import simulate
 
 drag = ElementLaw("quadratic_drag", "dashpot", "F = c*q*Abs(q)", ["c"])  # F = c v |v|
 scene = Scene(

@@ -1,6 +1,7 @@
 """Reproduce the paper's release-0.5 scenario and print its stick/slip summary."""
 
-from lumped import BinghamOscillator, integrate, summarize
+from lumped.solvers.closed_form import BinghamOscillator, integrate
+from lumped.trajectory import summarize
 
 osc = BinghamOscillator(m=1.0, k=100.0, gamma=1.0, tau=1.0)
 for method in ("bdf1", "bdf2"):

@@ -4,73 +4,79 @@ Elements are declared by implicit residuals ``alpha(x, F_s) = 0`` (springs) or
 ``beta(v, F_d) = 0`` (dashpots); a scene of masses and elements is a semi-explicit
 DAE, advanced by BDF1/BDF2 with a semismooth Newton solver (:func:`simulate`).  For one
 mass with a linear spring and a Bingham dashpot the step has a closed form (the paper's
-Algorithm 1, :func:`integrate`), and :mod:`lumped.reference` gives the exact solution.
+Algorithm 1, :func:`lumped.solvers.closed_form.integrate`), and :mod:`lumped.reference`
+gives the exact solution.
+
+The top level holds only the everyday names; everything else lives in its sub-package
+(``lumped.laws``, ``lumped.scene``, ``lumped.codegen``, ``lumped.solvers``,
+``lumped.reference``, ``lumped.bench``, ``lumped.io``, ``lumped.cli``; see
+docs/architecture.md).  Names that used to be exported here are still served, with a
+``DeprecationWarning`` naming their new home, for one release.
 """
 
-from .bingham import BinghamOscillator, bdf1_step, bdf2_step, integrate
-from .compare import compare
-from .forcing import SineBurst, paper_F1, paper_F2, zero_forcing
-from .laws import BUILTIN_LAWS, BoundLaw, ElementLaw, get_law
+from .io.scenefile import load_scene
+from .laws import ElementLaw, get_law
+from .result import Solution
 from .scene import GROUND, Element, Junction, Mass, Scene
-from .scenefile import load_scene
-from .simulate import (
-    METHODS,
-    BranchError,
-    InconsistentInitialForce,
-    Solution,
-    SolverError,
-    Status,
-    simulate,
-)
-from .trajectory import StickSummary, Trajectory, summarize
+from .simulate import simulate
+from .solvers.status import BranchError, InconsistentInitialForce, SolverError, Status
 
 __version__ = "0.1.0"
 
-#: Names served lazily: the exact reference pulls in scipy.optimize, which only it needs.
-_LAZY = {name: "reference" for name in
-         ("ExactSolution", "ReferenceNotApplicable", "exact_solution", "reference_for_grid")}
+#: Former top-level names -> the module that now holds them (served with a warning).
+_MOVED = {
+    "BinghamOscillator": "lumped.solvers.closed_form",
+    "bdf1_step": "lumped.solvers.closed_form",
+    "bdf2_step": "lumped.solvers.closed_form",
+    "integrate": "lumped.solvers.closed_form",
+    "compare": "lumped.compare",
+    "SineBurst": "lumped.scene",
+    "paper_F1": "lumped.scene",
+    "paper_F2": "lumped.scene",
+    "zero_forcing": "lumped.scene",
+    "BUILTIN_LAWS": "lumped.laws",
+    "BoundLaw": "lumped.laws",
+    "METHODS": "lumped.solvers.registry",
+    "StickSummary": "lumped.trajectory",
+    "Trajectory": "lumped.trajectory",
+    "summarize": "lumped.trajectory",
+    "ExactSolution": "lumped.reference",
+    "ReferenceNotApplicable": "lumped.reference",
+    "exact_solution": "lumped.reference",
+    "reference_for_grid": "lumped.reference",
+}
 
 
 def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
+    home = _MOVED.get(name)
+    if home is None:
+        raise AttributeError(f"module 'lumped' has no attribute {name!r}")
+    import importlib
+    import warnings
 
-        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-    raise AttributeError(f"module 'lumped' has no attribute {name!r}")
+    warnings.warn(
+        f"`lumped.{name}` is deprecated and will be removed in the next release; "
+        f"import it from `{home}` instead",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    return getattr(importlib.import_module(home), name)
+
 
 __all__ = [
-    "BUILTIN_LAWS",
     "GROUND",
-    "METHODS",
-    "BinghamOscillator",
-    "BoundLaw",
     "BranchError",
     "Element",
     "ElementLaw",
-    "ExactSolution",
     "InconsistentInitialForce",
     "Junction",
     "Mass",
-    "ReferenceNotApplicable",
     "Scene",
-    "SineBurst",
     "Solution",
     "SolverError",
     "Status",
-    "StickSummary",
-    "Trajectory",
     "__version__",
-    "bdf1_step",
-    "bdf2_step",
-    "compare",
-    "exact_solution",
     "get_law",
-    "integrate",
     "load_scene",
-    "paper_F1",
-    "paper_F2",
-    "reference_for_grid",
     "simulate",
-    "summarize",
-    "zero_forcing",
 ]

@@ -12,9 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .integrators import GENERIC_METHODS
+from .result import Solution
 from .scene import Scene
-from .simulate import Solution, closed_form_oscillator, simulate
+from .simulate import simulate
+from .solvers.fixed_step import GENERIC_METHODS
+from .solvers.registry import closed_form_oscillator
 
 __all__ = ["CompareReport", "compare"]
 

@@ -18,10 +18,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from .bingham import BinghamOscillator
-from .forcing import paper_F1, paper_F2, zero_forcing
 from .scene import GROUND, Element, Mass, Scene
+from .scene.forcing import paper_F1, paper_F2, zero_forcing
 from .simulate import simulate
+from .solvers.closed_form import BinghamOscillator
 from .trajectory import Trajectory
 
 __all__ = [

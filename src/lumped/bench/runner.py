@@ -1,0 +1,358 @@
+r"""Work-precision benchmark: error against the exact reference versus CPU time.
+
+Every run integrates one *scene* (one mass, a linear spring and a Bingham dashpot,
+``m v' = F(t) - k x - F_d``, law (6)) on ``[0, t_end]`` and is scored against the
+event-driven exact solution of :mod:`lumped.reference`:
+
+* ``max_err`` -- ``max |x - x_ref|`` over the common grid ``t_i = i * GRID_DT`` on
+  ``[0, t_end]``.  Time-stepping methods are scored at their own nodes ``t_n = n dt``
+  (no interpolation): at every node on the common grid when ``dt <= GRID_DT``, at
+  every node (each of which lies on the grid) when ``dt > GRID_DT``.  The scipy runs
+  are scored on their dense output at every grid point.
+* ``end_err`` -- ``|x(t_end) - x_ref(t_end)|`` (the rest position when the mass has
+  stopped).
+* ``steps`` -- time steps taken (accepted steps for scipy); ``nfev`` -- right-hand-side
+  evaluations (scipy) or forcing evaluations (closed form).
+* ``cpu_s`` -- CPU time (:func:`time.process_time`) of the solve alone (building the
+  output arrays included, scoring excluded); runs faster than ``min_time`` are repeated
+  and the smallest time is kept.
+* ``ratio`` -- ``cpu_s`` divided by the CPU time of the *yardstick*
+  (:func:`yardstick`), measured in the same process: the benchmark's unit of time.
+
+Methods (see :data:`METHODS`, a registry: adding a method is one entry):
+
+* ``closed-bdf1`` / ``closed-bdf2`` -- :func:`lumped.solvers.closed_form.integrate` over a
+  ladder of ``dt``;
+* ``generic-bdf1`` / ``generic-bdf2`` -- the semismooth-Newton steps of
+  :func:`lumped.simulate.simulate` on the same scene built from the ``linear_spring`` and
+  ``bingham`` laws (listed only when those modules import), over the ladder of ``dt``
+  down to ``Ladders.slow_min_dt``;
+* ``scipy-Radau`` / ``scipy-BDF`` / ``scipy-LSODA`` -- :func:`scipy.integrate.solve_ivp` on
+  the tanh-regularised model ``F_d = v / gamma + tau tanh(v / eps)`` over a ladder of
+  ``eps`` and ``rtol`` (``atol = rtol * L`` with ``L`` the scene's displacement scale),
+  with the analytic Jacobian of :func:`regularised_jacobian` (no overflow for any
+  ``v / eps``), integrated in two pieces when the forcing switches off inside the
+  interval (a careful user splits at a known jump).  A failed run (``status < 0``, an
+  exception, a non-finite value, or more than ``max_nfev`` evaluations) is recorded
+  with ``status = "failed"`` and its message, never dropped.
+
+Everything here is plain Python; the per-step work of every method is the method's own.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from .event_study import event_study
+from .methods import Method, Solved, _closed_form, _generic
+from .peers import _scipy, _scipy_solver
+from .scenes import (
+    FULL,
+    GRID_DT,
+    PAPER_SCENES,
+    SCENES,
+    YARDSTICK_ITERATIONS,
+    BenchScene,
+    Ladders,
+    reference_grid,
+)
+
+__all__ = [
+    "yardstick",
+    "time_call",
+    "METHODS",
+    "available_methods",
+    "RunResult",
+    "run_one",
+    "BenchReport",
+    "measure_unit",
+    "run_benchmark",
+    "creep_table",
+]
+
+
+# --------------------------------------------------------------------------- timing
+
+
+def yardstick(iterations: int = YARDSTICK_ITERATIONS) -> float:
+    """The unit of benchmark time: symplectic Euler on Python floats.
+
+    ``iterations`` updates ``v -= h w^2 x; x += h v`` of a harmonic oscillator
+    (``h = 1e-3``, ``w^2 = 100``), a fixed pure-Python float loop that does not depend
+    on any library code, so speed-ups of ``lumped`` show up as smaller ratios.
+    Returns the final ``x`` (so the loop cannot be optimised away).
+    """
+    x, v, h, w2 = 1.0, 0.0, 1e-3, 100.0
+    for _ in range(iterations):
+        v -= h * w2 * x
+        x += h * v
+    return x
+
+
+def time_call(
+    fn: Callable[[], object], *, min_time: float = 0.05, max_repeats: int = 20,
+) -> tuple[object, float, int]:
+    """CPU time of ``fn()``: best of several calls when one call is shorter than ``min_time``.
+
+    Returns ``(result of the first call, smallest CPU time in seconds, number of calls)``.
+    Calls are repeated until their total reaches ``4 * min_time`` or ``max_repeats``.
+    """
+    t0 = time.process_time()
+    result = fn()
+    best = total = time.process_time() - t0
+    calls = 1
+    if best < min_time:
+        while calls < max_repeats and total < 4.0 * min_time:
+            t0 = time.process_time()
+            fn()
+            elapsed = time.process_time() - t0
+            best = min(best, elapsed)
+            total += elapsed
+            calls += 1
+    return result, best, calls
+
+
+# --------------------------------------------------------------------------- methods
+
+
+def _generic_available() -> bool:
+    """Whether the generic solver and the law library are importable."""
+    try:
+        from .. import laws, scene, simulate  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+#: The registry: every method the benchmark runs.
+METHODS: tuple[Method, ...] = (
+    Method("closed-bdf1", "step", _closed_form("bdf1")),
+    Method("closed-bdf2", "step", _closed_form("bdf2")),
+    Method("generic-bdf1", "step", _generic("bdf1"), slow=True),
+    Method("generic-bdf2", "step", _generic("bdf2"), slow=True),
+    Method("scipy-Radau", "scipy", _scipy("Radau"), ours=False),
+    Method("scipy-BDF", "scipy", _scipy("BDF"), ours=False),
+    Method("scipy-LSODA", "scipy", _scipy("LSODA"), ours=False),
+)
+
+
+def available_methods() -> tuple[Method, ...]:
+    """:data:`METHODS` minus the generic solver's entries when it is not installed."""
+    return tuple(m for m in METHODS if not m.name.startswith("generic") or _generic_available())
+
+
+# --------------------------------------------------------------------------- runs
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """One row of the benchmark CSV."""
+
+    scene: str
+    method: str
+    setting: str
+    dt: float
+    eps: float
+    rtol: float
+    atol: float
+    status: str
+    message: str
+    max_err: float
+    end_err: float
+    steps: int
+    nfev: int
+    cpu_s: float
+    ratio: float
+    repeats: int
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+
+def _settings(method: Method, scene: BenchScene, ladders: Ladders) -> list[dict]:
+    if method.kind == "step":
+        floor = ladders.slow_min_dt if method.slow else 0.0
+        return [{"dt": dt} for dt in ladders.dts if dt >= floor * (1.0 - 1e-12)]
+    return [{"eps": e, "rtol": r, "atol": r * scene.length_scale}
+            for e in ladders.eps for r in ladders.rtols]
+
+
+def _label(setting: dict) -> str:
+    if "dt" in setting:
+        return f"dt={setting['dt']:g}"
+    return f"eps={setting['eps']:g} rtol={setting['rtol']:g}"
+
+
+def _score(solved: Solved, x_ref: np.ndarray, grid_dt: float) -> tuple[float, float]:
+    """``(max_err, end_err)`` of ``solved`` against the exact ``x_ref`` on the common grid."""
+    t, x = solved.t, solved.x
+    n = len(t) - 1
+    if len(x_ref) == len(x):
+        err = np.abs(x - x_ref)
+    else:
+        dt = (t[-1] - t[0]) / n
+        ratio = grid_dt / dt
+        if ratio >= 1.0:
+            stride = int(round(ratio))
+            if abs(stride - ratio) > 1e-9 * ratio or stride * (len(x_ref) - 1) != n:
+                raise ValueError(f"dt = {dt!r} does not divide the grid step {grid_dt!r}")
+            err = np.abs(x[::stride] - x_ref)
+        else:
+            stride = int(round(1.0 / ratio))
+            if abs(stride - 1.0 / ratio) > 1e-9 / ratio or stride * n != len(x_ref) - 1:
+                raise ValueError(f"dt = {dt!r} is not a multiple of the grid step {grid_dt!r}")
+            err = np.abs(x - x_ref[::stride])
+    if not np.all(np.isfinite(err)):
+        raise FloatingPointError("non-finite x in the solution")
+    return float(np.max(err)), float(err[-1])
+
+
+def run_one(
+    scene: BenchScene, method: Method, setting: dict, x_ref: np.ndarray, unit: float,
+    ladders: Ladders, grid_dt: float = GRID_DT,
+) -> RunResult:
+    """Run, time and score one setting; failures become a row with ``status="failed"``."""
+    nan = math.nan
+    row = {"scene": scene.name, "method": method.name, "setting": _label(setting),
+           "dt": setting.get("dt", nan), "eps": setting.get("eps", nan),
+           "rtol": setting.get("rtol", nan), "atol": setting.get("atol", nan)}
+    t0 = time.process_time()
+    try:
+        runner = method.solve(scene, setting, ladders)
+        solved, cpu, calls = time_call(runner, min_time=ladders.min_time)
+        max_err, end_err = _score(solved, x_ref, grid_dt)
+    except Exception as err:  # a failed run is a result; its time is the time to failure
+        spent = time.process_time() - t0
+        return RunResult(**row, status="failed", message=f"{type(err).__name__}: {err}",
+                         max_err=nan, end_err=nan, steps=0, nfev=0, cpu_s=spent,
+                         ratio=spent / unit, repeats=1)
+    return RunResult(**row, status="ok", message="", max_err=max_err, end_err=end_err,
+                     steps=solved.steps, nfev=solved.nfev, cpu_s=cpu, ratio=cpu / unit,
+                     repeats=calls)
+
+
+@dataclass
+class BenchReport:
+    """Everything one benchmark run produced."""
+
+    runs: list[RunResult]
+    creep: list[dict]
+    events: list[dict]
+    unit_s: float
+    reference_s: dict[str, float]
+    methods: tuple[str, ...]
+    scenes: tuple[str, ...]
+    wall_s: float = 0.0
+    notes: list[str] = field(default_factory=list)
+
+
+def measure_unit(repeats: int = 5) -> float:
+    """Smallest CPU time of :func:`yardstick` over ``repeats`` calls (seconds)."""
+    best = math.inf
+    for _ in range(repeats):
+        t0 = time.process_time()
+        yardstick()
+        best = min(best, time.process_time() - t0)
+    return best
+
+
+def run_benchmark(
+    *,
+    ladders: Ladders = FULL,
+    scenes: Iterable[BenchScene] = SCENES,
+    methods: Iterable[Method] | None = None,
+    creep: bool = True,
+    events: bool = True,
+    progress: Callable[[str], None] | None = None,
+    grid_dt: float = GRID_DT,
+) -> BenchReport:
+    """Run every method over its ladder on every scene, plus the creep test and the
+    event study (:func:`event_study`, closed forms only).
+
+    The yardstick is measured before and after the runs; the smaller value is the unit.
+    """
+    start = time.perf_counter()
+    scenes = tuple(scenes)
+    methods = available_methods() if methods is None else tuple(methods)
+    say = progress or (lambda _msg: None)
+    unit = measure_unit()
+    runs: list[RunResult] = []
+    ref_s: dict[str, float] = {}
+    for scene in scenes:
+        x_ref = reference_grid(scene, grid_dt)  # first call pays for imports
+        t0 = time.process_time()
+        reference_grid(scene, grid_dt)
+        ref_s[scene.name] = time.process_time() - t0
+        for method in methods:
+            for setting in _settings(method, scene, ladders):
+                row = run_one(scene, method, setting, x_ref, unit, ladders, grid_dt)
+                runs.append(row)
+            say(f"{scene.name:18s} {method.name:12s} done")
+    creep_rows = creep_table(ladders, methods) if creep else []
+    if creep:
+        say("creep done")
+    event_rows = event_study(dts=ladders.event_dts) if events else []
+    if events:
+        say("event study done")
+    unit_after = measure_unit()
+    if unit_after < unit:  # rescale with the better measurement
+        runs = [_rescale(r, unit_after) for r in runs]
+        unit = unit_after
+    return BenchReport(runs=runs, creep=creep_rows, events=event_rows, unit_s=unit,
+                       reference_s=ref_s,
+                       methods=tuple(m.name for m in methods),
+                       scenes=tuple(s.name for s in scenes),
+                       wall_s=time.perf_counter() - start)
+
+
+def _rescale(row: RunResult, unit: float) -> RunResult:
+    d = asdict(row)
+    d["ratio"] = row.cpu_s / unit
+    return RunResult(**d)
+
+
+# --------------------------------------------------------------------------- creep
+
+
+def creep_table(ladders: Ladders, methods: Iterable[Method]) -> list[dict]:
+    """Drift ``max |x - 0.005|`` of ``release-0.005`` held for ``ladders.creep_t_end`` seconds.
+
+    The exact solution never moves (``k x0 = 0.5 < tau = 1``): drift 0.  The closed
+    forms are run at ``dt = 1e-3``; the regularised models at every ``eps`` with
+    ``rtol = ladders.creep_rtol``.  Drift is sampled every 0.01 s.
+    """
+    scene = next(s for s in PAPER_SCENES if s.name == "release-0.005")
+    t_end = ladders.creep_t_end
+    held = BenchScene(scene.name, scene.osc, scene.x0, t_end=t_end)
+    rows = []
+    for method in methods:
+        if method.kind == "step":
+            settings = [{"dt": 1e-3}]
+        else:
+            settings = [{"eps": e, "rtol": ladders.creep_rtol,
+                         "atol": ladders.creep_rtol * held.length_scale} for e in ladders.eps]
+        for setting in settings:
+            try:
+                if method.kind == "step":
+                    solved = method.solve(held, setting, ladders)()
+                else:
+                    solved = _scipy_solver(held, method.name.removeprefix("scipy-"),
+                                           setting["eps"], setting["rtol"], setting["atol"],
+                                           ladders.max_nfev, t_end, grid_dt=0.01)()
+                x = solved.x[:: max(1, int(round(0.01 / setting.get("dt", 0.01))))]
+                drift = float(np.max(np.abs(x - held.x0)))
+                rows.append({"method": method.name, "setting": _label(setting),
+                             "drift": drift, "x_end": float(solved.x[-1]), "status": "ok"})
+            except Exception as err:
+                rows.append({"method": method.name, "setting": _label(setting),
+                             "drift": math.nan, "x_end": math.nan,
+                             "status": f"failed: {type(err).__name__}: {err}"})
+    return rows
+
+

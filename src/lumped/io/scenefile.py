@@ -1,0 +1,233 @@
+"""Scene files: a :class:`~lumped.scene.Scene` and its solver settings written in TOML.
+
+A scene file is data, never code: law names are looked up in the built-in library,
+numbers must be TOML numbers, and a forcing expression string is parsed by the
+allowlist parser :func:`lumped.laws.parser.parse_expression` (no ``eval``). The format
+is documented in ``docs/scenes.md``; in short::
+
+    [solver]                       # optional; command-line values override it
+    method = "auto"                # any of lumped.solvers.registry.METHODS
+    dt = 1e-4
+    t_end = 5.0
+
+    [nodes.mass]                   # a node with `mass` is a Mass, without it a Junction
+    mass = 1.0
+    x0 = 0.5                       # optional, default 0
+    v0 = 0.0                       # optional, default 0 (masses only)
+    force = "0.5*sin(5*pi*t)"      # optional: a number, an expression in t, or
+    # force = { kind = "sine", amplitude = 0.5, omega = 15.707963267948966, t_off = 1.0 }
+
+    [elements.spring]
+    law = "linear_spring"
+    between = ["ground", "mass"]   # a then b: q = x_b - x_a, +F on a, -F on b
+    parameters = { k = 100.0 }
+    # F0 = 50.0                    # optional initial force, checked against the law
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from ..scene import Element, Junction, Mass, Scene
+from ..scene.forcing import SineBurst
+
+__all__ = ["load_scene", "scene_from_dict", "SceneFileError", "SETTINGS_KEYS"]
+
+#: Keys of the ``[solver]`` table.
+SETTINGS_KEYS = ("method", "dt", "t_end")
+
+_NODE_KEYS = {"mass", "x0", "v0", "force"}
+_ELEMENT_KEYS = {"law", "between", "parameters", "F0"}
+_SINE_KEYS = {"kind", "amplitude", "omega", "t_off"}
+
+
+class SceneFileError(ValueError):
+    """Bad content in a scene file; the message names the file, the key and the value."""
+
+
+def load_scene(path: str | Path) -> tuple[Scene, dict[str, Any]]:
+    """Read a TOML scene file.
+
+    Returns
+    -------
+    scene : Scene
+    settings : dict
+        The ``[solver]`` table (``method``, ``dt``, ``t_end``; only those given).
+
+    Raises
+    ------
+    SceneFileError
+        For unreadable TOML or bad content, naming the file, the key and the value.
+    """
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        raise SceneFileError(f"{path}: no such scene file") from None
+    except tomllib.TOMLDecodeError as err:
+        raise SceneFileError(f"{path}: not valid TOML: {err}") from None
+    return scene_from_dict(data, source=str(path))
+
+
+def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>") -> tuple[Scene, dict]:
+    """Build ``(scene, settings)`` from the parsed TOML tables (see :func:`load_scene`)."""
+
+    def fail(key: str, msg: str) -> SceneFileError:
+        return SceneFileError(f"{source}: {key}: {msg}")
+
+    unknown = set(data) - {"solver", "nodes", "elements"}
+    if unknown:
+        raise fail(sorted(unknown)[0], "unknown top-level table (expected solver, nodes, elements)")
+
+    settings = _settings(data.get("solver", {}), fail)
+
+    nodes_tbl = data.get("nodes")
+    if not isinstance(nodes_tbl, dict) or not nodes_tbl:
+        raise fail("nodes", "a scene needs a [nodes.<name>] table for each node")
+    nodes: list[Mass | Junction] = []
+    forces: dict[str, object] = {}
+    for name, spec in nodes_tbl.items():
+        key = f"[nodes.{name}]"
+        _check_table(spec, key, _NODE_KEYS, fail)
+        try:
+            x0 = _number(spec.get("x0", 0.0), f"{key} x0", fail)
+            if "mass" in spec:
+                m = _number(spec["mass"], f"{key} mass", fail)
+                v0 = _number(spec.get("v0", 0.0), f"{key} v0", fail)
+                nodes.append(Mass(name, m=m, x0=x0, v0=v0))
+            else:
+                if "v0" in spec:
+                    raise fail(f"{key} v0", "a junction (no `mass`) has no initial velocity "
+                               "of its own; it follows from the laws")
+                nodes.append(Junction(name, x0=x0))
+        except (TypeError, ValueError) as err:
+            if isinstance(err, SceneFileError):
+                raise
+            raise fail(key, str(err)) from None
+        if "force" in spec:
+            forces[name] = _forcing(spec["force"], f"{key} force", fail)
+
+    elements_tbl = data.get("elements", {})
+    if not isinstance(elements_tbl, dict):
+        raise fail("elements", f"must be a table of [elements.<name>] tables, got {elements_tbl!r}")
+    elements: list[Element] = []
+    for name, spec in elements_tbl.items():
+        key = f"[elements.{name}]"
+        _check_table(spec, key, _ELEMENT_KEYS, fail)
+        law = _law(spec, key, fail)
+        between = spec.get("between")
+        if (not isinstance(between, list) or len(between) != 2
+                or not all(isinstance(s, str) for s in between)):
+            raise fail(f"{key} between", f"must be a list of two node names, got {between!r}")
+        F0 = spec.get("F0")
+        if F0 is not None:
+            F0 = _number(F0, f"{key} F0", fail)
+        try:
+            elements.append(Element(name, law, between[0], between[1], F0=F0))
+        except (TypeError, ValueError) as err:
+            raise fail(key, str(err)) from None
+    try:
+        scene = Scene(nodes, elements, forces)
+    except (TypeError, ValueError) as err:
+        raise SceneFileError(f"{source}: {err}") from None
+    return scene, settings
+
+
+def _check_table(spec: object, key: str, allowed: set[str], fail) -> None:
+    """``spec`` must be a TOML table whose keys are all in ``allowed``."""
+    if not isinstance(spec, dict):
+        raise fail(key, f"must be a table, got {spec!r}")
+    extra = set(spec) - allowed
+    if extra:
+        raise fail(f"{key} {sorted(extra)[0]}",
+                   f"unknown key (allowed: {', '.join(sorted(allowed))})")
+
+
+def _settings(tbl: object, fail) -> dict[str, Any]:
+    if not isinstance(tbl, dict):
+        raise fail("[solver]", f"must be a table, got {tbl!r}")
+    extra = set(tbl) - set(SETTINGS_KEYS)
+    if extra:
+        raise fail(f"[solver] {sorted(extra)[0]}",
+                   f"unknown key (allowed: {', '.join(SETTINGS_KEYS)})")
+    out: dict[str, Any] = {}
+    if "method" in tbl:
+        from ..solvers.registry import METHODS
+
+        if tbl["method"] not in METHODS:
+            raise fail("[solver] method", f"must be one of {METHODS}, got {tbl['method']!r}")
+        out["method"] = tbl["method"]
+    for k in ("dt", "t_end"):
+        if k in tbl:
+            val = _number(tbl[k], f"[solver] {k}", fail)
+            if not val > 0.0:
+                raise fail(f"[solver] {k}", f"must be positive, got {val!r}")
+            out[k] = val
+    return out
+
+
+def _number(value: object, key: str, fail) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise fail(key, f"must be a number, got {value!r}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise fail(key, f"must be finite, got {value!r}")
+    return x
+
+
+def _forcing(spec: object, key: str, fail) -> object:
+    if isinstance(spec, (int, float)) and not isinstance(spec, bool):
+        return _number(spec, key, fail)
+    if isinstance(spec, str):
+        from ..laws.parser import parse_expression
+
+        try:
+            return parse_expression(spec, ["t"])
+        except (TypeError, ValueError, SyntaxError) as err:
+            raise fail(key, f"bad expression {spec!r}: {err}") from None
+    if isinstance(spec, dict):
+        extra = set(spec) - _SINE_KEYS
+        if extra:
+            raise fail(f"{key} {sorted(extra)[0]}",
+                       f"unknown key (allowed: {', '.join(sorted(_SINE_KEYS))})")
+        if spec.get("kind") != "sine":
+            raise fail(f"{key} kind", f"the only forcing table is kind = \"sine\", "
+                       f"got {spec.get('kind')!r}")
+        for k in ("amplitude", "omega"):
+            if k not in spec:
+                raise fail(f"{key} {k}", "missing")
+        amp = _number(spec["amplitude"], f"{key} amplitude", fail)
+        omega = _number(spec["omega"], f"{key} omega", fail)
+        t_off = spec.get("t_off", math.inf)
+        if t_off != math.inf:
+            t_off = _number(t_off, f"{key} t_off", fail)
+        try:
+            return SineBurst(amplitude=amp, omega=omega, t_off=t_off)
+        except (TypeError, ValueError) as err:
+            raise fail(key, str(err)) from None
+    raise fail(key, f"must be a number, an expression string or a sine table, got {spec!r}")
+
+
+def _law(spec: dict, key: str, fail):
+    name = spec.get("law")
+    if not isinstance(name, str):
+        raise fail(f"{key} law", f"must be the name of a law, got {name!r}")
+    from ..laws import BUILTIN_LAWS, get_law
+
+    try:
+        law = get_law(name)
+    except (KeyError, ValueError):
+        raise fail(f"{key} law", f"unknown law {name!r} (known: {', '.join(sorted(BUILTIN_LAWS))})"
+                   ) from None
+    params = spec.get("parameters", {})
+    if not isinstance(params, dict):
+        raise fail(f"{key} parameters", f"must be a table of numbers, got {params!r}")
+    values = {k: _number(v, f"{key} parameters.{k}", fail) for k, v in params.items()}
+    try:
+        return law.bind(**values)
+    except (TypeError, ValueError) as err:
+        raise fail(f"{key} parameters", f"{err}") from None

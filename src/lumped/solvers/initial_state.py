@@ -1,0 +1,252 @@
+r"""Consistent initial state: the velocities of all nodes and the forces of all elements at
+``t = 0``.
+
+The step system with a vanishing step ``h = eps`` and the masses' accelerations as
+unknowns (``v_i = v_i(0) + eps a_i``) selects the initial forces that the limit
+``dt -> 0`` of the implicit steps selects: a stuck dashpot takes the force that keeps its
+mass at rest if its law admits it, else the nearest admissible one (for the paper's scene
+``clip(F(0) - k x0, -tau, tau)``, as :func:`lumped.solvers.closed_form.initial_dashpot_force`),
+and junction velocities follow from the laws.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..scene import Junction, Mass, Scene
+from .newton import (
+    NewtonCode,
+    NewtonOptions,
+    newton_solve,
+)
+from .status import InconsistentInitialForce, SolverError, Status
+from .step_system import (
+    _law_scale,
+    _newton_failure,
+)
+
+__all__ = ["consistent_initial_state"]
+
+
+# ---------------------------------------------------------------------------------------
+# consistent initial state
+
+
+def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
+    """Solve ``R(q, F) = 0`` for ``F`` (``q`` fixed) by safeguarded Newton in a bracket.
+
+    Returns ``(F, pinned)``: ``pinned`` is False when the law is flat in ``F`` at an
+    exact root (``R = 0`` with ``dR/dF = 0``: a set-valued law, e.g. a stuck Bingham
+    dashpot), so that ``F`` is not fixed by the law alone; a root found only as a sign
+    change between neighbouring floats is isolated, hence pinned. Raises ValueError if
+    no sign change is found.
+    """
+    R, _, RF = kernel(q, F0)
+    if R == 0.0:
+        return F0, RF != 0.0
+    # bracket: expand both ways from F0
+    lo = hi = None
+    step = 1.0 + abs(F0)
+    for _ in range(2000):
+        for cand in (F0 + step, F0 - step):
+            Rc = kernel(q, cand)[0]
+            if Rc == 0.0:
+                _, _, RFc = kernel(q, cand)
+                return cand, RFc != 0.0
+            if (Rc > 0.0) != (R > 0.0):
+                lo, hi = (F0, cand) if cand > F0 else (cand, F0)
+                break
+        if lo is not None or step > 1e300:
+            break
+        step *= 2.0
+    if lo is None:
+        raise ValueError(f"no root of the law in F at q = {q!r}")
+    R_lo = kernel(q, lo)[0]
+    F = F0 if lo <= F0 <= hi else 0.5 * (lo + hi)
+    for _ in range(400):
+        R, _, RF = kernel(q, F)
+        if R == 0.0:
+            return F, RF != 0.0
+        if (R > 0.0) == (R_lo > 0.0):
+            lo, R_lo = F, R
+        else:
+            hi = F
+        F_new = F - R / RF if RF != 0.0 else math.nan
+        if not (lo < F_new < hi):
+            F_new = 0.5 * (lo + hi)
+        if F_new == F or not (lo < F_new < hi):
+            break
+        F = F_new
+    # No exact zero: the root lies between floating-point neighbours (e.g. a Bingham
+    # force tau + q / gamma with q / gamma below an ulp of tau, at the kink). The sign
+    # change isolates it, so the law fixes F there even if the nearest float sits on a
+    # flat piece: take the candidate with the smallest |R| (the correctly rounded root).
+    best = min((F, lo, hi), key=lambda c: abs(kernel(q, c)[0]))
+    return best, True
+
+
+def consistent_initial_state(
+    scene: Scene, *, time_scale: float = 1.0, options: NewtonOptions | None = None
+) -> tuple[list[float], list[float], dict]:
+    """Initial velocities of all nodes and forces of all elements at ``t = 0``.
+
+    Masses keep their given ``v0``. Then:
+
+    1. every element whose ``q`` is known at ``t = 0`` (all springs; dashpots between
+       masses and ground) gets its force from its own law, ``R(q0, F) = 0``, if the law
+       fixes it there (``dR/dF != 0``);
+    2. the rest -- forces of laws that are flat in ``F`` at ``q0`` (a stuck dashpot),
+       dashpots at junctions, junction velocities -- solve the limit ``h -> 0`` of an
+       implicit step: the masses' accelerations ``a`` are unknowns, a flat law is read
+       at ``q0 + h (a_b - a_a)`` with ``h = 1e-20 * time_scale``, junction balances hold.
+       A stuck dashpot thus takes the force that keeps its mass at rest if its law
+       admits it, else the nearest admissible one (for the paper's scene
+       ``clip(F(0) - k x0, -tau, tau)``, as
+       :func:`lumped.solvers.closed_form.initial_dashpot_force`).
+
+    User forces ``Element.F0`` are checked against the law at the initial state (and the
+    junction balances), then replace the computed ones.
+
+    Returns
+    -------
+    v, F, stats
+        Node velocities, element forces and Newton counters.
+
+    Raises
+    ------
+    InconsistentInitialForce
+        If a user ``F0`` breaks its element's law or a junction's force balance.
+    SolverError
+        If the algebraic system has no solution Newton can find.
+    """
+    options = options or NewtonOptions()
+    nodes, elements = scene.nodes, scene.elements
+    N, E = len(nodes), len(elements)
+    n = N + E
+    eps = 1e-20 * time_scale
+    is_mass = [isinstance(nd, Mass) for nd in nodes]
+    mass = [nd.m if isinstance(nd, Mass) else 0.0 for nd in nodes]
+    v0 = [nd.v0 if isinstance(nd, Mass) else 0.0 for nd in nodes]
+    x0 = [nd.x0 for nd in nodes]
+    ea, eb = scene.elem_a, scene.elem_b
+    f = scene.external_forces(0.0)
+
+    def at(vals: list[float], i: int) -> float:
+        return vals[i] if i >= 0 else 0.0
+
+    # 1. forces fixed by the laws alone
+    pinned: list[float | None] = [None] * E
+    q0 = [0.0] * E
+    for e, el in enumerate(elements):
+        a, b = ea[e], eb[e]
+        if el.kind == "spring":
+            q0[e] = at(x0, b) - at(x0, a)
+        elif all(i < 0 or is_mass[i] for i in (a, b)):
+            q0[e] = at(v0, b) - at(v0, a)
+        else:
+            continue  # a dashpot at a junction: its rate is unknown
+        guess = el.F0 if el.F0 is not None else 0.0
+        try:
+            F_root, fixed = _scalar_root(el.law.kernel, q0[e], guess)
+        except ValueError as err:
+            raise SolverError(
+                f"no consistent initial state: law {el.law_name!r} of element {el.name!r} "
+                f"has no force at q = {q0[e]!r}: {err}", status=Status.DIVERGED, t=0.0,
+                where=f"element {el.name!r}", residual=math.nan,
+            ) from None
+        if fixed:
+            pinned[e] = F_root
+    # 2. the limit system
+    kernels = [el.law.kernel for el in elements]
+    spring = [el.kind == "spring" for el in elements]
+
+    def evaluate(u: list[float]):
+        G = [0.0] * n
+        S = [0.0] * n
+        J = [[0.0] * n for _ in range(n)]
+        # d_i: the node's velocity increment (eps a for masses, v for junctions)
+        d = [eps * u[i] if is_mass[i] else u[i] for i in range(N)]
+        dd = [eps if is_mass[i] else 1.0 for i in range(N)]
+        for i in range(N):
+            if is_mass[i]:
+                p = mass[i] * u[i]
+                G[i] = p - f[i]
+                S[i] = abs(p) + abs(f[i])
+                J[i][i] = mass[i]
+            else:
+                G[i] = -f[i]
+                S[i] = abs(f[i])
+        for e in range(E):
+            k = N + e
+            Fe = u[k]
+            a, b = ea[e], eb[e]
+            for i, sgn in ((a, -1.0), (b, 1.0)):
+                if i >= 0:
+                    G[i] += sgn * Fe
+                    S[i] += abs(Fe)
+                    J[i][k] = sgn
+            row = J[k]
+            Fp = pinned[e]
+            if Fp is not None:
+                G[k] = Fe - Fp
+                S[k] = abs(Fe) + abs(Fp)
+                row[k] = 1.0
+                continue
+            scale = eps if spring[e] else 1.0  # springs see x0 + eps * v
+            q = q0[e] + scale * (at(d, b) - at(d, a))
+            R, Rq, RF = kernels[e](q, Fe)
+            G[k] = R
+            S[k] = _law_scale(kernels[e], q, Fe, R, Rq, RF)
+            row[k] = RF
+            if a >= 0:
+                row[a] = -Rq * scale * dd[a]
+            if b >= 0:
+                row[b] = Rq * scale * dd[b]
+        return G, J, S
+
+    u0 = [0.0] * N + [
+        Fp if Fp is not None else (el.F0 if el.F0 is not None else 0.0)
+        for Fp, el in zip(pinned, elements, strict=True)
+    ]
+    # one solve per run: allow a generous budget (degenerate yields converge linearly)
+    ic_options = NewtonOptions(rtol=options.rtol, atol=options.atol,
+                               max_iters=max(options.max_iters, 200),
+                               max_backtracks=options.max_backtracks,
+                               free_steps=options.free_steps)
+    res = newton_solve(evaluate, u0, ic_options)
+    if res.code is not NewtonCode.SUCCESS:
+        err = _newton_failure(scene, res, 0.0, 0)
+        raise SolverError(
+            f"no consistent initial state: {err}", status=err.status, t=0.0,
+            where=err.where, residual=err.residual,
+        )
+    u = res.u
+    v = [v0[i] if is_mass[i] else u[i] for i in range(N)]
+    F = list(u[N:])
+    user = [e for e, el in enumerate(elements) if el.F0 is not None]
+    if user:
+        q_init = scene.elongations(x0, v)
+        for e in user:
+            el = elements[e]
+            R, Rq, RF = el.law.kernel(q_init[e], el.F0)
+            tol = 1e-9 * (abs(Rq * q_init[e]) + abs(RF * el.F0)) + 1e-12
+            if not abs(R) <= tol:
+                raise InconsistentInitialForce(
+                    f"initial force F0 = {el.F0!r} of element {el.name!r} breaks its law "
+                    f"{el.law_name!r}: R(q={q_init[e]!r}, F={el.F0!r}) = {R!r} != 0"
+                )
+            F[e] = el.F0
+        net = scene.net_forces(0.0, F)
+        for i, node in enumerate(nodes):
+            if isinstance(node, Junction):
+                scale = abs(f[i]) + sum(abs(F[e]) for e in range(E) if i in (ea[e], eb[e]))
+                if not abs(net[i]) <= 1e-9 * scale + 1e-12:
+                    raise InconsistentInitialForce(
+                        f"initial forces break the force balance of junction {node.name!r}: "
+                        f"net force {net[i]!r} != 0"
+                    )
+    stats = {
+        "newton_iterations": res.iterations, "residual_evals": res.residual_evals,
+        "jacobian_evals": res.jacobian_evals, "factorizations": res.factorizations,
+    }
+    return v, F, stats

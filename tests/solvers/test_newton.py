@@ -1,0 +1,143 @@
+"""Semismooth Newton: LU against numpy, result codes, counters, never a silent NaN."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from lumped.solvers.newton import (
+    DENSE_PYTHON_MAX,
+    NewtonCode,
+    NewtonOptions,
+    lu_factor,
+    lu_solve,
+    newton_solve,
+)
+
+entries = st.floats(-10.0, 10.0, allow_nan=False)
+
+
+@given(st.integers(1, DENSE_PYTHON_MAX).flatmap(
+    lambda n: st.tuples(st.lists(st.lists(entries, min_size=n, max_size=n), min_size=n,
+                                 max_size=n), st.lists(entries, min_size=n, max_size=n))))
+def test_python_lu_solves_like_numpy(Ab):
+    A, b = Ab
+    M = np.array(A)
+    if abs(np.linalg.det(M)) < 1e-3 or np.linalg.cond(M) > 1e6:
+        return
+    f = lu_factor(A)
+    assert f is not None
+    y = lu_solve(f, b)
+    np.testing.assert_allclose(M @ np.array(y), b, atol=1e-8 * (1 + np.abs(b).max()))
+
+
+def test_lu_reports_singular():
+    assert lu_factor([[1.0, 2.0], [2.0, 4.0]]) is None
+    assert lu_factor([[0.0]]) is None
+
+
+def _linear(A, b):
+    def evaluate(u):
+        G = [sum(a * x for a, x in zip(row, u, strict=True)) - bi
+             for row, bi in zip(A, b, strict=True)]
+        S = [sum(abs(a * x) for a, x in zip(row, u, strict=True)) + abs(bi)
+             for row, bi in zip(A, b, strict=True)]
+        return G, [list(r) for r in A], S
+    return evaluate
+
+
+def test_linear_system_converges_in_one_iteration():
+    res = newton_solve(_linear([[2.0, 1.0], [1.0, 3.0]], [3.0, 5.0]), [0.0, 0.0])
+    assert res.code is NewtonCode.SUCCESS
+    assert res.iterations == 1
+    assert res.factorizations == 1 and res.jacobian_evals == 1
+    assert res.residual_evals == 2
+    np.testing.assert_allclose(res.u, np.linalg.solve([[2, 1], [1, 3]], [3, 5]), rtol=1e-14)
+
+
+def test_already_solved_takes_no_iteration():
+    res = newton_solve(_linear([[2.0]], [4.0]), [2.0])
+    assert res.code is NewtonCode.SUCCESS and res.iterations == 0
+
+
+def test_large_system_goes_through_numpy():
+    n = DENSE_PYTHON_MAX + 3
+    rng = np.random.default_rng(1)
+    A = (np.eye(n) * 5 + rng.uniform(-1, 1, (n, n))).tolist()
+    b = rng.uniform(-1, 1, n).tolist()
+    res = newton_solve(_linear(A, b), [0.0] * n)
+    assert res.code is NewtonCode.SUCCESS
+    np.testing.assert_allclose(res.u, np.linalg.solve(A, b), rtol=1e-12)
+
+
+def test_nonlinear_quadratic_convergence():
+    def evaluate(u):
+        return [u[0] ** 3 - 8.0], [[3 * u[0] ** 2]], [abs(u[0]) ** 3 + 8.0]
+    res = newton_solve(evaluate, [3.0])
+    assert res.code is NewtonCode.SUCCESS
+    assert res.u[0] == pytest.approx(2.0, rel=1e-13)
+    assert res.iterations <= 8
+
+
+def test_singular_jacobian_is_reported():
+    res = newton_solve(_linear([[1.0, 1.0], [1.0, 1.0]], [1.0, 2.0]), [0.0, 0.0])
+    assert res.code is NewtonCode.SINGULAR
+
+
+def test_nan_residual_is_reported_not_returned():
+    def evaluate(u):
+        return [math.nan if u[0] != 0.0 else 1.0], [[1.0]], [1.0]
+    res = newton_solve(evaluate, [0.0])
+    assert res.code is not NewtonCode.SUCCESS
+
+
+def test_iteration_budget_is_enforced():
+    # arctan: full Newton steps from far away diverge; with a tiny budget we stop
+    def evaluate(u):
+        return [math.atan(u[0])], [[1.0 / (1.0 + u[0] ** 2)]], [abs(math.atan(u[0])) + 1e-300]
+    res = newton_solve(evaluate, [10.0], NewtonOptions(max_iters=2, free_steps=0,
+                                                        max_backtracks=0))
+    assert res.code in (NewtonCode.MAX_ITERS, NewtonCode.DIVERGED)
+    assert res.iterations <= 2
+
+
+def test_line_search_rescues_arctan():
+    def evaluate(u):
+        return [math.atan(u[0])], [[1.0 / (1.0 + u[0] ** 2)]], [abs(u[0]) + 1.0]
+    res = newton_solve(evaluate, [10.0], NewtonOptions(free_steps=0))
+    assert res.code is NewtonCode.SUCCESS
+    assert abs(res.u[0]) < 1e-10
+
+
+@pytest.mark.parametrize("kw", [{"rtol": 0.0}, {"atol": -1.0}, {"max_iters": 0}])
+def test_bad_options(kw):
+    with pytest.raises(ValueError, match=next(iter(kw))):
+        NewtonOptions(**kw)
+
+
+@given(st.integers(1, DENSE_PYTHON_MAX).flatmap(
+    lambda n: st.tuples(st.lists(st.lists(entries, min_size=n, max_size=n), min_size=n,
+                                 max_size=n), st.lists(entries, min_size=n, max_size=n))))
+def test_unrolled_solve_is_lu_solve_bit_for_bit(Ab):
+    from lumped.solvers.linalg import unrolled_lu_solve
+
+    A, b = Ab
+    f = lu_factor(A)
+    if f is not None:
+        assert unrolled_lu_solve(f)(b) == lu_solve(f, b)
+
+
+def test_factor_cache_reuses_factors_across_solves():
+    from lumped.solvers.linalg import FactorCache
+
+    cache = FactorCache()
+    ev = _linear([[2.0, 1.0], [1.0, 3.0]], [3.0, 5.0])
+    first = newton_solve(ev, [0.0, 0.0], cache=cache)
+    assert first.factorizations == 1
+    for _ in range(3):
+        again = newton_solve(ev, [0.0, 0.0], cache=cache)
+        assert again.factorizations == 0 and again.u == first.u
