@@ -31,9 +31,11 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
+from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.simulate import METHOD_REGISTRY, InconsistentInitialForce, simulate
+from lumped.solvers.registry import FIXED_STEP_METHODS, METHOD_REGISTRY
+from lumped.solvers.status import InconsistentInitialForce
 
 CI_EXAMPLES = 60
 LARGE_EXAMPLES = 10_000
@@ -42,8 +44,6 @@ EXAMPLES = LARGE_EXAMPLES if LARGE else CI_EXAMPLES
 
 #: Registered methods that are not generic: they run only the paper's one scene.
 NOT_GENERIC = frozenset({"closed-bdf1", "closed-bdf2", "exact"})
-#: Fixed-step generic methods (take ``dt``); every other generic method is adaptive.
-FIXED_STEP = frozenset({"bdf1", "bdf2"})
 GENERIC = tuple(sorted(m for m in METHOD_REGISTRY if m not in NOT_GENERIC))
 
 SPRINGS = ("linear_spring", "string_spring", "implicit_spring")
@@ -129,7 +129,7 @@ def stored_energy(scene: Scene, sol) -> np.ndarray:
 
 
 def _solve(scene: Scene, method: str, dt: float):
-    if method in FIXED_STEP:
+    if method in FIXED_STEP_METHODS:
         return simulate(scene, method=method, dt=dt, t_end=T_END)
     # an adaptive method: tolerance tied to the level, output on the same grid
     return simulate(scene, method=method, dt=dt, t_end=T_END, rtol=dt**2, atol=dt**3)

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-__all__ = ["locking_elements", "lock_state", "impact_velocities"]
+__all__ = ["lockable_elements", "locking_elements", "lock_state", "impact_velocities"]
 
 
 def _branches(law):
@@ -65,8 +65,21 @@ def lock_state(law, q: float, F: float) -> bool:
     return RF == 0.0 and Rq != 0.0 and Rq == Rq
 
 
+def lockable_elements(scene) -> list[int]:
+    """Spring-like elements whose law has a locking branch (all spring-like elements when
+    the law's branches cannot be read: the per-point test then decides)."""
+    out = []
+    for e, el in enumerate(scene.elements):
+        if el.kind != "spring":
+            continue
+        lb = _branches(el.law)
+        if lb is None or any(info.locks for info in lb.info):
+            out.append(e)
+    return out
+
+
 def locking_elements(scene, x: Sequence[float], v: Sequence[float],
-                     F: Sequence[float]) -> list[int]:
+                     F: Sequence[float], candidates: Sequence[int] | None = None) -> list[int]:
     """Indices of the spring-like elements whose active branch is a position lock.
 
     Parameters
@@ -76,6 +89,8 @@ def locking_elements(scene, x: Sequence[float], v: Sequence[float],
         Node displacements and velocities (scene node order).
     F : sequence of float
         Element forces.
+    candidates : sequence of int, optional
+        Only these elements are tested (e.g. :func:`lockable_elements`, computed once).
 
     Returns
     -------
@@ -83,9 +98,17 @@ def locking_elements(scene, x: Sequence[float], v: Sequence[float],
         Element indices, ascending. Dashpot-like elements (a stuck dashpot is a *rate*
         lock: sticking, not an impact) are never listed.
     """
-    q = scene.elongations(x, v)
-    return [e for e, el in enumerate(scene.elements)
-            if el.kind == "spring" and lock_state(el.law, q[e], F[e])]
+    elements = scene.elements
+    ea, eb = scene.elem_a, scene.elem_b
+    out = []
+    for e in (range(len(elements)) if candidates is None else candidates):
+        el = elements[e]
+        if el.kind != "spring":
+            continue
+        q = (x[eb[e]] if eb[e] >= 0 else 0.0) - (x[ea[e]] if ea[e] >= 0 else 0.0)
+        if lock_state(el.law, q, F[e]):
+            out.append(e)
+    return out
 
 
 def _rates(scene, v: Sequence[float], elems: Sequence[int]) -> list[float]:
