@@ -49,8 +49,8 @@ GENERIC = tuple(sorted(m for m in METHOD_REGISTRY if m not in NOT_GENERIC))
 SPRINGS = ("linear_spring", "string_spring", "implicit_spring")
 DASHPOTS = ("newtonian", "bingham", "coulomb", "herschel_bulkley")
 YIELDING = ("bingham", "coulomb", "herschel_bulkley")
-T_END = 1.0
-DT = 0.02
+T_END = 0.5
+DT = 0.025
 
 
 def _decade(lo: float, hi: float):

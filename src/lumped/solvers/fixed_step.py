@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 
 from ..scene import Scene
 from .branch_check import _known_monotone, _left_branch
+from .globalize import force_projector, stuck_guess
 from .impact_step import impact_step, impulse_is_negligible
 from .impacts import lockable_elements, locking_elements
 from .initial_state import consistent_initial_state
@@ -210,6 +211,21 @@ def run_bdf(
                 max_it = it
         else:
             res = newton_solve(full, v + F, options, cache, min_norm=True)
+            for guess in (stuck_guess(scene, v, F, False), stuck_guess(scene, v, F, True)):
+                if res.code is NewtonCode.SUCCESS or guess is None:
+                    break
+                # globalisation by restarts: a slipping friction element at a junction
+                # has a zero column for the junction's velocity, where Newton cannot move
+                total_it += res.iterations
+                res_ev += res.residual_evals
+                res = newton_solve(full, guess, options, None, min_norm=True)
+            if res.code is not NewtonCode.SUCCESS:
+                # nonlinear elimination: each law solved for its own force at every
+                # iterate (steep laws, e.g. Herschel-Bulkley n < 1 near its yield force)
+                total_it += res.iterations
+                res_ev += res.residual_evals
+                res = newton_solve(full, v + F, options, None, min_norm=True,
+                                   project=force_projector(scene, h, x_hat))
             total_it += res.iterations
             res_ev += res.residual_evals
             jac_ev += res.jacobian_evals

@@ -158,6 +158,7 @@ def newton_solve(
     cache: FactorCache | None = None,
     *,
     min_norm: bool = False,
+    project: Callable[[list[float]], list[float]] | None = None,
 ) -> NewtonResult:
     """Solve ``G(u) = 0`` from ``u0`` by damped semismooth Newton (see the module notes).
 
@@ -179,6 +180,11 @@ def newton_solve(
         unknowns keep their start values (the previous step's forces) as far as the
         equations allow. A consistent system still converges (the residual test decides);
         an inconsistent one ends ``DIVERGED`` or ``MAX_ITERS`` with ``singular`` set.
+    project : callable, optional
+        ``u -> u'`` applied to the start and to every trial iterate (nonlinear
+        elimination): e.g. solve each element's own law for its force at the iterate's
+        elongation, so that Newton acts on the reduced system where a law's graph is
+        steep in ``F`` (Herschel-Bulkley with ``n < 1`` at its yield force).
 
     Returns
     -------
@@ -187,7 +193,7 @@ def newton_solve(
     """
     rtol, atol = options.rtol, options.atol
     isfinite = math.isfinite
-    u = list(u0)
+    u = list(u0) if project is None else project(list(u0))
     n = len(u)
     G, J, S = evaluate(u)
     n_res, n_jac, n_fact, iters = 1, 0, 0, 0
@@ -292,6 +298,8 @@ def newton_solve(
                 u_new = [ui - di for ui, di in zip(u, du, strict=True)]
             else:
                 u_new = [ui - lam * di for ui, di in zip(u, du, strict=True)]
+            if project is not None:
+                u_new = project(u_new)
             G_new, J_new, S_new = evaluate(u_new)
             n_res += 1
             if (lam == 1.0 and J_new != J and finite(G_new)
