@@ -246,7 +246,7 @@ def run_bdf(
         if lockable:
             now = set(locking_elements(scene, x_new, v_new, F_new, lockable))
             new = [e for e in sorted(now) if e not in locked]
-            if new and not impulse_is_negligible(scene, v, new, restitution):
+            if new and not impulse_is_negligible(scene, v, new):
                 done = impact_step(scene, t - dt, dt, x, v, F, locked, options, restitution)
                 total_it += done.newton_iterations
                 res_ev += done.solves

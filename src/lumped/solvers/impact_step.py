@@ -8,14 +8,17 @@ the lock (the impulse that would stop them is not negligible). Then, from the st
 
 1. **Locate.** Backward-Euler substeps of size ``s`` from ``t_n`` show whether the lock is
    reached by ``t_n + s``; bisection on ``s`` brackets the impact time to ``1e-10 dt``.
-   The state just before it is the last substep that stays unlocked (``t_n + s_lo``).
-2. **Impulse.** :func:`lumped.solvers.impacts.impact_velocities` gives the velocities
+   The state just before it is the last substep that stays unlocked (``t_n + s_lo``),
+   the first locked one ends at ``t_n + s_hi``.
+2. **Impulse.** At ``t_n + s_hi``, with the positions there (on the lock) and the
+   velocities of the free motion just before (``t_n + s_lo``),
+   :func:`lumped.solvers.impacts.impact_velocities` gives the velocities
    after the impact for the elements locked at ``t_n + s_hi`` (restitution ``e``, ``0``
    by default: momentum conserved, the locked rates stopped), the impulse of each element
    and the kinetic energy lost; each newly locked element gives one
    :class:`~lumped.solvers.status.Event` (``kind="impact"``), the energy split among them
    as ``P_e * rate_e`` (their shares of ``1/2 P^T B v``).
-3. **Finish.** One backward-Euler substep from ``t_n + s_lo`` to ``t_{n+1}`` with the new
+3. **Finish.** One backward-Euler substep from ``t_n + s_hi`` to ``t_{n+1}`` with the new
    velocities. The caller restarts the multistep history (BDF2 takes a BDF1 step next).
 
 Every substep is a backward-Euler step, dissipative for passive laws, and the impulse
@@ -32,7 +35,7 @@ from dataclasses import dataclass, field
 
 from ..scene import Mass, Scene
 from .globalize import force_projector
-from .impacts import impact_velocities, locking_elements
+from .impacts import impact_velocities, locking_elements, onto_locks
 from .newton import NewtonCode, NewtonOptions, NewtonResult, newton_solve
 from .status import Event
 from .step_system import _make_evaluate
@@ -79,11 +82,11 @@ def be_substep(scene: Scene, t_end: float, h: float, x0: list[float], v0: list[f
     return x1, v1, res.u[N:], res
 
 
-def impulse_is_negligible(scene: Scene, v: list[float], new: list[int],
-                          restitution: float) -> bool:
+def impulse_is_negligible(scene: Scene, v: list[float], new: list[int]) -> bool:
     """True when stopping the newly locked elements ``new`` at velocities ``v`` costs no
-    kinetic energy beyond round-off (a lock reached at rest: a branch switch, no impact)."""
-    _, _, lost = impact_velocities(scene, [0.0] * len(v), v, new, restitution)
+    kinetic energy beyond round-off (a lock reached at rest: a branch switch, no impact;
+    measured with restitution 0 whatever the scene's, as the size of the impact)."""
+    _, _, lost = impact_velocities(scene, [0.0] * len(v), v, new, 0.0)
     kinetic = sum(0.5 * m * vi * vi for m, vi in zip(scene.masses, v, strict=True))
     return lost <= 1e-12 * kinetic + 1e-300
 
@@ -133,8 +136,11 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
     xl, vl, Fl = lo_state
     xh, vh, Fh = hi_state[:3]
     locked = locking_elements(scene, xh, vh, Fh)
+    xh = onto_locks(scene, xh, Fh, locked)
     new = [e for e in locked if e not in locked0]
-    v_after, impulses, lost = impact_velocities(scene, xl, vl, locked, restitution)
+    # the impact at t0 + s_hi: positions on the lock (x_hi), velocities of the free
+    # motion just before it (v_lo); the bracket is 1e-10 dt wide
+    v_after, impulses, lost = impact_velocities(scene, xh, vl, locked, restitution)
     rates = [(vl[scene.elem_b[e]] if scene.elem_b[e] >= 0 else 0.0)
              - (vl[scene.elem_a[e]] if scene.elem_a[e] >= 0 else 0.0) for e in locked]
     shares = {e: abs(p * r) for e, p, r in zip(locked, impulses, rates, strict=True)}
@@ -146,14 +152,24 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
             continue
         law = scene.elements[e].law
         out.events.append(Event(
-            t=t0 + lo, element=scene.elements[e].name, kind="impact",
+            t=t0 + hi, element=scene.elements[e].name, kind="impact",
             from_branch=_branch_index(law, ql[e], Fl[e]),
             to_branch=_branch_index(law, qh[e], Fh[e]),
             impulse=float(p), energy_lost=float(lost * shares[e] / total),
         ))
-    x1, v1, F1, res = sub(dt - lo, xl, v_after, Fl, t0 + dt)
+    if dt - hi <= _LOCATE_RTOL * dt:  # the impact ends the step: forces from a hair after
+        x1, v1, F1, res = sub(_LOCATE_RTOL * dt, xh, v_after, Fl, t0 + dt)
+        x1 = xh
+    else:
+        x1, v1, F1, res = sub(dt - hi, xh, v_after, Fl, t0 + dt)
     if res.code is not NewtonCode.SUCCESS:
         out.failure, out.failure_t = res, t0 + dt
         return out
+    # locked at the end: their rates are zero (a short remainder turns the rounding of
+    # q = x_hat + h v on the lock into a spurious rate ulp / h; an element that locked
+    # within the remainder gets Moreau's inelastic velocity)
+    end_locked = locking_elements(scene, x1, v1, F1)
+    if end_locked:
+        v1 = impact_velocities(scene, x1, v1, end_locked, 0.0)[0]
     out.x, out.v, out.F = x1, v1, F1
     return out

@@ -36,7 +36,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-__all__ = ["lockable_elements", "locking_elements", "lock_state", "impact_velocities"]
+__all__ = ["lockable_elements", "locking_elements", "lock_state", "impact_velocities",
+           "onto_locks"]
 
 
 def _branches(law):
@@ -119,8 +120,10 @@ def _rates(scene, v: Sequence[float], elems: Sequence[int]) -> list[float]:
     return out
 
 
-def _solve(scene, v: Sequence[float], elems: Sequence[int], restitution: float):
-    """The impact equations for the elements ``elems``: ``(v+, P)`` (minimum norm)."""
+def _solve(scene, v: Sequence[float], elems: Sequence[int], restitution: float,
+           target: Sequence[float] | None = None):
+    """The impact equations for the elements ``elems``: ``(v+, P)`` (minimum norm);
+    ``target`` replaces ``-e B v`` as the locked rates after the impact."""
     import numpy as np
 
     N, L = len(scene.nodes), len(elems)
@@ -138,7 +141,8 @@ def _solve(scene, v: Sequence[float], elems: Sequence[int], restitution: float):
                 # m dv = +P on a, -P on b  (P in tension, as F)
                 K[node, N + r] = sgn
                 K[N + r, node] = sgn
-        rhs[N + r] = -(1.0 + restitution) * rates[r]
+        rhs[N + r] = (-(1.0 + restitution) * rates[r] if target is None
+                      else target[r] - rates[r])
     sol, *_ = np.linalg.lstsq(K, rhs, rcond=None)
     dv = sol[:N]
     P = sol[N:]
@@ -214,3 +218,22 @@ def impact_velocities(scene, x: Sequence[float], v: Sequence[float], locked: Seq
     m = scene.masses
     lost = 0.5 * sum(mi * (vb * vb - va * va) for mi, vb, va in zip(m, v, v_after, strict=True))
     return v_after, [impulses[e] for e in locked], max(lost, 0.0)
+
+
+def onto_locks(scene, x: Sequence[float], F: Sequence[float],
+               locked: Sequence[int]) -> list[float]:
+    """Displacements moved (least, in the kinetic-energy norm) so that every element of
+    ``locked`` sits on its lock: ``dq_e = -R_e / (dR/dq)_e`` from its law at ``(q_e, F_e)``.
+
+    Removes the rounding a Newton solve leaves on a lock (``q = L`` to an ulp), which
+    the next short step would otherwise turn into a velocity ``ulp / h``.
+    """
+    q = scene.elongations(x, [0.0] * len(x))
+    dq = []
+    for e in locked:
+        R, Rq, _ = scene.elements[e].law.kernel(q[e], F[e])
+        dq.append(-R / Rq if Rq != 0.0 and R == R else 0.0)
+    if not any(dq):
+        return list(x)
+    dx, _, _ = _solve(scene, [0.0] * len(x), list(locked), 0.0, target=dq)
+    return [xi + di for xi, di in zip(x, dx, strict=True)]
