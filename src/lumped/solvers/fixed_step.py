@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 
 from ..scene import Scene
 from .branch_check import _known_monotone, _left_branch
-from .globalize import force_projector, stuck_guess
+from .globalize import force_projector, stuck_guesses
 from .impact_step import impact_step, impulse_is_negligible
 from .impacts import lockable_elements, locking_elements
 from .initial_state import consistent_initial_state
@@ -211,8 +211,9 @@ def run_bdf(
                 max_it = it
         else:
             res = newton_solve(full, v + F, options, cache, min_norm=True)
-            for guess in (stuck_guess(scene, v, F, False), stuck_guess(scene, v, F, True)):
-                if res.code is NewtonCode.SUCCESS or guess is None:
+            for guess in (stuck_guesses(scene, v, F) if res.code is not NewtonCode.SUCCESS
+                          else ()):
+                if res.code is NewtonCode.SUCCESS:
                     break
                 # globalisation by restarts: a slipping friction element at a junction
                 # has a zero column for the junction's velocity, where Newton cannot move

@@ -22,7 +22,7 @@ import math
 from ..scene import Junction, Scene
 from .initial_state import _scalar_root
 
-__all__ = ["force_projector", "stuck_guess"]
+__all__ = ["force_projector", "stuck_guesses"]
 
 
 def force_projector(scene: Scene, h: float, x_hat: list[float]):
@@ -54,22 +54,29 @@ def force_projector(scene: Scene, h: float, x_hat: list[float]):
     return project
 
 
-def stuck_guess(scene: Scene, v: list[float], F: list[float],
-                 zero_forces: bool) -> list[float] | None:
-    """A restart point for Newton: every junction moves with a neighbour it shares a
-    dashpot-like element with (that element's rate zero: stuck), forces as given or zero.
-    ``None`` when the scene has no junction and the forces are kept (nothing new)."""
+def stuck_guesses(scene: Scene, v: list[float], F: list[float]) -> list[list[float]]:
+    """Restart points for Newton: in the ``k``-th, every junction moves with its ``k``-th
+    neighbour across a dashpot-like element (that element's rate zero: stuck; ``k`` taken
+    modulo the junction's count), forces as given; then the same with all forces zero.
+    Empty for a scene without junctions."""
     N = len(scene.nodes)
-    w = list(v)
-    junctions = [i for i, nd in enumerate(scene.nodes) if isinstance(nd, Junction)]
-    if not junctions and not zero_forces:
-        return None
-    for i in junctions:
-        for e, el in enumerate(scene.elements):
-            a, b = scene.elem_a[e], scene.elem_b[e]
-            if el.kind == "dashpot" and i in (a, b):
-                o = b if a == i else a
-                w[i] = w[o] if o >= 0 else 0.0
-                break
-    Fs = [0.0] * len(F) if zero_forces else list(F)
-    return w[:N] + Fs
+    partners: list[tuple[int, list[int]]] = []
+    for i, nd in enumerate(scene.nodes):
+        if not isinstance(nd, Junction):
+            continue
+        others = [scene.elem_b[e] if scene.elem_a[e] == i else scene.elem_a[e]
+                  for e, el in enumerate(scene.elements)
+                  if el.kind == "dashpot" and i in (scene.elem_a[e], scene.elem_b[e])]
+        if others:
+            partners.append((i, others))
+    if not partners:
+        return []
+    out = []
+    for k in range(max(len(o) for _, o in partners)):
+        w = list(v[:N])
+        for i, others in partners:
+            o = others[k % len(others)]
+            w[i] = w[o] if o >= 0 else 0.0
+        out.append(w + list(F))
+    out += [g[:N] + [0.0] * len(F) for g in out]
+    return out
