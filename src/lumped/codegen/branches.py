@@ -1,0 +1,436 @@
+r"""The smooth branches of a law: which one is active, its kernel, and where it ends.
+
+A law ``R(q, F) = 0`` with kinks is, after :func:`~lumped.codegen.rewrite_kinks`, a tree of
+``Piecewise`` nodes.  Choosing one arm of every ``Piecewise`` that matters gives a *branch*:
+a smooth residual ``R_i(q, F)`` that holds on the region where the conditions that led to
+it hold.  The branches partition the ``(q, F)`` plane exactly as the compiled kernel does
+(first true condition wins, ties as in :mod:`lumped.codegen`), so the kernel's value and
+Jacobian at a point are those of the branch :meth:`LawBranches.branch` returns there.
+
+What the event model and the adaptive method use:
+
+* :meth:`LawBranches.branch` -- the index of the active branch at ``(q, F)``;
+* :meth:`LawBranches.kernel_for` -- the kernel of one branch alone, smooth everywhere it
+  is defined, so a step can hold a law on one branch (a *mode*) and stay high order;
+* :meth:`LawBranches.guards_for` -- the branch's conditions as continuous *guard
+  functions* ``g_j(q, F)``: all ``g_j > 0`` strictly inside the branch's region,
+  ``g_j = 0`` on its boundary (where the kernel's tie rule decides), and some
+  ``g_j < 0`` outside it.  An event is a sign change of a guard;
+* :attr:`BranchInfo.locks` -- the branch fixes ``q`` and leaves ``F`` free
+  (``dR_i/dF == 0`` identically, ``R_i`` depends on ``q``): a position lock for a spring
+  (a taut string, ``q = L``), a rate lock for a dashpot (sticking, ``q = 0``).  Such an
+  element's force is set by the rest of the system.  Detected from the law's expression,
+  never from its name.
+
+Guards from conditions (``a``, ``b`` the two sides of a relation)::
+
+    a < b,  a <= b   required true  ->  g = b - a       required false -> g = a - b
+    a > b,  a >= b   required true  ->  g = a - b       required false -> g = b - a
+    And(c1, c2)      required true  ->  the guards of c1 and the guards of c2
+    Or(c1, c2)       required true  ->  one guard  max(min(guards of c1), min(guards of c2))
+    Not(c)           the guards of c with the requirement flipped
+    ITE(c, a, b)     as Or(And(c, a), And(Not(c), b))
+
+``Eq``/``Ne`` conditions hold on sets of measure zero and give no guard.  Branches whose
+conditions contradict each other (the same condition required true and false, or
+bounds on one variable with an empty intersection, e.g. ``F >= 0`` false and ``F > 0``
+true) are dropped.
+
+Examples
+--------
+>>> from lumped.laws import get_law
+>>> lb = law_branches(get_law("bingham").bind(gamma=2.0, tau=1.0))
+>>> lb.count
+3
+>>> [lb.info[i].locks for i in range(lb.count)]
+[False, False, True]
+>>> i = lb.branch(0.0, 0.5)            # stuck: |F| <= tau
+>>> lb.info[i].lock_value, lb.guards_for(i)(0.0, 0.5)
+(0.0, (1.5, 0.5))
+>>> lb.kernel_for(i)(0.0, 0.5)
+(0.0, 1.0, 0.0)
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+
+import sympy as sp
+from sympy.core.parameters import distribute
+
+from .emit import _build, _Printer
+from .rewrite import magnitude_expression
+
+__all__ = ["BranchInfo", "LawBranches", "law_branches"]
+
+_Q, _F = sp.Symbol("q"), sp.Symbol("F")
+
+#: ``(condition, required truth value)`` pairs that select a branch.
+_Path = tuple[tuple[sp.Basic, bool], ...]
+
+
+@dataclass(frozen=True)
+class BranchInfo:
+    """One smooth branch of a law.
+
+    Attributes
+    ----------
+    index : int
+        Its index in :attr:`LawBranches.info` (the order of the law's ``Piecewise`` arms).
+    residual, dR_dq, dR_dF : sympy.Expr
+        ``R_i`` and its derivatives in ``Symbol("q")``, ``Symbol("F")``, parameters
+        substituted.
+    path : tuple of (condition, bool)
+        The conditions, and the truth value each must have, that select this branch.
+    locks : bool
+        ``R_i`` does not depend on ``F`` but does depend on ``q``: the branch fixes ``q``
+        and leaves the force free.
+    lock_value : float or None
+        The ``q`` a locking branch fixes when ``R_i`` is affine in ``q`` with constant
+        coefficients (``q = L``, ``q = 0``); else ``None``.
+    """
+
+    index: int
+    residual: sp.Expr
+    dR_dq: sp.Expr
+    dR_dF: sp.Expr
+    path: _Path
+    locks: bool
+    lock_value: float | None
+
+
+class LawBranches:
+    """The branches of one bound law; build with :func:`law_branches` (cached).
+
+    Attributes
+    ----------
+    count : int
+        Number of branches (``1`` for a smooth law).
+    info : tuple of BranchInfo
+    """
+
+    def __init__(self, residual: sp.Expr) -> None:
+        with distribute(False):
+            leaves = list(_leaves(residual, ()))
+        keep = [_feasible(path) for _, path in leaves]
+        if not any(keep):
+            raise ValueError(f"no branch of {residual} is admissible")
+        infos, number = [], []
+        for (expr, path), ok in zip(leaves, keep, strict=True):
+            number.append(len(infos) if ok else -1)
+            if not ok:
+                continue
+            path = tuple(dict.fromkeys(path))  # a condition met twice on the way counts once
+            with distribute(False):
+                dq, dF = sp.diff(expr, _Q), sp.diff(expr, _F)
+            locks = sp.simplify(dF) == 0 and sp.simplify(dq) != 0
+            infos.append(BranchInfo(len(infos), expr, dq, dF, path, bool(locks),
+                                    _lock_value(expr) if locks else None))
+        self.info: tuple[BranchInfo, ...] = tuple(infos)
+        self.count = len(infos)
+        self.branch: Callable[[float, float], int] = _build_selector(
+            _decision_tree(residual), number)
+        self._kernels: dict[tuple[int, bool], Callable] = {}
+        self._guards: dict[int, Callable] = {}
+
+    def kernel_for(self, i: int) -> Callable[[float, float], tuple[float, float, float]]:
+        """``kernel(q, F) -> (R_i, dR_i/dq, dR_i/dF)`` of branch ``i`` alone.
+
+        Plain ``math`` code like :func:`~lumped.codegen.compile_kernel` (``nan`` where
+        undefined), with ``.magnitude(q, F)`` (the terms' scale, for Newton's residual
+        test) and ``.__source__``.
+        """
+        return self._kernel(self._check(i), guard=True)
+
+    def source_for(self, i: int, *, guard: bool = False) -> str:
+        """The Python source of :meth:`kernel_for` ``(i)``; ``guard=False`` (default) gives
+        the bare body without ``try``, the form to hand to numba."""
+        return self._kernel(self._check(i), guard=guard).__source__
+
+    def guards_for(self, i: int) -> Callable[[float, float], tuple[float, ...]]:
+        """``guards(q, F) -> (g_1, ...)``: all ``> 0`` strictly inside branch ``i``, some
+        ``< 0`` outside it (see the module notes); ``()`` for a smooth law."""
+        i = self._check(i)
+        hit = self._guards.get(i)
+        if hit is None:
+            hit = self._guards[i] = _compile_guards(self.info[i].path)
+        return hit
+
+    def _kernel(self, i: int, *, guard: bool) -> Callable:
+        hit = self._kernels.get((i, guard))
+        if hit is None:
+            info = self.info[i]
+            with distribute(False):
+                hit = _build("kernel", ["q", "F"], [info.residual, info.dR_dq, info.dR_dF],
+                             guard=guard)
+                hit.magnitude = _build(  # type: ignore[attr-defined]
+                    "magnitude", ["q", "F"], [magnitude_expression(info.residual)], guard=guard)
+            self._kernels[(i, guard)] = hit
+        return hit
+
+    def _check(self, i: object) -> int:
+        if isinstance(i, bool) or not isinstance(i, int) or not 0 <= i < self.count:
+            raise ValueError(f"branch index must be an int in [0, {self.count}), got {i!r}")
+        return i
+
+    def __repr__(self) -> str:
+        parts = ", ".join(f"{b.index}: {b.residual}" + (" [locks]" if b.locks else "")
+                          for b in self.info)
+        return f"LawBranches({parts})"
+
+
+_CACHE: dict[object, LawBranches] = {}
+
+
+def law_branches(bound) -> LawBranches:
+    """The :class:`LawBranches` of a bound law (anything with a compiled ``kernel`` whose
+    ``expressions[0]`` is the prepared residual, e.g. :class:`lumped.laws.BoundLaw`);
+    cached per bound law."""
+    try:
+        hit = _CACHE.get(bound)
+    except TypeError:  # unhashable: no cache
+        hit = None
+    if hit is not None:
+        return hit
+    try:
+        residual = bound.kernel.expressions[0]
+    except AttributeError:
+        raise TypeError(
+            f"`bound` must be a bound law with a compiled kernel, got {type(bound).__name__}"
+        ) from None
+    out = LawBranches(residual)
+    try:
+        _CACHE[bound] = out
+    except TypeError:
+        pass
+    return out
+
+
+# ---------------------------------------------------------------------------------------
+# Enumeration
+
+
+def _ready_piecewise(expr: sp.Basic) -> sp.Piecewise | None:
+    """The first ``Piecewise`` in pre-order whose conditions hold no ``Piecewise``."""
+    for node in sp.preorder_traversal(expr):
+        if isinstance(node, sp.Piecewise) and not any(
+            c.has(sp.Piecewise) for _, c in node.args
+        ):
+            return node
+    return None
+
+
+def _arms(pw: sp.Piecewise, path: _Path) -> Iterator[tuple[sp.Expr, _Path]]:
+    """Each arm of ``pw`` with the path that selects it (first true condition wins)."""
+    before: list[tuple[sp.Basic, bool]] = []
+    for value, cond in pw.args:
+        if cond is sp.false:
+            continue
+        if cond is sp.true:
+            yield value, path + tuple(before)
+            return
+        yield value, path + tuple(before) + ((cond, True),)
+        before.append((cond, False))
+
+
+def _leaves(expr: sp.Expr, path: _Path) -> Iterator[tuple[sp.Expr, _Path]]:
+    pw = _ready_piecewise(expr)
+    if pw is None:
+        yield expr, path
+        return
+    for value, sub in _arms(pw, path):
+        yield from _leaves(expr.xreplace({pw: value}), sub)
+
+
+def _decision_tree(expr: sp.Expr):
+    """``("leaf",)`` or ``("node", [(cond, subtree), ...], fallback_subtree | None)``."""
+    pw = _ready_piecewise(expr)
+    if pw is None:
+        return ("leaf",)
+    arms, fallback = [], None
+    for value, cond in pw.args:
+        if cond is sp.false:
+            continue
+        sub = _decision_tree(expr.xreplace({pw: value}))
+        if cond is sp.true:
+            fallback = sub
+            break
+        arms.append((cond, sub))
+    return ("node", arms, fallback)
+
+
+def _build_selector(tree, number: list[int]) -> Callable[[float, float], int]:
+    """Compile the decision tree into ``branch(q, F) -> int``: the ``k``-th leaf (in the
+    order :func:`_leaves` yields them) returns ``number[k]``; ``-1`` where no condition
+    holds."""
+    printer = _Printer()
+    lines = ["def branch(q, F):"]
+    counter = itertools.count()
+
+    def emit(node, indent: int) -> None:
+        pad = "    " * indent
+        if node[0] == "leaf":
+            lines.append(f"{pad}return {number[next(counter)]}")
+            return
+        _, arms, fallback = node
+        for k, (cond, sub) in enumerate(arms):
+            lines.append(f"{pad}{'if' if k == 0 else 'elif'} {_condition_code(cond, printer)}:")
+            emit(sub, indent + 1)
+        if fallback is not None:
+            if arms:
+                lines.append(f"{pad}else:")
+                emit(fallback, indent + 1)
+            else:
+                emit(fallback, indent)
+        else:
+            lines.append(f"{pad}return -1")
+
+    emit(tree, 1)
+    if next(counter) != len(number):  # pragma: no cover - the two walks agree by construction
+        raise AssertionError("branch selector and leaves disagree")
+    source = "\n".join(lines) + "\n"
+    namespace: dict[str, object] = {"math": __import__("math"), "__builtins__": {}}
+    exec(compile(source, "<lumped branch>", "exec"), namespace)  # noqa: S102 (our own source)
+    fn = namespace["branch"]
+    fn.__source__ = source  # type: ignore[attr-defined]
+    return fn  # type: ignore[return-value]
+
+
+def _condition_code(cond: sp.Basic, printer: _Printer) -> str:
+    if cond is sp.true:
+        return "True"
+    if cond is sp.false:
+        return "False"
+    if isinstance(cond, sp.core.relational.Relational):
+        if cond.rel_op not in ("<", "<=", ">", ">=", "==", "!="):
+            raise ValueError(f"unsupported relation {cond}")
+        return f"({printer.doprint(cond.lhs)}) {cond.rel_op} ({printer.doprint(cond.rhs)})"
+    if isinstance(cond, sp.And | sp.Or):
+        joint = " and " if isinstance(cond, sp.And) else " or "
+        return "(" + joint.join(_condition_code(a, printer) for a in cond.args) + ")"
+    if isinstance(cond, sp.Not):
+        return f"(not {_condition_code(cond.args[0], printer)})"
+    if isinstance(cond, sp.ITE):
+        c, a, b = (_condition_code(x, printer) for x in cond.args)
+        return f"({a} if {c} else {b})"
+    raise ValueError(f"unsupported condition {cond} ({type(cond).__name__})")
+
+
+# ---------------------------------------------------------------------------------------
+# Branch data
+
+
+def _lock_value(expr: sp.Expr) -> float | None:
+    with distribute(False):
+        slope = sp.diff(expr, _Q)
+        if slope.free_symbols or slope == 0:
+            return None
+        value = -expr.xreplace({_Q: sp.S.Zero}) / slope
+    if value.free_symbols:
+        return None
+    try:
+        out = float(value)
+    except (TypeError, ValueError):
+        return None
+    return out + 0.0  # no negative zero
+
+
+def _guard_codes(cond: sp.Basic, want: bool, printer: _Printer) -> list[str] | None:
+    """Guard code strings for ``cond == want``: all must be ``> 0``; ``None`` when it
+    always holds, ``["-1.0"]`` when it never does."""
+    if cond is sp.true or cond is sp.false:
+        return None if (cond is sp.true) == want else ["-1.0"]
+    if isinstance(cond, sp.Not):
+        return _guard_codes(cond.args[0], not want, printer)
+    if isinstance(cond, sp.ITE):
+        c, a, b = cond.args
+        cond = sp.Or(sp.And(c, a, evaluate=False), sp.And(sp.Not(c), b, evaluate=False),
+                     evaluate=False)
+    if isinstance(cond, sp.And | sp.Or):
+        parts = [_guard_codes(a, want, printer) for a in cond.args]
+        if isinstance(cond, sp.And) == want:  # conjunction: every part must hold
+            out = [g for p in parts if p is not None for g in p]
+            return out or None
+        if any(p is None for p in parts):  # disjunction with an always-true part
+            return None
+        alts = [p[0] if len(p) == 1 else f"min({', '.join(p)})" for p in parts]
+        return [f"max({', '.join(alts)})"]
+    if isinstance(cond, sp.core.relational.Relational):
+        if cond.rel_op in ("==", "!="):
+            return None
+        lhs, rhs = (f"({printer.doprint(side)})" for side in (cond.lhs, cond.rhs))
+        less = cond.rel_op in ("<", "<=")
+        return [f"{rhs} - {lhs}" if less == want else f"{lhs} - {rhs}"]
+    raise ValueError(f"unsupported condition {cond} ({type(cond).__name__})")
+
+
+def _compile_guards(path: _Path) -> Callable[[float, float], tuple[float, ...]]:
+    """Compile ``guards(q, F) -> tuple`` for a branch's path (``nan`` where undefined)."""
+    printer = _Printer()
+    codes: list[str] = []
+    for cond, want in path:
+        codes.extend(_guard_codes(cond, want, printer) or [])
+    body = "(" + "".join(f"{c}, " for c in codes) + ")"
+    nans = "(" + "math.nan, " * len(codes) + ")"
+    source = (f"def guards(q, F):\n    try:\n        return {body}\n"
+              f"    except (ArithmeticError, ValueError):\n        return {nans}\n")
+    namespace: dict[str, object] = {
+        "math": math, "__builtins__": {"max": max, "min": min, "ArithmeticError":
+                                       ArithmeticError, "ValueError": ValueError}}
+    exec(compile(source, "<lumped guards>", "exec"), namespace)  # noqa: S102 (our own source)
+    fn = namespace["guards"]
+    fn.__source__ = source  # type: ignore[attr-defined]
+    fn.codes = tuple(codes)  # type: ignore[attr-defined]
+    return fn  # type: ignore[return-value]
+
+
+# ---------------------------------------------------------------------------------------
+# Pruning: paths whose conditions contradict each other
+
+
+def _affine_bound(cond: sp.Basic, want: bool):
+    """``(symbol, lo, lo_closed, hi, hi_closed)`` when ``cond == want`` is an interval of
+    one symbol (``a s + b  op  0`` with numbers ``a != 0, b``); else ``None``."""
+    if not isinstance(cond, sp.core.relational.Relational) or cond.rel_op in ("==", "!="):
+        return None
+    diff = sp.expand(cond.lhs - cond.rhs)
+    syms = diff.free_symbols
+    if len(syms) != 1:
+        return None
+    (s,) = syms
+    a, b = diff.coeff(s, 1), diff.xreplace({s: sp.S.Zero})
+    if not (a.is_Number and b.is_Number) or a == 0 or sp.expand(diff - a * s - b) != 0:
+        return None
+    op = cond.rel_op
+    if not want:
+        op = {"<": ">=", "<=": ">", ">": "<=", ">=": "<"}[op]
+    if a < 0:
+        op = {"<": ">", "<=": ">=", ">": "<", ">=": "<="}[op]
+    c = -b / a  # s op c
+    inf = sp.oo
+    if op in ("<", "<="):
+        return s, -inf, False, c, op == "<="
+    return s, c, op == ">=", inf, False
+
+
+def _feasible(path: _Path) -> bool:
+    seen: dict[sp.Basic, bool] = {}
+    box: dict[sp.Symbol, list] = {}
+    for cond, want in path:
+        if seen.setdefault(cond, want) != want:
+            return False
+        bound = _affine_bound(cond, want)
+        if bound is None:
+            continue
+        s, lo, loc, hi, hic = bound
+        cur = box.setdefault(s, [-sp.oo, False, sp.oo, False])
+        if lo > cur[0] or (lo == cur[0] and not loc):
+            cur[0], cur[1] = lo, loc
+        if hi < cur[2] or (hi == cur[2] and not hic):
+            cur[2], cur[3] = hi, hic
+        if cur[0] > cur[2] or (cur[0] == cur[2] and not (cur[1] and cur[3])):
+            return False
+    return True

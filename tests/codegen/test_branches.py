@@ -1,0 +1,105 @@
+"""The branches of a law (lumped.codegen.branches): the selector agrees with the kernel,
+guards are positive inside their branch only, and locking branches are found from the
+expression, not the law's name."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+import sympy as sp
+from hypothesis import given
+from hypothesis import strategies as st
+
+from lumped.codegen.branches import law_branches
+from lumped.laws import ElementLaw, get_law
+
+#: (label, bound law, expected count, expected lock values by branch (None: no lock))
+CASES = [
+    ("linear_spring", get_law("linear_spring").bind(k=3.0), [None]),
+    ("newtonian", get_law("newtonian").bind(c=2.0), [None]),
+    ("bingham", get_law("bingham").bind(gamma=2.0, tau=1.0), [None, None, 0.0]),
+    ("coulomb", get_law("coulomb").bind(tau=1.0, r=10.0), [None, None, 0.0]),
+    ("string_spring", get_law("string_spring").bind(k=100.0, L=0.1), [None, 0.1]),
+    ("hb", get_law("herschel_bulkley").bind(gamma=2.0, tau=1.0, n=0.5), [None, None, 0.0]),
+    ("hb_tau0_n1", get_law("herschel_bulkley").bind(gamma=2.0, tau=0.0, n=1.0), [None]),
+    ("implicit_spring", get_law("implicit_spring").bind(k=1.0, L0=0.1, F0=1.0), [None]),
+    ("s_shaped", get_law("s_shaped").bind(q0=1.0, F0=1.0), [None]),
+    # user laws: a hard stop written another way, a Bingham law through sign/Max/Abs,
+    # and a smooth-by-pieces spring
+    ("user_stop", ElementLaw("stop", "spring", "q - Piecewise((F/k, F < k*L), (L, True))",
+                             ["k", "L"]).bind(k=10.0, L=0.2), [None, 0.2]),
+    ("user_bingham", ElementLaw("b2", "dashpot", "q - gamma*sign(F)*Max(Abs(F) - tau, 0)",
+                                ["gamma", "tau"]).bind(gamma=2.0, tau=1.0),
+     [None, 0.0, None, 0.0]),
+    ("user_pieces", ElementLaw("p", "spring", "F - k*q*Abs(q) - Max(q, 0)*c",
+                               ["k", "c"]).bind(k=2.0, c=1.0), [None, None]),
+]
+IDS = [c[0] for c in CASES]
+
+points = st.tuples(
+    st.one_of(st.floats(-3, 3), st.sampled_from([0.0, 0.1, 0.2, -0.1])),
+    st.one_of(st.floats(-30, 30), st.sampled_from([-1.0, 1.0, 0.0, 2.0, 10.0, -10.0])),
+)
+
+
+@pytest.mark.parametrize(("label", "bound", "locks"), CASES, ids=IDS)
+def test_branch_structure(label, bound, locks):
+    lb = law_branches(bound)
+    assert lb.count == len(locks)
+    assert [b.lock_value for b in lb.info] == locks
+    assert [b.locks for b in lb.info] == [v is not None for v in locks]
+    assert law_branches(bound) is lb  # cached
+
+
+@pytest.mark.parametrize(("label", "bound", "locks"), CASES, ids=IDS)
+@given(point=points)
+def test_selector_kernel_and_guards_agree(label, bound, locks, point):
+    q, F = point
+    lb = law_branches(bound)
+    i = lb.branch(q, F)
+    assert 0 <= i < lb.count
+    whole, alone = bound.kernel(q, F), lb.kernel_for(i)(q, F)
+    for a, b in zip(whole, alone, strict=True):
+        assert (math.isnan(a) and math.isnan(b)) or abs(a - b) <= 1e-14 * (1 + abs(a))
+    assert all(g >= 0 for g in lb.guards_for(i)(q, F))
+    for j in range(lb.count):
+        if j != i:  # another branch is not strictly admissible here
+            assert min(lb.guards_for(j)(q, F)) <= 0
+
+
+def test_guard_changes_sign_where_the_branch_is_left():
+    lb = law_branches(get_law("string_spring").bind(k=100.0, L=0.1))
+    slack, taut = 0, 1
+    assert lb.branch(0.05, 5.0) == slack and lb.branch(0.1, 11.0) == taut
+    g = lb.guards_for(slack)
+    assert g(0.0, 9.0)[0] > 0 and g(0.0, 10.0)[0] == 0 and g(0.0, 11.0)[0] < 0
+    assert lb.info[taut].residual.free_symbols == {sp.Symbol("q")}  # F free: a lock
+
+
+def test_numba_source_has_no_try():
+    lb = law_branches(get_law("bingham").bind(gamma=2.0, tau=1.0))
+    src = lb.source_for(1)
+    assert "try" not in src and src.startswith("def kernel(q, F):")
+    assert "try" in lb.source_for(1, guard=True)
+
+
+@pytest.mark.parametrize("bad", [-1, 3, 1.0, True, "0"])
+def test_bad_branch_index(bad):
+    lb = law_branches(get_law("bingham").bind(gamma=2.0, tau=1.0))
+    with pytest.raises(ValueError, match="branch index"):
+        lb.kernel_for(bad)
+
+
+def test_bad_law():
+    with pytest.raises(TypeError, match="bound"):
+        law_branches(object())
+
+
+def test_doctests_pass():
+    import doctest
+
+    import lumped.codegen.branches as module
+
+    result = doctest.testmod(module)
+    assert result.attempted > 0 and result.failed == 0
