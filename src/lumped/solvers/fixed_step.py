@@ -49,7 +49,7 @@ from .globalize import force_projector, stuck_guesses
 from .impact_step import impact_step, impulse_is_negligible
 from .impacts import lockable_elements, locking_elements
 from .initial_state import consistent_initial_state
-from .locks import IntervalLog, indeterminate_elements
+from .locks import IntervalLog, cyclic_elements, indeterminate_elements
 from .newton import (
     FactorCache,
     NewtonCode,
@@ -175,6 +175,7 @@ def run_bdf(
     events: list[Event] = []
     n_impacts = 0
     log = IntervalLog()
+    cyclic = cyclic_elements(scene)
     for step in range(1, n_steps + 1):
         t = step * dt
         for i, fn in forcing:
@@ -203,6 +204,7 @@ def run_bdf(
         cache = cache1 if h == h1 else cache2
         u = _fast_step(evaluate, v + F, cache, rtol, atol) if fast else None
         if u is not None:  # the common case, counted as newton_solve would count it
+            J_acc = cache.J  # the Jacobian at the solution (same pieces)
             it = u.pop()
             total_it += it
             res_ev += 1 + it
@@ -240,6 +242,7 @@ def run_bdf(
                 status, message = err.status, str(err)
                 break
             u = res.u
+            J_acc = res.jacobian
         v_new = u[:N]
         x_new = [x_hat[i] + h * v_new[i] for i in range(N)]
         F_new = u[N:]
@@ -261,6 +264,7 @@ def run_bdf(
                 events += done.events
                 n_impacts += 1
                 restart = True
+                J_acc = None
                 now = set(locking_elements(scene, x_new, v_new, F_new, lockable))
             locked = now
         F_prev, F = F, F_new
@@ -288,10 +292,15 @@ def run_bdf(
             prev_d[e] = d1
         if status is not Status.SUCCESS:
             break
-        if E > 1:
-            q_acc = scene.elongations(x_new, v_new)
-            log.mark((step - 1) * dt, t, [scene.elements[e].name
-                                 for e in indeterminate_elements(scene, q_acc, F)])
+        if cyclic:
+            # force-free elements: dR/dF = 0 on the diagonal of the step's Jacobian
+            if J_acc is not None and sum(J_acc[N + e][N + e] == 0.0 for e in cyclic) < 2:
+                if log.open:
+                    log.mark((step - 1) * dt, t, ())
+            else:
+                q_acc = scene.elongations(x_new, v_new)
+                log.mark((step - 1) * dt, t, [scene.elements[e].name for e in
+                                              indeterminate_elements(scene, q_acc, F, cyclic)])
         x_prev, v_prev, x, v = x, v, x_new, v_new
         xs += x
         vs += v

@@ -1,10 +1,10 @@
 r"""Locked elements in parallel: which forces are not unique, and over which intervals.
 
-An element is *force-free* at a point ``(q, F)`` of its law when its force can move a
-little with ``q`` held: ``R(q, F + d) = 0`` or ``R(q, F - d) = 0`` for a small ``d`` (a
-taut string, ``F >= k L``; a stuck dashpot, ``|F| <= tau``; a slipping Coulomb element at
-``F = tau`` with its rate held at zero). The test probes the law's compiled kernel, so it
-holds for user laws as for the built-in ones.
+An element is *force-free* at a point ``(q, F)`` of its law when the active branch there
+leaves the force free: ``dR/dF = 0`` from the law's compiled kernel (a taut string,
+``F >= k L``; a stuck dashpot, ``|F| <= tau``, also at ``|F| = tau`` where the kernels
+return the stuck branch). The test reads the kernel, so it holds for user laws as for the
+built-in ones.
 
 With the motion fixed, a change ``dF`` of the force-free elements' forces must keep every
 node's balance (ground takes any reaction). Such a change exists exactly when the
@@ -14,7 +14,8 @@ and ground. The elements on such cycles are the ones whose forces are *indetermi
 the motion is determinate, the split of the load among them is not. The solver then
 picks the split by its documented rule (the minimum-norm Newton correction from the
 previous step's forces, see :func:`lumped.solvers.newton.newton_solve`) and reports the
-elements and intervals here.
+elements and intervals here. Scenes without a cycle of elements skip the test
+(:func:`cyclic_elements`).
 """
 
 from __future__ import annotations
@@ -22,31 +23,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from functools import lru_cache
 
-__all__ = ["force_free", "indeterminate_elements", "IntervalLog"]
-
-#: Relative size of the force probe.
-_PROBE = 1e-7
-#: A probed residual below this fraction of the law's term magnitude counts as zero.
-_ZERO = 1e-9
-
-
-def force_free(kernel, q: float, F: float, scale: float) -> bool:
-    """True when ``R(q, F +- d) = 0`` for ``d = 1e-7 (|F| + scale)`` on at least one side.
-
-    ``scale`` is a force scale of the scene (e.g. the largest element force), so that a
-    zero force is probed by a meaningful amount.
-    """
-    d = _PROBE * (abs(F) + scale) + 1e-300
-    mag = getattr(kernel, "magnitude", None)
-    for Fp in (F + d, F - d):
-        R = kernel(q, Fp)[0]
-        ref = mag(q, Fp) if mag is not None else abs(q) + abs(Fp)
-        if not ref == ref:  # NaN magnitude: the law is undefined there
-            continue
-        if abs(R) <= _ZERO * ref + 1e-300:
-            return True
-    return False
-
+__all__ = ["cyclic_elements", "indeterminate_elements", "IntervalLog"]
 
 @lru_cache(maxsize=256)
 def _on_cycles(n_nodes: int, edges: tuple[tuple[int, int, int], ...]) -> tuple[int, ...]:
@@ -72,16 +49,27 @@ def _find(parent: list[int], i: int) -> int:
     return i
 
 
-def indeterminate_elements(scene, q: Sequence[float], F: Sequence[float]) -> tuple[int, ...]:
+def cyclic_elements(scene) -> tuple[int, ...]:
+    """Elements on some cycle of the whole network (ground one vertex): the only ones whose
+    forces can ever be indeterminate."""
+    edges = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in range(len(scene.elements)))
+    return _on_cycles(len(scene.nodes), edges)
+
+
+def indeterminate_elements(scene, q: Sequence[float], F: Sequence[float],
+                           candidates: Sequence[int] | None = None) -> tuple[int, ...]:
     """Indices of the elements whose forces are not unique at ``(q, F)`` (see the module
-    notes): force-free elements on a cycle of force-free elements."""
+    notes): force-free elements on a cycle of force-free elements. ``candidates`` (e.g.
+    :func:`cyclic_elements`) limits the elements examined."""
     elements = scene.elements
-    scale = max((abs(f) for f in F), default=0.0) + 1e-300
-    free = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(elements)
-                 if force_free(el.law.kernel, q[e], F[e], scale))
+    ea, eb = scene.elem_a, scene.elem_b
+    free = []
+    for e in (range(len(elements)) if candidates is None else candidates):
+        if elements[e].law.kernel(q[e], F[e])[2] == 0.0:
+            free.append((e, ea[e], eb[e]))
     if len(free) < 2:
         return ()
-    return _on_cycles(len(scene.nodes), free)
+    return _on_cycles(len(scene.nodes), tuple(free))
 
 
 class IntervalLog:
@@ -95,6 +83,11 @@ class IntervalLog:
     def __init__(self) -> None:
         self._open: dict[str, list[float]] = {}
         self._done: dict[str, list[tuple[float, float]]] = {}
+
+    @property
+    def open(self) -> bool:
+        """Some interval is open (its element was indeterminate at the last mark)."""
+        return bool(self._open)
 
     def mark(self, t_prev: float, t: float, names: Sequence[str]) -> None:
         names = set(names)
