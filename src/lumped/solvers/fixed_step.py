@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 
 from ..scene import Scene
 from .branch_check import _known_monotone, _left_branch
-from .globalize import force_projector, stuck_guesses
+from .globalize import solve_globalized
 from .impact_step import impact_step, impulse_is_negligible
 from .impacts import lockable_elements, locking_elements
 from .initial_state import consistent_initial_state
@@ -213,22 +213,10 @@ def run_bdf(
                 max_it = it
         else:
             res = newton_solve(full, v + F, options, cache, min_norm=True)
-            for guess in (stuck_guesses(scene, v, F) if res.code is not NewtonCode.SUCCESS
-                          else ()):
-                if res.code is NewtonCode.SUCCESS:
-                    break
-                # globalisation by restarts: a slipping friction element at a junction
-                # has a zero column for the junction's velocity, where Newton cannot move
-                total_it += res.iterations
-                res_ev += res.residual_evals
-                res = newton_solve(full, guess, options, None, min_norm=True)
             if res.code is not NewtonCode.SUCCESS:
-                # nonlinear elimination: each law solved for its own force at every
-                # iterate (steep laws, e.g. Herschel-Bulkley n < 1 near its yield force)
                 total_it += res.iterations
                 res_ev += res.residual_evals
-                res = newton_solve(full, v + F, options, None, min_norm=True,
-                                   project=force_projector(scene, h, x_hat))
+                res = solve_globalized(scene, full, h, x_hat, v, F, options)
             total_it += res.iterations
             res_ev += res.residual_evals
             jac_ev += res.jacobian_evals

@@ -21,8 +21,9 @@ import math
 
 from ..scene import Junction, Scene
 from .initial_state import _scalar_root
+from .newton import NewtonCode, NewtonOptions, NewtonResult, newton_solve
 
-__all__ = ["force_projector", "stuck_guesses"]
+__all__ = ["force_projector", "solve_globalized", "stuck_guesses"]
 
 
 def force_projector(scene: Scene, h: float, x_hat: list[float]):
@@ -80,3 +81,31 @@ def stuck_guesses(scene: Scene, v: list[float], F: list[float]) -> list[list[flo
         out.append(w + list(F))
     out += [g[:N] + [0.0] * len(F) for g in out]
     return out
+
+
+def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: list[float],
+                     F: list[float], options: NewtonOptions) -> NewtonResult:
+    """The step system ``evaluate`` solved from the restart points: the previous solution
+    and every :func:`stuck_guesses` point, each first by plain (minimum-norm) Newton, then
+    with nonlinear elimination (:func:`force_projector`). The first success is returned,
+    else the first failure (the counters add up over all attempts)."""
+    project = force_projector(scene, h, x_hat)
+    first: NewtonResult | None = None
+    its = res_ev = jac = facts = 0
+    for start in [list(v) + list(F), *stuck_guesses(scene, v, F)]:
+        for proj in (None, project):
+            res = newton_solve(evaluate, start, options, None, min_norm=True, project=proj)
+            its += res.iterations
+            res_ev += res.residual_evals
+            jac += res.jacobian_evals
+            facts += res.factorizations
+            if res.code is NewtonCode.SUCCESS:
+                break
+            first = first or res
+        if res.code is NewtonCode.SUCCESS:
+            break
+    else:
+        res = first
+    res.iterations, res.residual_evals = its, res_ev
+    res.jacobian_evals, res.factorizations = jac, facts
+    return res

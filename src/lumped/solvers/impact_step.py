@@ -34,7 +34,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..scene import Mass, Scene
-from .globalize import force_projector, stuck_guesses
+from .globalize import solve_globalized
 from .impacts import impact_velocities, locking_elements, onto_locks
 from .newton import NewtonCode, NewtonOptions, NewtonResult, newton_solve
 from .status import Event
@@ -74,14 +74,8 @@ def be_substep(scene: Scene, t_end: float, h: float, x0: list[float], v0: list[f
     ev = _make_evaluate(scene, h, cm, [0.0] * N, [1.0] * N, list(v0), list(x0), f, qs, rq,
                         rf, roundoff=True)
     res = newton_solve(ev, list(v0) + list(F0), options, min_norm=True)
-    guesses = stuck_guesses(scene, list(v0), list(F0)) if res.code is not NewtonCode.SUCCESS else []
-    for guess in guesses:
-        res = newton_solve(ev, guess, options, min_norm=True)
-        if res.code is NewtonCode.SUCCESS:
-            break
     if res.code is not NewtonCode.SUCCESS:
-        res = newton_solve(ev, list(v0) + list(F0), options, min_norm=True,
-                           project=force_projector(scene, h, list(x0)))
+        res = solve_globalized(scene, ev, h, list(x0), list(v0), list(F0), options)
     v1 = res.u[:N]
     x1 = [x0[i] + h * v1[i] for i in range(N)]
     return x1, v1, res.u[N:], res

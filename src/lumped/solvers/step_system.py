@@ -226,6 +226,9 @@ def _newton_failure(scene: Scene, res: NewtonResult, t: float, step: int) -> Sol
         N = len(scene.nodes)
         rigid = [el.name for e, el in enumerate(scene.elements)
                  if res.jacobian[N + e][N + e] == 0.0]
+        if len(rigid) < 2:  # no two locks to disagree: a plain Newton failure
+            return SolverError(msg, status=Status(res.code.value), t=t, where=where,
+                               residual=r)
         msg = (f"no motion satisfies all the laws at t = {t!r} (step {step}): the locked "
                f"elements {rigid} (each fixing its elongation or rate, its force free) admit "
                f"no common motion with the rest of the scene; largest residual {r!r} in "
