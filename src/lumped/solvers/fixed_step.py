@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 from ..scene import Scene
 from .branch_check import _known_monotone, _left_branch
 from .globalize import solve_globalized
-from .impact_step import impact_step, impulse_is_negligible
+from .impact_step import halved_steps, impact_step, impulse_is_negligible
 from .impacts import lockable_elements, locking_elements
 from .initial_state import consistent_initial_state
 from .locks import IntervalLog, cyclic_elements, indeterminate_elements
@@ -203,6 +203,7 @@ def run_bdf(
                 uref[i] = vi + (vi - v_prev[i]) / 3.0
         cache = cache1 if h == h1 else cache2
         u = _fast_step(evaluate, v + F, cache, rtol, atol) if fast else None
+        halved = None
         if u is not None:  # the common case, counted as newton_solve would count it
             J_acc = cache.J  # the Jacobian at the solution (same pieces)
             it = u.pop()
@@ -223,18 +224,25 @@ def run_bdf(
             facts += res.factorizations
             if res.iterations > max_it:
                 max_it = res.iterations
-            if res.code is not NewtonCode.SUCCESS:
+            if res.code is not NewtonCode.SUCCESS:  # last resort: backward-Euler substeps
+                halved = halved_steps(scene, t - dt, dt, x, v, F, options)
+            if res.code is not NewtonCode.SUCCESS and halved is None:
                 err = _newton_failure(scene, res, t, step)
                 if throw:
                     raise err
                 status, message = err.status, str(err)
                 break
-            u = res.u
-            J_acc = res.jacobian
+            if halved is not None:
+                total_it += halved[3]
+                u = halved[1] + halved[2]
+                J_acc = None
+            else:
+                u = res.u
+                J_acc = res.jacobian
         v_new = u[:N]
-        x_new = [x_hat[i] + h * v_new[i] for i in range(N)]
+        x_new = [x_hat[i] + h * v_new[i] for i in range(N)] if halved is None else halved[0]
         F_new = u[N:]
-        restart = False
+        restart = halved is not None  # history through substeps: BDF2 restarts
         if lockable:
             now = set(locking_elements(scene, x_new, v_new, F_new, lockable))
             new = [e for e in sorted(now) if e not in locked]

@@ -40,7 +40,7 @@ from .newton import NewtonCode, NewtonOptions, NewtonResult, newton_solve
 from .status import Event
 from .step_system import _make_evaluate
 
-__all__ = ["ImpactStep", "be_substep", "impact_step", "impulse_is_negligible"]
+__all__ = ["ImpactStep", "be_substep", "halved_steps", "impact_step", "impulse_is_negligible"]
 
 #: Bisection of the impact time stops when the bracket is below this fraction of dt.
 _LOCATE_RTOL = 1e-10
@@ -79,6 +79,26 @@ def be_substep(scene: Scene, t_end: float, h: float, x0: list[float], v0: list[f
     v1 = res.u[:N]
     x1 = [x0[i] + h * v1[i] for i in range(N)]
     return x1, v1, res.u[N:], res
+
+
+def halved_steps(scene: Scene, t0: float, dt: float, x: list[float], v: list[float],
+                 F: list[float], options: NewtonOptions, depth: int = 4):
+    """The step ``[t0, t0 + dt]`` as ``2**k`` backward-Euler substeps, ``k = 1 .. depth``,
+    the first ``k`` whose substeps all converge: a last resort when the step's Newton
+    fails (closer starts). Returns ``(x, v, F, iterations)`` or ``None``."""
+    its = 0
+    for k in range(1, depth + 1):
+        n = 2**k
+        h = dt / n
+        xs, vs, Fs = list(x), list(v), list(F)
+        for j in range(1, n + 1):
+            xs, vs, Fs, res = be_substep(scene, t0 + j * h, h, xs, vs, Fs, options)
+            its += res.iterations
+            if res.code is not NewtonCode.SUCCESS:
+                break
+        else:
+            return xs, vs, Fs, its
+    return None
 
 
 def impulse_is_negligible(scene: Scene, v: list[float], new: list[int]) -> bool:
