@@ -37,7 +37,7 @@ from lumped.scene import Element, Junction, Mass, Scene
 from lumped.solvers.registry import FIXED_STEP_METHODS, METHOD_REGISTRY
 from lumped.solvers.status import InconsistentInitialForce
 
-CI_EXAMPLES = 60
+CI_EXAMPLES = 40
 LARGE_EXAMPLES = 10_000
 LARGE = os.environ.get("LUMPED_LARGE", "") not in ("", "0")
 EXAMPLES = LARGE_EXAMPLES if LARGE else CI_EXAMPLES
@@ -51,6 +51,8 @@ DASHPOTS = ("newtonian", "bingham", "coulomb", "herschel_bulkley")
 YIELDING = ("bingham", "coulomb", "herschel_bulkley")
 T_END = 0.5
 DT = 0.025
+#: Coarsest step as a fraction of the scene's fastest time scale (see :func:`grid`).
+STEP_FRACTION = 0.2
 
 
 def _decade(lo: float, hi: float):
@@ -132,16 +134,31 @@ def stored_energy(scene: Scene, sol) -> tuple[np.ndarray, np.ndarray]:
     return E, M + np.abs(E)
 
 
-def _solve(scene: Scene, method: str, dt: float):
+def grid(scene: Scene) -> tuple[float, float]:
+    """``(dt, t_end)``: the coarsest step resolves the scene's fastest time scale
+    (``sqrt(m / sum k)`` and ``m / sum c`` with the smallest mass, ``c = 1/gamma`` for a
+    slipping Bingham element), so that halving it shows convergence; at most 40 steps."""
+    m = min(nd.m for nd in scene.nodes if isinstance(nd, Mass))
+    k = sum(el.law.params.get("k", 0.0) for el in scene.elements if el.kind == "spring")
+    c = sum(el.law.params["c"] if el.law_name == "newtonian" else
+            1.0 / el.law.params["gamma"] if el.law_name == "bingham" else 0.0
+            for el in scene.elements)
+    rate = max(math.sqrt(k / m), c / m, 1e-12)
+    dt = min(DT, STEP_FRACTION / rate)
+    n = min(math.ceil(T_END / dt), 40)
+    return dt, n * dt
+
+
+def _solve(scene: Scene, method: str, dt: float, t_end: float):
     if method in FIXED_STEP_METHODS:
-        return simulate(scene, method=method, dt=dt, t_end=T_END)
+        return simulate(scene, method=method, dt=dt, t_end=t_end)
     # an adaptive method: tolerance tied to the level, output on the same grid
-    return simulate(scene, method=method, dt=dt, t_end=T_END, rtol=dt**2, atol=dt**3)
+    return simulate(scene, method=method, dt=dt, t_end=t_end, rtol=dt**2, atol=dt**3)
 
 
-def _run_or_reject(scene: Scene, method: str, dt: float):
+def _run_or_reject(scene: Scene, method: str, dt: float, t_end: float):
     try:
-        return _solve(scene, method, dt)
+        return _solve(scene, method, dt, t_end)
     except InconsistentInitialForce:
         raise
     except ValueError as err:
@@ -153,7 +170,9 @@ def _run_or_reject(scene: Scene, method: str, dt: float):
 
 
 def check_network(scene: Scene, method: str) -> None:
-    sols = [_run_or_reject(scene, method, DT / 2**k) for k in range(3)]
+    dt, t_end = grid(scene)
+    sols = [_run_or_reject(scene, method, dt / 2**k, t_end) for k in range(3)]
+    assert [len(s.t) - 1 for s in sols] == [(len(sols[0].t) - 1) * 2**k for k in range(3)]
     scale = 1.0 + max(float(np.abs(s.data).max()) for s in sols)
     for s in sols:
         assert s.ok, s.message
@@ -161,7 +180,9 @@ def check_network(scene: Scene, method: str) -> None:
         _check_yield(scene, s)
     energies, mags = zip(*(stored_energy(scene, s) for s in sols), strict=True)
     E0 = energies[0][0]
-    tol = 1e-8 * E0 + 1e-13 * max(m.max() for m in mags)
+    # round-off of the terms, and Newton's absolute tolerance on the velocities
+    vmax = max(float(np.abs(s.data[:, 2:1 + 2 * len(scene.nodes):2]).max()) for s in sols)
+    tol = 1e-8 * E0 + 1e-13 * max(m.max() for m in mags) + 1e-12 * sum(scene.masses) * vmax
     if method == "bdf1":
         for E in energies:
             rise = np.diff(E)
@@ -174,21 +195,32 @@ def check_network(scene: Scene, method: str) -> None:
     xcols = slice(1, 1 + 2 * len(scene.nodes), 2)
     d0 = np.abs(sols[0].data[:, xcols] - sols[2].data[::4, xcols]).max()
     d1 = np.abs(sols[1].data[:, xcols] - sols[2].data[::2, xcols]).max()
-    assert d1 <= 0.9 * d0 + 1e-7 * scale, f"no convergence: {d0!r} -> {d1!r}"
+    # either the distance shrinks, or it is already within a first-order bound
+    # (``dt |v|``): near-degenerate stick positions (spring force ~ yield force) make the
+    # distance erratic at small values, while a method that does not converge (BDF2
+    # bouncing off a string) is off by O(1)
+    bound = 0.5 * dt * (1.0 + vmax)
+    assert d1 <= max(0.9 * d0 + 1e-7 * scale, bound), f"no convergence: {d0!r} -> {d1!r}"
 
 
 def _check_yield(scene: Scene, sol) -> None:
+    """A dashpot carries more than its yield force only while it slips at the rate its
+    law gives for that force (Coulomb: never more than ``tau``)."""
     v = {nd.name: sol.v[nd.name] for nd in scene.nodes}
     for el in scene.elements:
         if el.law_name not in YIELDING:
             continue
-        tau = el.law.params["tau"]
-        q = v.get(el.b, 0.0) - v.get(el.a, 0.0)
+        p = el.law.params
+        tau = p["tau"]
         F = np.abs(sol.F[el.name])
-        stuck = np.abs(np.asarray(q) + np.zeros_like(F)) <= 1e-12 * (1.0 + np.abs(F))
+        above = F > tau * (1 + 1e-9) + 1e-12
         if el.law_name == "coulomb":
-            stuck = np.ones_like(F, dtype=bool)  # |F| <= tau always
-        assert np.all(F[stuck] <= tau * (1 + 1e-9) + 1e-12), f"{el.name} above its yield"
+            assert not above.any(), f"{el.name} above its yield force"
+            continue
+        q = np.abs(v.get(el.b, 0.0) - v.get(el.a, 0.0)) + np.zeros_like(F)
+        slip_rate = p["gamma"] * np.maximum(F - tau, 0.0) ** p.get("n", 1.0)
+        stuck_above = above & (q < 0.5 * slip_rate)
+        assert not stuck_above.any(), f"{el.name} stuck above its yield force"
 
 
 _SETTINGS = settings(max_examples=EXAMPLES, deadline=None,
