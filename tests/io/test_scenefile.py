@@ -43,7 +43,8 @@ def test_other_examples_load_and_run():
         scene, settings = load_scene(path)
         if path.stem in PAPER:
             continue
-        assert any(isinstance(n, Junction) for n in scene.nodes) or len(scene.nodes) > 1
+        assert (any(isinstance(n, Junction) for n in scene.nodes) or len(scene.nodes) > 1
+                or path.stem in ("impact", "lock"))  # issue 11: one mass on a string
         from lumped.simulate import simulate
 
         sol = simulate(scene, method=settings["method"], dt=settings["dt"] * 10, t_end=1.0)

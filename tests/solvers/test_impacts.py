@@ -196,3 +196,17 @@ def test_initial_state_no_law_admits_is_refused_by_name():
                                "ground", "mass")])
     with pytest.raises(ValueError, match="'string'.*'string_spring'"):
         simulate(stretched, method="bdf1", dt=1e-3, t_end=0.1)
+
+
+@pytest.mark.parametrize("name", ["impact", "lock"])
+def test_example_files_are_the_bench_scenes(name):
+    from pathlib import Path
+
+    from lumped.bench.impact_scenes import IMPACT_SCENES
+    from lumped.io.scenefile import load_scene
+
+    path = Path(__file__).resolve().parents[2] / "examples" / f"{name}.toml"
+    scene, settings = load_scene(path)
+    a = simulate(scene, method="bdf2", dt=settings["dt"], t_end=1.5)
+    b = simulate(IMPACT_SCENES[name][0](), method="bdf2", dt=settings["dt"], t_end=1.5)
+    assert np.array_equal(a.data, b.data) and len(a.events) == 1
