@@ -23,7 +23,7 @@ from ..laws import get_law
 from ..scene import Element, Mass, Scene
 
 __all__ = ["IMPACT_TIME", "IMPACT_SCENES", "impact_scene", "lock_scene", "exact_impact",
-           "impact_errors"]
+           "impact_errors", "impact_markdown"]
 
 #: Time at which the string of :func:`impact_scene` becomes taut.
 IMPACT_TIME = math.pi / 6
@@ -61,15 +61,29 @@ IMPACT_SCENES = {
 
 
 def impact_errors(methods=("bdf1", "bdf2", "auto"), dts=(1e-2, 1e-3, 1e-4),
-                  t_end: float = 3.0) -> list[dict]:
+                  t_end: float = 3.0, timed: bool = False) -> list[dict]:
     """Max error against :func:`exact_impact` per method and step (rows for a table),
-    with the largest energy after the impact (``0.125`` exact) and the run's counters."""
+    with the largest energy after the impact (``0.125`` exact), the impacts recorded and
+    the Newton iterations; with ``timed``, the CPU time in yardstick units
+    (:func:`lumped.bench.runner.yardstick`, measured in the same process)."""
     from ..simulate import simulate
 
+    unit = None
+    if timed:
+        from .runner import measure_unit, time_call
+
+        unit = measure_unit()
     rows = []
     for method in methods:
         for dt in dts:
-            sol = simulate(impact_scene(), method=method, dt=dt, t_end=t_end, throw=False)
+            def go(method=method, dt=dt):
+                return simulate(impact_scene(), method=method, dt=dt, t_end=t_end,
+                                throw=False)
+
+            if unit is not None:
+                sol, cpu, _ = time_call(go)
+            else:
+                sol, cpu = go(), math.nan
             x, v = sol.x["mass"], sol.v["mass"]
             E = 0.5 * v**2 + 0.5 * x**2
             after = sol.t > IMPACT_TIME + dt
@@ -77,7 +91,19 @@ def impact_errors(methods=("bdf1", "bdf2", "auto"), dts=(1e-2, 1e-3, 1e-4),
                 "method": sol.method, "dt": dt, "status": sol.status.value,
                 "max_error": float(np.abs(x - exact_impact(sol.t)).max()),
                 "max_energy_after": float(E[after].max()) if after.any() else math.nan,
-                "impacts": len(sol.events), "newton_iterations":
-                    sol.stats.get("newton_iterations", 0),
+                "impacts": len(sol.events),
+                "newton_iterations": sol.stats.get("newton_iterations", 0),
+                "ratio": cpu / unit if unit is not None else math.nan,
             })
     return rows
+
+
+def impact_markdown(rows: list[dict]) -> str:
+    """The rows of :func:`impact_errors` as a markdown table."""
+    out = ["| method | dt | status | max error | error / dt | max E after impact | impacts "
+           "| Newton its | time (yardsticks) |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        out.append(f"| {r['method']} | {r['dt']:g} | {r['status']} | {r['max_error']:.2e} | "
+                   f"{r['max_error'] / r['dt']:.3g} | {r['max_energy_after']:.6f} | "
+                   f"{r['impacts']} | {r['newton_iterations']} | {r['ratio']:.3g} |")
+    return "\n".join(out) + "\n"
