@@ -219,3 +219,26 @@ def test_impact_bench_rows():
     assert [r["status"] for r in rows] == ["success", "success"]
     assert all(r["max_error"] <= 3e-2 and r["impacts"] == 1 for r in rows)
     assert impact_markdown(rows).count("\n") == 4
+
+
+def test_two_rigid_bars_of_different_lengths_are_refused_at_the_start():
+    # user laws that fix q and leave F free everywhere: no state satisfies both
+    bar = ElementLaw("bar", "spring", "q - l", ["l"])
+    scene = Scene([Mass("mass", m=1.0, x0=0.5)],
+                  [Element("long", bar.bind(l=0.5), "ground", "mass"),
+                   Element("short", bar.bind(l=0.3), "ground", "mass")])
+    with pytest.raises(ValueError, match="'short'.*'bar'"):
+        simulate(scene, method="bdf1", dt=1e-3, t_end=0.1)
+
+
+def test_two_equal_rigid_bars_share_a_load_indeterminately():
+    bar = ElementLaw("bar", "spring", "q - l", ["l"])
+    scene = Scene([Mass("mass", m=1.0, x0=0.5)],
+                  [Element("b1", bar.bind(l=0.5), "ground", "mass"),
+                   Element("b2", bar.bind(l=0.5), "ground", "mass")],
+                  forces={"mass": 2.0})
+    sol = simulate(scene, method="bdf2", dt=1e-2, t_end=0.5)
+    assert sol.ok and np.all(sol.x["mass"] == 0.5)
+    assert np.abs(sol.v["mass"]).max() <= 1e-15  # min-norm pinv: round-off only
+    assert np.allclose(sol.F["b1"] + sol.F["b2"], 2.0, rtol=0, atol=1e-12)
+    assert set(sol.indeterminate) == {"b1", "b2"}
