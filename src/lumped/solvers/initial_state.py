@@ -257,34 +257,42 @@ def consistent_initial_state(
 def _refuse_uncarried_force(scene: Scene, pinned: list[float | None], f: list[float]) -> None:
     """Raise ValueError when a junction's balance asks an element for a force its law
     admits at no elongation (rate): e.g. a Maxwell link whose spring starts stretched
-    beyond what its Coulomb dashpot can carry. Only junctions with exactly one element
-    whose force is not fixed at the start are examined (then the balance fixes it)."""
+    beyond what its Coulomb dashpot can carry. A junction with exactly one element whose
+    force is not yet fixed fixes it by its balance; this propagates through the network
+    (a junction on a single friction element fixes that force to zero, and so on)."""
     ea, eb = scene.elem_a, scene.elem_b
-    for i, node in enumerate(scene.nodes):
-        if not isinstance(node, Junction):
-            continue
-        touching = [e for e in range(len(scene.elements)) if i in (ea[e], eb[e])]
-        free = [e for e in touching if pinned[e] is None]
-        if len(free) != 1:
-            continue
-        (e,) = free
-        # balance: f_i + sum_{a_e = i} F_e - sum_{b_e = i} F_e = 0
-        rest = f[i] + sum((pinned[k] if ea[k] == i else -pinned[k]) for k in touching if k != e)
-        need = -rest if ea[e] == i else rest
-        el = scene.elements[e]
-        kernel = el.law.kernel
+    known = list(pinned)
+    changed = True
+    while changed:
+        changed = False
+        for i, node in enumerate(scene.nodes):
+            if not isinstance(node, Junction):
+                continue
+            touching = [e for e in range(len(scene.elements)) if i in (ea[e], eb[e])]
+            free = [e for e in touching if known[e] is None]
+            if len(free) != 1:
+                continue
+            (e,) = free
+            # balance: f_i + sum_{a_e = i} F_e - sum_{b_e = i} F_e = 0
+            rest = f[i] + sum((known[k] if ea[k] == i else -known[k])
+                              for k in touching if k != e)
+            need = -rest if ea[e] == i else rest
+            el = scene.elements[e]
+            kernel = el.law.kernel
 
-        def swapped(F: float, q: float, kernel=kernel):
-            R, Rq, RF = kernel(q, F)
-            return R, RF, Rq
+            def swapped(F: float, q: float, kernel=kernel):
+                R, Rq, RF = kernel(q, F)
+                return R, RF, Rq
 
-        try:
-            _scalar_root(swapped, need, 0.0)
-        except ValueError:
-            what = "elongation" if el.kind == "spring" else "rate"
-            raise ValueError(
-                f"inconsistent initial state: the force balance of junction {node.name!r} "
-                f"asks element {el.name!r} for the force F = {need!r}, which its law "
-                f"{el.law_name!r} admits at no {what} (e.g. a friction element beyond its "
-                "yield force); change the initial positions or the parameters"
-            ) from None
+            try:
+                _scalar_root(swapped, need, 0.0)
+            except ValueError:
+                what = "elongation" if el.kind == "spring" else "rate"
+                raise ValueError(
+                    f"inconsistent initial state: the force balance of junction {node.name!r} "
+                    f"asks element {el.name!r} for the force F = {need!r}, which its law "
+                    f"{el.law_name!r} admits at no {what} (e.g. a friction element beyond "
+                    "its yield force); change the initial positions or the parameters"
+                ) from None
+            known[e] = need
+            changed = True
