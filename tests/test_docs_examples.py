@@ -1,28 +1,102 @@
-"""The README's Python example and the scripts in examples/ run as written."""
+"""Every example in the documentation runs: the README's Python blocks, the Python blocks
+of every page in docs/, the docstring examples of every module (as doctests) and the
+scripts in examples/."""
 
 from __future__ import annotations
 
+import doctest
+import importlib
+import pkgutil
+import re
 import runpy
 import sys
+import textwrap
 from pathlib import Path
 
 import pytest
 
+import lumped
+
 ROOT = Path(__file__).resolve().parents[1]
+_BLOCK = re.compile(r"^( *)```python[ \t]*\n(.*?)^\1```", re.MULTILINE | re.DOTALL)
 
 
-def test_readme_python_examples_run(tmp_path, monkeypatch, capsys):
-    text = (ROOT / "README.md").read_text()
-    blocks = [b.split("```", 1)[0] for b in text.split("```python")[1:]]
-    assert len(blocks) == 2
+def python_blocks(text: str) -> list[str]:
+    """The ```python fenced blocks of a Markdown text (indented ones dedented)."""
+    return [textwrap.dedent(m.group(2)) for m in _BLOCK.finditer(text)]
+
+
+def _run_blocks(blocks: list[str], where: str) -> dict:
+    namespace: dict = {"__name__": "__docs__"}
+    for i, block in enumerate(blocks):
+        exec(compile(block, f"{where} [python block {i + 1}]", "exec"), namespace)
+    return namespace
+
+
+@pytest.fixture
+def quiet_plots(monkeypatch, tmp_path):
+    """Run in a scratch directory, with matplotlib (if any) drawing off screen."""
     monkeypatch.chdir(tmp_path)
-    first = {}
-    exec(compile(blocks[0], "README.md", "exec"), first)
-    assert (tmp_path / "F2.csv").exists()
+    try:
+        import matplotlib
+    except ImportError:
+        yield tmp_path
+        return
+    matplotlib.use("Agg")
+    yield tmp_path
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
+
+def test_readme_python_examples_run(quiet_plots, capsys):
+    blocks = python_blocks((ROOT / "README.md").read_text())
+    assert len(blocks) == 2
+    first = _run_blocks(blocks[:1], "README.md")
+    assert (quiet_plots / "F2.csv").exists()
     assert capsys.readouterr().out.strip()
-    second = {}
-    exec(compile(blocks[1], "README.md", "exec"), second)
+    assert first["sol"].success and first["sol"].method == "closed-bdf1"
+    second = _run_blocks(blocks[1:], "README.md")
     assert second["sol"].ok and second["sol"].x["mass"].shape == (5001,)
+
+
+DOC_PAGES = sorted(p for p in (ROOT / "docs").glob("*.md") if python_blocks(p.read_text()))
+
+
+def test_the_pages_with_examples_are_found():
+    names = {p.name for p in DOC_PAGES}
+    assert {"laws.md", "scenes.md", "reference.md", "solution.md", "index.md"} <= names
+
+
+@pytest.mark.parametrize("page", DOC_PAGES, ids=lambda p: p.name)
+def test_docs_page_examples_run(page, quiet_plots):
+    _run_blocks(python_blocks(page.read_text()), f"docs/{page.name}")
+
+
+def _modules_with_examples() -> list[str]:
+    found = []
+    for info in pkgutil.walk_packages(lumped.__path__, "lumped."):
+        if info.name.endswith("__main__"):
+            continue
+        module = importlib.import_module(info.name)
+        if any(t.examples for t in doctest.DocTestFinder().find(module)):
+            found.append(info.name)
+    return found
+
+
+DOCTEST_MODULES = _modules_with_examples()
+
+
+def test_docstring_examples_are_found():
+    assert {"lumped.result", "lumped.scene.oscillator", "lumped.laws.catalogue"} <= set(
+        DOCTEST_MODULES)
+
+
+@pytest.mark.parametrize("name", DOCTEST_MODULES)
+def test_docstring_examples_pass(name, quiet_plots):
+    result = doctest.testmod(importlib.import_module(name), report=True,
+                             optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    assert result.failed == 0 and result.attempted > 0
 
 
 @pytest.mark.parametrize("script", ["paper_quickstart.py"])
@@ -30,3 +104,4 @@ def test_example_script_runs(script, monkeypatch, capsys):
     monkeypatch.setattr(sys, "argv", [script])
     runpy.run_path(str(ROOT / "examples" / script), run_name="__main__")
     assert capsys.readouterr().out.strip()
+

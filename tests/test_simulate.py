@@ -85,7 +85,8 @@ def test_bad_method_names(bad):
 
 
 def test_methods_tuple():
-    assert METHODS == ("auto", "bdf1", "bdf2", "closed-bdf1", "closed-bdf2", "exact")
+    assert METHODS == ("auto", "bdf1", "bdf2", "jit-bdf1", "jit-bdf2", "closed-bdf1",
+                       "closed-bdf2", "exact")
 
 
 @pytest.mark.parametrize("kw, match", [({"dt": 0.0}, "dt"), ({"dt": math.nan}, "dt"),

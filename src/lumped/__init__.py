@@ -47,6 +47,19 @@ _MOVED = {
 }
 
 
+#: The old single-mass front door: what to use instead (the warning says so).
+_SUPERSEDED = {
+    "integrate": "lumped.simulate(lumped.scene.bingham_oscillator(m, k, gamma, tau, x0=..., "
+                 "v0=..., forcing=...), method='closed-bdf1' or 'closed-bdf2', dt=..., "
+                 "t_end=...), which returns a lumped.Solution",
+    "BinghamOscillator": "lumped.scene.bingham_oscillator(m, k, gamma, tau, ...), a Scene "
+                         "to pass to lumped.simulate",
+    "Trajectory": "lumped.Solution, what lumped.simulate returns (x, v, F by name)",
+    "summarize": "lumped.Solution.stick_intervals() of the result of lumped.simulate",
+    "StickSummary": "lumped.Solution.stick_intervals() of the result of lumped.simulate",
+}
+
+
 def __getattr__(name: str):
     home = _MOVED.get(name)
     if home is None:
@@ -54,9 +67,10 @@ def __getattr__(name: str):
     import importlib
     import warnings
 
+    advice = (f"use {_SUPERSEDED[name]} (or import it from `{home}`)"
+              if name in _SUPERSEDED else f"import it from `{home}` instead")
     warnings.warn(
-        f"`lumped.{name}` is deprecated and will be removed in the next release; "
-        f"import it from `{home}` instead",
+        f"`lumped.{name}` is deprecated and will be removed in the next release; {advice}",
         DeprecationWarning,
         stacklevel=2,
     )

@@ -88,6 +88,14 @@ def simulate(
     return Solution(
         columns=scene.columns(), data=data, node_names=scene.node_names,
         element_names=scene.element_names, method=concrete, stats=dict(raw.stats),
-        status=raw.status, message=raw.message, events=tuple(raw.events),
-        indeterminate=dict(raw.indeterminate),
+        status=raw.status, message=raw.message,
+        located_events=_located_events(raw), indeterminate=dict(raw.indeterminate),
+        scene=scene, dense=raw.dense,
     )
+
+
+def _located_events(raw) -> tuple | None:
+    """The runner's events if it reports any (a method that locates events); else ``None``,
+    and the Solution reads the branch switches off the samples (the fixed-step methods,
+    or a run in which no event was located: then the samples show none either)."""
+    return tuple(raw.events) if raw.events else None

@@ -134,6 +134,7 @@ def test_command_line(tmp_path, capsys):
     parser = argparse.ArgumentParser()
     cmd_bench.add_arguments(parser)
     args = parser.parse_args(["--out", str(tmp_path), "--quick", "--scenes", "release-0.005",
+                              "--methods", "closed-bdf1,scipy-LSODA,scipy-events-LSODA",
                               "--no-creep", "--no-events"])
     assert cmd_bench.run(args) == 0
     assert (tmp_path / "runs.csv").exists() and (tmp_path / "summary.md").exists()

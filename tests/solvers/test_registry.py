@@ -99,9 +99,12 @@ def test_registered_fixed_step_method_needs_dt(restore_registry):
     np.testing.assert_array_equal(a.data, b.data)
 
 
-def test_solution_defaults_have_no_events():
+def test_fixed_step_solutions_derive_their_events_from_the_samples():
+    """A fixed-step runner locates no events (``located_events`` is None): the solution
+    reads the branch switches off the samples; here the release of the stuck dashpot."""
     sol = simulate(oscillator(), method="closed-bdf2", dt=1e-3, t_end=0.01)
-    assert sol.events == () and sol.indeterminate == {}
+    assert sol.located_events is None and sol.indeterminate == {}
+    assert [(e.t, e.element, e.kind) for e in sol.events] == [(0.001, "dashpot", "switch")]
 
 
 def test_status_has_the_shared_members():

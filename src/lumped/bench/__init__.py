@@ -1,10 +1,17 @@
 """Work-precision benchmark against the exact reference and scipy (``lumped bench``).
 
-:mod:`.scenes` (what is run), :mod:`.methods` (our methods), :mod:`.peers` (scipy),
-:mod:`.runner` (timing, runs, the method registry), :mod:`.report` (tables, CSV, plot)
-and :mod:`.event_study`; the full description is in :mod:`.runner`.
+:mod:`.scenes` (what is run), :mod:`.methods` (our methods, and
+:func:`tolerance_method` for any ``simulate`` method driven by ``rtol``/``atol``),
+:mod:`.peers` (scipy on the tanh-regularised model), :mod:`.event_peer` (scipy on the
+exact law with terminal events), :mod:`.runner` (timing, runs, the method registry
+:func:`register_bench_method`), :mod:`.report` (tables, CSV, plot) and
+:mod:`.event_study`; the full description is in :mod:`.runner`.
 """
 
+from .event_peer import (
+    MAX_EVENTS,
+    event_driven_solver,
+)
 from .event_study import (
     EVENT_SCENES,
     event_markdown,
@@ -13,6 +20,8 @@ from .event_study import (
 from .methods import (
     Method,
     Solved,
+    tolerance_method,
+    x_on_grid,
 )
 from .peers import (
     regularised_jacobian,
@@ -21,6 +30,7 @@ from .peers import (
 from .report import (
     markdown_tables,
     observed_orders,
+    ratio_table,
     read_csv,
     summarize_runs,
     write_csv,
@@ -29,16 +39,17 @@ from .report import (
     write_plot,
 )
 from .runner import (
+    BENCH_METHODS,
+    KINDS,
     METHODS,
     BenchReport,
     RunResult,
     available_methods,
+    count_steps,
     creep_table,
-    measure_unit,
+    register_bench_method,
     run_benchmark,
     run_one,
-    time_call,
-    yardstick,
 )
 from .scenes import (
     FULL,
@@ -55,14 +66,18 @@ from .scenes import (
     generic_scene,
     reference_grid,
 )
+from .timing import measure_unit, time_call, yardstick
 
 __all__ = [
+    "BENCH_METHODS",
     "BenchReport",
     "BenchScene",
     "EVENT_SCENES",
     "FULL",
     "GRID_DT",
+    "KINDS",
     "Ladders",
+    "MAX_EVENTS",
     "METHODS",
     "Method",
     "OWN_SCENES",
@@ -75,24 +90,30 @@ __all__ = [
     "YARDSTICK_ITERATIONS",
     "available_methods",
     "check_ladders",
+    "count_steps",
     "creep_table",
+    "event_driven_solver",
     "event_markdown",
     "event_study",
     "generic_scene",
     "markdown_tables",
     "measure_unit",
     "observed_orders",
+    "ratio_table",
     "read_csv",
     "reference_grid",
+    "register_bench_method",
     "regularised_jacobian",
     "regularised_rhs",
     "run_benchmark",
     "run_one",
     "summarize_runs",
     "time_call",
+    "tolerance_method",
     "write_csv",
     "write_markdown",
     "write_outputs",
     "write_plot",
+    "x_on_grid",
     "yardstick",
 ]

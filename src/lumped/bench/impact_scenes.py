@@ -70,7 +70,7 @@ def impact_errors(methods=("bdf1", "bdf2", "auto"), dts=(1e-2, 1e-3, 1e-4),
 
     unit = None
     if timed:
-        from .runner import measure_unit, time_call
+        from .timing import measure_unit, time_call
 
         unit = measure_unit()
     rows = []

@@ -11,7 +11,7 @@ from dataclasses import fields
 from pathlib import Path
 
 from .event_study import _slope, event_markdown
-from .runner import METHODS, BenchReport, RunResult
+from .runner import BENCH_METHODS, BenchReport, RunResult
 from .scenes import FULL, GRID_DT, TARGETS, YARDSTICK_ITERATIONS
 
 __all__ = [
@@ -20,6 +20,7 @@ __all__ = [
     "write_csv",
     "read_csv",
     "markdown_tables",
+    "ratio_table",
     "write_markdown",
     "write_plot",
     "write_outputs",
@@ -127,11 +128,11 @@ def markdown_tables(report: BenchReport, targets: Sequence[float] = TARGETS) -> 
         "as CPU time / yardstick (setting).",
         "",
     ]
-    ours = {m.name for m in METHODS if m.ours}
+    ours = _ours(report)
     for scene in report.scenes:
         lines.append(f"#### {scene}")
         lines.append("")
-        lines.append("| target | " + " | ".join(methods) + " | best ours / best scipy |")
+        lines.append("| target | " + " | ".join(methods) + " | best ours / fastest scipy |")
         lines.append("|---" * (len(methods) + 2) + "|")
         for tgt in targets:
             cells = [_cell(best.get((scene, tgt, m))) for m in methods]
@@ -139,6 +140,10 @@ def markdown_tables(report: BenchReport, targets: Sequence[float] = TARGETS) -> 
                          f"{_ours_vs_scipy(best, scene, tgt, methods, ours)} |")
         lines.append("")
     lines += _overall_table(report, best, targets, ours)
+    lines += ["#### Our best method / the fastest scipy peer", "",
+              "CPU time of our fastest run that reaches the target over the fastest scipy run "
+              "(tanh-regularised or event-driven) that does; below 1: we are faster.", "",
+              ratio_table(report, targets)]
     if report.reference_s:
         lines.append("For comparison, the exact event-driven reference on the same "
                      f"{GRID_DT:g} grid (error at round-off level) took, in yardstick units: "
@@ -166,6 +171,40 @@ def markdown_tables(report: BenchReport, targets: Sequence[float] = TARGETS) -> 
                          f"{c['x_end']:.10g} | {c['status']} |")
         lines.append("")
     return "\n".join(lines)
+
+
+def _ours(report: BenchReport) -> set[str]:
+    """The names of our methods in ``report`` (older reports: from the registry)."""
+    if report.ours:
+        return set(report.ours)
+    return {m.name for m in BENCH_METHODS.values() if m.ours}
+
+
+def ratio_table(report: BenchReport, targets: Sequence[float] = TARGETS) -> str:
+    """Per scene and target: our best method's time over the fastest scipy time.
+
+    The scipy side is the fastest of every peer (tanh-regularised or event-driven) that
+    reached the target; a ratio below 1 means we are faster. Each cell names the two
+    runs compared.
+    """
+    best = summarize_runs(report.runs, targets)
+    ours = _ours(report)
+    mine = [m for m in report.methods if m in ours]
+    peers = [m for m in report.methods if m not in ours]
+    lines = ["| scene | " + " | ".join(f"{t:g}" for t in targets) + " |",
+             "|---" * (len(targets) + 1) + "|"]
+    for scene in report.scenes:
+        cells = []
+        for tgt in targets:
+            a = _fastest(best, scene, tgt, mine)
+            b = _fastest(best, scene, tgt, peers)
+            if a is None or b is None:
+                cells.append("-" if a is None and b is None else
+                             "ours unreachable" if a is None else "scipy unreachable")
+            else:
+                cells.append(f"{a.cpu_s / b.cpu_s:.3g} ({a.method} / {b.method})")
+        lines.append(f"| {scene} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def _fastest(best, scene, tgt, names) -> RunResult | None:
@@ -253,7 +292,8 @@ def write_plot(report: BenchReport, path: str | Path) -> str:
     cols = 2 if n > 1 else 1
     rows = math.ceil(n / cols)
     fig, axes = plt.subplots(rows, cols, figsize=(9, 2.4 * rows), squeeze=False)
-    markers = "os^vDP*Xh"
+    markers = "os^vDP*Xh<>p"
+    ours = _ours(report)
     for ax, scene in zip(axes.flat, report.scenes, strict=False):
         for i, m in enumerate(report.methods):
             pts = sorted((r.ratio, max(r.max_err, 1e-17)) for r in report.runs
@@ -265,7 +305,7 @@ def write_plot(report: BenchReport, path: str | Path) -> str:
                     best_err = e
             if front:
                 ax.loglog(*zip(*front, strict=True), marker=markers[i % len(markers)],
-                          ms=3, lw=1, label=m)
+                          ms=3, lw=1, ls="-" if m in ours else "--", label=m)
         for tgt in TARGETS:
             ax.axhline(tgt, color="0.85", lw=0.5, zorder=0)
         ax.set_title(scene, fontsize=9)
@@ -278,8 +318,9 @@ def write_plot(report: BenchReport, path: str | Path) -> str:
     for ax in axes[:, 0]:
         ax.set_ylabel("max |x - x_ref|", fontsize=8)
     handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8)
-    fig.tight_layout(rect=(0, 0.04, 1, 1))
+    ncol = min(len(labels), 5)
+    fig.legend(handles, labels, loc="lower center", ncol=ncol, fontsize=8)
+    fig.tight_layout(rect=(0, 0.025 * math.ceil(len(labels) / ncol) + 0.01, 1, 1))
     fig.savefig(path, dpi=70)
     plt.close(fig)
     return f"plot written to {path}"

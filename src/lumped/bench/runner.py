@@ -35,6 +35,14 @@ Methods (see :data:`METHODS`, a registry: adding a method is one entry):
   interval (a careful user splits at a known jump).  A failed run (``status < 0``, an
   exception, a non-finite value, or more than ``max_nfev`` evaluations) is recorded
   with ``status = "failed"`` and its message, never dropped.
+* ``scipy-events-DOP853`` / ``scipy-events-LSODA`` / ``scipy-events-RK45`` -- what an expert
+  writes by hand for this scene (:mod:`lumped.bench.event_peer`): ``solve_ivp`` on the
+  exact law, slip+ / slip- / stick modes switched by terminal events, break-out from
+  stick found on ``|F(t) - k x| = tau``, split at the forcing's switch-off, over
+  ``Ladders.tol_rtols`` (``atol = rtol * L``).
+
+A method of ours driven by ``rtol``/``atol`` is one entry:
+``register_bench_method(tolerance_method(name, simulate_method, rtols))``.
 
 Everything here is plain Python; the per-step work of every method is the method's own.
 """
@@ -48,6 +56,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from .event_peer import _events
 from .event_study import event_study
 from .methods import Method, Solved, _closed_form, _generic
 from .peers import _scipy, _scipy_solver
@@ -56,65 +65,25 @@ from .scenes import (
     GRID_DT,
     PAPER_SCENES,
     SCENES,
-    YARDSTICK_ITERATIONS,
     BenchScene,
     Ladders,
     reference_grid,
 )
+from .timing import measure_unit, time_call
 
 __all__ = [
-    "yardstick",
-    "time_call",
+    "BENCH_METHODS",
+    "KINDS",
     "METHODS",
+    "register_bench_method",
     "available_methods",
     "RunResult",
     "run_one",
     "BenchReport",
-    "measure_unit",
     "run_benchmark",
+    "count_steps",
     "creep_table",
 ]
-
-
-# --------------------------------------------------------------------------- timing
-
-
-def yardstick(iterations: int = YARDSTICK_ITERATIONS) -> float:
-    """The unit of benchmark time: symplectic Euler on Python floats.
-
-    ``iterations`` updates ``v -= h w^2 x; x += h v`` of a harmonic oscillator
-    (``h = 1e-3``, ``w^2 = 100``), a fixed pure-Python float loop that does not depend
-    on any library code, so speed-ups of ``lumped`` show up as smaller ratios.
-    Returns the final ``x`` (so the loop cannot be optimised away).
-    """
-    x, v, h, w2 = 1.0, 0.0, 1e-3, 100.0
-    for _ in range(iterations):
-        v -= h * w2 * x
-        x += h * v
-    return x
-
-
-def time_call(
-    fn: Callable[[], object], *, min_time: float = 0.05, max_repeats: int = 20,
-) -> tuple[object, float, int]:
-    """CPU time of ``fn()``: best of several calls when one call is shorter than ``min_time``.
-
-    Returns ``(result of the first call, smallest CPU time in seconds, number of calls)``.
-    Calls are repeated until their total reaches ``4 * min_time`` or ``max_repeats``.
-    """
-    t0 = time.process_time()
-    result = fn()
-    best = total = time.process_time() - t0
-    calls = 1
-    if best < min_time:
-        while calls < max_repeats and total < 4.0 * min_time:
-            t0 = time.process_time()
-            fn()
-            elapsed = time.process_time() - t0
-            best = min(best, elapsed)
-            total += elapsed
-            calls += 1
-    return result, best, calls
 
 
 # --------------------------------------------------------------------------- methods
@@ -129,8 +98,34 @@ def _generic_available() -> bool:
     return True
 
 
-#: The registry: every method the benchmark runs.
-METHODS: tuple[Method, ...] = (
+#: The registry: every method the benchmark runs, by name (see :func:`register_bench_method`).
+BENCH_METHODS: dict[str, Method] = {}
+
+#: The registered methods in order of registration (rebuilt by :func:`register_bench_method`).
+METHODS: tuple[Method, ...] = ()
+
+
+def register_bench_method(method: Method) -> Method:
+    """Add (or replace) ``method`` in the registry of the benchmark; returns it.
+
+    A tolerance-driven method of ours is one entry, e.g.
+    ``register_bench_method(tolerance_method("adaptive", "radau", rtols=(1e-4, ...)))``
+    (see :func:`lumped.bench.methods.tolerance_method`).
+    """
+    global METHODS
+    if not isinstance(method, Method):
+        raise TypeError(f"`method` must be a Method, got {type(method).__name__}")
+    if method.kind not in KINDS:
+        raise ValueError(f"`method.kind` must be one of {KINDS}, got {method.kind!r}")
+    BENCH_METHODS[method.name] = method
+    METHODS = tuple(BENCH_METHODS.values())
+    return method
+
+
+#: The kinds of entry and what each is swept over (see :class:`Method`).
+KINDS = ("step", "scipy", "tol")
+
+for _m in (
     Method("closed-bdf1", "step", _closed_form("bdf1")),
     Method("closed-bdf2", "step", _closed_form("bdf2")),
     Method("generic-bdf1", "step", _generic("bdf1"), slow=True),
@@ -138,12 +133,17 @@ METHODS: tuple[Method, ...] = (
     Method("scipy-Radau", "scipy", _scipy("Radau"), ours=False),
     Method("scipy-BDF", "scipy", _scipy("BDF"), ours=False),
     Method("scipy-LSODA", "scipy", _scipy("LSODA"), ours=False),
-)
+    Method("scipy-events-DOP853", "tol", _events("DOP853"), ours=False),
+    Method("scipy-events-LSODA", "tol", _events("LSODA"), ours=False),
+    Method("scipy-events-RK45", "tol", _events("RK45"), ours=False),
+):
+    register_bench_method(_m)
 
 
 def available_methods() -> tuple[Method, ...]:
-    """:data:`METHODS` minus the generic solver's entries when it is not installed."""
-    return tuple(m for m in METHODS if not m.name.startswith("generic") or _generic_available())
+    """The registered methods minus the generic solver's entries when it is not installed."""
+    return tuple(m for m in BENCH_METHODS.values()
+                 if not m.name.startswith("generic") or _generic_available())
 
 
 # --------------------------------------------------------------------------- runs
@@ -179,6 +179,9 @@ def _settings(method: Method, scene: BenchScene, ladders: Ladders) -> list[dict]
     if method.kind == "step":
         floor = ladders.slow_min_dt if method.slow else 0.0
         return [{"dt": dt} for dt in ladders.dts if dt >= floor * (1.0 - 1e-12)]
+    if method.kind == "tol":
+        rtols = ladders.tol_rtols if method.rtols is None else method.rtols
+        return [{"rtol": r, "atol": r * scene.length_scale} for r in rtols]
     return [{"eps": e, "rtol": r, "atol": r * scene.length_scale}
             for e in ladders.eps for r in ladders.rtols]
 
@@ -186,6 +189,8 @@ def _settings(method: Method, scene: BenchScene, ladders: Ladders) -> list[dict]
 def _label(setting: dict) -> str:
     if "dt" in setting:
         return f"dt={setting['dt']:g}"
+    if "eps" not in setting:
+        return f"rtol={setting['rtol']:g}"
     return f"eps={setting['eps']:g} rtol={setting['rtol']:g}"
 
 
@@ -225,6 +230,8 @@ def run_one(
     t0 = time.process_time()
     try:
         runner = method.solve(scene, setting, ladders)
+        if method.warmup:
+            runner()
         solved, cpu, calls = time_call(runner, min_time=ladders.min_time)
         max_err, end_err = _score(solved, x_ref, grid_dt)
     except Exception as err:  # a failed run is a result; its time is the time to failure
@@ -250,16 +257,7 @@ class BenchReport:
     scenes: tuple[str, ...]
     wall_s: float = 0.0
     notes: list[str] = field(default_factory=list)
-
-
-def measure_unit(repeats: int = 5) -> float:
-    """Smallest CPU time of :func:`yardstick` over ``repeats`` calls (seconds)."""
-    best = math.inf
-    for _ in range(repeats):
-        t0 = time.process_time()
-        yardstick()
-        best = min(best, time.process_time() - t0)
-    return best
+    ours: tuple[str, ...] = ()
 
 
 def run_benchmark(
@@ -274,6 +272,9 @@ def run_benchmark(
 ) -> BenchReport:
     """Run every method over its ladder on every scene, plus the creep test and the
     event study (:func:`event_study`, closed forms only).
+
+    ``progress(message)`` is called after every run, after the creep test and after the
+    event study: :func:`count_steps` calls in all.
 
     The yardstick is measured before and after the runs; the smaller value is the unit.
     """
@@ -293,7 +294,7 @@ def run_benchmark(
             for setting in _settings(method, scene, ladders):
                 row = run_one(scene, method, setting, x_ref, unit, ladders, grid_dt)
                 runs.append(row)
-            say(f"{scene.name:18s} {method.name:12s} done")
+                say(f"{scene.name} {method.name} {row.setting}")
     creep_rows = creep_table(ladders, methods) if creep else []
     if creep:
         say("creep done")
@@ -308,7 +309,18 @@ def run_benchmark(
                        reference_s=ref_s,
                        methods=tuple(m.name for m in methods),
                        scenes=tuple(s.name for s in scenes),
-                       wall_s=time.perf_counter() - start)
+                       wall_s=time.perf_counter() - start,
+                       ours=tuple(m.name for m in methods if m.ours))
+
+
+def count_steps(
+    ladders: Ladders, scenes: Iterable[BenchScene], methods: Iterable[Method], *,
+    creep: bool = True, events: bool = True,
+) -> int:
+    """How many times :func:`run_benchmark` reports progress with these arguments."""
+    scenes, methods = tuple(scenes), tuple(methods)
+    runs = sum(len(_settings(m, s, ladders)) for s in scenes for m in methods)
+    return runs + int(creep) + int(events)
 
 
 def _rescale(row: RunResult, unit: float) -> RunResult:
@@ -334,6 +346,9 @@ def creep_table(ladders: Ladders, methods: Iterable[Method]) -> list[dict]:
     for method in methods:
         if method.kind == "step":
             settings = [{"dt": 1e-3}]
+        elif method.kind == "tol":
+            settings = [{"rtol": ladders.creep_rtol,
+                         "atol": ladders.creep_rtol * held.length_scale}]
         else:
             settings = [{"eps": e, "rtol": ladders.creep_rtol,
                          "atol": ladders.creep_rtol * held.length_scale} for e in ladders.eps]
@@ -341,6 +356,8 @@ def creep_table(ladders: Ladders, methods: Iterable[Method]) -> list[dict]:
             try:
                 if method.kind == "step":
                     solved = method.solve(held, setting, ladders)()
+                elif method.kind == "tol":
+                    solved = method.solve(held, {**setting, "grid_dt": 0.01}, ladders)()
                 else:
                     solved = _scipy_solver(held, method.name.removeprefix("scipy-"),
                                            setting["eps"], setting["rtol"], setting["atol"],

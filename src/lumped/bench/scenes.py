@@ -34,7 +34,7 @@ __all__ = [
 #: Step of the common grid on which errors are measured.
 GRID_DT = 1e-3
 #: Error targets of the summary (absolute, in units of x).
-TARGETS = (1e-3, 1e-5, 1e-7, 1e-9)
+TARGETS = (1e-3, 1e-5, 1e-7, 1e-9, 1e-11)
 #: Iterations of the yardstick loop (one unit of benchmark time).
 YARDSTICK_ITERATIONS = 500_000
 
@@ -118,11 +118,19 @@ SCENES: tuple[BenchScene, ...] = PAPER_SCENES + OWN_SCENES
 
 @dataclass(frozen=True)
 class Ladders:
-    """Settings swept by the benchmark."""
+    """Settings swept by the benchmark.
+
+    ``dts``: the step sizes of the fixed-step methods; ``eps`` x ``rtols``: the
+    regularisation and tolerances of the tanh-regularised scipy peers; ``tol_rtols``: the
+    tolerances of the tolerance-driven methods (the event-driven scipy peers, and any
+    method of ours driven by ``rtol``/``atol`` that has no ladder of its own); ``atol`` is
+    always ``rtol`` times the scene's displacement scale.
+    """
 
     dts: tuple[float, ...]
     eps: tuple[float, ...]
     rtols: tuple[float, ...]
+    tol_rtols: tuple[float, ...] = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-13)
     creep_t_end: float = 100.0
     creep_rtol: float = 1e-10
     max_nfev: int = 200_000
@@ -133,8 +141,9 @@ class Ladders:
 
 FULL = Ladders(
     dts=(1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 5e-6, 2e-6),
-    eps=(1e-5, 1e-7, 1e-9, 1e-11),
-    rtols=(1e-4, 1e-6, 1e-8, 1e-10, 1e-12),
+    eps=(1e-5, 1e-7, 1e-9, 1e-11, 1e-13),
+    rtols=(1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-13),
+    tol_rtols=(1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13),
     max_nfev=50_000,
     slow_min_dt=2e-5,
 )
@@ -142,6 +151,7 @@ QUICK = Ladders(
     dts=(1e-2, 1e-3, 1e-4, 1e-5),
     eps=(1e-5, 1e-9),
     rtols=(1e-6, 1e-10),
+    tol_rtols=(1e-6, 1e-9, 1e-12),
     max_nfev=50_000,
     min_time=0.02,
     slow_min_dt=1e-3,

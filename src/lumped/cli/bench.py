@@ -1,16 +1,18 @@
-"""``lumped bench --out DIR [--quick]``: the work-precision benchmark.
+"""``lumped bench --out DIR [--quick] [--quiet]``: the work-precision benchmark.
 
 Writes ``runs.csv`` (every run), ``summary.md`` (fastest run per scene, error target
 and method; creep; observed orders) and ``work_precision.png`` (when matplotlib is
-installed) into ``DIR``.  See :mod:`lumped.bench` for what is measured.
+installed) into ``DIR``, then prints the ratio of our best method's time to the fastest
+scipy time per scene and error target.  Progress shows on a terminal (not with
+``--quiet``).  See :mod:`lumped.bench` for what is measured.
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
-import time
 from pathlib import Path
+
+from .progress import Progress, progress_wanted
 
 __all__ = ["add_arguments", "run"]
 
@@ -23,8 +25,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="short ladders (under 2 minutes) instead of the full run")
     parser.add_argument("--scenes", default=None, metavar="NAMES",
                         help="comma-separated scene names (default: all)")
+    parser.add_argument("--methods", default=None, metavar="NAMES",
+                        help="comma-separated method names (default: all available)")
     parser.add_argument("--no-creep", action="store_true", help="skip the 100 s creep runs")
     parser.add_argument("--no-events", action="store_true", help="skip the event study")
+    parser.add_argument("--quiet", action="store_true",
+                        help="print nothing but errors (no progress, no summary)")
     parser.add_argument("--impact", action="store_true",
                         help="only the impact scene (issue 11): errors against its exact "
                              "motion, written to DIR/impact.md")
@@ -50,15 +56,26 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"`--scenes`: unknown scene(s) {unknown}; known: {sorted(known)}")
         scenes = tuple(known[n] for n in names)
     ladders = bench.QUICK if args.quick else bench.FULL
-    start = time.perf_counter()
-
-    def progress(msg: str) -> None:
-        print(f"[{time.perf_counter() - start:7.1f} s] {msg}", file=sys.stderr, flush=True)
-
-    report = bench.run_benchmark(ladders=ladders, scenes=scenes, creep=not args.no_creep,
-                                 events=not args.no_events, progress=progress)
-    for line in bench.write_outputs(report, args.out):
-        print(line)
-    print(f"{len(report.runs)} runs ({sum(not r.ok for r in report.runs)} failed) "
-          f"in {report.wall_s:.1f} s wall time; yardstick {report.unit_s * 1e3:.2f} ms")
+    methods = bench.available_methods()
+    if getattr(args, "methods", None):
+        names = [n.strip() for n in args.methods.split(",") if n.strip()]
+        known = {m.name: m for m in methods}
+        unknown = [n for n in names if n not in known]
+        if unknown:
+            raise ValueError(f"`--methods`: unknown method(s) {unknown}; known: {list(known)}")
+        methods = tuple(known[n] for n in names)
+    creep, events = not args.no_creep, not args.no_events
+    total = bench.count_steps(ladders, scenes, methods, creep=creep, events=events)
+    with Progress(total, "lumped bench", enabled=progress_wanted(args.quiet)) as bar:
+        report = bench.run_benchmark(ladders=ladders, scenes=scenes, methods=methods,
+                                     creep=creep, events=events,
+                                     progress=lambda msg: bar.update(note=msg))
+    lines = bench.write_outputs(report, args.out)
+    if not args.quiet:
+        for line in lines:
+            print(line)
+        print(f"{len(report.runs)} runs ({sum(not r.ok for r in report.runs)} failed) "
+              f"in {report.wall_s:.1f} s wall time; yardstick {report.unit_s * 1e3:.2f} ms")
+        print("Our best method / the fastest scipy peer (CPU time ratio; < 1: we are faster):")
+        print(bench.ratio_table(report), end="")
     return 0

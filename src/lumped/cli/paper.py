@@ -1,5 +1,5 @@
 """Run the four scenarios of the paper's Section 3 and write CSVs, figures and a summary
-table (``lumped paper --out DIR``)."""
+table (``lumped paper --out DIR``); progress shows on a terminal (not with ``--quiet``)."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from .._validate import as_positive
 from ..plotting import have_matplotlib, plot_trajectory
 from ..scenarios import PAPER_DT, PAPER_METHODS, PAPER_SCENARIOS, PAPER_T_END, run_scenario
 from ..trajectory import StickSummary, _fmt, summarize
+from .progress import Progress, progress_wanted
 
 __all__ = ["add_arguments", "format_summary", "run"]
 
@@ -30,6 +31,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help=f"final time (default {PAPER_T_END})")
     parser.add_argument("--scenario", action="append", default=None, metavar="NAME",
                        help="run only this scenario (repeatable); default: all four")
+    parser.add_argument("--quiet", action="store_true",
+                        help="print nothing but errors (no progress, no summary table)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -46,17 +49,23 @@ def run(args: argparse.Namespace) -> int:
                 f"unknown scenario {name!r}; known scenarios: {', '.join(PAPER_SCENARIOS)}"
             )
     out: Path = args.out
+    quiet = bool(getattr(args, "quiet", False))
     plots = have_matplotlib()
-    if not plots:
+    if not plots and not quiet:
         print("matplotlib is not installed: writing CSVs only (pip install 'lumped[plot]').")
     rows = []
     started = time.perf_counter()
-    for name in names:
-        traj = run_scenario(name, method=method, dt=dt, t_end=t_end)
-        traj.to_csv(out / f"{name}.csv")
-        if plots:
-            plot_trajectory(traj, out / f"{name}.png", title=f"{name} ({method}, dt = {dt:g})")
-        rows.append((name, summarize(traj)))
+    with Progress(len(names), "lumped paper", enabled=progress_wanted(quiet)) as bar:
+        for name in names:
+            traj = run_scenario(name, method=method, dt=dt, t_end=t_end)
+            traj.to_csv(out / f"{name}.csv")
+            if plots:
+                plot_trajectory(traj, out / f"{name}.png",
+                                title=f"{name} ({method}, dt = {dt:g})")
+            rows.append((name, summarize(traj)))
+            bar.update(note=name)
+    if quiet:
+        return 0
     print(format_summary(rows))
     print(f"wrote {len(rows)} scenario(s) to {out} with {method}, dt = {dt:g}, t_end = {t_end:g} "
           f"in {time.perf_counter() - started:.2f} s")

@@ -389,6 +389,13 @@ class BoundLaw:
             {self.law.symbols[p]: sp.Float(v) for p, v in self._params.items()}
         )
 
+    def latex(self) -> str:
+        """The law with its parameter values as LaTeX, ``R(q, F) = 0``."""
+        return f"{sp.latex(self.expression())} = 0"
+
+    def _repr_latex_(self) -> str:
+        return f"$\\displaystyle {self.latex()}$"
+
     def _key(self) -> tuple:
         return (self.law, tuple(self._params.items()))
 

@@ -2,6 +2,7 @@
 
 from .forcing import SineBurst, paper_F1, paper_F2, zero_forcing
 from .network import GROUND, Element, Junction, Mass, Scene, as_forcing
+from .oscillator import bingham_oscillator
 
 __all__ = [
     "GROUND",
@@ -11,6 +12,7 @@ __all__ = [
     "Scene",
     "SineBurst",
     "as_forcing",
+    "bingham_oscillator",
     "paper_F1",
     "paper_F2",
     "zero_forcing",

@@ -5,6 +5,10 @@ Built-in methods (the same names on the command line):
 ``bdf1``, ``bdf2``
     The generic semismooth-Newton BDF steps of :mod:`lumped.solvers.fixed_step`, for any
     scene.
+``jit-bdf1``, ``jit-bdf2``
+    The same steps compiled with numba (:mod:`lumped.solvers.fixed_step_jit`): the same
+    numbers, much faster per step, after a one-off compile cached on disk. Not for
+    scenes with a position lock (a taut string) or with hand-written kernels.
 ``closed-bdf1``, ``closed-bdf2``
     The closed-form steps of :mod:`lumped.solvers.closed_form` (``closed-bdf1`` is the
     paper's Algorithm 1). Only for a scene that is exactly one mass with one
@@ -191,6 +195,17 @@ def _run_generic(formula: str) -> Runner:
     return runner
 
 
+def _run_jit(method: str) -> Runner:
+    def runner(scene: Scene, settings: RunSettings) -> RawRun:
+        from .fixed_step_jit import run_bdf_jit
+
+        dt, n_steps = _fixed_step_grid(method, settings)
+        return run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
+                           options=settings.options, throw=settings.throw)
+
+    return runner
+
+
 def _single(method: str, make: Callable[..., Trajectory]) -> Runner:
     def runner(scene: Scene, settings: RunSettings) -> RawRun:
         dt, n_steps = _fixed_step_grid(method, settings)
@@ -203,6 +218,8 @@ def _single(method: str, make: Callable[..., Trajectory]) -> Runner:
 METHOD_REGISTRY: dict[str, Runner] = {
     "bdf1": _run_generic("bdf1"),
     "bdf2": _run_generic("bdf2"),
+    "jit-bdf1": _run_jit("jit-bdf1"),
+    "jit-bdf2": _run_jit("jit-bdf2"),
     "closed-bdf1": _single("closed-bdf1", _closed_trajectory("bdf1")),
     "closed-bdf2": _single("closed-bdf2", _closed_trajectory("bdf2")),
     "exact": _single("exact", _exact_trajectory),

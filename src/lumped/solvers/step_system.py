@@ -1,6 +1,8 @@
-r"""The discrete system of one implicit step (see :mod:`lumped.solvers.fixed_step`):
-residual and Jacobian of the balances and the laws in ``u = (v_1 .. v_N, F_1 .. F_E)``,
-the scale of a law row's residual, and the report of a failed Newton solve.
+r"""The discrete system of one implicit step (see :mod:`lumped.solvers.fixed_step`).
+
+Residual and Jacobian of the balances and the laws in the unknowns ``u`` (the velocity of
+every node and the force of every element), the scale of a law row's residual, and the
+report of a failed Newton solve.
 """
 
 from __future__ import annotations

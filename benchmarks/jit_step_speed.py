@@ -1,0 +1,144 @@
+"""Compiled generic BDF (``jit-bdf1``/``jit-bdf2``): cost per step and compile time.
+
+Usage, from the repository root (after ``pip install -e ".[test]"``)::
+
+    python benchmarks/jit_step_speed.py [--steps 50000] [--repeats 5]
+
+Measured in one process, each the smallest CPU time of ``--repeats`` interleaved runs,
+reported in nanoseconds and in units of one iteration of the benchmark yardstick
+(:func:`lumped.bench.measure_unit`, a pure-Python float loop), since shared machines
+are noisy:
+
+1. per step, on the paper's Bingham scene with forcing F2 (``dt = 1e-4``): the
+   compiled generic loop alone (every step stored; the run's setup -- consistent initial
+   state, forcing tables, source hash -- is timed apart), ``simulate(method="jit-...")``
+   end to end, the pure-Python generic step (``run_bdf``) and, when it exists (branch
+   ``sweep``), the compiled closed-form step storing every step
+   (``lumped.solvers.closed_form_jit.run_steps``); the issue's target is generic compiled
+   at most 3x the compiled closed form;
+2. compile time: a fresh process with an empty scene cache (``LUMPED_CACHE_DIR``; the
+   solver cores' helpers come from numba's cache beside the package), then a second
+   fresh process that loads the scene's machine code from the disk cache.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+
+from lumped.bench import YARDSTICK_ITERATIONS, measure_unit
+from lumped.bench.timing import time_call
+from lumped.scenarios import scenario_scene
+from lumped.simulate import simulate
+from lumped.solvers.bdf_jit_core import compiled_run_bdf_core
+from lumped.solvers.fixed_step import run_bdf
+from lumped.solvers.fixed_step_jit import loop_arguments
+from lumped.solvers.newton import NewtonOptions
+
+DT = 1e-4
+SCENE = "forcing-F2"
+
+_CHILD = """
+import time
+t0 = time.perf_counter()
+from lumped import simulate
+from lumped.scenarios import scenario_scene
+t1 = time.perf_counter()
+simulate(scenario_scene({scene!r}), method="jit-bdf2", dt=1e-4, t_end=1e-3)
+t2 = time.perf_counter()
+simulate(scenario_scene({scene!r}), method="jit-bdf2", dt=1e-4, t_end=1e-3)
+print(t1 - t0, t2 - t1, time.perf_counter() - t2)
+"""
+
+
+def per_step(n: int, repeats: int) -> dict[str, float]:
+    scene = scenario_scene(SCENE)
+    opts = NewtonOptions()
+    loop = compiled_run_bdf_core()
+    variants = {}
+    for formula in ("bdf1", "bdf2"):
+        js, args, _ = loop_arguments(scene, formula, DT, n, opts)
+        variants[f"jit-{formula}: compiled loop"] = (
+            lambda m=js.module, a=args: loop(m.evaluate, m.element_law, *a))
+        variants[f"jit-{formula}: simulate() end to end"] = (
+            lambda f=formula: simulate(scene, method=f"jit-{f}", dt=DT, t_end=n * DT))
+        variants[f"jit-{formula}: setup only (loop_arguments)"] = (
+            lambda f=formula: loop_arguments(scene, f, DT, n, opts))
+    try:
+        import numpy as np
+
+        from lumped.solvers import closed_form_jit as C
+
+        cols = [np.zeros(n + 1) for _ in range(4)]
+        A, W, T = 10.0, 5.0 * math.pi, 1.0
+        for bdf2 in (False, True):
+            variants[f"closed form {'BDF2' if bdf2 else 'BDF1'} compiled (every step stored)"] = (
+                lambda b=bdf2: C.run_steps(1.0, 100.0, 1.0, 1.0, DT, b, C.FORCE_SINE, A, W, T,
+                                           np.empty(0), *cols))
+    except ImportError:
+        pass
+    for fn in variants.values():  # compile or load from the cache
+        fn()
+    best = {name: math.inf for name in variants}
+    for _ in range(repeats):  # interleaved, CPU time (the machine may be loaded)
+        for name, fn in variants.items():
+            best[name] = min(best[name], time_call(fn, min_time=0.0, max_repeats=1)[1])
+    per = {name: t / n for name, t in best.items()}
+    n_py = max(n // 10, 1000)
+    for formula in ("bdf1", "bdf2"):
+        per[f"{formula}: pure-Python generic step"] = time_call(
+            lambda f=formula: run_bdf(scene, method=f, dt=DT, n_steps=n_py), min_time=0.0,
+            max_repeats=3)[1] / n_py
+    return per
+
+
+def compile_times() -> list[tuple[float, float, float]]:
+    """``(import s, first simulate s, second simulate s)``: empty cache, then warm."""
+    env = dict(os.environ)
+    out = []
+    with tempfile.TemporaryDirectory() as cache:
+        env["LUMPED_CACHE_DIR"] = cache
+        for _ in range(2):
+            res = subprocess.run([sys.executable, "-c", _CHILD.format(scene=SCENE)], env=env,
+                                 check=True, capture_output=True, text=True)
+            out.append(tuple(float(u) for u in res.stdout.split()))
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=50_000)
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args()
+    import numba
+
+    print(f"date: {time.strftime('%Y-%m-%d %H:%M')}, cpus: {os.cpu_count()}, "
+          f"numba {numba.__version__}, python {sys.version.split()[0]}")
+    unit = measure_unit() / YARDSTICK_ITERATIONS
+    per = per_step(args.steps, args.repeats)
+    unit = min(unit, measure_unit() / YARDSTICK_ITERATIONS)
+    closed = {f: per.get(f"closed form {f.upper()} compiled (every step stored)")
+              for f in ("bdf1", "bdf2")}
+    print(f"\nyardstick iteration: {unit * 1e9:.1f} ns; {args.steps} steps of dt = {DT:g}, "
+          f"paper scene {SCENE}")
+    print(f"{'per step':58s} {'ns':>10s} {'yardstick':>10s} {'/ closed form':>14s}")
+    for name, sec in per.items():
+        ref = closed.get(re.search(r"bdf[12]", name, flags=re.I).group(0).lower())
+        ratio = f"{sec / ref:14.2f}" if ref else f"{'':14s}"
+        print(f"{name:58s} {sec * 1e9:10.1f} {sec / unit:10.3f} {ratio}")
+    runs = compile_times()
+    (imp0, first0, second0), (imp1, first1, _) = runs
+    print(f"\ncompile: fresh process, empty scene cache: import {imp0:.2f} s, first "
+          f"simulate(jit-bdf2) {first0:.2f} s (the next one in that process {second0:.3f} s);"
+          f"\n         fresh process, warm disk cache: import {imp1:.2f} s, first simulate "
+          f"{first1:.2f} s")
+
+
+if __name__ == "__main__":
+    main()

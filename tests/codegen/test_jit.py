@@ -1,0 +1,130 @@
+"""The generated numba module of a scene (:mod:`lumped.codegen.jit`): its functions agree
+with the Python kernels and branch machinery they are generated from, and the disk cache
+is written safely. Only the small functions are called here (numba compiles lazily, one
+function at a time); the compiled solver loop is tested in tests/solvers."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from lumped import Element, Mass, Scene
+from lumped.codegen.branches import law_branches
+from lumped.codegen.jit import _write_once, cache_dir, jit_scene, scene_source
+from lumped.laws import ElementLaw, get_law
+
+CUBIC = ElementLaw("cubic", "spring", "F = k*q + c*q**3", ["k", "c"])
+
+
+@pytest.fixture(scope="module")
+def js():
+    """One mass on a Bingham dashpot, a taut-or-slack string and a user law; the string
+    and the Bingham law appear twice (one compiled kernel each)."""
+    bingham = get_law("bingham").bind(gamma=2.0, tau=1.0)
+    scene = Scene(
+        [Mass("m", 1.0), Mass("n", 2.0)],
+        [Element("d", bingham, "ground", "m"),
+         Element("s", get_law("string_spring").bind(k=10.0, L=0.5), "m", "n"),
+         Element("c", CUBIC.bind(k=3.0, c=0.5), "ground", "n"),
+         Element("d2", get_law("bingham").bind(gamma=2.0, tau=1.0), "n", "ground")],
+    )
+    return scene, jit_scene(scene)
+
+
+finite = st.floats(-3.0, 3.0, allow_nan=False)
+
+
+def test_one_kernel_per_distinct_law(js):
+    scene, j = js
+    assert list(j.law_index) == [0, 1, 2, 0]
+    assert j.masses.tolist() == [1.0, 2.0]
+    assert j.ea.tolist() == [-1, 0, -1, 1] and j.eb.tolist() == [0, 1, 1, -1]
+    assert j.spring.tolist() == [False, True, True, False]
+
+
+@given(q=finite, F=finite)
+def test_element_laws_and_branches_match_python(js, q, F):
+    scene, j = js
+    m = j.module
+    out = np.empty(4)
+    for e, el in enumerate(scene.elements):
+        assert m.element_law(e, q, F) == el.law.kernel(q, F)
+        assert m.element_magnitude(e, q, F) == el.law.kernel.magnitude(q, F)
+        lb = law_branches(el.law)
+        assert m.branch_count(e) == lb.count
+        assert m.active_branch(e, q, F) == lb.branch(q, F)
+        for i in range(lb.count):
+            assert m.branch_law(e, i, q, F) == lb.kernel_for(i)(q, F)
+            k = m.branch_guards(e, i, q, F, out)
+            assert tuple(out[:k]) == lb.guards_for(i)(q, F)
+
+
+def test_scene_laws_all_elements_at_once(js):
+    scene, j = js
+    q = np.array([0.3, 0.7, -0.2, 0.0])
+    F = np.array([1.5, 2.0, -0.4, 0.2])
+    R, Rq, RF = np.empty(4), np.empty(4), np.empty(4)
+    j.module.scene_laws(q, F, R, Rq, RF)
+    for e, el in enumerate(scene.elements):
+        assert (R[e], Rq[e], RF[e]) == el.law.kernel(q[e], F[e])
+
+
+def test_same_laws_same_module_and_parameters_are_baked_in(js):
+    scene, j = js
+    again = Scene([Mass("m", 5.0, x0=1.0), Mass("n", 1.0, v0=2.0)], scene.elements)
+    assert jit_scene(again).module is j.module  # masses and state are data
+    other = Scene(scene.nodes, [Element("d", get_law("bingham").bind(gamma=2.0, tau=1.5),
+                                        "ground", "m")])
+    assert scene_source(other)[0] != scene_source(scene)[0]
+
+
+def test_module_file_is_named_by_its_source_hash(js):
+    scene, j = js
+    path = Path(j.module.__file__)
+    assert path.parent == cache_dir() / "jit"
+    source = scene_source(scene)[0]
+    assert path.read_text(encoding="utf-8") == source
+    assert hashlib.sha256(source.encode()).hexdigest()[:24] in path.name
+
+
+def test_cache_dir_from_environment(monkeypatch, tmp_path):
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path / "a"))
+    assert cache_dir() == tmp_path / "a"
+    monkeypatch.delenv("LUMPED_CACHE_DIR")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "x"))
+    assert cache_dir() == tmp_path / "x" / "lumped"
+
+
+def test_write_once_never_replaces_a_file(tmp_path):
+    path = tmp_path / "d" / "m.py"
+    _write_once(path, "A = 1\n")
+    stamp = path.stat().st_mtime_ns
+    _write_once(path, "A = 2\n")
+    assert path.read_text() == "A = 1\n" and path.stat().st_mtime_ns == stamp
+    assert [p.name for p in path.parent.iterdir()] == ["m.py"]  # no temp file left
+
+
+def test_position_lock_is_refused():
+    from lumped import simulate
+
+    scene = Scene([Mass("m", 1.0, x0=0.6)],
+                  [Element("s", get_law("string_spring").bind(k=10.0, L=0.5), "ground", "m")])
+    with pytest.raises(ValueError, match="position lock.*'string_spring'.*element 's'"):
+        simulate(scene, method="jit-bdf1", dt=1e-3, t_end=0.01)
+
+
+def test_unwritable_cache_falls_back_to_a_temporary_directory(monkeypatch, tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(blocker))
+    scene = Scene([Mass("m", 3.0)],
+                  [Element("c", CUBIC.bind(k=2.0, c=0.25), "ground", "m")])  # a new module
+    with pytest.warns(UserWarning, match="cannot write the compiled-code cache"):
+        j = jit_scene(scene)
+    assert not Path(j.module.__file__).is_relative_to(blocker)
+    assert j.module.element_law(0, 0.5, 1.0) == scene.elements[0].law.kernel(0.5, 1.0)
