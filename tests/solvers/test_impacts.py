@@ -218,6 +218,7 @@ def test_impact_bench_rows():
     rows = impact_errors(methods=("bdf1", "bdf2"), dts=(1e-2,), t_end=1.0, timed=True)
     assert [r["status"] for r in rows] == ["success", "success"]
     assert all(r["max_error"] <= 3e-2 and r["impacts"] == 1 for r in rows)
+    assert all(math.isfinite(r["ratio"]) and r["ratio"] > 0 for r in rows)
     assert impact_markdown(rows).count("\n") == 4
 
 

@@ -195,13 +195,31 @@ def _run_generic(formula: str) -> Runner:
     return runner
 
 
+#: Statuses of a compiled run that send it to the reference solver.
+_NEWTON_FAILURES = frozenset({Status.SINGULAR, Status.DIVERGED, Status.MAX_ITERS,
+                              Status.NON_FINITE})
+
+
 def _run_jit(method: str) -> Runner:
     def runner(scene: Scene, settings: RunSettings) -> RawRun:
         from .fixed_step_jit import run_bdf_jit
 
         dt, n_steps = _fixed_step_grid(method, settings)
-        return run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
-                           options=settings.options, throw=settings.throw)
+        raw = run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
+                          options=settings.options, throw=False)
+        if raw.status in _NEWTON_FAILURES:
+            # a step the compiled Newton cannot take (indeterminate forces: a singular
+            # step matrix; a hard point of a law): the whole run on the reference solver,
+            # with its globalised Newton and minimum-norm force split (issue 11)
+            out = run_bdf(scene, method=method.removeprefix("jit-"), dt=dt, n_steps=n_steps,
+                          options=settings.options, throw=settings.throw)
+            stats = dict(out.stats, fallback=f"reference solver after: {raw.message}")
+            return RawRun(out.as_array(), stats, out.status, out.message,
+                          events=out.events, indeterminate=out.indeterminate)
+        if raw.status is not Status.SUCCESS and settings.throw:
+            return run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
+                               options=settings.options, throw=True)
+        return raw
 
     return runner
 
