@@ -216,6 +216,17 @@ def consistent_initial_state(
                                free_steps=options.free_steps)
     res = newton_solve(evaluate, u0, ic_options, min_norm=True)
     if res.code is not NewtonCode.SUCCESS:
+        # restarts: every junction moving with each dashpot neighbour in turn (see
+        # lumped.solvers.globalize.stuck_guesses), the masses' accelerations zero
+        from .globalize import stuck_guesses
+
+        for guess in stuck_guesses(scene, v0, u0[N:]):
+            retry = newton_solve(evaluate, [0.0 if is_mass[i] else guess[i] for i in range(N)]
+                                 + guess[N:], ic_options, min_norm=True)
+            if retry.code is NewtonCode.SUCCESS:
+                res = retry
+                break
+    if res.code is not NewtonCode.SUCCESS:
         _refuse_uncarried_force(scene, pinned, f)
         err = _newton_failure(scene, res, 0.0, 0)
         raise SolverError(
