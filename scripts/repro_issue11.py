@@ -10,30 +10,8 @@ import math
 
 import numpy as np
 
-from lumped.laws import get_law
-from lumped.scene import Element, Mass, Scene
+from lumped.bench.impact_scenes import exact_impact, impact_scene, lock_scene
 from lumped.simulate import simulate
-
-
-def impact_scene() -> Scene:
-    return Scene([Mass("mass", m=1.0, x0=0.0, v0=1.0)],
-                 [Element("string", get_law("string_spring").bind(k=1.0, L=0.5),
-                          "ground", "mass")])
-
-
-def exact_impact(t):
-    t = np.asarray(t, dtype=float)
-    ts = math.pi / 6
-    return np.where(t < ts, np.sin(t), 0.5 * np.cos(t - ts))
-
-
-def lock_scene() -> Scene:
-    return Scene([Mass("mass", m=1.0, x0=0.0, v0=0.0)],
-                 [Element("string", get_law("string_spring").bind(k=1.0, L=0.5),
-                          "ground", "mass"),
-                  Element("friction", get_law("coulomb").bind(tau=0.2, r=10.0),
-                          "ground", "mass")],
-                 forces={"mass": 1.0})
 
 
 def main() -> None:
