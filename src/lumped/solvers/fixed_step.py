@@ -310,8 +310,9 @@ def run_bdf(
         "factorizations": facts,
         "max_newton_iterations": max_it,
         "initial_newton_iterations": ic_stats["newton_iterations"],
-        "impacts": n_impacts,
     }
+    if lockable:  # a scene that can lock counts its impacts
+        stats["impacts"] = n_impacts
     return RunResult(dt, N, E, xs, vs, Fs, stats, status, message, events, log.result())
 
 
