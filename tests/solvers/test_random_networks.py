@@ -17,7 +17,8 @@ silently) it asserts:
 * the runs converge as ``dt`` halves;
 * a stuck dashpot (rate zero) never carries more than its yield force.
 
-Budget: ``ci`` runs :data:`CI_EXAMPLES` examples; ``LUMPED_LARGE=1`` runs
+Budget: ``ci`` runs :data:`CI_EXAMPLES` examples per method (:data:`COMPILED_EXAMPLES`
+for the methods that compile each scene); ``LUMPED_LARGE=1`` runs
 :data:`LARGE_EXAMPLES` (at least 10 000, for a background run; see CHANGELOG).
 """
 
@@ -233,10 +234,22 @@ _SETTINGS = settings(max_examples=EXAMPLES, deadline=None,
                      suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 
 
-@pytest.mark.parametrize("method", GENERIC)
+#: Methods that compile every new scene (numba, about a second each): a smaller budget.
+COMPILED = tuple(m for m in GENERIC if m.startswith("jit-"))
+COMPILED_EXAMPLES = 1_000 if LARGE else 4
+
+
+@pytest.mark.parametrize("method", [m for m in GENERIC if m not in COMPILED])
 @_SETTINGS
 @given(scene=passive_networks())
 def test_random_passive_network(method: str, scene: Scene) -> None:
+    check_network(scene, method)
+
+
+@pytest.mark.parametrize("method", COMPILED)
+@settings(_SETTINGS, max_examples=COMPILED_EXAMPLES)
+@given(scene=passive_networks())
+def test_random_passive_network_compiled(method: str, scene: Scene) -> None:
     check_network(scene, method)
 
 
