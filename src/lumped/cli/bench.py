@@ -31,12 +31,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-events", action="store_true", help="skip the event study")
     parser.add_argument("--quiet", action="store_true",
                         help="print nothing but errors (no progress, no summary)")
+    parser.add_argument("--impact", action="store_true",
+                        help="only the impact scene (issue 11): errors against its exact "
+                             "motion, written to DIR/impact.md")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the benchmark; ``ValueError`` for an unknown scene name."""
     from .. import bench
 
+    if args.impact:  # the impact scene against its exact solution (bench.impact_scenes)
+        from ..bench.impact_scenes import impact_errors, impact_markdown
+
+        args.out.mkdir(parents=True, exist_ok=True)
+        (args.out / "impact.md").write_text(impact_markdown(impact_errors(timed=True)))
+        print(args.out / "impact.md")
+        return 0
     scenes = bench.SCENES
     if args.scenes:
         names = [n.strip() for n in args.scenes.split(",") if n.strip()]

@@ -45,7 +45,11 @@ from dataclasses import dataclass, field
 
 from ..scene import Scene
 from .branch_check import _known_monotone, _left_branch
+from .globalize import solve_globalized
+from .impact_step import halved_steps, impact_step, impulse_is_negligible
+from .impacts import lockable_elements, locking_elements
 from .initial_state import consistent_initial_state
+from .locks import IntervalLog, cyclic_elements, indeterminate_elements
 from .newton import (
     FactorCache,
     NewtonCode,
@@ -54,7 +58,7 @@ from .newton import (
     _update_ok,
     newton_solve,
 )
-from .status import BranchError, Status
+from .status import BranchError, Event, Status
 from .step_system import (
     _generate_evaluate,
     _newton_failure,
@@ -81,6 +85,8 @@ class RunResult:
     stats: dict = field(default_factory=dict)
     status: Status = Status.SUCCESS
     message: str = ""
+    events: list[Event] = field(default_factory=list)
+    indeterminate: dict[str, list[tuple[float, float]]] = field(default_factory=dict)
 
     def as_array(self):
         """``(n, 1 + 2 N + E)`` array: ``t``, then ``x_i, v_i`` per node, then ``F_e``."""
@@ -108,16 +114,28 @@ def run_bdf(
     n_steps: int,
     options: NewtonOptions | None = None,
     throw: bool = True,
+    restitution: float = 0.0,
 ) -> RunResult:
     """Advance ``scene`` by ``n_steps`` fixed steps of BDF1 or BDF2 (first step BDF1).
 
     Returns the samples (see :class:`RunResult`; ``as_array()`` gives the columns ``t``,
-    ``x_i, v_i`` per node, ``F_e`` per element) and the counters. On a failed step: raise
+    ``x_i, v_i`` per node, ``F_e`` per element), the counters, the impacts (``events``)
+    and the intervals of indeterminate forces. On a failed step: raise
     :class:`SolverError` (``throw=True``) or return the samples so far with ``status`` and
     ``message`` set.
+
+    **Impacts** (a spring-like element reaches a locking branch while its ends approach):
+    the step is redone by :func:`lumped.solvers.impact_step.impact_step` (locate, impulse
+    with restitution ``restitution``, finish), and BDF2 restarts with a BDF1 step.
+    **Indeterminate forces** (locked elements in parallel): a singular step matrix is
+    solved by minimum-norm Newton corrections (the forces change as little as possible
+    from the previous step), and the elements and intervals are reported
+    (:mod:`lumped.solvers.locks`).
     """
     if method not in GENERIC_METHODS:
         raise ValueError(f"`method` must be one of {GENERIC_METHODS}, got {method!r}")
+    if not (isinstance(restitution, (int, float)) and 0.0 <= restitution <= 1.0):
+        raise ValueError(f"`restitution` must be in [0, 1], got {restitution!r}")
     options = options or NewtonOptions()
     N, E = len(scene.nodes), len(scene.elements)
     v, F, ic_stats = consistent_initial_state(scene, time_scale=dt, options=options)
@@ -150,6 +168,14 @@ def run_bdf(
     max_it = 0
     status, message = Status.SUCCESS, ""
     x_prev, v_prev = x, v
+    # impacts and locks: springs that can lock, those locked now, the events
+    lockable = lockable_elements(scene)
+    locked = set(locking_elements(scene, x, v, F, lockable)) if lockable else set()
+    restart = False
+    events: list[Event] = []
+    n_impacts = 0
+    log = IntervalLog()
+    cyclic = cyclic_elements(scene)
     for step in range(1, n_steps + 1):
         t = step * dt
         for i, fn in forcing:
@@ -159,7 +185,7 @@ def run_bdf(
                     f"force on node {scene.nodes[i].name!r} returned {val!r} at t = {t!r}"
                 )
             f[i] = val
-        if ev2 is None or step == 1:
+        if ev2 is None or step == 1 or restart:
             h = h1
             evaluate, full = ev1, full1
             for i in range(N):
@@ -177,7 +203,9 @@ def run_bdf(
                 uref[i] = vi + (vi - v_prev[i]) / 3.0
         cache = cache1 if h == h1 else cache2
         u = _fast_step(evaluate, v + F, cache, rtol, atol) if fast else None
+        halved = None
         if u is not None:  # the common case, counted as newton_solve would count it
+            J_acc = cache.J  # the Jacobian at the solution (same pieces)
             it = u.pop()
             total_it += it
             res_ev += 1 + it
@@ -185,23 +213,57 @@ def run_bdf(
             if it > max_it:
                 max_it = it
         else:
-            res = newton_solve(full, v + F, options, cache)
+            res = newton_solve(full, v + F, options, cache, min_norm=True)
+            if res.code is not NewtonCode.SUCCESS:
+                total_it += res.iterations
+                res_ev += res.residual_evals
+                res = solve_globalized(scene, full, h, x_hat, v, F, options)
             total_it += res.iterations
             res_ev += res.residual_evals
             jac_ev += res.jacobian_evals
             facts += res.factorizations
             if res.iterations > max_it:
                 max_it = res.iterations
-            if res.code is not NewtonCode.SUCCESS:
+            if res.code is not NewtonCode.SUCCESS:  # last resort: backward-Euler substeps
+                halved = halved_steps(scene, t - dt, dt, x, v, F, options)
+            if res.code is not NewtonCode.SUCCESS and halved is None:
                 err = _newton_failure(scene, res, t, step)
                 if throw:
                     raise err
                 status, message = err.status, str(err)
                 break
-            u = res.u
+            if halved is not None:
+                total_it += halved[3]
+                u = halved[1] + halved[2]
+                J_acc = None
+            else:
+                u = res.u
+                J_acc = res.jacobian
         v_new = u[:N]
-        x_new = [x_hat[i] + h * v_new[i] for i in range(N)]
-        F_prev, F = F, u[N:]
+        x_new = [x_hat[i] + h * v_new[i] for i in range(N)] if halved is None else halved[0]
+        F_new = u[N:]
+        restart = halved is not None  # history through substeps: BDF2 restarts
+        if lockable:
+            now = set(locking_elements(scene, x_new, v_new, F_new, lockable))
+            new = [e for e in sorted(now) if e not in locked]
+            if new and not impulse_is_negligible(scene, v, new):
+                done = impact_step(scene, t - dt, dt, x, v, F, locked, options, restitution)
+                total_it += done.newton_iterations
+                res_ev += done.solves
+                if done.failure is not None:
+                    err = _newton_failure(scene, done.failure, done.failure_t, step)
+                    if throw:
+                        raise err
+                    status, message = err.status, str(err)
+                    break
+                x_new, v_new, F_new = done.x, done.v, done.F
+                events += done.events
+                n_impacts += 1
+                restart = True
+                J_acc = None
+                now = set(locking_elements(scene, x_new, v_new, F_new, lockable))
+            locked = now
+        F_prev, F = F, F_new
         q_new = scene.elongations(x_new, v_new) if checked else ()
         for e in checked:
             q0, d0 = prev_q[e], prev_d[e]
@@ -226,6 +288,15 @@ def run_bdf(
             prev_d[e] = d1
         if status is not Status.SUCCESS:
             break
+        if cyclic:
+            # force-free elements: dR/dF = 0 on the diagonal of the step's Jacobian
+            if J_acc is not None and sum(J_acc[N + e][N + e] == 0.0 for e in cyclic) < 2:
+                if log.open:
+                    log.mark((step - 1) * dt, t, ())
+            else:
+                q_acc = scene.elongations(x_new, v_new)
+                log.mark((step - 1) * dt, t, [scene.elements[e].name for e in
+                                              indeterminate_elements(scene, q_acc, F, cyclic)])
         x_prev, v_prev, x, v = x, v, x_new, v_new
         xs += x
         vs += v
@@ -240,7 +311,9 @@ def run_bdf(
         "max_newton_iterations": max_it,
         "initial_newton_iterations": ic_stats["newton_iterations"],
     }
-    return RunResult(dt, N, E, xs, vs, Fs, stats, status, message)
+    if lockable:  # a scene that can lock counts its impacts
+        stats["impacts"] = n_impacts
+    return RunResult(dt, N, E, xs, vs, Fs, stats, status, message, events, log.result())
 
 
 def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,

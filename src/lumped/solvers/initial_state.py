@@ -19,7 +19,7 @@ from .newton import (
     NewtonOptions,
     newton_solve,
 )
-from .status import InconsistentInitialForce, SolverError, Status
+from .status import InconsistentInitialForce, SolverError
 from .step_system import (
     _law_scale,
     _newton_failure,
@@ -149,10 +149,11 @@ def consistent_initial_state(
         try:
             F_root, fixed = _scalar_root(el.law.kernel, q0[e], guess)
         except ValueError as err:
-            raise SolverError(
-                f"no consistent initial state: law {el.law_name!r} of element {el.name!r} "
-                f"has no force at q = {q0[e]!r}: {err}", status=Status.DIVERGED, t=0.0,
-                where=f"element {el.name!r}", residual=math.nan,
+            what = "elongation" if el.kind == "spring" else "elongation rate"
+            raise ValueError(
+                f"inconsistent initial state: element {el.name!r} starts at the {what} "
+                f"q = {q0[e]!r}, which its law {el.law_name!r} admits with no force ({err}); "
+                "change the initial positions or velocities"
             ) from None
         if fixed:
             pinned[e] = F_root
@@ -213,8 +214,20 @@ def consistent_initial_state(
                                max_iters=max(options.max_iters, 200),
                                max_backtracks=options.max_backtracks,
                                free_steps=options.free_steps)
-    res = newton_solve(evaluate, u0, ic_options)
+    res = newton_solve(evaluate, u0, ic_options, min_norm=True)
     if res.code is not NewtonCode.SUCCESS:
+        # restarts: every junction moving with each dashpot neighbour in turn (see
+        # lumped.solvers.globalize.stuck_guesses), the masses' accelerations zero
+        from .globalize import stuck_guesses
+
+        for guess in stuck_guesses(scene, v0, u0[N:]):
+            retry = newton_solve(evaluate, [0.0 if is_mass[i] else guess[i] for i in range(N)]
+                                 + guess[N:], ic_options, min_norm=True)
+            if retry.code is NewtonCode.SUCCESS:
+                res = retry
+                break
+    if res.code is not NewtonCode.SUCCESS:
+        _refuse_uncarried_force(scene, pinned, f)
         err = _newton_failure(scene, res, 0.0, 0)
         raise SolverError(
             f"no consistent initial state: {err}", status=err.status, t=0.0,
@@ -250,3 +263,47 @@ def consistent_initial_state(
         "jacobian_evals": res.jacobian_evals, "factorizations": res.factorizations,
     }
     return v, F, stats
+
+
+def _refuse_uncarried_force(scene: Scene, pinned: list[float | None], f: list[float]) -> None:
+    """Raise ValueError when a junction's balance asks an element for a force its law
+    admits at no elongation (rate): e.g. a Maxwell link whose spring starts stretched
+    beyond what its Coulomb dashpot can carry. A junction with exactly one element whose
+    force is not yet fixed fixes it by its balance; this propagates through the network
+    (a junction on a single friction element fixes that force to zero, and so on)."""
+    ea, eb = scene.elem_a, scene.elem_b
+    known = list(pinned)
+    changed = True
+    while changed:
+        changed = False
+        for i, node in enumerate(scene.nodes):
+            if not isinstance(node, Junction):
+                continue
+            touching = [e for e in range(len(scene.elements)) if i in (ea[e], eb[e])]
+            free = [e for e in touching if known[e] is None]
+            if len(free) != 1:
+                continue
+            (e,) = free
+            # balance: f_i + sum_{a_e = i} F_e - sum_{b_e = i} F_e = 0
+            rest = f[i] + sum((known[k] if ea[k] == i else -known[k])
+                              for k in touching if k != e)
+            need = -rest if ea[e] == i else rest
+            el = scene.elements[e]
+            kernel = el.law.kernel
+
+            def swapped(F: float, q: float, kernel=kernel):
+                R, Rq, RF = kernel(q, F)
+                return R, RF, Rq
+
+            try:
+                _scalar_root(swapped, need, 0.0)
+            except ValueError:
+                what = "elongation" if el.kind == "spring" else "rate"
+                raise ValueError(
+                    f"inconsistent initial state: the force balance of junction {node.name!r} "
+                    f"asks element {el.name!r} for the force F = {need!r}, which its law "
+                    f"{el.law_name!r} admits at no {what} (e.g. a friction element beyond "
+                    "its yield force); change the initial positions or the parameters"
+                ) from None
+            known[e] = need
+            changed = True

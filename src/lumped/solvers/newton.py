@@ -61,6 +61,7 @@ __all__ = [
     "NewtonResult",
     "FactorCache",
     "newton_solve",
+    "min_norm_solver",
     "unrolled_lu_solve",
     "lu_factor",
     "lu_solve",
@@ -133,6 +134,9 @@ class NewtonResult:
         Index of the row with the largest ``|G_i| / (rtol S_i + atol)``.
     jacobian : list of list of float
         ``J(u)`` at the returned iterate (callers read element derivatives from it).
+    singular : bool
+        A singular Jacobian was met (and, with ``min_norm=True``, stepped over by a
+        minimum-norm correction).
     """
 
     u: list[float]
@@ -144,6 +148,7 @@ class NewtonResult:
     residual: list[float]
     worst_row: int
     jacobian: list[list[float]]
+    singular: bool = False
 
 
 def newton_solve(
@@ -151,6 +156,9 @@ def newton_solve(
     u0: Sequence[float],
     options: NewtonOptions = NewtonOptions(),
     cache: FactorCache | None = None,
+    *,
+    min_norm: bool = False,
+    project: Callable[[list[float]], list[float]] | None = None,
 ) -> NewtonResult:
     """Solve ``G(u) = 0`` from ``u0`` by damped semismooth Newton (see the module notes).
 
@@ -164,6 +172,19 @@ def newton_solve(
         Tolerances and budgets.
     cache : FactorCache, optional
         Reuse LU factors of an identical Jacobian across solves (e.g. time steps).
+    min_norm : bool
+        On a singular Jacobian take the minimum-norm least-squares correction
+        (:func:`min_norm_solver`) instead of stopping with ``SINGULAR``: where the laws
+        leave some unknowns free (locked elements in parallel: the motion is fixed, the
+        split of the forces is not), the iterate moves as little as possible, so those
+        unknowns keep their start values (the previous step's forces) as far as the
+        equations allow. A consistent system still converges (the residual test decides);
+        an inconsistent one ends ``DIVERGED`` or ``MAX_ITERS`` with ``singular`` set.
+    project : callable, optional
+        ``u -> u'`` applied to the start and to every trial iterate (nonlinear
+        elimination): e.g. solve each element's own law for its force at the iterate's
+        elongation, so that Newton acts on the reduced system where a law's graph is
+        steep in ``F`` (Herschel-Bulkley with ``n < 1`` at its yield force).
 
     Returns
     -------
@@ -172,22 +193,24 @@ def newton_solve(
     """
     rtol, atol = options.rtol, options.atol
     isfinite = math.isfinite
-    u = list(u0)
+    u = list(u0) if project is None else project(list(u0))
     n = len(u)
     G, J, S = evaluate(u)
     n_res, n_jac, n_fact, iters = 1, 0, 0, 0
+    met_singular = False
 
     def result(code: NewtonCode) -> NewtonResult:
         worst, worst_ratio = 0, -1.0
         if code is NewtonCode.SUCCESS:
-            return NewtonResult(u, code, iters, n_res, n_jac, n_fact, G, worst, J)
+            return NewtonResult(u, code, iters, n_res, n_jac, n_fact, G, worst, J,
+                                met_singular)
         for i in range(n):
             r = abs(G[i]) / (rtol * S[i] + atol)
             if not r <= worst_ratio:  # NaN counts as worst
                 worst, worst_ratio = i, r
                 if not isfinite(r):
                     break
-        return NewtonResult(u, code, iters, n_res, n_jac, n_fact, G, worst, J)
+        return NewtonResult(u, code, iters, n_res, n_jac, n_fact, G, worst, J, met_singular)
 
     def finite(vals: Sequence[float]) -> bool:
         # a NaN or an infinity anywhere makes the sum NaN or infinite
@@ -217,8 +240,11 @@ def newton_solve(
             solve = _factor(J)
             n_fact += 1
             if solve is None:
-                return result(NewtonCode.SINGULAR)
-            if cache is not None:
+                met_singular = True
+                if not min_norm:
+                    return result(NewtonCode.SINGULAR)
+                solve = min_norm_solver(J)
+            elif cache is not None:
                 cache.store(J, solve)
         du = solve(G)  # J du = G; the step is -du
         if not finite(du):
@@ -272,6 +298,8 @@ def newton_solve(
                 u_new = [ui - di for ui, di in zip(u, du, strict=True)]
             else:
                 u_new = [ui - lam * di for ui, di in zip(u, du, strict=True)]
+            if project is not None:
+                u_new = project(u_new)
             G_new, J_new, S_new = evaluate(u_new)
             n_res += 1
             if (lam == 1.0 and J_new != J and finite(G_new)
@@ -302,6 +330,24 @@ def newton_solve(
         u, G, J, S = u_new, G_new, J_new, S_new
         norm = -1.0
         iters += 1
+
+
+def min_norm_solver(J: Sequence[Sequence[float]]):
+    """``solve(b)``: the minimum-norm least-squares solution of ``J y = b`` (numpy SVD).
+
+    Singular values below ``n * eps`` times the largest count as zero, so an exactly
+    rank-deficient step matrix (two locked elements in parallel) is solved on its range
+    and leaves the null space (the free split of the forces) untouched.
+    """
+    import numpy as np
+
+    A = np.array(J, dtype=float)
+    pinv = np.linalg.pinv(A, rcond=len(A) * 2.220446049250313e-16)
+
+    def solve(b: Sequence[float]) -> list[float]:
+        return (pinv @ np.asarray(b, dtype=float)).tolist()
+
+    return solve
 
 
 def _hair(u: float, d: float) -> float:

@@ -165,8 +165,10 @@ def _exact_trajectory(osc, x0, v0, forcing, dt, n_steps):
     return reference_for_grid(osc, x0=x0, v0=v0, forcing=forcing, dt=dt, t_end=n_steps * dt)
 
 
-def _fixed_step_grid(method: str, settings: RunSettings) -> tuple[float, int]:
-    """``(dt, n_steps)`` of a fixed-step method; refuses what it does not take."""
+def _fixed_step_grid(method: str, settings: RunSettings,
+                     allowed: tuple[str, ...] = ()) -> tuple[float, int]:
+    """``(dt, n_steps)`` of a fixed-step method; refuses what it does not take (extra
+    keywords other than ``allowed``)."""
     if settings.dt is None:
         raise ValueError(f"`dt` is required for the fixed-step method {method!r}, got None")
     for name in ("rtol", "atol"):
@@ -174,20 +176,28 @@ def _fixed_step_grid(method: str, settings: RunSettings) -> tuple[float, int]:
             raise ValueError(f"`{name}` applies to adaptive methods only; {method!r} is a "
                              f"fixed-step method (give `dt`), got {name}="
                              f"{getattr(settings, name)!r}")
-    if settings.extra:
+    unknown = sorted(k for k in settings.extra if k not in allowed)
+    if unknown:
         raise TypeError(f"method {method!r} takes no keyword argument(s) "
-                        f"{', '.join(map(repr, sorted(settings.extra)))}")
+                        f"{', '.join(map(repr, unknown))}")
     return settings.dt, steps_for(settings.dt, settings.t_end)
 
 
 def _run_generic(formula: str) -> Runner:
     def runner(scene: Scene, settings: RunSettings) -> RawRun:
-        dt, n_steps = _fixed_step_grid(formula, settings)
+        dt, n_steps = _fixed_step_grid(formula, settings, ("restitution",))
         out = run_bdf(scene, method=formula, dt=dt, n_steps=n_steps, options=settings.options,
-                      throw=settings.throw)
-        return RawRun(out.as_array(), out.stats, out.status, out.message)
+                      throw=settings.throw,
+                      restitution=settings.extra.get("restitution", 0.0))
+        return RawRun(out.as_array(), out.stats, out.status, out.message,
+                      events=out.events, indeterminate=out.indeterminate)
 
     return runner
+
+
+#: Statuses of a compiled run that send it to the reference solver.
+_NEWTON_FAILURES = frozenset({Status.SINGULAR, Status.DIVERGED, Status.MAX_ITERS,
+                              Status.NON_FINITE})
 
 
 def _run_jit(method: str) -> Runner:
@@ -195,8 +205,21 @@ def _run_jit(method: str) -> Runner:
         from .fixed_step_jit import run_bdf_jit
 
         dt, n_steps = _fixed_step_grid(method, settings)
-        return run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
-                           options=settings.options, throw=settings.throw)
+        raw = run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
+                          options=settings.options, throw=False)
+        if raw.status in _NEWTON_FAILURES:
+            # a step the compiled Newton cannot take (indeterminate forces: a singular
+            # step matrix; a hard point of a law): the whole run on the reference solver,
+            # with its globalised Newton and minimum-norm force split (issue 11)
+            out = run_bdf(scene, method=method.removeprefix("jit-"), dt=dt, n_steps=n_steps,
+                          options=settings.options, throw=settings.throw)
+            stats = dict(out.stats, fallback=f"reference solver after: {raw.message}")
+            return RawRun(out.as_array(), stats, out.status, out.message,
+                          events=out.events, indeterminate=out.indeterminate)
+        if raw.status is not Status.SUCCESS and settings.throw:
+            return run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
+                               options=settings.options, throw=True)
+        return raw
 
     return runner
 

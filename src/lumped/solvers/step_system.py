@@ -222,4 +222,18 @@ def _newton_failure(scene: Scene, res: NewtonResult, t: float, step: int) -> Sol
         msg += (" (singular step Jacobian: the laws do not determine all forces and "
                 "velocities, e.g. two rigid or stuck elements in parallel, or a junction "
                 "whose elements are all stuck)")
+    if res.singular and res.code is not NewtonCode.SINGULAR and res.jacobian:
+        # the minimum-norm steps over a singular Jacobian found no solution: the locked
+        # (rigid, dR/dF = 0) elements admit no common motion
+        N = len(scene.nodes)
+        rigid = [el.name for e, el in enumerate(scene.elements)
+                 if res.jacobian[N + e][N + e] == 0.0]
+        if len(rigid) < 2:  # no two locks to disagree: a plain Newton failure
+            return SolverError(msg, status=Status(res.code.value), t=t, where=where,
+                               residual=r)
+        msg = (f"no motion satisfies all the laws at t = {t!r} (step {step}): the locked "
+               f"elements {rigid} (each fixing its elongation or rate, its force free) admit "
+               f"no common motion with the rest of the scene; largest residual {r!r} in "
+               f"the {where}")
+        return SolverError(msg, status=Status.INCONSISTENT, t=t, where=where, residual=r)
     return SolverError(msg, status=Status(res.code.value), t=t, where=where, residual=r)

@@ -1,0 +1,194 @@
+r"""A fixed step across an impact: locate it, apply the impulse, finish the step.
+
+Used by :func:`lumped.solvers.fixed_step.run_bdf` when a trial step ends with a
+spring-like element on a *locking* branch that was not locked at the start of the step
+(:func:`lumped.solvers.impacts.locking_elements`) while the element's ends still approach
+the lock (the impulse that would stop them is not negligible). Then, from the state
+``(x_n, v_n)`` at ``t_n``:
+
+1. **Locate.** Backward-Euler substeps of size ``s`` from ``t_n`` show whether the lock is
+   reached by ``t_n + s``; bisection on ``s`` brackets the impact time to ``1e-10 dt``.
+   The state just before it is the last substep that stays unlocked (``t_n + s_lo``),
+   the first locked one ends at ``t_n + s_hi``.
+2. **Impulse.** At ``t_n + s_hi``, with the positions there (on the lock) and the
+   velocities of the free motion just before (``t_n + s_lo``),
+   :func:`lumped.solvers.impacts.impact_velocities` gives the velocities
+   after the impact for the elements locked at ``t_n + s_hi`` (restitution ``e``, ``0``
+   by default: momentum conserved, the locked rates stopped), the impulse of each element
+   and the kinetic energy lost; each newly locked element gives one
+   :class:`~lumped.solvers.status.Event` (``kind="impact"``), the energy split among them
+   as ``P_e * rate_e`` (their shares of ``1/2 P^T B v``).
+3. **Finish.** One backward-Euler substep from ``t_n + s_hi`` to ``t_{n+1}`` with the new
+   velocities. The caller restarts the multistep history (BDF2 takes a BDF1 step next).
+
+Every substep is a backward-Euler step, dissipative for passive laws, and the impulse
+only removes energy, so the energy ledger never gains. Backward Euler *across* the lock
+(without step 1-2) is already Moreau's time-stepping with restitution 0 and converges at
+first order; locating the impact keeps the velocity jump where it belongs, makes the
+state after the step exact to the substep's error (``x = L``, ``v = 0`` for a single mass),
+and records the impact.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..scene import Mass, Scene
+from .globalize import solve_globalized
+from .impacts import impact_velocities, locking_elements, onto_locks
+from .newton import NewtonCode, NewtonOptions, NewtonResult, newton_solve
+from .status import Event
+from .step_system import _make_evaluate
+
+__all__ = ["ImpactStep", "be_substep", "halved_steps", "impact_step", "impulse_is_negligible"]
+
+#: Bisection of the impact time stops when the bracket is below this fraction of dt.
+_LOCATE_RTOL = 1e-10
+
+
+@dataclass
+class ImpactStep:
+    """Outcome of :func:`impact_step`: the state at ``t_{n+1}``, the events, counters,
+    and the failed Newton result if a substep failed (then the state is the last good
+    one)."""
+
+    x: list[float]
+    v: list[float]
+    F: list[float]
+    events: list[Event] = field(default_factory=list)
+    newton_iterations: int = 0
+    solves: int = 0
+    failure: NewtonResult | None = None
+    failure_t: float = 0.0
+
+
+def be_substep(scene: Scene, t_end: float, h: float, x0: list[float], v0: list[float],
+               F0: list[float], options: NewtonOptions) -> tuple[list[float], list[float],
+                                                                 list[float], NewtonResult]:
+    """One backward-Euler step of size ``h`` ending at ``t_end`` from ``(x0, v0)``,
+    Newton started at ``(v0, F0)``; returns ``(x1, v1, F1, result)``."""
+    N, E = len(scene.nodes), len(scene.elements)
+    f = scene.external_forces(t_end)
+    cm = [nd.m / h if isinstance(nd, Mass) else 0.0 for nd in scene.nodes]
+    qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
+    ev = _make_evaluate(scene, h, cm, [0.0] * N, [1.0] * N, list(v0), list(x0), f, qs, rq,
+                        rf, roundoff=True)
+    res = newton_solve(ev, list(v0) + list(F0), options, min_norm=True)
+    if res.code is not NewtonCode.SUCCESS:
+        res = solve_globalized(scene, ev, h, list(x0), list(v0), list(F0), options)
+    v1 = res.u[:N]
+    x1 = [x0[i] + h * v1[i] for i in range(N)]
+    return x1, v1, res.u[N:], res
+
+
+def halved_steps(scene: Scene, t0: float, dt: float, x: list[float], v: list[float],
+                 F: list[float], options: NewtonOptions, depth: int = 4):
+    """The step ``[t0, t0 + dt]`` as ``2**k`` backward-Euler substeps, ``k = 1 .. depth``,
+    the first ``k`` whose substeps all converge: a last resort when the step's Newton
+    fails (closer starts). Returns ``(x, v, F, iterations)`` or ``None``."""
+    its = 0
+    for k in range(1, depth + 1):
+        n = 2**k
+        h = dt / n
+        xs, vs, Fs = list(x), list(v), list(F)
+        for j in range(1, n + 1):
+            xs, vs, Fs, res = be_substep(scene, t0 + j * h, h, xs, vs, Fs, options)
+            its += res.iterations
+            if res.code is not NewtonCode.SUCCESS:
+                break
+        else:
+            return xs, vs, Fs, its
+    return None
+
+
+def impulse_is_negligible(scene: Scene, v: list[float], new: list[int]) -> bool:
+    """True when stopping the newly locked elements ``new`` at velocities ``v`` costs no
+    kinetic energy beyond round-off (a lock reached at rest: a branch switch, no impact;
+    measured with restitution 0 whatever the scene's, as the size of the impact)."""
+    _, _, lost = impact_velocities(scene, [0.0] * len(v), v, new, 0.0)
+    kinetic = sum(0.5 * m * vi * vi for m, vi in zip(scene.masses, v, strict=True))
+    return lost <= 1e-12 * kinetic + 1e-300
+
+
+def _branch_index(law, q: float, F: float) -> int:
+    try:
+        from ..codegen.branches import law_branches
+
+        return int(law_branches(law).branch(q, F))
+    except Exception:  # noqa: BLE001 - no branch machinery for this law: n/a
+        return -1
+
+
+def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[float],
+                F: list[float], locked0: set[int], options: NewtonOptions,
+                restitution: float = 0.0) -> ImpactStep:
+    """The step ``[t0, t0 + dt]`` across an impact (see the module notes)."""
+    out = ImpactStep(list(x), list(v), list(F))
+
+    def sub(s: float, xs, vs, Fs, t_end):
+        x1, v1, F1, res = be_substep(scene, t_end, s, xs, vs, Fs, options)
+        out.newton_iterations += res.iterations
+        out.solves += 1
+        return x1, v1, F1, res
+
+    def new_locks(xs, vs, Fs) -> list[int]:
+        return [e for e in locking_elements(scene, xs, vs, Fs) if e not in locked0]
+
+    lo, hi = 0.0, dt
+    lo_state = (list(x), list(v), list(F))
+    hi_state = sub(dt, x, v, F, t0 + dt)
+    if hi_state[3].code is not NewtonCode.SUCCESS:
+        out.failure, out.failure_t = hi_state[3], t0 + dt
+        return out
+    if not new_locks(*hi_state[:3]):  # backward Euler does not lock in this step
+        out.x, out.v, out.F = hi_state[:3]
+        return out
+    while hi - lo > _LOCATE_RTOL * dt:
+        mid = 0.5 * (lo + hi)
+        trial = sub(mid, x, v, F, t0 + mid)
+        if trial[3].code is not NewtonCode.SUCCESS:
+            break  # keep the bracket found so far
+        if new_locks(*trial[:3]):
+            hi, hi_state = mid, trial
+        else:
+            lo, lo_state = mid, trial[:3]
+    xl, vl, Fl = lo_state
+    xh, vh, Fh = hi_state[:3]
+    locked = locking_elements(scene, xh, vh, Fh)
+    xh = onto_locks(scene, xh, Fh, locked)
+    new = [e for e in locked if e not in locked0]
+    # the impact at t0 + s_hi: positions on the lock (x_hi), velocities of the free
+    # motion just before it (v_lo); the bracket is 1e-10 dt wide
+    v_after, impulses, lost = impact_velocities(scene, xh, vl, locked, restitution)
+    rates = [(vl[scene.elem_b[e]] if scene.elem_b[e] >= 0 else 0.0)
+             - (vl[scene.elem_a[e]] if scene.elem_a[e] >= 0 else 0.0) for e in locked]
+    shares = {e: abs(p * r) for e, p, r in zip(locked, impulses, rates, strict=True)}
+    total = sum(shares[e] for e in new) or 1.0
+    qh = scene.elongations(xh, vh)
+    ql = scene.elongations(xl, vl)
+    for e, p in zip(locked, impulses, strict=True):
+        if e not in new:
+            continue
+        law = scene.elements[e].law
+        out.events.append(Event(
+            t=t0 + hi, element=scene.elements[e].name, kind="impact",
+            from_branch=_branch_index(law, ql[e], Fl[e]),
+            to_branch=_branch_index(law, qh[e], Fh[e]),
+            impulse=float(p), energy_lost=float(lost * shares[e] / total),
+        ))
+    if dt - hi <= _LOCATE_RTOL * dt:  # the impact ends the step: forces from a hair after
+        x1, v1, F1, res = sub(_LOCATE_RTOL * dt, xh, v_after, Fl, t0 + dt)
+        x1 = xh
+    else:
+        x1, v1, F1, res = sub(dt - hi, xh, v_after, Fl, t0 + dt)
+    if res.code is not NewtonCode.SUCCESS:
+        out.failure, out.failure_t = res, t0 + dt
+        return out
+    # locked at the end: their rates are zero (a short remainder turns the rounding of
+    # q = x_hat + h v on the lock into a spurious rate ulp / h; an element that locked
+    # within the remainder gets Moreau's inelastic velocity)
+    end_locked = locking_elements(scene, x1, v1, F1)
+    if end_locked:
+        v1 = impact_velocities(scene, x1, v1, end_locked, 0.0)[0]
+    out.x, out.v, out.F = x1, v1, F1
+    return out

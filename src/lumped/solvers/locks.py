@@ -1,0 +1,111 @@
+r"""Locked elements in parallel: which forces are not unique, and over which intervals.
+
+An element is *force-free* at a point ``(q, F)`` of its law when the active branch there
+leaves the force free: ``dR/dF = 0`` from the law's compiled kernel (a taut string,
+``F >= k L``; a stuck dashpot, ``|F| <= tau``, also at ``|F| = tau`` where the kernels
+return the stuck branch). The test reads the kernel, so it holds for user laws as for the
+built-in ones.
+
+With the motion fixed, a change ``dF`` of the force-free elements' forces must keep every
+node's balance (ground takes any reaction). Such a change exists exactly when the
+force-free elements close a *cycle* in the network (ground one vertex): two elements in
+parallel, a loop through ground, a junction between force-free elements on both sides
+and ground. The elements on such cycles are the ones whose forces are *indeterminate*:
+the motion is determinate, the split of the load among them is not. The solver then
+picks the split by its documented rule (the minimum-norm Newton correction from the
+previous step's forces, see :func:`lumped.solvers.newton.newton_solve`) and reports the
+elements and intervals here. Scenes without a cycle of elements skip the test
+(:func:`cyclic_elements`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import lru_cache
+
+__all__ = ["cyclic_elements", "indeterminate_elements", "IntervalLog"]
+
+@lru_cache(maxsize=256)
+def _on_cycles(n_nodes: int, edges: tuple[tuple[int, int, int], ...]) -> tuple[int, ...]:
+    """Elements (first entry of each edge) that lie on a cycle of the graph of ``edges``
+    (``(element, a, b)``, ground ``-1``): those whose removal keeps ``a`` and ``b``
+    connected."""
+    out = []
+    m = n_nodes + 1  # ground (-1) is vertex n_nodes
+    for k, (e, a, b) in enumerate(edges):
+        parent = list(range(m))
+        for j, (_, a2, b2) in enumerate(edges):
+            if j != k:
+                parent[_find(parent, a2 % m)] = _find(parent, b2 % m)
+        if _find(parent, a % m) == _find(parent, b % m):
+            out.append(e)
+    return tuple(out)
+
+
+def _find(parent: list[int], i: int) -> int:
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+def cyclic_elements(scene) -> tuple[int, ...]:
+    """Elements on some cycle of the whole network (ground one vertex): the only ones whose
+    forces can ever be indeterminate."""
+    edges = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in range(len(scene.elements)))
+    return _on_cycles(len(scene.nodes), edges)
+
+
+def indeterminate_elements(scene, q: Sequence[float], F: Sequence[float],
+                           candidates: Sequence[int] | None = None) -> tuple[int, ...]:
+    """Indices of the elements whose forces are not unique at ``(q, F)`` (see the module
+    notes): force-free elements on a cycle of force-free elements. ``candidates`` (e.g.
+    :func:`cyclic_elements`) limits the elements examined."""
+    elements = scene.elements
+    ea, eb = scene.elem_a, scene.elem_b
+    free = []
+    for e in (range(len(elements)) if candidates is None else candidates):
+        if elements[e].law.kernel(q[e], F[e])[2] == 0.0:
+            free.append((e, ea[e], eb[e]))
+    if len(free) < 2:
+        return ()
+    return _on_cycles(len(scene.nodes), tuple(free))
+
+
+class IntervalLog:
+    """Collects, step by step, the intervals on which each element's force is not unique.
+
+    ``mark(t_prev, t, elements)`` records that ``elements`` (names) were indeterminate at
+    the end of the step ``[t_prev, t]``; consecutive steps join into one interval
+    ``(t_first, t_last)``. ``result()`` gives ``{name: [(t0, t1), ...]}``.
+    """
+
+    def __init__(self) -> None:
+        self._open: dict[str, list[float]] = {}
+        self._done: dict[str, list[tuple[float, float]]] = {}
+
+    @property
+    def open(self) -> bool:
+        """Some interval is open (its element was indeterminate at the last mark)."""
+        return bool(self._open)
+
+    def mark(self, t_prev: float, t: float, names: Sequence[str]) -> None:
+        names = set(names)
+        for name in list(self._open):
+            if name not in names:
+                t0, t1 = self._open.pop(name)
+                self._done.setdefault(name, []).append((t0, t1))
+        for name in names:
+            span = self._open.get(name)
+            if span is not None and span[1] == t_prev:
+                span[1] = t
+            else:
+                if span is not None:
+                    self._done.setdefault(name, []).append((span[0], span[1]))
+                self._open[name] = [t, t]
+
+    def result(self) -> dict[str, list[tuple[float, float]]]:
+        out = {k: list(v) for k, v in self._done.items()}
+        for name, (t0, t1) in self._open.items():
+            out.setdefault(name, []).append((t0, t1))
+        return out

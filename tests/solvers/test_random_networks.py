@@ -1,0 +1,257 @@
+"""Property suite over random passive networks (issue 11).
+
+Hypothesis builds unforced networks of 1 to 4 nodes (masses and massless junctions) joined
+to each other and to ground by every built-in passive law (``linear_spring``,
+``string_spring``, ``implicit_spring``, ``newtonian``, ``bingham``, ``coulomb``,
+``herschel_bulkley`` with ``n`` on both sides of 1), parameters over decades. For every
+registered generic method (every entry of the method registry except the closed forms of
+the paper's one scene and the exact reference -- a new method is picked up, never skipped
+silently) it asserts:
+
+* the run completes (no stop mid-run) and every value is finite;
+* ``bdf1`` never creates energy: ``E_{n+1} <= E_n`` to round-off, ``E`` the kinetic
+  energy plus the energy stored in the springs (a taut string stores nothing beyond its
+  spring's ``k q^2 / 2``);
+* the other methods create no energy beyond their error (measured against the same run
+  at half the step);
+* the runs converge as ``dt`` halves;
+* a stuck dashpot (rate zero) never carries more than its yield force.
+
+Budget: ``ci`` runs :data:`CI_EXAMPLES` examples per method (:data:`COMPILED_EXAMPLES`
+for the methods that compile each scene); ``LUMPED_LARGE=1`` runs
+:data:`LARGE_EXAMPLES` (at least 10 000, for a background run; see CHANGELOG).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, assume, event, given, settings
+from hypothesis import strategies as st
+
+from lumped import simulate
+from lumped.laws import get_law
+from lumped.scene import Element, Junction, Mass, Scene
+from lumped.solvers.registry import FIXED_STEP_METHODS, METHOD_REGISTRY
+from lumped.solvers.status import InconsistentInitialForce
+
+CI_EXAMPLES = 40
+LARGE_EXAMPLES = 10_000
+LARGE = os.environ.get("LUMPED_LARGE", "") not in ("", "0")
+EXAMPLES = LARGE_EXAMPLES if LARGE else CI_EXAMPLES
+
+#: Registered methods that are not generic: they run only the paper's one scene.
+NOT_GENERIC = frozenset({"closed-bdf1", "closed-bdf2", "exact"})
+GENERIC = tuple(sorted(m for m in METHOD_REGISTRY if m not in NOT_GENERIC))
+
+SPRINGS = ("linear_spring", "string_spring", "implicit_spring")
+DASHPOTS = ("newtonian", "bingham", "coulomb", "herschel_bulkley")
+YIELDING = ("bingham", "coulomb", "herschel_bulkley")
+T_END = 0.5
+DT = 0.025
+#: Coarsest step as a fraction of the scene's fastest time scale (see :func:`grid`).
+STEP_FRACTION = 0.2
+
+
+def _decade(lo: float, hi: float):
+    return st.floats(math.log10(lo), math.log10(hi)).map(lambda e: 10.0 ** e)
+
+
+@st.composite
+def passive_networks(draw):
+    """A random unforced passive network with an admissible initial state."""
+    n = draw(st.integers(1, 4))
+    kinds = [True] + [draw(st.booleans()) for _ in range(n - 1)]  # first node a mass
+    kinds = draw(st.permutations(kinds))
+    x0 = [draw(st.floats(-1.0, 1.0)) for _ in range(n)]
+    nodes = []
+    for i, is_mass in enumerate(kinds):
+        if is_mass:
+            nodes.append(Mass(f"m{i}", m=draw(_decade(0.1, 10.0)), x0=x0[i],
+                              v0=draw(st.floats(-2.0, 2.0))))
+        else:
+            nodes.append(Junction(f"j{i}", x0=x0[i]))
+    names = ["ground"] + [nd.name for nd in nodes]
+    pos = {"ground": 0.0, **{nd.name: x0[i] for i, nd in enumerate(nodes)}}
+    pairs = []
+    for i in range(n):  # a spanning tree to ground, then extra elements
+        pairs.append((names[draw(st.integers(0, i))], names[i + 1]))
+    for _ in range(draw(st.integers(0, 3))):
+        a, b = draw(st.permutations(names))[:2]
+        pairs.append((a, b))
+    elements = []
+    for e, (a, b) in enumerate(pairs):
+        # a junction's tree element is a dashpot: a junction joined by springs only has
+        # its position fixed by its force balance (x0 is then not free state)
+        law = draw(st.sampled_from(DASHPOTS if e < n and not kinds[e] else SPRINGS + DASHPOTS))
+        elements.append(Element(f"e{e}", _bind(draw, law, pos[b] - pos[a]), a, b))
+    return Scene(nodes, elements)
+
+
+def _bind(draw, law: str, q0: float):
+    if law == "linear_spring":
+        return get_law(law).bind(k=draw(_decade(0.1, 100.0)))
+    if law == "string_spring":  # slack at the start: L above the initial elongation
+        L = max(q0, 0.0) + draw(_decade(1e-3, 1.0))
+        return get_law(law).bind(k=draw(_decade(0.1, 100.0)), L=L)
+    if law == "implicit_spring":
+        return get_law(law).bind(k=draw(_decade(0.1, 100.0)), L0=draw(_decade(1e-3, 1.0)),
+                                 F0=draw(_decade(1.0, 100.0)))
+    if law == "newtonian":
+        return get_law(law).bind(c=draw(_decade(0.01, 10.0)))
+    if law == "bingham":
+        return get_law(law).bind(gamma=draw(_decade(0.1, 10.0)), tau=draw(_decade(0.01, 1.0)))
+    if law == "coulomb":
+        return get_law(law).bind(tau=draw(_decade(0.01, 1.0)), r=draw(_decade(1.0, 100.0)))
+    return get_law(law).bind(gamma=draw(_decade(0.1, 10.0)), tau=draw(_decade(0.01, 1.0)),
+                             n=draw(st.sampled_from([0.3, 0.5, 0.8, 1.0, 1.5, 2.0])))
+
+
+def stored_energy(scene: Scene, sol) -> tuple[np.ndarray, np.ndarray]:
+    """Kinetic energy plus the energy stored in the springs, per sample, and the magnitude
+    of the terms it is computed from (its round-off is ``eps`` times that)."""
+    E = np.zeros(len(sol.t))
+    M = np.zeros(len(sol.t))
+    for nd in scene.nodes:
+        if isinstance(nd, Mass):
+            E += 0.5 * nd.m * sol.v[nd.name] ** 2
+    x = {nd.name: sol.x[nd.name] for nd in scene.nodes}
+    for el in scene.elements:
+        if el.kind != "spring":
+            continue
+        p = el.law.params
+        q = x.get(el.b, 0.0) - x.get(el.a, 0.0)
+        if el.law_name == "implicit_spring":
+            F, F0, L0 = sol.F[el.name], p["F0"], p["L0"]
+            terms = (F**2 / (2 * p["k"]), L0 * F * np.sinh(F / F0), L0 * F0 * np.cosh(F / F0),
+                     L0 * F0)
+            E += terms[0] + terms[1] - terms[2] + terms[3]
+            M += sum(np.abs(t) for t in terms)
+        else:  # linear spring; string: the spring's k q^2 / 2, the taut string stores none
+            E += 0.5 * p["k"] * np.asarray(q) ** 2
+    return E, M + np.abs(E)
+
+
+def grid(scene: Scene) -> tuple[float, float]:
+    """``(dt, t_end)``: the coarsest step resolves the scene's fastest time scale
+    (``sqrt(m / sum k)`` and ``m / sum c`` with the smallest mass, ``c = 1/gamma`` for a
+    slipping Bingham element), so that halving it shows convergence; at most 40 steps."""
+    m = min(nd.m for nd in scene.nodes if isinstance(nd, Mass))
+    k = sum(el.law.params.get("k", 0.0) for el in scene.elements if el.kind == "spring")
+    c = sum(el.law.params["c"] if el.law_name == "newtonian" else
+            1.0 / el.law.params["gamma"] if el.law_name == "bingham" else 0.0
+            for el in scene.elements)
+    rate = max(math.sqrt(k / m), c / m, 1e-12)
+    dt = min(DT, STEP_FRACTION / rate)
+    n = min(math.ceil(T_END / dt), 40)
+    return dt, n * dt
+
+
+def _solve(scene: Scene, method: str, dt: float, t_end: float):
+    if method in FIXED_STEP_METHODS:
+        return simulate(scene, method=method, dt=dt, t_end=t_end)
+    # an adaptive method: tolerance tied to the level, output on the same grid
+    return simulate(scene, method=method, dt=dt, t_end=t_end, rtol=dt**2, atol=dt**3)
+
+
+def _run_or_reject(scene: Scene, method: str, dt: float, t_end: float):
+    try:
+        return _solve(scene, method, dt, t_end)
+    except InconsistentInitialForce:
+        raise
+    except ValueError as err:
+        # an initial state that no law admits is refused by name (issue 11, item 4), and
+        # a method may refuse a scene outside its documented scope ("does not take", e.g.
+        # the compiled jit methods and position locks): such a draw is rejected for that
+        # method, recorded in the statistics, never counted as a pass
+        msg = str(err)
+        if "inconsistent initial state" in msg or "does not take" in msg:
+            event(f"{method}: refused ({msg.split(':')[0]})")
+            assume(False)
+        raise
+
+
+def check_network(scene: Scene, method: str) -> None:
+    dt, t_end = grid(scene)
+    sols = [_run_or_reject(scene, method, dt / 2**k, t_end) for k in range(3)]
+    assert [len(s.t) - 1 for s in sols] == [(len(sols[0].t) - 1) * 2**k for k in range(3)]
+    scale = 1.0 + max(float(np.abs(s.data).max()) for s in sols)
+    for s in sols:
+        assert s.ok, s.message
+        assert np.all(np.isfinite(s.data))
+        _check_yield(scene, s)
+    energies, mags = zip(*(stored_energy(scene, s) for s in sols), strict=True)
+    E0 = energies[0][0]
+    # round-off of the terms, and Newton's absolute tolerance on the velocities
+    vmax = max(float(np.abs(s.data[:, 2:1 + 2 * len(scene.nodes):2]).max()) for s in sols)
+    tol = 1e-8 * E0 + 1e-13 * max(m.max() for m in mags) + 1e-12 * sum(scene.masses) * vmax
+    if method == "bdf1":
+        for E in energies:
+            rise = np.diff(E)
+            assert rise.max() <= tol, f"bdf1 created energy {rise.max()!r}"
+    else:
+        err = np.abs(energies[1][::2] - energies[2][::4]).max()
+        assert energies[1].max() - E0 <= 4 * err + tol, "energy created beyond the error"
+    # convergence of the displacements (continuous; velocities jump at impacts and
+    # forces carry impulses): the distance to the finest run shrinks as dt halves
+    xcols = slice(1, 1 + 2 * len(scene.nodes), 2)
+    d0 = np.abs(sols[0].data[:, xcols] - sols[2].data[::4, xcols]).max()
+    d1 = np.abs(sols[1].data[:, xcols] - sols[2].data[::2, xcols]).max()
+    # either the distance shrinks, or it is already within a first-order bound
+    # (``dt |v|``): near-degenerate stick positions (spring force ~ yield force) make the
+    # distance erratic at small values, while a method that does not converge (BDF2
+    # bouncing off a string) is off by O(1)
+    bound = 0.5 * dt * (1.0 + vmax)
+    assert d1 <= max(0.9 * d0 + 1e-7 * scale, bound), f"no convergence: {d0!r} -> {d1!r}"
+
+
+def _check_yield(scene: Scene, sol) -> None:
+    """A dashpot carries more than its yield force only while it slips at the rate its
+    law gives for that force (Coulomb: never more than ``tau``)."""
+    v = {nd.name: sol.v[nd.name] for nd in scene.nodes}
+    for el in scene.elements:
+        if el.law_name not in YIELDING:
+            continue
+        p = el.law.params
+        tau = p["tau"]
+        F = np.abs(sol.F[el.name])
+        # Newton's tolerance is relative to the forces that meet at the element's nodes
+        scale = np.abs(sol.forces).max(axis=1)
+        above = F > tau * (1 + 1e-9) + 1e-8 * scale + 1e-12
+        if el.law_name == "coulomb":
+            assert not above.any(), f"{el.name} above its yield force"
+            continue
+        q = np.abs(v.get(el.b, 0.0) - v.get(el.a, 0.0)) + np.zeros_like(F)
+        slip_rate = p["gamma"] * np.maximum(F - tau, 0.0) ** p.get("n", 1.0)
+        stuck_above = above & (q < 0.5 * slip_rate)
+        assert not stuck_above.any(), f"{el.name} stuck above its yield force"
+
+
+_SETTINGS = settings(max_examples=EXAMPLES, deadline=None,
+                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+
+
+#: Methods that compile every new scene (numba, about a second each): a smaller budget.
+COMPILED = tuple(m for m in GENERIC if m.startswith("jit-"))
+COMPILED_EXAMPLES = 1_000 if LARGE else 4
+
+
+@pytest.mark.parametrize("method", [m for m in GENERIC if m not in COMPILED])
+@_SETTINGS
+@given(scene=passive_networks())
+def test_random_passive_network(method: str, scene: Scene) -> None:
+    check_network(scene, method)
+
+
+@pytest.mark.parametrize("method", COMPILED)
+@settings(_SETTINGS, max_examples=COMPILED_EXAMPLES)
+@given(scene=passive_networks())
+def test_random_passive_network_compiled(method: str, scene: Scene) -> None:
+    check_network(scene, method)
+
+
+def test_generic_methods_listed() -> None:
+    assert {"bdf1", "bdf2"} <= set(GENERIC)
