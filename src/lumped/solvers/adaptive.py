@@ -39,8 +39,9 @@ from .events import (
     select_modes,
 )
 from .initial_state import consistent_initial_state
+from .locks import IntervalLog, cyclic_elements, indeterminate_elements
+from .radau import START_WEIGHTS, C, StageSystem
 from .radau import A as _A
-from .radau import C, StageSystem
 from .status import BranchError, Event, RawRun, SolverError, Status
 
 __all__ = ["run_radau5", "DEFAULT_RTOL", "DEFAULT_ATOL", "EXTRA_OPTIONS"]
@@ -167,10 +168,17 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     t = 0.0
     bi = 0
     max_newton = 10
+    forces_from_probe = False  # the forces at t are an event probe's (see the dense output)
+    cyclic, log = cyclic_elements(scene), IntervalLog()
 
     def at_event(t: float, h: float, cause: str) -> tuple[Status, str] | None:
         """The mode after an event at ``t``; ``(status, message)`` if the run must stop."""
+        nonlocal forces_from_probe
         msg = change_mode(t, max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t))), cause)
+        forces_from_probe = True
+        if cyclic and not msg:  # forces not unique from the event on
+            free = indeterminate_elements(scene, scene.elongations(x, v), F, cyclic)
+            log.mark(t, t, [names[e] for e in free])
         stats["events"] = len(events)
         if msg:
             return Status.INCONSISTENT, msg
@@ -333,16 +341,28 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                     s_ += A_[k][j] * sol[j * n + i]
                 Xk.append(x[i] + h * s_)
             Y.append(Xk + sol[k * n:k * n + N] + sol[k * n + N:k * n + n])
-        dense.add(t, h, x + v + F, Y)
+        F0 = F
+        if forces_from_probe:
+            # the forces at t came from the event's vanishing probe step, whose round-off
+            # is magnified by m / h_probe; the stage forces hold the laws and the balance,
+            # so the dense output starts from their quadratic (exact for a linear relation
+            # such as a load shared by locked elements)
+            F0 = [sum(w * Yk[2 * N + e] for w, Yk in zip(START_WEIGHTS, Y, strict=True))
+                  for e in range(E)]
+            forces_from_probe = False
+        dense.add(t, h, x + v + F0, Y)
         dF_n = system.end_slope(sol, h, F)
         event_here = target is not None
         target = None
-        t = t_stop if to_stop else t + h
+        t_prev, t = t, (t_stop if to_stop else t + h)
         x = Y[2][:N]
         v = Y[2][N:2 * N]
         F = Y[2][2 * N:]
         stats["steps"] += 1
         rows.append(row_of(t, x, v, F))
+        if cyclic:  # locked elements in parallel: forces not unique (lumped.solvers.locks)
+            free = indeterminate_elements(scene, scene.elongations(x, v), F, cyclic)
+            log.mark(t_prev, t, [names[e] for e in free])
         # the step size for the next step (Gustafsson's predictive controller)
         h_new = h / quot
         if h_acc is not None and err_norm > 0.0:
@@ -375,7 +395,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         grid[-1] = min(grid[-1], t)
         data = dense(grid)
         data[0] = rows[0]
-    return RawRun(data, stats, status, message, events, dense if dense.t0 else None)
+    return RawRun(data, stats, status, message, events, dense if dense.t0 else None,
+                  indeterminate=log.result())
 
 
 def _accumulating(recent: deque, window: float) -> bool:

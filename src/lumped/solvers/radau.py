@@ -31,7 +31,8 @@ from collections.abc import Callable, Sequence
 
 from .linalg import lu_factor, lu_solve
 
-__all__ = ["C", "A", "W", "E_ERR", "MU_REAL", "StageSystem", "dense_weights", "dense_slopes"]
+__all__ = ["C", "A", "W", "E_ERR", "MU_REAL", "START_WEIGHTS", "StageSystem", "dense_weights",
+           "dense_slopes"]
 
 _S6 = math.sqrt(6.0)
 #: Collocation nodes of Radau IIA (3 stages).
@@ -41,6 +42,14 @@ A = (
     ((88.0 - 7.0 * _S6) / 360.0, (296.0 - 169.0 * _S6) / 1800.0, (-2.0 + 3.0 * _S6) / 225.0),
     ((296.0 + 169.0 * _S6) / 1800.0, (88.0 + 7.0 * _S6) / 360.0, (-2.0 - 3.0 * _S6) / 225.0),
     ((16.0 - _S6) / 36.0, (16.0 + _S6) / 36.0, 1.0 / 9.0),
+)
+#: ``L_k(0)``: the value at the step's start of the quadratic through the three stage values
+#: (Lagrange weights on the nodes ``C``).  An algebraic variable (a force) that satisfies a
+#: linear relation at every stage satisfies it on that quadratic too.
+START_WEIGHTS = tuple(
+    math.prod(-C[j] for j in range(3) if j != k)
+    / math.prod(C[k] - C[j] for j in range(3) if j != k)
+    for k in range(3)
 )
 #: Weights of the embedded error estimate (Hairer & Wanner, RADAU5).
 E_ERR = ((-13.0 - 7.0 * _S6) / 3.0, (-13.0 + 7.0 * _S6) / 3.0, -1.0 / 3.0)
