@@ -1,6 +1,6 @@
 """Reproduce issue 11: impacts, locks and hard points in the generic fixed-step solver.
 
-Run from the repository root: ``python scripts/repro_issue11.py``. Prints, per case and
+Run from the repository root: ``python benchmarks/repro_issue11.py``. Prints, per case and
 method, the status and the measured error (or the failure message).
 """
 

@@ -1,7 +1,7 @@
 """Draw docs/impact.png: x(t) and energy of the impact scene (issue 11) for every
 registered generic method, against the exact motion.
 
-Run from the repository root: ``python scripts/impact_figure.py [--dt 0.05]``.
+Run from the repository root: ``python examples/impact_figure.py [--dt 0.05]``.
 """
 
 from __future__ import annotations
@@ -35,12 +35,20 @@ def main() -> None:
     ax_x.plot(t, xe, "k-", lw=2.5, alpha=0.35, label="exact")
     ax_e.plot(t, 0.5 * ve**2 + 0.5 * xe**2, "k-", lw=2.5, alpha=0.35, label="exact")
     for method in sorted(m for m in METHOD_REGISTRY if m not in NOT_GENERIC):
-        kw = {"dt": args.dt} if method in FIXED_STEP_METHODS else {"rtol": 1e-6, "atol": 1e-9}
-        sol = simulate(impact_scene(), method=method, t_end=t_end, **kw)
+        # an adaptive method's output on a 0.01 grid, read off its dense output
+        kw = ({"dt": args.dt} if method in FIXED_STEP_METHODS
+              else {"rtol": 1e-6, "atol": 1e-9, "dt": 0.01})
+        try:
+            sol = simulate(impact_scene(), method=method, t_end=t_end, **kw)
+        except ValueError as err:  # a method whose scope excludes locks (jit-bdf*)
+            print(f"{method}: skipped ({err})")
+            continue
         x, v = sol.x["mass"], sol.v["mass"]
-        label = f"{method} (dt = {args.dt:g})" if "dt" in kw else f"{method} (rtol 1e-6)"
-        ax_x.plot(sol.t, x, ".-", ms=3, label=label)
-        ax_e.plot(sol.t, 0.5 * v**2 + 0.5 * x**2, ".-", ms=3, label=label)
+        label = (f"{method} (dt = {args.dt:g})" if method in FIXED_STEP_METHODS
+                 else f"{method} (rtol 1e-6, dense output)")
+        style = ".-" if method in FIXED_STEP_METHODS else "-"
+        ax_x.plot(sol.t, x, style, ms=3, label=label)
+        ax_e.plot(sol.t, 0.5 * v**2 + 0.5 * x**2, style, ms=3, label=label)
     ax_x.axhline(0.5, color="grey", lw=0.8, ls=":")
     ax_x.set_ylabel("x (string taut at L = 0.5)")
     ax_e.axhline(0.125, color="grey", lw=0.8, ls=":")
