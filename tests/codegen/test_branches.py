@@ -103,3 +103,12 @@ def test_doctests_pass():
 
     result = doctest.testmod(module)
     assert result.attempted > 0 and result.failed == 0
+
+
+@pytest.mark.parametrize(("n", "steep"), [(0.3, True), (0.5, True), (1.0, False), (2.0, False)])
+def test_steep_branches_are_the_unbounded_slopes(n, steep):
+    lb = law_branches(get_law("herschel_bulkley").bind(gamma=2.0, tau=1.0, n=n))
+    assert [b.steep for b in lb.info] == [steep, steep, False]  # slip+, slip-, stuck
+    for name, p in [("bingham", {"gamma": 1.0, "tau": 1.0}), ("s_shaped", {"q0": 1.0, "F0": 1.0}),
+                    ("implicit_spring", {"k": 1.0, "L0": 0.1, "F0": 1.0})]:
+        assert not any(b.steep for b in law_branches(get_law(name).bind(**p)).info)

@@ -381,3 +381,19 @@ def test_the_compiled_stage_newton_gives_the_same_run():
     assert np.array_equal(compiled.data, ours.data) and compiled.stats == ours.stats
     assert [(ev.t, ev.element) for ev in compiled.events] == [
         (ev.t, ev.element) for ev in ours.events]
+
+
+def test_radau5_refuses_an_unbounded_slope_and_auto_runs_bdf2():
+    # Herschel-Bulkley with n < 1: dq/dF is infinite at the yield force, where the stage
+    # Newton of a step starting on the boundary fails at every step size (issue 11)
+    hb = get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=0.5)
+    scene = Scene([Mass("m", m=1.0, x0=0.5)],
+                  [Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m"),
+                   Element("d", hb, "ground", "m")])
+    with pytest.raises(ValueError, match=r"does not take element 'd'.*herschel_bulkley"):
+        simulate(scene, method="radau5", t_end=1.0)
+    sol = simulate(scene, dt=1e-3, t_end=1.0)  # auto
+    assert sol.method == "bdf2" and sol.ok
+    n_ok = Scene(scene.nodes, [scene.elements[0], Element(
+        "d", get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=2.0), "ground", "m")])
+    assert simulate(n_ok, dt=1e-3, t_end=1.0).method == "radau5"

@@ -91,6 +91,10 @@ class BranchInfo:
     lock_value : float or None
         The ``q`` a locking branch fixes when ``R_i`` is affine in ``q`` with constant
         coefficients (``q = L``, ``q = 0``); else ``None``.
+    steep : bool
+        ``dR_i/dF`` holds a negative power of an expression in ``F``: it is unbounded
+        where that expression vanishes, e.g. Herschel-Bulkley with ``n < 1`` at its yield
+        force (``dq/dF -> infinity``), or a pole.
     """
 
     index: int
@@ -100,6 +104,7 @@ class BranchInfo:
     path: _Path
     locks: bool
     lock_value: float | None
+    steep: bool = False
 
 
 class LawBranches:
@@ -127,8 +132,10 @@ class LawBranches:
             with distribute(False):
                 dq, dF = sp.diff(expr, _Q), sp.diff(expr, _F)
             locks = sp.simplify(dF) == 0 and sp.simplify(dq) != 0
+            steep = any(isinstance(p, sp.Pow) and p.exp.is_negative and p.base.has(_F)
+                        for p in sp.preorder_traversal(dF))
             infos.append(BranchInfo(len(infos), expr, dq, dF, path, bool(locks),
-                                    _lock_value(expr) if locks else None))
+                                    _lock_value(expr) if locks else None, steep))
         self.info: tuple[BranchInfo, ...] = tuple(infos)
         self.count = len(infos)
         self.branch: Callable[[float, float], int] = _build_selector(

@@ -28,7 +28,13 @@ import numpy as np
 
 from ..scene import Mass, Scene
 from .adaptive_output import DenseOutput, initial_step, row_of
-from .adaptive_setup import EXTRA_OPTIONS, breakpoints, compiled_stage_solver, read_options
+from .adaptive_setup import (
+    EXTRA_OPTIONS,
+    breakpoints,
+    compiled_stage_solver,
+    read_options,
+    scope_error,
+)
 from .branch_check import _known_monotone
 from .events import (
     apply_impacts,
@@ -61,6 +67,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     from ..codegen.branches import law_branches
     from .closed_form import steps_for
 
+    refused = scope_error(scene)
+    if refused:
+        raise ValueError(refused)
     rtol = DEFAULT_RTOL if settings.rtol is None else settings.rtol
     atol = DEFAULT_ATOL if settings.atol is None else settings.atol
     opts = read_options(settings)

@@ -10,7 +10,8 @@ import numpy as np
 
 from ..scene import Scene
 
-__all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "compiled_stage_solver"]
+__all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "compiled_stage_solver",
+           "scope_error"]
 
 
 #: Method-specific keywords of ``radau5`` and their defaults.
@@ -49,6 +50,28 @@ def read_options(settings) -> dict:
                                     and val > 0):
             raise ValueError(f"`{key}` must be a positive number, got {val!r}")
     return out
+
+
+def scope_error(scene: Scene) -> str | None:
+    """Why ``radau5`` does not take ``scene``, or ``None`` when it does.
+
+    A branch whose ``dR/dF`` is unbounded at its boundary
+    (:attr:`lumped.codegen.branches.BranchInfo.steep`: Herschel-Bulkley with ``n < 1`` at
+    its yield force, where ``dq/dF -> infinity``) makes the stage Newton of a step that
+    starts on that boundary fail at every step size: ``radau5`` refuses such a scene
+    rather than stop mid-run, and ``auto`` runs ``bdf2`` there (its globalised Newton
+    takes such points).
+    """
+    from ..codegen.branches import law_branches
+
+    for el in scene.elements:
+        lb = law_branches(el.law)
+        for info in lb.info:
+            if info.steep:
+                return (f"method 'radau5' does not take element {el.name!r}: branch "
+                        f"{info.index} of its law {el.law_name!r} has an unbounded dR/dF "
+                        f"({info.dR_dF}) at its boundary; use 'bdf2' (or 'auto')")
+    return None
 
 
 def breakpoints(scene: Scene, t_end: float) -> list[float]:

@@ -26,6 +26,7 @@ from scipy.optimize import brentq
 
 from ..scene import Mass, Scene
 from .branch_check import _left_branch
+from .globalize import solve_globalized
 from .newton import NewtonCode, NewtonOptions, newton_solve
 from .radau import dense_weights
 from .step_system import _make_evaluate
@@ -141,11 +142,15 @@ def select_modes(
     evaluate = _make_evaluate(scene, h_probe, cm, [0.0] * N, [1.0] * N, uref, x_hat, f,
                               qs, rq, rf, roundoff=True)
     opts = options or NewtonOptions()
-    res = newton_solve(evaluate, list(v) + list(F),
-                       NewtonOptions(rtol=min(opts.rtol, 1e-12), atol=min(opts.atol, 1e-14),
-                                     max_iters=max(opts.max_iters, 100),
-                                     max_backtracks=opts.max_backtracks,
-                                     free_steps=opts.free_steps))
+    probe_opts = NewtonOptions(rtol=min(opts.rtol, 1e-12), atol=min(opts.atol, 1e-14),
+                               max_iters=max(opts.max_iters, 100),
+                               max_backtracks=opts.max_backtracks, free_steps=opts.free_steps)
+    # as the fixed-step methods: locks in parallel (a singular step) by the minimum-norm
+    # correction, hard points of a law (Herschel-Bulkley n < 1 at its yield force) by the
+    # globalised solve
+    res = newton_solve(evaluate, list(v) + list(F), probe_opts, min_norm=True)
+    if res.code is not NewtonCode.SUCCESS:
+        res = solve_globalized(scene, evaluate, h_probe, x_hat, list(v), list(F), probe_opts)
     if res.code is not NewtonCode.SUCCESS:
         return (f"no motion continues from t = {t!r}: the implicit step of the full laws "
                 f"({h_probe!r} s) failed ({res.code.value})")

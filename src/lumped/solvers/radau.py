@@ -30,6 +30,7 @@ import math
 from collections.abc import Callable, Sequence
 
 from .linalg import lu_factor, lu_solve
+from .newton import min_norm_solver
 
 __all__ = ["C", "A", "W", "E_ERR", "MU_REAL", "START_WEIGHTS", "StageSystem", "dense_weights",
            "dense_slopes"]
@@ -55,6 +56,17 @@ START_WEIGHTS = tuple(
 E_ERR = ((-13.0 - 7.0 * _S6) / 3.0, (-13.0 + 7.0 * _S6) / 3.0, -1.0 / 3.0)
 #: The real eigenvalue of ``A^{-1}``: ``3 + 3^(2/3) - 3^(1/3)``.
 MU_REAL = 3.0 + 3.0 ** (2.0 / 3.0) - 3.0 ** (1.0 / 3.0)
+
+
+def _solver(J: list[list[float]]) -> Callable[[list[float]], list[float]]:
+    """``solve(b)`` for ``J y = b``: the LU with pivoting, or the minimum-norm least-squares
+    solution when ``J`` is singular (:func:`lumped.solvers.newton.min_norm_solver`)."""
+    fac = lu_factor(J)
+    if fac is not None:
+        return lambda b: lu_solve(fac, b)
+    if not all(math.isfinite(a) for row in J for a in row):  # a law undefined here
+        return lambda b: [math.nan] * len(b)
+    return min_norm_solver(J)
 
 
 def _inverse3(M: Sequence[Sequence[float]]) -> tuple[tuple[float, ...], ...]:
@@ -217,17 +229,17 @@ class StageSystem:
 
         Converged when ``max_j |dU_j| / scale_j <= tol``; the Jacobian is refactored when
         the contraction rate exceeds 1/2 (simplified Newton otherwise). Returns
-        ``(U or None, iterations, factorisations)``; ``None`` when Newton failed (singular,
-        non-finite or no convergence): the caller shrinks the step.
+        ``(U or None, iterations, factorisations)``; ``None`` when Newton failed
+        (non-finite or no convergence): the caller shrinks the step.  A singular Jacobian
+        (locked elements in parallel: the split of their forces is free) is solved by the
+        minimum-norm correction, the rule of the fixed-step methods.
         """
         G, J = self.evaluate(U, h, x_n, v_n, f, kernels)
-        fac = lu_factor(J)
+        solve = _solver(J)
         nfac = 1
         prev = math.inf
         for it in range(1, max_iters + 1):
-            if fac is None:
-                return None, it, nfac
-            du = lu_solve(fac, [-g for g in G])
+            du = solve([-g for g in G])
             worst = 0.0
             for j in range(len(U)):
                 d = du[j]
@@ -241,7 +253,7 @@ class StageSystem:
                 return U, it, nfac
             G, J2 = self.evaluate(U, h, x_n, v_n, f, kernels)
             if worst > 0.5 * prev:
-                fac = lu_factor(J2)
+                solve = _solver(J2)
                 nfac += 1
             prev = worst
         return None, max_iters, nfac
@@ -254,7 +266,7 @@ class StageSystem:
         Solves ``(mu/h M - J) e = f(y_n) + M sum_k E_k Z_k / h`` with ``Z_k = Y_k - y_n``:
         rows ``x' = v`` per node, momentum per mass (the junction balances and the laws
         have ``M = 0`` and right side 0: ``y_n`` is consistent), with the laws
-        linearised at ``y_n`` (``jac_n[e] = (dR/dq, dR/dF)``). ``None`` if singular.
+        linearised at ``y_n`` (``jac_n[e] = (dR/dq, dR/dF)``); minimum norm if singular.
         """
         N, E, n = self.N, self.E, self.n
         m, ea, eb, spring = self.m, self.ea, self.eb, self.spring
@@ -291,10 +303,7 @@ class StageSystem:
             if a >= 0:
                 M[col][off + a] += Rq
             M[col][col] = -RF
-        fac = lu_factor(M)
-        if fac is None:
-            return None
-        return lu_solve(fac, rhs)
+        return _solver(M)(rhs)
 
     def error_norm(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
                    F_n: list[float], err: list[float], rtol: float, atol: float,
