@@ -83,8 +83,8 @@ def be_substep(scene: Scene, t_end: float, h: float, x0: list[float], v0: list[f
 
 def halved_steps(scene: Scene, t0: float, dt: float, x: list[float], v: list[float],
                  F: list[float], options: NewtonOptions, depth: int = 4):
-    """The step ``[t0, t0 + dt]`` as ``2**k`` backward-Euler substeps, ``k = 1 .. depth``,
-    the first ``k`` whose substeps all converge: a last resort when the step's Newton
+    """The step ``[t0, t0 + dt]`` as ``2**k`` backward-Euler substeps (``k`` from 1 to
+    ``depth``), the first ``k`` whose substeps all converge: a last resort when the step's Newton
     fails (closer starts). Returns ``(x, v, F, iterations)`` or ``None``."""
     its = 0
     for k in range(1, depth + 1):
