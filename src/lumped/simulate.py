@@ -78,7 +78,13 @@ def simulate(
     atol = None if atol is None else as_positive("atol", atol)
     concrete = resolve_method(scene, method)
     if dt is None and concrete in registry.FIXED_STEP_METHODS:
-        raise ValueError(f"`dt` is required for the fixed-step method {concrete!r}, got None")
+        why = ""
+        if method == "auto":  # say why auto chose a fixed-step method
+            from .solvers.adaptive_setup import scope_error
+
+            why = f" (`auto` runs it on this scene: {scope_error(scene) or 'the closed form'})"
+        raise ValueError(f"`dt` is required for the fixed-step method {concrete!r}{why}, "
+                         "got None")
     settings = RunSettings(t_end=t_end, dt=dt, rtol=rtol, atol=atol, throw=throw,
                            options=options, extra=MappingProxyType(dict(extra)))
     raw = registry.METHOD_REGISTRY[concrete](scene, settings)

@@ -392,6 +392,8 @@ def test_radau5_refuses_an_unbounded_slope_and_auto_runs_bdf2():
                    Element("d", hb, "ground", "m")])
     with pytest.raises(ValueError, match=r"does not take element 'd'.*herschel_bulkley"):
         simulate(scene, method="radau5", t_end=1.0)
+    with pytest.raises(ValueError, match=r"`dt` is required .*`auto` runs it .*'radau5'"):
+        simulate(scene, t_end=1.0)  # auto says why it needs a step size here
     sol = simulate(scene, dt=1e-3, t_end=1.0)  # auto
     assert sol.method == "bdf2" and sol.ok
     n_ok = Scene(scene.nodes, [scene.elements[0], Element(
