@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.linalg
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
@@ -19,6 +18,7 @@ from lumped.bench.network_peers import TanhNetwork, solve_tanh_network
 from lumped.bench.network_scenes import (
     NETWORK_SCENES,
     bingham_chain,
+    maxwell_exact,
     maxwell_example,
     network_scene,
 )
@@ -36,12 +36,6 @@ from lumped.scene import Element, Junction, Mass, Scene
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
-def maxwell_exact(t, m=1.0, k=50.0, c=2.0, x0=0.3):
-    """(x, x_j) of examples/maxwell.toml on the uniform grid t (matrix exponential)."""
-    A = np.array([[0.0, 1.0, 0.0], [-k / m, 0.0, k / m], [k / c, 0.0, -k / c]])
-    return np.array([scipy.linalg.expm(A * tt) @ [x0, 0.0, 0.0] for tt in t])[:, [0, 2]]
-
-
 # ------------------------------------------------------------------------- the scenes
 
 
@@ -53,6 +47,14 @@ def test_the_maxwell_scene_is_the_example_file():
         (n.x0, getattr(n, "m", None)) for n in built.nodes]
     assert [(e.name, e.a, e.b, e.law_name, dict(e.law.params)) for e in scene.elements] == [
         (e.name, e.a, e.b, e.law_name, dict(e.law.params)) for e in built.elements]
+
+
+def test_the_chain_example_file_is_the_three_mass_chain():
+    scene, settings = load_scene(EXAMPLES / "bingham-chain-3.toml")
+    kw = {"method": "radau5", "t_end": 3.5, "rtol": 1e-6, "atol": 1e-9}
+    a, b = simulate(scene, **kw), simulate(bingham_chain(3), **kw)
+    assert settings["method"] == "radau5" and a.columns == b.columns
+    np.testing.assert_array_equal(a.data, b.data)  # the burst's switch-off is an event too
 
 
 @pytest.mark.parametrize("n", [2, 3])

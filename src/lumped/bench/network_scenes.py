@@ -23,6 +23,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..laws import get_law
 from ..scene import Element, Junction, Mass, Scene
 from ..scene.forcing import SineBurst
@@ -32,6 +34,7 @@ __all__ = [
     "NETWORK_SCENES",
     "bingham_chain",
     "maxwell_example",
+    "maxwell_exact",
     "network_scene",
 ]
 
@@ -83,6 +86,23 @@ def maxwell_example(m: float = 1.0, k: float = 50.0, c: float = 2.0,
         [Element("dashpot", get_law("newtonian").bind(c=c), "ground", "j"),
          Element("spring", get_law("linear_spring").bind(k=k), "j", "mass")],
     )
+
+
+def maxwell_exact(t: np.ndarray, m: float = 1.0, k: float = 50.0, c: float = 2.0,
+                  x0: float = 0.3) -> np.ndarray:
+    r"""Exact ``(x, x_j)`` of :func:`maxwell_example` at the times ``t``.
+
+    .. math::  y(t) = e^{A t} y_0, \qquad y = (x, v, x_j), \qquad
+               A = \begin{pmatrix} 0 & 1 & 0 \\ -k/m & 0 & k/m \\ k/c & 0 & -k/c
+               \end{pmatrix},
+
+    with ``y_0 = (x0, 0, 0)``; returns an array of shape ``(len(t), 2)``.
+    """
+    from scipy.linalg import expm
+
+    A = np.array([[0.0, 1.0, 0.0], [-k / m, 0.0, k / m], [k / c, 0.0, -k / c]])
+    y0 = np.array([x0, 0.0, 0.0])
+    return np.array([expm(A * float(tt)) @ y0 for tt in np.asarray(t, dtype=float)])[:, [0, 2]]
 
 
 @dataclass(frozen=True)
