@@ -19,8 +19,9 @@ Times are CPU seconds over the yardstick measured in the same process
 timed up to ``x`` of every node on the grid (radau5 through its dense output, LSODA through
 ``solve_ivp``'s).
 
-Run: ``python benchmarks/multi_mass.py [--out FILE.md]`` (about 2 min on a quiet
-machine, plus about 20 s once to compile ``jit-bdf2``'s kernels for each chain).
+Run: ``PYTHONPATH=src python benchmarks/multi_mass.py [--out FILE.md]`` (about 1 min of
+CPU, 2.5 min wall on the shared 2-core machine; plus about 20 s of CPU once per chain to
+compile ``jit-bdf2``'s kernels when their disk cache is cold).
 """
 
 from __future__ import annotations
