@@ -21,12 +21,14 @@ timed up to ``x`` of every node on the grid (radau5 through its dense output, LS
 
 Run: ``PYTHONPATH=src python benchmarks/multi_mass.py [--out FILE.md]`` (about 1 min of
 CPU, 2.5 min wall on the shared 2-core machine; plus about 20 s of CPU once per chain to
-compile ``jit-bdf2``'s kernels when their disk cache is cold).
+compile ``jit-bdf2``'s kernels when their disk cache is cold). ``--option KEY=VALUE``
+(repeatable) passes a further keyword to every ``radau5`` run, e.g. ``compiled=True``.
 """
 
 from __future__ import annotations
 
 import argparse
+import ast
 
 import numpy as np
 
@@ -45,8 +47,23 @@ CHECK_RTOL = 1e-10
 TARGET = 1e-7
 
 
+#: Further ``simulate`` keywords for every radau5 run (``--option KEY=VALUE``).
+RADAU_OPTIONS: dict = {}
+
+
 def radau(scene, t_end, rtol, atol):
-    return simulate(scene, method="radau5", t_end=t_end, rtol=rtol, atol=atol, throw=False)
+    return simulate(scene, method="radau5", t_end=t_end, rtol=rtol, atol=atol, throw=False,
+                    **RADAU_OPTIONS)
+
+
+def _option(text: str) -> tuple[str, object]:
+    key, sep, value = text.partition("=")
+    if not sep or not key.isidentifier():
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    try:
+        return key, ast.literal_eval(value)
+    except (ValueError, SyntaxError):
+        return key, value
 
 
 def reference(ns: NetworkScene, g: np.ndarray, lines: list[str]) -> np.ndarray:
@@ -135,7 +152,11 @@ def bdf_rows(ns: NetworkScene, x_ref_full, g_full, bdf_lines, summary) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=None, help="also write the tables to this file")
+    parser.add_argument("--option", type=_option, action="append", default=[],
+                        metavar="KEY=VALUE",
+                        help="a further simulate keyword for radau5 (e.g. compiled=True)")
     args = parser.parse_args()
+    RADAU_OPTIONS.update(args.option)
     unit = measure_unit()
     ref_lines = ["| scene | ref steps | ref events | vs radau5 rtol 1e-11 | vs exact |",
                  "|---|---|---|---|---|"]
