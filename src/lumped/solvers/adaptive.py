@@ -27,7 +27,8 @@ from collections import deque
 import numpy as np
 
 from ..scene import Mass, Scene
-from .adaptive_output import DenseOutput, initial_step, row_of
+from .adaptive_fast import compiled_loop
+from .adaptive_output import DenseOutput, Rows, initial_step, row_of
 from .adaptive_setup import (
     EXTRA_OPTIONS,
     breakpoints,
@@ -92,7 +93,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     events: list[Event] = []
     recent: deque = deque(maxlen=opts["zeno_events"])
     dense = DenseOutput(N, E)
-    rows = [row_of(0.0, x, v, F)]
+    rows = Rows()
+    rows.append(row_of(0.0, x, v, F))
     stats = {"steps": 0, "rejected": 0, "newton_iterations": 0, "factorizations": 0,
              "nfev": 0, "njev": 0, "events": 0, "max_newton_iterations": 0,
              "initial_newton_iterations": ic["newton_iterations"]}
@@ -103,7 +105,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     guards: list = [None] * E
     watched: list[int] = []
 
-    stage_solve = compiled_stage_solver(scene, modes) if opts["compiled"] else None
+    stage_solve = compiled_stage_solver(scene, modes) if opts["compiled"] is True else None
 
     def set_modes(new: list[int]) -> None:
         modes[:] = new
@@ -159,7 +161,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     if msg:
         raise SolverError(f"radau5: no consistent initial mode: {msg}",
                           status=Status.INCONSISTENT, t=0.0, where="", residual=math.nan)
-    rows[0] = row_of(0.0, x, v, F)
+    rows.set_first(row_of(0.0, x, v, F))
 
     def net_at(t: float) -> list[float]:
         return scene.net_forces(t, F)
@@ -179,6 +181,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     max_newton = 10
     forces_from_probe = False  # the forces at t are an event probe's (see the dense output)
     cyclic, log = cyclic_elements(scene), IntervalLog()
+    fast, stats["loop"] = compiled_loop(scene, lbs, checked, cyclic,
+                                          opts["compiled"])
 
     def at_event(t: float, h: float, cause: str) -> tuple[Status, str] | None:
         """The mode after an event at ``t``; ``(status, message)`` if the run must stop."""
@@ -209,6 +213,21 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     A_ = _A
     stalled = 0  # loop passes since the last accepted step (a guard against any cycle)
     while t < t_final:
+        if fast is not None and target is None and not kept and not forces_from_probe:
+            # the held-mode steps compiled (the same numbers as the loop below); it
+            # returns before the pass this loop must take (a stop, an event, ...)
+            st = {"t": t, "h": h, "x": x, "v": v, "F": F, "dF_n": dF_n, "F_seen": F_seen,
+                  "h_acc": h_acc, "err_acc": err_acc, "h_good": h_good, "stalled": stalled,
+                  "t_stop": breaks[bi] if bi < len(breaks) else t_final,
+                  "t_final": t_final, "prev_break": breaks[bi - 1] if bi > 0 else math.nan,
+                  "rtol": rtol, "atol": atol, "m_min": m_min, "max_steps": opts["max_steps"]}
+            before = stats["steps"]
+            fast.run(st, modes, watched, stats, dense, rows)
+            t, h, x, v, F, dF_n = st["t"], st["h"], st["x"], st["v"], st["F"], st["dF_n"]
+            F_seen, h_acc, err_acc, h_good = st["F_seen"], st["h_acc"], st["err_acc"], st["h_good"]
+            stalled = st["stalled"]
+            if stats["steps"] > before:
+                floor_tried = False
         stalled += 1
         if stalled > 10_000:
             status, message = Status.STEP_TOO_SMALL, (
@@ -396,15 +415,15 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     if status is not Status.SUCCESS and settings.throw:
         error = BranchError if status is Status.BRANCH_LOST else SolverError
         raise error(message, status=status, t=t, where="", residual=math.nan)
-    data = np.array(rows, dtype=float)
-    if dt is not None and dense.t0:
+    data = rows.array()
+    if dt is not None and len(dense):
         n_grid = steps_for(dt, settings.t_end)
         grid = np.arange(n_grid + 1) * dt
         grid = grid[grid <= t + 1e-12 * max(1.0, t)]
         grid[-1] = min(grid[-1], t)
         data = dense(grid)
-        data[0] = rows[0]
-    return RawRun(data, stats, status, message, events, dense if dense.t0 else None,
+        data[0] = rows.first()
+    return RawRun(data, stats, status, message, events, dense if len(dense) else None,
                   indeterminate=log.result())
 
 

@@ -10,31 +10,58 @@ import numpy as np
 
 from .radau import dense_weights
 
-__all__ = ["DenseOutput", "row_of", "initial_step"]
+__all__ = ["DenseOutput", "Rows", "row_of", "initial_step"]
 
 
 class DenseOutput:
-    """The collocation polynomials of the accepted steps: ``t -> rows like data``."""
+    """The collocation polynomials of the accepted steps: ``t -> rows like data``.
+
+    Steps come one at a time (:meth:`add`, the Python loop) or as blocks of arrays
+    (:meth:`extend`, the compiled loop); both keep the order of the steps."""
 
     def __init__(self, N: int, E: int) -> None:
         self.N, self.E = N, E
-        self.t0: list[float] = []
-        self.h: list[float] = []
-        self.y0: list[list[float]] = []
-        self.D: list[list[list[float]]] = []
+        self._blocks: list[tuple[np.ndarray, ...]] = []
+        self._t0: list[float] = []
+        self._h: list[float] = []
+        self._y0: list[list[float]] = []
+        self._D: list[list[list[float]]] = []
+        self._count = 0
         self._cache: tuple | None = None
 
+    def __len__(self) -> int:
+        return self._count
+
     def add(self, t: float, h: float, y0: list[float], Y: list[list[float]]) -> None:
-        self.t0.append(t)
-        self.h.append(h)
-        self.y0.append(y0)
-        self.D.append([[Yk[j] - y0[j] for j in range(len(y0))] for Yk in Y])
+        """One step: its start ``t``, size ``h``, ``y_n`` and the stage values ``Y_k``."""
+        self._t0.append(t)
+        self._h.append(h)
+        self._y0.append(y0)
+        self._D.append([[Yk[j] - y0[j] for j in range(len(y0))] for Yk in Y])
+        self._count += 1
+
+    def extend(self, t0: np.ndarray, h: np.ndarray, y0: np.ndarray, D: np.ndarray) -> None:
+        """A block of steps: starts, sizes, ``y_n`` rows and ``Y_k - y_n`` (copied)."""
+        if not len(t0):
+            return
+        self._flush()
+        self._blocks.append((t0.copy(), h.copy(), y0.copy(), D.copy()))
+        self._count += len(t0)
+
+    def _flush(self) -> None:
+        if self._t0:
+            self._blocks.append((np.array(self._t0), np.array(self._h), np.array(self._y0),
+                                 np.array(self._D)))
+            self._t0, self._h, self._y0, self._D = [], [], [], []
 
     def _arrays(self) -> tuple[np.ndarray, ...]:
-        n = len(self.t0)
+        n = self._count
         if self._cache is None or self._cache[0] != n:
-            self._cache = (n, np.array(self.t0), np.array(self.h), np.array(self.y0),
-                           np.array(self.D))
+            self._flush()
+            if len(self._blocks) > 1:
+                cols = zip(*self._blocks, strict=True)
+                self._blocks = [tuple(np.concatenate(parts) for parts in cols)]
+            self._cache = (n, *self._blocks[0])
         return self._cache[1:]
 
     def __call__(self, t) -> np.ndarray:
@@ -42,7 +69,7 @@ class DenseOutput:
         boundary the later step is used (right limits: the forces after an event)."""
         ts = np.atleast_1d(np.asarray(t, dtype=float))
         N = self.N
-        if not self.t0:
+        if not self._count:
             raise ValueError("no step was taken: the dense output is empty")
         T0, H, Y0, D = self._arrays()
         t_lo, t_hi = T0[0], T0[-1] + H[-1]
@@ -59,6 +86,40 @@ class DenseOutput:
         out[:, 2:2 + 2 * N:2] = y[:, N:2 * N]
         out[:, 1 + 2 * N:] = y[:, 2 * N:]
         return out
+
+
+class Rows:
+    """The output rows of the accepted steps, one list at a time or as array blocks."""
+
+    def __init__(self) -> None:
+        self._blocks: list[np.ndarray] = []
+        self._rows: list[list[float]] = []
+
+    def append(self, row: list[float]) -> None:
+        self._rows.append(row)
+
+    def extend(self, block: np.ndarray) -> None:
+        if len(block):
+            self._flush()
+            self._blocks.append(block.copy())
+
+    def _flush(self) -> None:
+        if self._rows:
+            self._blocks.append(np.array(self._rows, dtype=float))
+            self._rows = []
+
+    def first(self) -> list[float]:
+        return self._rows[0] if not self._blocks else self._blocks[0][0].tolist()
+
+    def set_first(self, row: list[float]) -> None:
+        if self._blocks:
+            self._blocks[0][0] = row
+        else:
+            self._rows[0] = row
+
+    def array(self) -> np.ndarray:
+        self._flush()
+        return self._blocks[0] if len(self._blocks) == 1 else np.concatenate(self._blocks)
 
 
 def row_of(t: float, x: list[float], v: list[float], F: list[float]) -> list[float]:

@@ -1,0 +1,146 @@
+r"""The bridge between the ``radau5`` driver and its compiled inner loop.
+
+:func:`compiled_loop` decides whether a scene runs its held-mode steps in
+:func:`lumped.solvers.radau_loop_jit.advance` (and says why not when it does not), and
+:class:`CompiledLoop` moves the driver's state into that loop's arrays and back, and its
+accepted steps into the dense output and the output rows.
+
+The compiled loop takes a scene when numba is enabled, every forcing is absent, constant
+or a :class:`~lumped.scene.forcing.SineBurst` (a tabulated forcing is fixed-grid only),
+every law is a sympy residual (the generated kernels of :mod:`lumped.codegen.jit`), no
+law needs the fold check (``checked`` elements, :mod:`lumped.solvers.branch_check`), and
+no locked elements sit in parallel (their forces are the minimum-norm split, Python's).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene import Scene
+from . import radau_loop_jit as L
+
+__all__ = ["CompiledLoop", "compiled_loop"]
+
+#: Steps per block of output arrays (a full block returns to Python, which keeps it).
+BLOCK = 2048
+
+
+def compiled_loop(scene: Scene, lbs: list, checked: list[int], cyclic, option: bool | None
+                  ) -> tuple[CompiledLoop | None, str]:
+    """``(loop, "compiled")`` or ``(None, why the Python loop runs)``.
+
+    ``lbs`` are the elements' :func:`~lumped.codegen.branches.law_branches`, ``checked``
+    the elements that need the fold check, ``cyclic`` those on a cycle of the network
+    (:func:`lumped.solvers.locks.cyclic_elements`); ``option`` is the ``compiled``
+    keyword: ``False`` asks for the Python loop."""
+    from ..codegen.jit import numba_enabled
+    from .fixed_step_jit import forcing_arrays
+
+    if option is False:
+        return None, "python: compiled=False"
+    if not numba_enabled():
+        return None, "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
+    if checked:
+        names = [scene.elements[e].name for e in checked]
+        return None, f"python: the laws of {names} need the fold check"
+    if _locks_in_parallel(scene, lbs, cyclic):
+        return None, "python: locked elements in parallel (minimum-norm forces)"
+    fkind, fpar, _ = forcing_arrays(scene, 1.0, 0)
+    if (fkind == 3).any():
+        node = scene.nodes[int(np.argmax(fkind == 3))].name
+        return None, f"python: the forcing on node {node!r} is tabulated (fixed-grid only)"
+    try:
+        loop = CompiledLoop(scene, fkind, fpar)
+    except ValueError as err:  # a hand-written kernel: no generated code
+        return None, f"python: {err}"
+    return loop, "compiled"
+
+
+def _locks_in_parallel(scene: Scene, lbs: list, cyclic) -> bool:
+    """Some elements that can be force-free (a branch whose ``dR/dF`` is not a nonzero
+    constant) close a cycle: their forces can become indeterminate
+    (:mod:`lumped.solvers.locks`)."""
+    from .locks import _on_cycles
+
+    free = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in cyclic
+                 if any(not (info.dR_dF.is_number and info.dR_dF != 0)
+                        for info in lbs[e].info))
+    return len(free) > 1 and bool(_on_cycles(len(scene.nodes), free))
+
+
+class CompiledLoop:
+    """The compiled loop of one scene: its generated kernels, arrays and output blocks."""
+
+    def __init__(self, scene: Scene, fkind: np.ndarray, fpar: np.ndarray) -> None:
+        from ..codegen.jit import jit_scene
+        from .radau import A, W
+
+        js = jit_scene(scene)
+        self.js = js
+        self.fn = L.compiled_advance()
+        self.law = js.module.branch_law
+        self.guards = js.module.branch_guards
+        self.fkind, self.fpar = fkind, fpar
+        self.A, self.W = np.array(A), np.array(W)
+        self.N, self.E = len(scene.nodes), len(scene.elements)
+        self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(
+            self.N, self.E, self.E, BLOCK)
+        self.fst = np.zeros(12)
+        self.ist = np.zeros(13, dtype=np.int64)
+        self.calls = 0
+
+    def run(self, st: dict, modes: list[int], watched: list[int], stats: dict, dense,
+            rows) -> str:
+        """Advance the driver's state ``st`` (keys ``t, h, x, v, F, dF_n, F_seen, h_acc,
+        err_acc, h_good, stalled, t_stop, t_final, prev_break, rtol, atol, m_min,
+        max_steps``) in place; returns the reason the loop stopped (``REASONS``)."""
+        fst, ist = self.fst, self.ist
+        x = np.array(st["x"], dtype=float)
+        v = np.array(st["v"], dtype=float)
+        F = np.array(st["F"], dtype=float)
+        dF = np.zeros(self.E) if st["dF_n"] is None else np.array(st["dF_n"], dtype=float)
+        fst[L.T], fst[L.H], fst[L.F_SEEN] = st["t"], st["h"], st["F_seen"]
+        fst[L.H_ACC] = 0.0 if st["h_acc"] is None else st["h_acc"]
+        fst[L.ERR_ACC] = 0.0 if st["err_acc"] is None else st["err_acc"]
+        fst[L.H_GOOD], fst[L.T_STOP], fst[L.T_FINAL] = st["h_good"], st["t_stop"], st["t_final"]
+        fst[L.RTOL], fst[L.ATOL], fst[L.M_MIN] = st["rtol"], st["atol"], st["m_min"]
+        fst[L.PREV_BREAK] = st["prev_break"]
+        ist[:] = 0
+        ist[L.HAVE_ACC] = st["h_acc"] is not None
+        ist[L.HAVE_DF] = st["dF_n"] is not None
+        ist[L.STALLED] = st["stalled"]
+        ist[L.MAX_STEPS] = st["max_steps"]
+        counters = (("steps", L.STEPS), ("rejected", L.REJECTED),
+                    ("newton_iterations", L.NEWTON_ITERATIONS),
+                    ("factorizations", L.FACTORIZATIONS), ("nfev", L.NFEV), ("njev", L.NJEV),
+                    ("max_newton_iterations", L.MAX_NEWTON_ITERATIONS))
+        for key, i in counters:
+            ist[i] = stats[key]
+        modes_a = np.array(modes, dtype=np.int64)
+        watched_a = np.array(watched, dtype=np.int64)
+        T0, HS, Y0, D, ROWS = self.outputs
+        while True:
+            ist[L.N_OUT] = 0
+            self.fn(self.law, self.guards, self.js.masses, self.js.ea, self.js.eb,
+                    self.js.spring, modes_a, watched_a, self.A, self.W, self.fkind, self.fpar,
+                    x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, self.ws, self.wm, self.iw)
+            self.calls += 1
+            k = int(ist[L.N_OUT])
+            if k:
+                dense.extend(T0[:k], HS[:k], Y0[:k], D[:k])
+                rows.extend(ROWS[:k])
+            if ist[L.REASON] != L.FULL:
+                break
+        for key, i in counters:
+            stats[key] = int(ist[i])
+        st["t"], st["h"], st["F_seen"] = float(fst[L.T]), float(fst[L.H]), float(fst[L.F_SEEN])
+        st["stalled"] = int(ist[L.STALLED])
+        if ist[L.HAVE_ACC]:
+            st["h_acc"], st["err_acc"] = float(fst[L.H_ACC]), float(fst[L.ERR_ACC])
+        else:
+            st["h_acc"] = st["err_acc"] = None
+        st["h_good"] = float(fst[L.H_GOOD])
+        st["x"], st["v"], st["F"] = x.tolist(), v.tolist(), F.tolist()
+        st["dF_n"] = dF.tolist() if ist[L.HAVE_DF] else None
+        return L.REASONS.get(int(ist[L.REASON]), "?")
+
