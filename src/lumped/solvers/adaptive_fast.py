@@ -68,6 +68,45 @@ def _locks_in_parallel(scene: Scene, lbs: list, cyclic) -> bool:
     return len(free) > 1 and bool(_on_cycles(len(scene.nodes), free))
 
 
+_POINTERS: dict = {}
+
+
+def _pointer(dispatcher, ftype):
+    """``dispatcher`` as a first-class function whose address is looked up once (cached).
+
+    numba converts a dispatcher passed for a function-type argument to its address on
+    every call (about 0.1 ms); an object of numba's *wrapper address protocol* hands the
+    address over as it is."""
+    from numba.experimental.function_type import _get_wrapper_address
+
+    key = id(dispatcher)
+    got = _POINTERS.get(key)
+    if got is None or got.keep is not dispatcher:
+        sig = ftype.signature
+        got = _POINTERS[key] = _Pointer(_get_wrapper_address(dispatcher, sig), sig, dispatcher)
+    return got
+
+
+try:
+    from numba.core.types.function_type import WrapperAddressProtocol as _Protocol
+except ImportError:  # pragma: no cover - without numba
+    _Protocol = object
+
+
+class _Pointer(_Protocol):
+    """A compiled function's address and signature (numba's wrapper address protocol);
+    it keeps the dispatcher, hence the code, alive."""
+
+    def __init__(self, addr: int, sig, keep) -> None:
+        self.addr, self.sig, self.keep = addr, sig, keep
+
+    def __wrapper_address__(self) -> int:
+        return self.addr
+
+    def signature(self):
+        return self.sig
+
+
 class CompiledLoop:
     """The compiled loop of one scene: its generated kernels, arrays and output blocks."""
 
@@ -78,14 +117,14 @@ class CompiledLoop:
         js = jit_scene(scene)
         self.js = js
         self.fn = L.compiled_advance()
-        self.law = js.module.branch_law
-        self.guards = js.module.branch_guards
+        self.law = _pointer(js.module.branch_law, L.law_type())
+        self.guards = _pointer(js.module.branch_guards, L.guards_type())
         self.fkind, self.fpar = fkind, fpar
         self.A, self.W = np.array(A), np.array(W)
         self.N, self.E = len(scene.nodes), len(scene.elements)
         self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(
             self.N, self.E, self.E, BLOCK)
-        self.fst = np.zeros(12)
+        self.fst = np.zeros(13)
         self.ist = np.zeros(13, dtype=np.int64)
         self.calls = 0
 
@@ -104,7 +143,7 @@ class CompiledLoop:
         fst[L.ERR_ACC] = 0.0 if st["err_acc"] is None else st["err_acc"]
         fst[L.H_GOOD], fst[L.T_STOP], fst[L.T_FINAL] = st["h_good"], st["t_stop"], st["t_final"]
         fst[L.RTOL], fst[L.ATOL], fst[L.M_MIN] = st["rtol"], st["atol"], st["m_min"]
-        fst[L.PREV_BREAK] = st["prev_break"]
+        fst[L.PREV_BREAK], fst[L.TWO] = st["prev_break"], 2.0
         ist[:] = 0
         ist[L.HAVE_ACC] = st["h_acc"] is not None
         ist[L.HAVE_DF] = st["dF_n"] is not None

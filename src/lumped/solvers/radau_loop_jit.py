@@ -27,7 +27,7 @@ singular but finite (:data:`SINGULAR`: Python's minimum-norm solve), the step si
 below its floor (:data:`FLOOR`), the output arrays are full (:data:`FULL`),
 ``max_steps`` or the stall limit (:data:`LIMIT`).
 
-State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. PREV_BREAK``)
+State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. TWO``)
 and ``ist`` (ints, indices ``HAVE_ACC .. REASON``).  The forcing is ``(fkind, fpar)`` of
 :func:`lumped.solvers.bdf_jit_core.forcing_into` (kinds 0 none, 1 constant, 2 sine burst;
 a tabulated forcing is not taken here).
@@ -47,10 +47,11 @@ from .radau import E_ERR, END_SLOPES, FORCE_TOL_FACTOR, MU_REAL, C
 from .radau_jit import stage_solve
 
 __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", "SINGULAR",
-           "FLOOR", "FULL", "LIMIT", "REASONS"]
+           "FLOOR", "FULL", "LIMIT", "REASONS", "law_type", "guards_type"]
 
 # fst: float state
-T, H, F_SEEN, H_ACC, ERR_ACC, H_GOOD, T_STOP, T_FINAL, RTOL, ATOL, M_MIN, PREV_BREAK = range(12)
+(T, H, F_SEEN, H_ACC, ERR_ACC, H_GOOD, T_STOP, T_FINAL, RTOL, ATOL, M_MIN, PREV_BREAK,
+ TWO) = range(13)
 # ist: int state and counters
 (HAVE_ACC, HAVE_DF, STALLED, STEPS, REJECTED, NEWTON_ITERATIONS, FACTORIZATIONS, NFEV, NJEV,
  MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON) = range(13)
@@ -119,9 +120,13 @@ def _crossed(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n,
 
 @njit(cache=True)
 def _error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x_n, v_n, F_n,
-                net_n, dF, have_dF, rtol, atol, F_ref, M, LU, perm, rhs, err) -> float:
+                net_n, dF, have_dF, rtol, atol, F_ref, M, LU, perm, rhs, err, two) -> float:
     """The scaled RMS error of the step (``StageSystem.error`` then ``error_norm``);
-    NaN for a non-finite system, -1.0 for a singular finite one (Python's minimum norm)."""
+    NaN for a non-finite system, -1.0 for a singular finite one (Python's minimum norm).
+
+    ``two`` is 2.0, a run-time value: CPython's ``y ** 2`` is the C library's ``pow``, which
+    differs from ``y * y`` in the last bit now and then, and numba (LLVM) turns a constant
+    exponent 2 into ``y * y``."""
     N = masses.shape[0]
     E = ea.shape[0]
     n = N + E
@@ -176,11 +181,11 @@ def _error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x_n
     for i in range(N):
         x_new = x_n[i] + h * (A[2, 0] * U[i] + A[2, 1] * U[n + i] + A[2, 2] * U[2 * n + i])
         sc = atol + rtol * max(abs(x_n[i]), abs(x_new))
-        acc += (err[i] / sc) ** 2
+        acc += (err[i] / sc) ** two
         cnt += 1
         if masses[i] > 0.0:
             sc = atol + rtol * max(abs(v_n[i]), abs(U[2 * n + i]))
-            acc += (err[N + i] / sc) ** 2
+            acc += (err[N + i] / sc) ** two
             cnt += 1
     if have_dF:
         g0 = 1.0 / MU_REAL
@@ -194,7 +199,7 @@ def _error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x_n
             est += _E1 * (U[n + k0] - Fe)
             est += _E2 * (U[2 * n + k0] - Fe)
             sc = rtol_F * max(abs(Fe), abs(U[2 * n + k0]), F_ref)
-            acc += (g0 * est / sc) ** 2
+            acc += (g0 * est / sc) ** two
             cnt += 1
     return math.sqrt(acc / cnt)
 
@@ -300,7 +305,7 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, A
                 net[eb[e]] -= F[e]
         err_norm = _error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x,
                                v, F, net, dF, ist[HAVE_DF] == 1, rtol, atol, F_ref, M, LUm,
-                               permm, rhs, err)
+                               permm, rhs, err, fst[TWO])
         if err_norm == -1.0:  # singular: undo this pass's counters, Python redoes it
             ist[STALLED] -= 1
             ist[NEWTON_ITERATIONS] -= its
@@ -372,7 +377,7 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, A
         ist[N_OUT] = o + 1
         h_new = h / quot
         if ist[HAVE_ACC] == 1 and err_norm > 0.0:
-            facgus = (fst[H_ACC] / h) * (err_norm ** 2 / fst[ERR_ACC]) ** 0.25 / 0.9
+            facgus = (fst[H_ACC] / h) * (err_norm ** fst[TWO] / fst[ERR_ACC]) ** 0.25 / 0.9
             facgus = max(0.125, min(5.0, facgus))
             h_new = h / max(quot, facgus)
         fst[H_ACC] = h
@@ -390,6 +395,21 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, A
 _COMPILED: list = []
 
 
+def law_type():
+    """The numba function type of ``branch_law(e, i, q, F) -> (R, dR/dq, dR/dF)``."""
+    from .radau_jit import BRANCH_LAW_TYPE
+
+    return BRANCH_LAW_TYPE
+
+
+def guards_type():
+    """The numba function type of ``branch_guards(e, i, q, F, out) -> count``."""
+    from numba import types as T_
+
+    f8 = T_.float64
+    return T_.FunctionType(T_.int64(T_.int64, T_.int64, f8, f8, f8[::1]))
+
+
 def compiled_advance():
     """:func:`advance` compiled once for every scene (numba's disk cache after the first
     time on a machine), or ``None`` without numba."""
@@ -398,13 +418,10 @@ def compiled_advance():
     if not _COMPILED:
         from numba import types as T_
 
-        from .radau_jit import BRANCH_LAW_TYPE
-
         f8 = T_.float64
-        guards_type = T_.FunctionType(T_.int64(T_.int64, T_.int64, f8, f8, f8[::1]))
         v, m, m3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
         iv = T_.int64[::1]
-        sig = T_.none(BRANCH_LAW_TYPE, guards_type, v, iv, iv, T_.boolean[::1], iv, iv, m, m,
+        sig = T_.none(law_type(), guards_type(), v, iv, iv, T_.boolean[::1], iv, iv, m, m,
                       iv, m, v, v, v, v, v, iv, v, v, m, m3, m, m, m3,
                       T_.int64[:, ::1])
         _COMPILED.append(njit(sig, cache=True)(advance))
