@@ -210,17 +210,21 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         q, Fe = system.element_nodes(U, h, x, v, F, e)
         return guards[e](q[3], Fe[3])[which[1]], guard_tolerance(q[3], Fe[3])
 
+    def state() -> dict:
+        """The loop's state for the compiled loop (:mod:`lumped.solvers.adaptive_fast`)."""
+        return {"t": t, "h": h, "x": x, "v": v, "F": F, "dF_n": dF_n, "F_seen": F_seen,
+                "h_acc": h_acc, "err_acc": err_acc, "h_good": h_good, "stalled": stalled,
+                "t_stop": breaks[bi] if bi < len(breaks) else t_final, "t_final": t_final,
+                "prev_break": breaks[bi - 1] if bi > 0 else math.nan, "rtol": rtol,
+                "atol": atol, "m_min": m_min, "max_steps": opts["max_steps"]}
+
     A_ = _A
     stalled = 0  # loop passes since the last accepted step (a guard against any cycle)
     while t < t_final:
         if fast is not None and target is None and not kept and not forces_from_probe:
             # the held-mode steps compiled (the same numbers as the loop below); it
             # returns before the pass this loop must take (a stop, an event, ...)
-            st = {"t": t, "h": h, "x": x, "v": v, "F": F, "dF_n": dF_n, "F_seen": F_seen,
-                  "h_acc": h_acc, "err_acc": err_acc, "h_good": h_good, "stalled": stalled,
-                  "t_stop": breaks[bi] if bi < len(breaks) else t_final,
-                  "t_final": t_final, "prev_break": breaks[bi - 1] if bi > 0 else math.nan,
-                  "rtol": rtol, "atol": atol, "m_min": m_min, "max_steps": opts["max_steps"]}
+            st = state()
             before = stats["steps"]
             fast.run(st, modes, watched, stats, dense, rows)
             t, h, x, v, F, dF_n = st["t"], st["h"], st["x"], st["v"], st["F"], st["dF_n"]
@@ -262,21 +266,26 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             status, message = Status.STEP_TOO_SMALL, (
                 f"radau5: step size {h!r} below its floor {h_min!r} at t = {t!r}")
             break
-        fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
-        U = (list(v) + list(F)) * 3
-        # the force scale: the largest force or load met so far (never shrinks to 0)
-        F_seen = max([F_seen] + [abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]])
-        # ... and at least the force that changes the lightest mass's velocity by its
-        # tolerance over the step (a force error below it does not show in x, v)
-        Fref = max(F_seen, m_min * (max(abs(vi) for vi in v) + atol / rtol) / h)
-        scale = ([atol + rtol * abs(vi) for vi in v]
-                 + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
-        if stage_solve is None:
-            sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale,
-                                          max_iters=max_newton)
+        # this attempt compiled (the same numbers), unless a Jacobian is singular
+        got = None if fast is None else fast.attempt(state(), modes, watched)
+        if got is not None:
+            sol, its, nfac, err_norm, F_seen = got
         else:
-            sol, its, nfac = stage_solve(U, h, x, v, fk, scale, max_newton)
-            U = sol if sol is not None else U
+            fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
+            U = (list(v) + list(F)) * 3
+            # the force scale: the largest force or load met so far (never shrinks to 0)
+            F_seen = max([F_seen] + [abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]])
+            # ... and at least the force that changes the lightest mass's velocity by its
+            # tolerance over the step (a force error below it does not show in x, v)
+            Fref = max(F_seen, m_min * (max(abs(vi) for vi in v) + atol / rtol) / h)
+            scale = ([atol + rtol * abs(vi) for vi in v]
+                     + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
+            if stage_solve is None:
+                sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale,
+                                              max_iters=max_newton)
+            else:
+                sol, its, nfac = stage_solve(U, h, x, v, fk, scale, max_newton)
+                U = sol if sol is not None else U
         stats["newton_iterations"] += its
         stats["factorizations"] += nfac
         stats["nfev"] += its + 1
@@ -287,13 +296,14 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h *= 0.5
             h_acc = None
             continue
-        t_n0 = math.nextafter(t, math.inf) if (bi > 0 and t == breaks[bi - 1]) else t
-        net_n = scene.net_forces(t_n0, F)
-        q_n = scene.elongations(x, v)
-        jac_n = [kernels[e](q_n[e], F[e])[1:] for e in range(E)]
-        err = system.error(U, h, x, v, net_n, jac_n)
-        err_norm = math.inf if err is None else system.error_norm(
-            U, h, x, v, F, err, rtol, atol, dF_n, watched, Fref)
+        if got is None:
+            t_n0 = math.nextafter(t, math.inf) if (bi > 0 and t == breaks[bi - 1]) else t
+            net_n = scene.net_forces(t_n0, F)
+            q_n = scene.elongations(x, v)
+            jac_n = [kernels[e](q_n[e], F[e])[1:] for e in range(E)]
+            err = system.error(U, h, x, v, net_n, jac_n)
+            err_norm = math.inf if err is None else system.error_norm(
+                U, h, x, v, F, err, rtol, atol, dF_n, watched, Fref)
         fac = 0.9 * (2 * max_newton + 1) / (2 * max_newton + its)
         if not math.isfinite(err_norm):
             stats["rejected"] += 1

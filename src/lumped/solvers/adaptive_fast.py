@@ -124,15 +124,13 @@ class CompiledLoop:
         self.N, self.E = len(scene.nodes), len(scene.elements)
         self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(
             self.N, self.E, self.E, BLOCK)
-        self.fst = np.zeros(13)
-        self.ist = np.zeros(13, dtype=np.int64)
+        self.fst = np.zeros(14)
+        self.ist = np.zeros(17, dtype=np.int64)
         self.calls = 0
 
-    def run(self, st: dict, modes: list[int], watched: list[int], stats: dict, dense,
-            rows) -> str:
-        """Advance the driver's state ``st`` (keys ``t, h, x, v, F, dF_n, F_seen, h_acc,
-        err_acc, h_good, stalled, t_stop, t_final, prev_break, rtol, atol, m_min,
-        max_steps``) in place; returns the reason the loop stopped (``REASONS``)."""
+    def _load(self, st: dict, modes: list[int], watched: list[int], stats: dict | None):
+        """The driver's state into the arrays of :func:`~lumped.solvers.radau_loop_jit.
+        advance`; returns ``(x, v, F, dF)``."""
         fst, ist = self.fst, self.ist
         x = np.array(st["x"], dtype=float)
         v = np.array(st["v"], dtype=float)
@@ -149,28 +147,52 @@ class CompiledLoop:
         ist[L.HAVE_DF] = st["dF_n"] is not None
         ist[L.STALLED] = st["stalled"]
         ist[L.MAX_STEPS] = st["max_steps"]
-        counters = (("steps", L.STEPS), ("rejected", L.REJECTED),
-                    ("newton_iterations", L.NEWTON_ITERATIONS),
-                    ("factorizations", L.FACTORIZATIONS), ("nfev", L.NFEV), ("njev", L.NJEV),
-                    ("max_newton_iterations", L.MAX_NEWTON_ITERATIONS))
-        for key, i in counters:
-            ist[i] = stats[key]
-        modes_a = np.array(modes, dtype=np.int64)
-        watched_a = np.array(watched, dtype=np.int64)
+        if stats is not None:
+            for key, i in _COUNTERS:
+                ist[i] = stats[key]
+        self.modes_a = np.array(modes, dtype=np.int64)
+        self.watched_a = np.array(watched, dtype=np.int64)
+        return x, v, F, dF
+
+    def _call(self, x, v, F, dF) -> None:
+        self.fn(self.law, self.guards, self.js.masses, self.js.ea, self.js.eb, self.js.spring,
+                self.modes_a, self.watched_a, self.A, self.W, self.fkind, self.fpar, x, v, F,
+                dF, self.fst, self.ist, *self.outputs, self.ws, self.wm, self.iw)
+        self.calls += 1
+
+    def attempt(self, st: dict, modes: list[int], watched: list[int]):
+        """One step of size ``st["h"]`` from the state ``st``, not accepted: ``(U or None,
+        its, nfac, err_norm, F_seen)`` as the Python loop computes them, or ``None`` when
+        a Jacobian is singular (the Python loop's minimum-norm solve must run)."""
+        x, v, F, dF = self._load(st, modes, watched, None)
+        ist = self.ist
+        ist[L.SINGLE] = 1
+        self._call(x, v, F, dF)
+        ok = int(ist[L.A_OK])
+        if ok < 0:
+            return None
+        U = self.ws[0, :3 * (self.N + self.E)].tolist() if ok else None
+        return (U, int(ist[L.A_ITS]), int(ist[L.A_NFAC]), float(self.fst[L.A_ERR]),
+                float(self.fst[L.F_SEEN]))
+
+    def run(self, st: dict, modes: list[int], watched: list[int], stats: dict, dense,
+            rows) -> str:
+        """Advance the driver's state ``st`` (keys ``t, h, x, v, F, dF_n, F_seen, h_acc,
+        err_acc, h_good, stalled, t_stop, t_final, prev_break, rtol, atol, m_min,
+        max_steps``) in place; returns the reason the loop stopped (``REASONS``)."""
+        x, v, F, dF = self._load(st, modes, watched, stats)
+        fst, ist = self.fst, self.ist
         T0, HS, Y0, D, ROWS = self.outputs
         while True:
             ist[L.N_OUT] = 0
-            self.fn(self.law, self.guards, self.js.masses, self.js.ea, self.js.eb,
-                    self.js.spring, modes_a, watched_a, self.A, self.W, self.fkind, self.fpar,
-                    x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, self.ws, self.wm, self.iw)
-            self.calls += 1
+            self._call(x, v, F, dF)
             k = int(ist[L.N_OUT])
             if k:
                 dense.extend(T0[:k], HS[:k], Y0[:k], D[:k])
                 rows.extend(ROWS[:k])
             if ist[L.REASON] != L.FULL:
                 break
-        for key, i in counters:
+        for key, i in _COUNTERS:
             stats[key] = int(ist[i])
         st["t"], st["h"], st["F_seen"] = float(fst[L.T]), float(fst[L.H]), float(fst[L.F_SEEN])
         st["stalled"] = int(ist[L.STALLED])
@@ -183,3 +205,8 @@ class CompiledLoop:
         st["dF_n"] = dF.tolist() if ist[L.HAVE_DF] else None
         return L.REASONS.get(int(ist[L.REASON]), "?")
 
+
+_COUNTERS = (("steps", L.STEPS), ("rejected", L.REJECTED),
+             ("newton_iterations", L.NEWTON_ITERATIONS), ("factorizations", L.FACTORIZATIONS),
+             ("nfev", L.NFEV), ("njev", L.NJEV),
+             ("max_newton_iterations", L.MAX_NEWTON_ITERATIONS))

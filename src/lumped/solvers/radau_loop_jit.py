@@ -51,13 +51,13 @@ __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", 
 
 # fst: float state
 (T, H, F_SEEN, H_ACC, ERR_ACC, H_GOOD, T_STOP, T_FINAL, RTOL, ATOL, M_MIN, PREV_BREAK,
- TWO) = range(13)
+ TWO, A_ERR) = range(14)
 # ist: int state and counters
 (HAVE_ACC, HAVE_DF, STALLED, STEPS, REJECTED, NEWTON_ITERATIONS, FACTORIZATIONS, NFEV, NJEV,
- MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON) = range(13)
-STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT = range(1, 7)
+ MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK) = range(17)
+STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT = range(1, 8)
 REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "floor",
-           FULL: "full", LIMIT: "limit"}
+           FULL: "full", LIMIT: "limit", ATTEMPT: "attempt"}
 
 _EPS = 2.220446049250313e-16
 _MAX_NEWTON = 10
@@ -212,6 +212,31 @@ def _forces(t, fkind, fpar, f) -> None:
     forcing_into(0, t, fkind, fpar, fpar, f)
 
 
+@njit(cache=True, inline="always")
+def _finite(J) -> bool:
+    for r in range(J.shape[0]):
+        for c in range(J.shape[1]):
+            if not math.isfinite(J[r, c]):
+                return False
+    return True
+
+
+@njit(cache=True)
+def _step_error(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, t, prev_break,
+                x, v, F, dF, have_dF, fkind, fpar, net, rtol, atol, F_ref, M, LUm, permm, rhs,
+                err, two) -> float:
+    """The error norm of the step from ``t`` (the forces right after a breakpoint)."""
+    t_n0 = np.nextafter(t, math.inf) if t == prev_break else t
+    _forces(t_n0, fkind, fpar, net)
+    for e in range(ea.shape[0]):
+        if ea[e] >= 0:
+            net[ea[e]] += F[e]
+        if eb[e] >= 0:
+            net[eb[e]] -= F[e]
+    return _error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x, v, F,
+                       net, dF, have_dF == 1, rtol, atol, F_ref, M, LUm, permm, rhs, err, two)
+
+
 def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, A, W, fkind,
             fpar, x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
     """Steps with the modes held until a reason to return (see the module notes).
@@ -236,7 +261,10 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, A
     cap = T0.shape[0]
     while True:
         reason = 0
-        if ist[STALLED] + 1 > 10_000 or ist[STEPS] >= ist[MAX_STEPS]:
+        single = ist[SINGLE] == 1
+        if single:
+            pass
+        elif ist[STALLED] + 1 > 10_000 or ist[STEPS] >= ist[MAX_STEPS]:
             reason = LIMIT
         elif t + 1.0001 * h >= t_stop or h >= t_stop - t:
             reason = STOP
@@ -246,7 +274,8 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, A
             reason = FULL
         if reason:
             break
-        ist[STALLED] += 1
+        if not single:
+            ist[STALLED] += 1
         for k in range(3):
             ck = _C0 if k == 0 else (_C1 if k == 1 else _C2)
             _forces(t + ck * h, fkind, fpar, ftmp)
@@ -275,13 +304,24 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, A
                     1e-3, _MAX_NEWTON, G, J, LU, perm, b, du, out)
         its = out[0]
         nfac = out[1]
+        if single:  # one attempt for the Python loop: its outcome, nothing accepted
+            F_seen = F_new
+            ist[A_ITS] = its
+            ist[A_NFAC] = nfac
+            reason = ATTEMPT
+            ist[A_OK] = 0
+            if ok or (out[2] == 1 and _finite(J)):
+                ist[A_OK] = -1  # singular: Python's minimum-norm solve
+            if ok:
+                fst[A_ERR] = _step_error(branch_law, masses, ea, eb, spring, modes, watched,
+                                         A, U, h, t, prev_break, x, v, F, dF, ist[HAVE_DF],
+                                         fkind, fpar, net, rtol, atol, F_ref, M, LUm, permm,
+                                         rhs, err, fst[TWO])
+                if fst[A_ERR] != -1.0:
+                    ist[A_OK] = 1
+            break
         if not ok and out[2] == 1:
-            finite = True
-            for r in range(size):
-                for c in range(size):
-                    if not math.isfinite(J[r, c]):
-                        finite = False
-            if finite:
+            if _finite(J):
                 ist[STALLED] -= 1
                 reason = SINGULAR
                 break
@@ -296,16 +336,9 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, A
             h *= 0.5
             ist[HAVE_ACC] = 0
             continue
-        t_n0 = np.nextafter(t, math.inf) if t == prev_break else t
-        _forces(t_n0, fkind, fpar, net)
-        for e in range(E):
-            if ea[e] >= 0:
-                net[ea[e]] += F[e]
-            if eb[e] >= 0:
-                net[eb[e]] -= F[e]
-        err_norm = _error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x,
-                               v, F, net, dF, ist[HAVE_DF] == 1, rtol, atol, F_ref, M, LUm,
-                               permm, rhs, err, fst[TWO])
+        err_norm = _step_error(branch_law, masses, ea, eb, spring, modes, watched, A, U, h,
+                               t, prev_break, x, v, F, dF, ist[HAVE_DF], fkind, fpar, net,
+                               rtol, atol, F_ref, M, LUm, permm, rhs, err, fst[TWO])
         if err_norm == -1.0:  # singular: undo this pass's counters, Python redoes it
             ist[STALLED] -= 1
             ist[NEWTON_ITERATIONS] -= its
