@@ -72,39 +72,35 @@ _POINTERS: dict = {}
 
 
 def _pointer(dispatcher, ftype):
-    """``dispatcher`` as a first-class function whose address is looked up once (cached).
+    """``dispatcher`` as a first-class function of numba type ``ftype`` whose address and
+    type are looked up once (cached per dispatcher).
 
     numba converts a dispatcher passed for a function-type argument to its address on
-    every call (about 0.1 ms); an object of numba's *wrapper address protocol* hands the
-    address over as it is."""
+    every call, and types an object of its *wrapper address protocol* anew on every call
+    (each about 0.1 ms); :class:`_Pointer` carries both, ready."""
     from numba.experimental.function_type import _get_wrapper_address
 
     key = id(dispatcher)
     got = _POINTERS.get(key)
     if got is None or got.keep is not dispatcher:
-        sig = ftype.signature
-        got = _POINTERS[key] = _Pointer(_get_wrapper_address(dispatcher, sig), sig, dispatcher)
+        addr = _get_wrapper_address(dispatcher, ftype.signature)
+        got = _POINTERS[key] = _Pointer(addr, ftype, dispatcher)
     return got
 
 
-try:
-    from numba.core.types.function_type import WrapperAddressProtocol as _Protocol
-except ImportError:  # pragma: no cover - without numba
-    _Protocol = object
+class _Pointer:
+    """A compiled function's address and numba type (``_numba_type_``, read by numba's
+    ``typeof``; ``__wrapper_address__``, read when the argument is unboxed); it keeps
+    the dispatcher, hence the code, alive."""
 
-
-class _Pointer(_Protocol):
-    """A compiled function's address and signature (numba's wrapper address protocol);
-    it keeps the dispatcher, hence the code, alive."""
-
-    def __init__(self, addr: int, sig, keep) -> None:
-        self.addr, self.sig, self.keep = addr, sig, keep
+    def __init__(self, addr: int, ftype, keep) -> None:
+        self.addr, self._numba_type_, self.keep = addr, ftype, keep
 
     def __wrapper_address__(self) -> int:
         return self.addr
 
     def signature(self):
-        return self.sig
+        return self._numba_type_.signature
 
 
 class CompiledLoop:
