@@ -5,10 +5,9 @@ r"""The bridge between the ``radau5`` driver and its compiled inner loop.
 :class:`CompiledLoop` moves the driver's state into that loop's arrays and back, and its
 accepted steps into the dense output and the output rows.
 
-The compiled loop takes a scene when numba is enabled, every forcing is absent, constant
-or a :class:`~lumped.scene.forcing.SineBurst` (a tabulated forcing is fixed-grid only),
-every law is a sympy residual (the generated kernels of :mod:`lumped.codegen.jit`), no
-law needs the fold check (``checked`` elements, :mod:`lumped.solvers.branch_check`), and
+The compiled loop takes a scene when numba is enabled, every forcing is absent, zero,
+constant or a :class:`~lumped.scene.forcing.SineBurst` (a tabulated forcing is fixed-grid only),
+every law is a sympy residual (the generated kernels of :mod:`lumped.codegen.jit`), and
 no locked elements sit in parallel (their forces are the minimum-norm split, Python's).
 """
 
@@ -40,17 +39,19 @@ def compiled_loop(scene: Scene, lbs: list, checked: list[int], cyclic, option: b
         return None, "python: compiled=False"
     if not numba_enabled():
         return None, "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
-    if checked:
-        names = [scene.elements[e].name for e in checked]
-        return None, f"python: the laws of {names} need the fold check"
     if _locks_in_parallel(scene, lbs, cyclic):
         return None, "python: locked elements in parallel (minimum-norm forces)"
+    from ..scene.forcing import zero_forcing
+
     fkind, fpar, _ = forcing_arrays(scene, 1.0, 0)
+    for i, fn in enumerate(scene.forcing):
+        if fn is zero_forcing:  # f = 0.0, as no forcing
+            fkind[i] = 0
     if (fkind == 3).any():
         node = scene.nodes[int(np.argmax(fkind == 3))].name
         return None, f"python: the forcing on node {node!r} is tabulated (fixed-grid only)"
     try:
-        loop = CompiledLoop(scene, fkind, fpar)
+        loop = CompiledLoop(scene, fkind, fpar, checked)
     except ValueError as err:  # a hand-written kernel: no generated code
         return None, f"python: {err}"
     return loop, "compiled"
@@ -106,7 +107,8 @@ class _Pointer:
 class CompiledLoop:
     """The compiled loop of one scene: its generated kernels, arrays and output blocks."""
 
-    def __init__(self, scene: Scene, fkind: np.ndarray, fpar: np.ndarray) -> None:
+    def __init__(self, scene: Scene, fkind: np.ndarray, fpar: np.ndarray,
+                 checked: list[int]) -> None:
         from ..codegen.jit import jit_scene
         from .radau import A, W
 
@@ -116,6 +118,7 @@ class CompiledLoop:
         self.law = _pointer(js.module.branch_law, L.law_type())
         self.guards = _pointer(js.module.branch_guards, L.guards_type())
         self.fkind, self.fpar = fkind, fpar
+        self.checked = np.array(checked, dtype=np.int64)
         self.A, self.W = np.array(A), np.array(W)
         self.N, self.E = len(scene.nodes), len(scene.elements)
         self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(
@@ -152,8 +155,9 @@ class CompiledLoop:
 
     def _call(self, x, v, F, dF) -> None:
         self.fn(self.law, self.guards, self.js.masses, self.js.ea, self.js.eb, self.js.spring,
-                self.modes_a, self.watched_a, self.A, self.W, self.fkind, self.fpar, x, v, F,
-                dF, self.fst, self.ist, *self.outputs, self.ws, self.wm, self.iw)
+                self.modes_a, self.watched_a, self.checked, self.A, self.W, self.fkind,
+                self.fpar, x, v, F, dF, self.fst, self.ist, *self.outputs, self.ws, self.wm,
+                self.iw)
         self.calls += 1
 
     def attempt(self, st: dict, modes: list[int], watched: list[int]):

@@ -22,7 +22,9 @@ operation (the numbers agree bit for bit):
 It returns to Python, with the state as at the top of the reference loop's pass that
 must run next, when any of these holds (the code in ``ist[REASON]``): the next step
 would reach the stop (:data:`STOP`), a guard turns negative in a candidate step
-(:data:`CROSSING`: Python redoes that step and lands on the event), a Jacobian is
+(:data:`CROSSING`: Python redoes that step and lands on the event), a checked law
+(not a known monotone one) crosses a fold of its graph (:data:`FOLD`: Python redoes the
+step and stops with its message), a Jacobian is
 singular but finite (:data:`SINGULAR`: Python's minimum-norm solve), the step size is
 below its floor (:data:`FLOOR`), the output arrays are full (:data:`FULL`),
 ``max_steps`` or the stall limit (:data:`LIMIT`).
@@ -40,7 +42,7 @@ import math
 import numpy as np
 
 from ..codegen.jit import njit, numba_enabled
-from .bdf_jit_core import forcing_into
+from .bdf_jit_core import _bit, _sign, forcing_into
 from .events import SAMPLES
 from .newton_jit import lu_factor_into, lu_solve_into
 from .radau import E_ERR, END_SLOPES, FORCE_TOL_FACTOR, MU_REAL, C
@@ -55,9 +57,10 @@ __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", 
 # ist: int state and counters
 (HAVE_ACC, HAVE_DF, STALLED, STEPS, REJECTED, NEWTON_ITERATIONS, FACTORIZATIONS, NFEV, NJEV,
  MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK) = range(17)
-STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT = range(1, 8)
+STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD = range(1, 9)
 REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "floor",
-           FULL: "full", LIMIT: "limit", ATTEMPT: "attempt"}
+           FULL: "full", LIMIT: "limit", ATTEMPT: "attempt",
+           FOLD: "fold"}
 
 _EPS = 2.220446049250313e-16
 _MAX_NEWTON = 10
@@ -86,20 +89,74 @@ def _elem_at(spring, A, h, x_n, v_n, U, n, i, k) -> float:
     return v_n[i] if k < 0 else U[k * n + i]
 
 
+@njit(cache=True, inline="always")
+def _element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, e, q, F) -> None:
+    """``q`` and ``F`` of element ``e`` at ``s = 0, c_1, c_2, 1`` into ``q[:4]``,
+    ``F[:4]`` (:meth:`StageSystem.element_nodes`)."""
+    for k in range(4):
+        q[k] = (_elem_at(spring[e], A, h, x_n, v_n, U, n, eb[e], k - 1)
+                - _elem_at(spring[e], A, h, x_n, v_n, U, n, ea[e], k - 1))
+    F[0] = F_n[e]
+    for k in range(3):
+        F[k + 1] = U[k * n + N + e]
+
+
+@njit(cache=True)
+def _folded(branch_law, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n, U, N, n, q,
+            F) -> bool:
+    """A checked element's law crosses a fold along the step
+    (:func:`lumped.solvers.events.fold_crossed` on the held branch's kernel)."""
+    for c in range(checked.shape[0]):
+        e = checked[c]
+        _element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, e, q, F)
+        _, Rq0, RF0 = branch_law(e, modes[e], q[0], F[0])
+        for k in range(3):
+            _, Rq1, RF1 = branch_law(e, modes[e], q[k + 1], F[k + 1])
+            if _left_branch(branch_law, e, modes[e], q[k], F[k], Rq0, RF0, q[k + 1],
+                            F[k + 1], Rq1, RF1):
+                return True
+            Rq0, RF0 = Rq1, RF1
+    return False
+
+
+@njit(cache=True, inline="always")
+def _left_branch(branch_law, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
+    """:func:`lumped.solvers.bdf_jit_core.left_branch` (the fold test of
+    :mod:`lumped.solvers.branch_check`) on element ``e``'s branch ``mode``."""
+    s0 = abs(Rq0) + abs(RF0)
+    s1 = abs(Rq1) + abs(RF1)
+    mq = _bit(_sign(Rq0, s0)) | _bit(_sign(Rq1, s1))
+    mf = _bit(_sign(RF0, s0)) | _bit(_sign(RF1, s1))
+    if mq == 3 or mf == 3:
+        return True
+    dq = q1 - q0
+    dF = F1 - F0
+    off = 0.0
+    for k in range(2):
+        Rq = Rq0 if k == 0 else Rq1
+        RF = RF0 if k == 0 else RF1
+        total = abs(Rq * dq) + abs(RF * dF)
+        if total > 0.0:
+            off = max(off, abs(Rq * dq + RF * dF) / total)
+    if off <= 0.5:
+        return False
+    for s in (0.25, 0.5, 0.75):
+        _, Rq, RF = branch_law(e, mode, q0 + s * dq, F0 + s * dF)
+        sc = abs(Rq) + abs(RF)
+        mq |= _bit(_sign(Rq, sc))
+        mf |= _bit(_sign(RF, sc))
+        if mq == 3 or mf == 3:
+            return True
+    return False
+
+
 @njit(cache=True)
 def _crossed(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, U, N, n,
              qn, Fn, gbuf) -> bool:
     """True when a watched guard (shifted by its round-off tolerance) is negative at a
     sample of the step: :func:`lumped.solvers.events.first_crossing_on`'s test."""
     for w in range(watched.shape[0]):
-        e = watched[w]
-        for k in range(4):
-            kk = k - 1
-            qn[w, k] = (_elem_at(spring[e], A, h, x_n, v_n, U, n, eb[e], kk)
-                        - _elem_at(spring[e], A, h, x_n, v_n, U, n, ea[e], kk))
-        Fn[w, 0] = F_n[e]
-        for k in range(3):
-            Fn[w, k + 1] = U[k * n + N + e]
+        _element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, watched[w], qn[w], Fn[w])
     for s in _SAMPLES:
         l1 = s * (s - _C1) * (s - _C2) / _D1
         l2 = s * (s - _C0) * (s - _C2) / _D2
@@ -237,7 +294,8 @@ def _step_error(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, t, 
                        net, dF, have_dF == 1, rtol, atol, F_ref, M, LUm, permm, rhs, err, two)
 
 
-def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, A, W, fkind,
+def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, checked, A, W,
+            fkind,
             fpar, x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
     """Steps with the modes held until a reason to return (see the module notes).
 
@@ -359,15 +417,19 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, A
             h = h / quot
             ist[HAVE_ACC] = 0
             continue
-        if watched.shape[0] and _crossed(branch_guards, ea, eb, spring, modes, watched, A, h,
-                                         x, v, F, U, N, n, qn, Fn, gbuf):
-            # Python redoes this pass and lands on the event: undo its counters
+        crossed = watched.shape[0] > 0 and _crossed(branch_guards, ea, eb, spring, modes,
+                                                    watched, A, h, x, v, F, U, N, n, qn, Fn,
+                                                    gbuf)
+        if crossed or (checked.shape[0] > 0 and _folded(
+                branch_law, ea, eb, spring, modes, checked, A, h, x, v, F, U, N, n, qn[0],
+                Fn[0])):
+            # Python redoes this pass (and lands on the event, or stops at the fold)
             ist[STALLED] -= 1
             ist[NEWTON_ITERATIONS] -= its
             ist[FACTORIZATIONS] -= nfac
             ist[NFEV] -= its + 1
             ist[NJEV] -= nfac
-            reason = CROSSING
+            reason = CROSSING if crossed else FOLD
             break
         # accept: the dense record (t, h, y_n, Y_k - y_n) and the output row
         o = ist[N_OUT]
@@ -454,7 +516,7 @@ def compiled_advance():
         f8 = T_.float64
         v, m, m3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
         iv = T_.int64[::1]
-        sig = T_.none(law_type(), guards_type(), v, iv, iv, T_.boolean[::1], iv, iv, m, m,
+        sig = T_.none(law_type(), guards_type(), v, iv, iv, T_.boolean[::1], iv, iv, iv, m, m,
                       iv, m, v, v, v, v, v, iv, v, v, m, m3, m, m, m3,
                       T_.int64[:, ::1])
         _COMPILED.append(njit(sig, cache=True)(advance))
