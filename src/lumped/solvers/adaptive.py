@@ -34,9 +34,8 @@ from .adaptive_setup import (
     breakpoints,
     compiled_stage_solver,
     read_options,
-    scope_error,
+    scene_plan,
 )
-from .branch_check import _known_monotone
 from .events import (
     apply_impacts,
     first_crossing_on,
@@ -46,7 +45,7 @@ from .events import (
     select_modes,
 )
 from .initial_state import consistent_initial_state
-from .locks import IntervalLog, cyclic_elements, indeterminate_elements
+from .locks import IntervalLog, indeterminate_elements
 from .radau import START_WEIGHTS, C, StageSystem
 from .radau import A as _A
 from .status import BranchError, Event, RawRun, SolverError, Status
@@ -65,12 +64,11 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     ``settings.dt`` (optional) samples the dense output on ``t_n = n dt``; the keywords of
     :data:`EXTRA_OPTIONS` come in ``settings.extra``.
     """
-    from ..codegen.branches import law_branches
     from .closed_form import steps_for
 
-    refused = scope_error(scene)
-    if refused:
-        raise ValueError(refused)
+    plan = scene_plan(scene)
+    if plan.refused:
+        raise ValueError(plan.refused)
     rtol = DEFAULT_RTOL if settings.rtol is None else settings.rtol
     atol = DEFAULT_ATOL if settings.atol is None else settings.atol
     opts = read_options(settings)
@@ -83,9 +81,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     masses = scene.masses
     system = StageSystem(masses, scene.elem_a, scene.elem_b,
                          [el.kind == "spring" for el in scene.elements])
-    lbs = [law_branches(el.law) for el in scene.elements]
+    lbs = plan.branches
     names = scene.element_names
-    checked = [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)]
+    checked = plan.checked
     x = [float(nd.x0) for nd in scene.nodes]
     v, F, ic = consistent_initial_state(scene, time_scale=t_final, options=settings.options)
     breaks = breakpoints(scene, t_final)
@@ -180,9 +178,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     bi = 0
     max_newton = 10
     forces_from_probe = False  # the forces at t are an event probe's (see the dense output)
-    cyclic, log = cyclic_elements(scene), IntervalLog()
-    fast, stats["loop"] = compiled_loop(scene, lbs, checked, cyclic,
-                                          opts["compiled"])
+    cyclic, log = plan.cyclic, IntervalLog()
+    fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"])
 
     def at_event(t: float, h: float, cause: str) -> tuple[Status, str] | None:
         """The mode after an event at ``t``; ``(status, message)`` if the run must stop."""

@@ -21,40 +21,50 @@ from . import radau_loop_jit as L
 __all__ = ["CompiledLoop", "compiled_loop"]
 
 #: Steps per block of output arrays (a full block returns to Python, which keeps it).
-BLOCK = 2048
+BLOCK = 256
 
 
-def compiled_loop(scene: Scene, lbs: list, checked: list[int], cyclic, option: bool | None
+def compiled_loop(scene: Scene, plan, option: bool | None
                   ) -> tuple[CompiledLoop | None, str]:
     """``(loop, "compiled")`` or ``(None, why the Python loop runs)``.
 
-    ``lbs`` are the elements' :func:`~lumped.codegen.branches.law_branches`, ``checked``
-    the elements that need the fold check, ``cyclic`` those on a cycle of the network
-    (:func:`lumped.solvers.locks.cyclic_elements`); ``option`` is the ``compiled``
-    keyword: ``False`` asks for the Python loop."""
-    from ..codegen.jit import numba_enabled
-    from .fixed_step_jit import forcing_arrays
-
+    ``plan`` is the scene's :class:`~lumped.solvers.adaptive_setup.ScenePlan` (the
+    compiled parts are kept on it); ``option`` is the ``compiled`` keyword: ``False``
+    asks for the Python loop."""
     if option is False:
         return None, "python: compiled=False"
-    if not numba_enabled():
-        return None, "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
-    if _locks_in_parallel(scene, lbs, cyclic):
-        return None, "python: locked elements in parallel (minimum-norm forces)"
-    from ..scene.forcing import zero_forcing
+    with plan.lock:
+        if plan.fast is None:
+            plan.fast = _parts(scene, plan)
+    if isinstance(plan.fast, str):
+        return None, plan.fast
+    return CompiledLoop(*plan.fast), "compiled"
 
+
+def _parts(scene: Scene, plan) -> tuple | str:
+    """The compiled loop's per-scene parts, or why the scene runs in Python."""
+    from ..codegen.jit import jit_scene, numba_enabled
+    from ..scene.forcing import zero_forcing
+    from .fixed_step_jit import forcing_arrays
+
+    if not numba_enabled():
+        return "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
+    if _locks_in_parallel(scene, plan.branches, plan.cyclic):
+        return "python: locked elements in parallel (minimum-norm forces)"
     fkind, fpar, _ = forcing_arrays(scene, 1.0, 0)
     for i, fn in enumerate(scene.forcing):
         if fn is zero_forcing:  # f = 0.0, as no forcing
             fkind[i] = 0
     if (fkind == 3).any():
         node = scene.nodes[int(np.argmax(fkind == 3))].name
-        return None, f"python: the forcing on node {node!r} is tabulated (fixed-grid only)"
+        return f"python: the forcing on node {node!r} is tabulated (fixed-grid only)"
     try:
-        loop = CompiledLoop(scene, fkind, fpar, checked)
+        js = jit_scene(scene)
     except ValueError as err:  # a hand-written kernel: no generated code
-        return None, f"python: {err}"
-    return loop, "compiled"
+        return f"python: {err}"
+    return (js, _pointer(js.module.branch_law, L.law_type()),
+            _pointer(js.module.branch_guards, L.guards_type()), fkind, fpar,
+            np.array(plan.checked, dtype=np.int64))
 
 
 def _locks_in_parallel(scene: Scene, lbs: list, cyclic) -> bool:
@@ -107,20 +117,15 @@ class _Pointer:
 class CompiledLoop:
     """The compiled loop of one scene: its generated kernels, arrays and output blocks."""
 
-    def __init__(self, scene: Scene, fkind: np.ndarray, fpar: np.ndarray,
-                 checked: list[int]) -> None:
-        from ..codegen.jit import jit_scene
+    def __init__(self, js, law, guards, fkind: np.ndarray, fpar: np.ndarray,
+                 checked: np.ndarray) -> None:
         from .radau import A, W
 
-        js = jit_scene(scene)
-        self.js = js
+        self.js, self.law, self.guards = js, law, guards
         self.fn = L.compiled_advance()
-        self.law = _pointer(js.module.branch_law, L.law_type())
-        self.guards = _pointer(js.module.branch_guards, L.guards_type())
-        self.fkind, self.fpar = fkind, fpar
-        self.checked = np.array(checked, dtype=np.int64)
+        self.fkind, self.fpar, self.checked = fkind, fpar, checked
         self.A, self.W = np.array(A), np.array(W)
-        self.N, self.E = len(scene.nodes), len(scene.elements)
+        self.N, self.E = len(js.masses), len(js.ea)
         self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(
             self.N, self.E, self.E, BLOCK)
         self.fst = np.zeros(14)

@@ -5,13 +5,16 @@ the optional compiled stage Newton.
 from __future__ import annotations
 
 import math
+import threading
+import weakref
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..scene import Scene
 
 __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "compiled_stage_solver",
-           "scope_error"]
+           "scope_error", "ScenePlan", "scene_plan"]
 
 
 #: Method-specific keywords of ``radau5`` and their defaults.
@@ -109,3 +112,43 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
         return (Ua.tolist() if ok else None), int(out[0]), int(out[1])
 
     return run
+
+
+@dataclass
+class ScenePlan:
+    """What ``radau5`` reads from a scene's structure and laws before it steps, kept per
+    scene object (:func:`scene_plan`): the refusal (:func:`scope_error`), the laws'
+    branches, the elements whose law needs the fold check (not a known monotone one),
+    the elements on cycles of the network, and ``fast`` (the compiled loop's parts or why
+    there is none, :mod:`lumped.solvers.adaptive_fast`)."""
+
+    refused: str | None
+    branches: list
+    checked: list[int]
+    cyclic: tuple[int, ...]
+    key: tuple
+    fast: object = None
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+
+_PLANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def scene_plan(scene: Scene) -> ScenePlan:
+    """The :class:`ScenePlan` of ``scene``, made once per scene object (the nodes,
+    elements and forcing it was made from must be the same objects), so that repeated
+    runs of one scene (a benchmark, a study) skip this set-up."""
+    from ..codegen.branches import law_branches
+    from .branch_check import _known_monotone
+    from .locks import cyclic_elements
+
+    key = (scene.nodes, scene.elements, tuple(id(f) for f in scene.forcing))
+    plan = _PLANS.get(scene)
+    if plan is not None and plan.key[0] is key[0] and plan.key[1] is key[1] \
+            and plan.key[2] == key[2]:
+        return plan
+    plan = ScenePlan(scope_error(scene), [law_branches(el.law) for el in scene.elements],
+                     [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)],
+                     cyclic_elements(scene), key)
+    _PLANS[scene] = plan
+    return plan
