@@ -17,6 +17,11 @@ logic :mod:`lumped.solvers.events`; the reasons are in ``docs/theory.md``):
 
 The output holds the accepted step points, or (with ``dt``) the dense output on
 ``t_n = n dt``; ``RawRun.dense(t)`` evaluates the collocation polynomials anywhere.
+
+The loop below is the readable reference. By default the steps between events run in
+its compiled port (:mod:`lumped.solvers.radau_loop_jit`, through
+:mod:`lumped.solvers.adaptive_fast`), which returns here for every pass that needs more
+than a held-mode step (an event, a stop, a singular matrix) and gives the same numbers.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-r"""Setup of the adaptive method ``radau5``: its keywords, the forcing's breakpoints and
-the optional compiled stage Newton.
+r"""Setup of the adaptive method ``radau5``: its keywords, the forcing's breakpoints, the
+optional compiled stage Newton and the per-scene plan (:func:`scene_plan`).
 """
 
 from __future__ import annotations
@@ -29,7 +29,8 @@ def read_options(settings) -> dict:
     Raises
     ------
     TypeError
-        For an unknown keyword or a non-boolean ``compiled``.
+        For an unknown keyword, or a ``compiled`` that is not ``True``, ``False`` or
+        ``None`` (``None``, the default: the compiled loop where the scene allows it).
     ValueError
         For a bad value; the message names the keyword and quotes the value.
     """
