@@ -271,7 +271,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         # this attempt compiled (the same numbers), unless a Jacobian is singular
         got = None if fast is None else fast.attempt(state(), modes, watched)
         if got is not None:
-            sol, its, nfac, err_norm, F_seen = got
+            sol, its, nfac, err_norm, F_seen, negative = got
         else:
             fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
             U = (list(v) + list(F)) * 3
@@ -318,7 +318,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h = h / quot
             h_acc = None
             continue
-        hit = crossing(sol, h)
+        # (the compiled attempt has tested the samples: no negative guard, no crossing)
+        hit = crossing(sol, h) if got is None or negative else None
         if target is not None:  # a landing step: bracket the event by end-of-step values
             if hit is not None and hit[1] != target[0] and hit[0] < 1.0:
                 target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0]

@@ -129,7 +129,7 @@ class CompiledLoop:
         self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(
             self.N, self.E, self.E, BLOCK)
         self.fst = np.zeros(14)
-        self.ist = np.zeros(17, dtype=np.int64)
+        self.ist = np.zeros(18, dtype=np.int64)
         self.calls = 0
 
     def _load(self, st: dict, modes: list[int], watched: list[int], stats: dict | None):
@@ -167,8 +167,10 @@ class CompiledLoop:
 
     def attempt(self, st: dict, modes: list[int], watched: list[int]):
         """One step of size ``st["h"]`` from the state ``st``, not accepted: ``(U or None,
-        its, nfac, err_norm, F_seen)`` as the Python loop computes them, or ``None`` when
-        a Jacobian is singular (the Python loop's minimum-norm solve must run)."""
+        its, nfac, err_norm, F_seen, negative)`` as the Python loop computes them
+        (``negative``: some guard is negative at a sample of the step, the test of
+        :func:`lumped.solvers.events.first_crossing_on`), or ``None`` when a Jacobian is
+        singular (the Python loop's minimum-norm solve must run)."""
         x, v, F, dF = self._load(st, modes, watched, None)
         ist = self.ist
         ist[L.SINGLE] = 1
@@ -178,7 +180,7 @@ class CompiledLoop:
             return None
         U = self.ws[0, :3 * (self.N + self.E)].tolist() if ok else None
         return (U, int(ist[L.A_ITS]), int(ist[L.A_NFAC]), float(self.fst[L.A_ERR]),
-                float(self.fst[L.F_SEEN]))
+                float(self.fst[L.F_SEEN]), bool(ist[L.A_HIT]))
 
     def run(self, st: dict, modes: list[int], watched: list[int], stats: dict, dense,
             rows) -> str:

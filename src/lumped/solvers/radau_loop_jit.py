@@ -28,10 +28,12 @@ minimum-norm solve), the step size is below its floor (:data:`FLOOR`), the outpu
 are full (:data:`FULL`), ``max_steps`` or the stall limit (:data:`LIMIT`). With
 ``ist[SINGLE] = 1`` it makes one attempt of size ``h`` for the Python loop and returns
 (:data:`ATTEMPT`) its outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular),
-``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]`` and the stage values in ``ws[0]``.
+``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]``, ``ist[A_HIT]`` (1 when a guard is
+negative at a sample: only then must Python look for the crossing) and the stage values
+in ``ws[0]``.
 
 State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. A_ERR``)
-and ``ist`` (ints, indices ``HAVE_ACC .. A_OK``).  The forcing is ``(fkind, fpar)`` of
+and ``ist`` (ints, indices ``HAVE_ACC .. A_HIT``).  The forcing is ``(fkind, fpar)`` of
 :func:`lumped.solvers.bdf_jit_core.forcing_into` (kinds 0 none, 1 constant, 2 sine burst;
 a tabulated forcing is not taken here).
 """
@@ -56,7 +58,8 @@ __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", 
  TWO, A_ERR) = range(14)
 # ist: int state and counters
 (HAVE_ACC, HAVE_DF, STALLED, STEPS, REJECTED, NEWTON_ITERATIONS, FACTORIZATIONS, NFEV, NJEV,
- MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK) = range(17)
+ MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK,
+ A_HIT) = range(18)
 STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD = range(1, 9)
 REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "floor",
            FULL: "full", LIMIT: "limit", ATTEMPT: "attempt",
@@ -153,6 +156,9 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, c
                                          rhs, err, fst[TWO])
                 if fst[A_ERR] != -1.0:
                     ist[A_OK] = 1
+                    ist[A_HIT] = watched.shape[0] > 0 and crossed(
+                        branch_guards, ea, eb, spring, modes, watched, A, h, x, v, F, U, N, n,
+                        qn, Fn, gbuf)
             break
         if not ok and out[2] == 1:
             if finite(J):
