@@ -61,7 +61,7 @@ def _pair(name: str):
     build, t_end, rtol = CASES[name]
     scene = build()
     kw = dict(method="radau5", t_end=t_end, rtol=rtol, atol=1e-3 * rtol)
-    return simulate(scene, compiled=False, **kw), simulate(scene, **kw)
+    return simulate(scene, compiled=False, **kw), simulate(scene, compiled=True, **kw)
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
@@ -88,10 +88,12 @@ def test_the_compiled_loop_gives_the_python_loop_run(name):
 
 def test_exact_sticking_is_kept_in_the_compiled_loop():
     # eq. (17a): the mass never moves; release-0.5: it sticks for good after its last event
-    stuck = simulate(scenario_scene("forcing-F1"), method="radau5", t_end=3.0, rtol=1e-8)
+    stuck = simulate(scenario_scene("forcing-F1"), method="radau5", t_end=3.0, rtol=1e-8,
+                     compiled=True)
     assert stuck.stats["loop"] == "compiled" and stuck.stats["steps"] > 20
     assert np.all(stuck.v["mass"] == 0.0) and np.all(stuck.x["mass"] == 0.0)
-    sol = simulate(scenario_scene("release-0.5"), method="radau5", t_end=5.0, rtol=1e-8)
+    sol = simulate(scenario_scene("release-0.5"), method="radau5", t_end=5.0, rtol=1e-8,
+                   compiled=True)
     last = sol.events[-1]  # the mass comes to rest for good, stretched, at t = 3.1455
     after = sol.t > last.t
     assert sol.stats["loop"] == "compiled" and after.sum() >= 3
@@ -104,13 +106,13 @@ def test_exact_sticking_is_kept_in_the_compiled_loop():
 def test_the_fallback_to_python_says_why():
     base = scenario_scene("release-0.5")
     tabulated = Scene(base.nodes, base.elements, {"mass": lambda t: 0.1 * t})
-    sol = simulate(tabulated, method="radau5", t_end=0.5)
+    sol = simulate(tabulated, method="radau5", t_end=0.5, compiled=True)
     assert sol.ok and "tabulated" in sol.stats["loop"] and "'mass'" in sol.stats["loop"]
     # locked elements in parallel: the minimum-norm split of their forces is Python's
-    sol = simulate(lock_scene(), method="radau5", t_end=1.0)
+    sol = simulate(lock_scene(), method="radau5", t_end=1.0, compiled=True)
     assert sol.ok and "in parallel" in sol.stats["loop"]
     # a spring and a Bingham dashpot in parallel: only one of them can lock, compiled
-    assert simulate(base, method="radau5", t_end=0.5).stats["loop"] == "compiled"
+    assert simulate(base, method="radau5", t_end=0.5, compiled=True).stats["loop"] == "compiled"
 
 
 def test_a_fold_stops_the_compiled_run_as_the_python_run():
@@ -121,12 +123,34 @@ def test_a_fold_stops_the_compiled_run_as_the_python_run():
                    Element("damper", get_law("newtonian").bind(c=0.05), "ground", "mass")],
                   forces={"mass": SineBurst(9.0, 0.25)})
     kw = dict(method="radau5", t_end=8.0, rtol=1e-8, throw=False)
-    ref, fast = simulate(scene, compiled=False, **kw), simulate(scene, **kw)
+    ref, fast = simulate(scene, compiled=False, **kw), simulate(scene, compiled=True, **kw)
     assert fast.stats["loop"] == "compiled"
     assert fast.status is ref.status and fast.status.value == "branch_lost"
     assert fast.message == ref.message and "'s'" in fast.message
     assert fast.stats["steps"] == ref.stats["steps"] > 3
     assert np.array_equal(fast.data, ref.data)
+
+
+def test_by_default_a_new_scene_compiles_once_a_run_is_long():
+    """``compiled=None``: a scene not compiled yet in this process starts in the Python loop
+    and switches to the compiled loop after ``COMPILE_AFTER`` steps, seamlessly (the same
+    run as the Python loop's); a short run stays in Python; a compiled scene starts
+    compiled."""
+    from lumped.solvers.adaptive_fast import COMPILE_AFTER
+
+    lin, bing = get_law("linear_spring"), get_law("bingham")
+    scene = Scene([Mass("m", m=1.0, x0=0.5)],
+                  [Element("s", lin.bind(k=123.25), "ground", "m"),
+                   Element("d", bing.bind(gamma=0.75, tau=1.25), "ground", "m")])
+    short = simulate(scene, method="radau5", t_end=0.2, rtol=1e-6)
+    assert short.stats["loop"] == "python: not compiled yet (a short run)"
+    kw = dict(method="radau5", t_end=3.0, rtol=1e-9, atol=1e-12)
+    ref = simulate(scene, compiled=False, **kw)
+    lazy = simulate(scene, **kw)
+    assert ref.stats["steps"] > COMPILE_AFTER + 50
+    assert lazy.stats["loop"] == f"compiled from step {COMPILE_AFTER}"
+    assert np.array_equal(lazy.data, ref.data) and lazy.stats["nfev"] == ref.stats["nfev"]
+    assert simulate(scene, **kw).stats["loop"] == "compiled"
 
 
 def test_the_compiled_keyword_is_checked():

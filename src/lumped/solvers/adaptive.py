@@ -32,7 +32,7 @@ from collections import deque
 import numpy as np
 
 from ..scene import Mass, Scene
-from .adaptive_fast import compiled_loop
+from .adaptive_fast import COMPILE_AFTER, compiled_loop
 from .adaptive_output import DenseOutput, Rows, initial_step, row_of
 from .adaptive_setup import (
     EXTRA_OPTIONS,
@@ -102,6 +102,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
              "nfev": 0, "njev": 0, "events": 0, "max_newton_iterations": 0,
              "initial_newton_iterations": ic["newton_iterations"]}
     status, message = Status.SUCCESS, ""
+    fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"])
 
     modes = [0] * E
     kernels: list = [None] * E
@@ -121,6 +122,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
 
     def change_mode(t: float, h_probe: float, cause: str) -> str:
         """Choose the mode after ``t`` and record the switches; '' or a failure message."""
+        if fast is not None:
+            fast.forget()  # x, v, F may change in place here
         sel: tuple | str = ""
         for _ in range(3):
             sel = select_modes(scene, lbs, t, x, v, F, h_probe, settings.options)
@@ -175,6 +178,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     h_acc = err_acc = None
     F_seen = 0.0
     m_min = min(mi for mi in masses if mi > 0.0)
+    if fast is not None:
+        fast.setup(t_final, rtol, atol, m_min)
     dF_n: list[float] | None = None  # force slopes at t (None at the start, after events)
     target: list | None = None  # the guard being landed on and its bracket
     floor_tried = False  # a mode change was tried at the step floor since the last step
@@ -184,7 +189,6 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     max_newton = 10
     forces_from_probe = False  # the forces at t are an event probe's (see the dense output)
     cyclic, log = plan.cyclic, IntervalLog()
-    fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"])
 
     def at_event(t: float, h: float, cause: str) -> tuple[Status, str] | None:
         """The mode after an event at ``t``; ``(status, message)`` if the run must stop."""
@@ -223,6 +227,11 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     A_ = _A
     stalled = 0  # loop passes since the last accepted step (a guard against any cycle)
     while t < t_final:
+        if fast is None and stats["steps"] >= COMPILE_AFTER and stats["loop"].startswith(
+                "python: not compiled yet"):  # a long run: compile the scene's loop now
+            fast, stats["loop"] = compiled_loop(scene, plan, None, stats["steps"])
+            if fast is not None:
+                fast.setup(t_final, rtol, atol, m_min)
         if fast is not None and target is None and not kept and not forces_from_probe:
             # the held-mode steps compiled (the same numbers as the loop below); it
             # returns before the pass this loop must take (a stop, an event, ...)
@@ -269,7 +278,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 f"radau5: step size {h!r} below its floor {h_min!r} at t = {t!r}")
             break
         # this attempt compiled (the same numbers), unless a Jacobian is singular
-        got = None if fast is None else fast.attempt(state(), modes, watched)
+        got = None if fast is None else fast.attempt(
+            t, h, x, v, F, dF_n, F_seen, breaks[bi - 1] if bi > 0 else math.nan, modes,
+            watched)
         if got is not None:
             sol, its, nfac, err_norm, F_seen, negative = got
         else:

@@ -24,21 +24,32 @@ __all__ = ["CompiledLoop", "compiled_loop"]
 BLOCK = 256
 
 
-def compiled_loop(scene: Scene, plan, option: bool | None
+#: With ``compiled=None``, a scene whose compiled parts are not built yet in this process
+#: starts in the Python loop and is compiled once a run has taken this many steps: a
+#: short run never pays for a compile (about a second per new scene, less from numba's
+#: disk cache), a long one soon does; the two loops give the same numbers.
+COMPILE_AFTER = 200
+
+
+def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
                   ) -> tuple[CompiledLoop | None, str]:
     """``(loop, "compiled")`` or ``(None, why the Python loop runs)``.
 
     ``plan`` is the scene's :class:`~lumped.solvers.adaptive_setup.ScenePlan` (the
     compiled parts are kept on it); ``option`` is the ``compiled`` keyword: ``False``
-    asks for the Python loop."""
+    asks for the Python loop, ``True`` for the compiled loop now, ``None`` for it now if
+    the scene's parts are built, else once the run has taken :data:`COMPILE_AFTER`
+    ``steps``."""
     if option is False:
         return None, "python: compiled=False"
     with plan.lock:
         if plan.fast is None:
+            if option is None and steps < COMPILE_AFTER:
+                return None, "python: not compiled yet (a short run)"
             plan.fast = _parts(scene, plan)
     if isinstance(plan.fast, str):
         return None, plan.fast
-    return CompiledLoop(*plan.fast), "compiled"
+    return CompiledLoop(*plan.fast), "compiled" if steps == 0 else f"compiled from step {steps}"
 
 
 def _parts(scene: Scene, plan) -> tuple | str:
@@ -131,6 +142,14 @@ class CompiledLoop:
         self.fst = np.zeros(14)
         self.ist = np.zeros(18, dtype=np.int64)
         self.calls = 0
+        self._akey: tuple | None = None
+        self._arrays: tuple = ()
+
+    def setup(self, t_final: float, rtol: float, atol: float, m_min: float) -> None:
+        """The run's constants."""
+        fst = self.fst
+        fst[L.T_FINAL], fst[L.RTOL], fst[L.ATOL], fst[L.M_MIN] = t_final, rtol, atol, m_min
+        fst[L.TWO] = 2.0
 
     def _load(self, st: dict, modes: list[int], watched: list[int], stats: dict | None):
         """The driver's state into the arrays of :func:`~lumped.solvers.radau_loop_jit.
@@ -165,22 +184,44 @@ class CompiledLoop:
                 self.iw)
         self.calls += 1
 
-    def attempt(self, st: dict, modes: list[int], watched: list[int]):
-        """One step of size ``st["h"]`` from the state ``st``, not accepted: ``(U or None,
-        its, nfac, err_norm, F_seen, negative)`` as the Python loop computes them
-        (``negative``: some guard is negative at a sample of the step, the test of
+    def forget(self) -> None:
+        """The driver changed its state lists in place (an event): convert them again."""
+        self._akey = None
+
+    def attempt(self, t: float, h: float, x: list[float], v: list[float], F: list[float],
+                dF_n: list[float] | None, F_seen: float, prev_break: float, modes: list[int],
+                watched: list[int]):
+        """One step of size ``h`` from ``t``, not accepted: ``(U or None, its, nfac,
+        err_norm, F_seen, negative)`` as the Python loop computes them (``negative``: some
+        guard is negative at a sample of the step, the test of
         :func:`lumped.solvers.events.first_crossing_on`), or ``None`` when a Jacobian is
-        singular (the Python loop's minimum-norm solve must run)."""
-        x, v, F, dF = self._load(st, modes, watched, None)
-        ist = self.ist
+        singular (the Python loop's minimum-norm solve must run).
+
+        The state lists are converted to arrays once while they are the same objects
+        (the landing steps of an event retry one state with other ``h``); a driver that
+        changes them in place calls :meth:`forget`."""
+        fst, ist = self.fst, self.ist
+        key = self._akey
+        if (key is None or key[0] is not x or key[1] is not v or key[2] is not F
+                or key[3] is not dF_n or key[4] != modes or key[5] != watched):
+            self._akey = (x, v, F, dF_n, list(modes), list(watched))
+            self._arrays = (np.array(x, dtype=float), np.array(v, dtype=float),
+                            np.array(F, dtype=float),
+                            np.zeros(self.E) if dF_n is None else np.array(dF_n, dtype=float))
+            self.modes_a = np.array(modes, dtype=np.int64)
+            self.watched_a = np.array(watched, dtype=np.int64)
+        else:  # run() may have replaced the mode arrays with equal ones: keep them
+            pass
+        fst[L.T], fst[L.H], fst[L.F_SEEN], fst[L.PREV_BREAK] = t, h, F_seen, prev_break
         ist[L.SINGLE] = 1
-        self._call(x, v, F, dF)
+        ist[L.HAVE_DF] = dF_n is not None
+        self._call(*self._arrays)
         ok = int(ist[L.A_OK])
         if ok < 0:
             return None
         U = self.ws[0, :3 * (self.N + self.E)].tolist() if ok else None
-        return (U, int(ist[L.A_ITS]), int(ist[L.A_NFAC]), float(self.fst[L.A_ERR]),
-                float(self.fst[L.F_SEEN]), bool(ist[L.A_HIT]))
+        return (U, int(ist[L.A_ITS]), int(ist[L.A_NFAC]), float(fst[L.A_ERR]),
+                float(fst[L.F_SEEN]), bool(ist[L.A_HIT]))
 
     def run(self, st: dict, modes: list[int], watched: list[int], stats: dict, dense,
             rows) -> str:
