@@ -44,12 +44,31 @@ def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
         return None, "python: compiled=False"
     with plan.lock:
         if plan.fast is None:
-            if option is None and steps < COMPILE_AFTER:
+            if option is None and steps < COMPILE_AFTER and not _loaded(scene, plan):
                 return None, "python: not compiled yet (a short run)"
             plan.fast = _parts(scene, plan)
     if isinstance(plan.fast, str):
         return None, plan.fast
     return CompiledLoop(*plan.fast), "compiled" if steps == 0 else f"compiled from step {steps}"
+
+
+def _loaded(scene: Scene, plan) -> bool:
+    """The scene's generated module is loaded in this process already (another scene
+    object with the same laws and structure compiled it): nothing left to compile.
+    Checked once per plan."""
+    import hashlib
+
+    from ..codegen import jit
+
+    if getattr(plan, "module_loaded", None) is None:
+        try:
+            source, _ = jit.scene_source(scene)
+        except ValueError:  # a hand-written kernel: _parts says why
+            plan.module_loaded = True
+        else:
+            digest = hashlib.sha256(source.encode()).hexdigest()[:24]
+            plan.module_loaded = digest in jit._MODULES  # the key of jit.scene_module
+    return plan.module_loaded
 
 
 def _parts(scene: Scene, plan) -> tuple | str:

@@ -120,8 +120,9 @@ class ScenePlan:
     """What ``radau5`` reads from a scene's structure and laws before it steps, kept per
     scene object (:func:`scene_plan`): the refusal (:func:`scope_error`), the laws'
     branches, the elements whose law needs the fold check (not a known monotone one),
-    the elements on cycles of the network, and ``fast`` (the compiled loop's parts or why
-    there is none, :mod:`lumped.solvers.adaptive_fast`)."""
+    the elements on cycles of the network, ``fast`` (the compiled loop's parts or why
+    there is none, :mod:`lumped.solvers.adaptive_fast`) and ``module_loaded`` (its
+    generated module was loaded in this process when the plan was first asked)."""
 
     refused: str | None
     branches: list
@@ -129,6 +130,7 @@ class ScenePlan:
     cyclic: tuple[int, ...]
     key: tuple
     fast: object = None
+    module_loaded: bool | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)
 
 
