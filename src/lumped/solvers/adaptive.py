@@ -29,17 +29,17 @@ from __future__ import annotations
 import math
 from collections import deque
 
-import numpy as np
-
 from ..scene import Mass, Scene
 from .adaptive_fast import COMPILE_AFTER, compiled_loop
-from .adaptive_output import DenseOutput, Rows, initial_step, row_of
+from .adaptive_output import DenseOutput, Rows, initial_step, output_data, row_of
 from .adaptive_setup import (
     EXTRA_OPTIONS,
+    accumulating,
     breakpoints,
     compiled_stage_solver,
     read_options,
     scene_plan,
+    too_many,
 )
 from .events import (
     apply_impacts,
@@ -201,8 +201,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         stats["events"] = len(events)
         if msg:
             return Status.INCONSISTENT, msg
-        if _accumulating(recent, zeno_window) or len(events) > opts["max_events"]:
-            return _too_many(events, recent, t, opts)
+        if accumulating(recent, zeno_window) or len(events) > opts["max_events"]:
+            return too_many(events, recent, t, opts)
         return None
 
     def crossing(U: list[float], h: float):
@@ -439,28 +439,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     if status is not Status.SUCCESS and settings.throw:
         error = BranchError if status is Status.BRANCH_LOST else SolverError
         raise error(message, status=status, t=t, where="", residual=math.nan)
-    data = rows.array()
-    if dt is not None and len(dense):
-        n_grid = steps_for(dt, settings.t_end)
-        grid = np.arange(n_grid + 1) * dt
-        grid = grid[grid <= t + 1e-12 * max(1.0, t)]
-        grid[-1] = min(grid[-1], t)
-        data = dense(grid)
-        data[0] = rows.first()
+    data = output_data(rows, dense, dt, settings.t_end, t)
     return RawRun(data, stats, status, message, events, dense if len(dense) else None,
                   indeterminate=log.result())
 
-
-def _accumulating(recent: deque, window: float) -> bool:
-    return len(recent) == recent.maxlen and recent[-1] - recent[0] <= window
-
-
-def _too_many(events: list[Event], recent: deque, t: float, opts: dict) -> tuple:
-    if len(events) > opts["max_events"]:
-        return Status.TOO_MANY_EVENTS, (
-            f"radau5 stopped at t = {t!r}: more than max_events = {opts['max_events']} events")
-    names = sorted({ev.element for ev in events[-len(recent):]})
-    return Status.TOO_MANY_EVENTS, (
-        f"radau5 stopped at t = {t!r}: {len(recent)} events within "
-        f"{recent[-1] - recent[0]!r} s (elements {names}): an accumulation of events "
-        "(Zeno or chattering)")

@@ -10,7 +10,7 @@ import numpy as np
 
 from .radau import dense_weights
 
-__all__ = ["DenseOutput", "Rows", "row_of", "initial_step"]
+__all__ = ["DenseOutput", "Rows", "row_of", "initial_step", "output_data"]
 
 
 class DenseOutput:
@@ -146,3 +146,19 @@ def initial_step(x, v, acc, is_mass, rtol, atol, span) -> float:
     d0, d1 = math.sqrt(d0 / n), math.sqrt(d1 / n)
     h0 = 1e-6 * span if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     return min(h0, 0.1 * span) * rtol ** 0.2 / 1e-6 ** 0.2 if h0 > 0 else 1e-6 * span
+
+
+def output_data(rows: Rows, dense: DenseOutput, dt: float | None, t_end: float,
+                t: float) -> np.ndarray:
+    """``data`` of a run that reached ``t``: the accepted step points, or with ``dt`` the
+    dense output on ``t_n = n dt`` (up to ``t``; the first row exactly the initial one)."""
+    from .closed_form import steps_for
+
+    data = rows.array()
+    if dt is not None and len(dense):
+        grid = np.arange(steps_for(dt, t_end) + 1) * dt
+        grid = grid[grid <= t + 1e-12 * max(1.0, t)]
+        grid[-1] = min(grid[-1], t)
+        data = dense(grid)
+        data[0] = rows.first()
+    return data

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import threading
 import weakref
+from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -14,7 +15,7 @@ import numpy as np
 from ..scene import Scene
 
 __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "compiled_stage_solver",
-           "scope_error", "ScenePlan", "scene_plan"]
+           "scope_error", "ScenePlan", "scene_plan", "accumulating", "too_many"]
 
 
 #: Method-specific keywords of ``radau5`` and their defaults.
@@ -155,3 +156,22 @@ def scene_plan(scene: Scene) -> ScenePlan:
                      cyclic_elements(scene), key)
     _PLANS[scene] = plan
     return plan
+
+
+def accumulating(recent: deque, window: float) -> bool:
+    """The last ``recent.maxlen`` events fell within ``window`` seconds (Zeno, chattering)."""
+    return len(recent) == recent.maxlen and recent[-1] - recent[0] <= window
+
+
+def too_many(events: list, recent: deque, t: float, opts: dict) -> tuple:
+    """``(Status.TOO_MANY_EVENTS, message)``: too many events, or an accumulation."""
+    from .status import Status
+
+    if len(events) > opts["max_events"]:
+        return Status.TOO_MANY_EVENTS, (
+            f"radau5 stopped at t = {t!r}: more than max_events = {opts['max_events']} events")
+    names = sorted({ev.element for ev in events[-len(recent):]})
+    return Status.TOO_MANY_EVENTS, (
+        f"radau5 stopped at t = {t!r}: {len(recent)} events within "
+        f"{recent[-1] - recent[0]!r} s (elements {names}): an accumulation of events "
+        "(Zeno or chattering)")
