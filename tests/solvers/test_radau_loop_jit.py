@@ -163,3 +163,17 @@ def test_by_default_a_new_scene_compiles_once_a_run_is_long():
 def test_the_compiled_keyword_is_checked():
     with pytest.raises(TypeError, match=r"`compiled` must be True, False or None, got 'yes'"):
         simulate(scenario_scene("release-0.5"), method="radau5", t_end=0.5, compiled="yes")
+
+
+def test_the_compiled_dense_output_is_the_numpy_one(monkeypatch):
+    """``sol(t)`` of ``radau5`` evaluated by the compiled loop of
+    :mod:`lumped.solvers.adaptive_output` gives the numpy evaluation's numbers, also at the
+    step points and events (the later step: right limits)."""
+    import lumped.solvers.adaptive_output as out
+
+    sol = simulate(scenario_scene("forcing-F2"), method="radau5", t_end=3.0, rtol=1e-7,
+                   compiled=True)
+    t = np.concatenate([np.linspace(0.0, 3.0, 3001), sol.t, [ev.t for ev in sol.events]])
+    fast = sol.sol(t)
+    monkeypatch.setattr(out, "numba_enabled", lambda: False)
+    assert np.array_equal(sol.sol(t), fast)

@@ -8,7 +8,8 @@ import math
 
 import numpy as np
 
-from .radau import dense_weights
+from ..codegen.jit import njit, numba_enabled
+from .radau import C, dense_weights
 
 __all__ = ["DenseOutput", "Rows", "row_of", "initial_step", "output_data"]
 
@@ -77,15 +78,50 @@ class DenseOutput:
         if bad.any():
             raise ValueError(f"`t` = {ts[bad][0]!r} is outside the solved interval "
                              f"[{t_lo!r}, {t_hi!r}]")
+        out = np.empty((len(ts), 1 + Y0.shape[1]))
+        if numba_enabled():  # the same operations compiled (no temporary arrays)
+            _evaluate(T0, H, Y0, D, ts, N, out)
+            return out
         i = np.clip(np.searchsorted(T0, ts, side="right") - 1, 0, len(T0) - 1)
         l1, l2, l3 = dense_weights((ts - T0[i]) / H[i])
         y = Y0[i] + (l1[:, None] * D[i, 0] + l2[:, None] * D[i, 1] + l3[:, None] * D[i, 2])
-        out = np.empty((len(ts), 1 + y.shape[1]))
         out[:, 0] = ts
         out[:, 1:1 + 2 * N:2] = y[:, :N]
         out[:, 2:2 + 2 * N:2] = y[:, N:2 * N]
         out[:, 1 + 2 * N:] = y[:, 2 * N:]
         return out
+
+
+_C1, _C2, _C3 = C
+_W1 = _C1 * (_C1 - _C2) * (_C1 - _C3)  # the denominators of radau.dense_weights
+_W2 = _C2 * (_C2 - _C1) * (_C2 - _C3)
+_W3 = _C3 * (_C3 - _C1) * (_C3 - _C2)
+
+
+@njit(cache=True)
+def _evaluate(T0, H, Y0, D, ts, N, out) -> None:
+    """:meth:`DenseOutput.__call__`'s numpy evaluation, operation for operation, in one
+    loop: the step ``i`` with ``T0[i] <= t < T0[i+1]`` (the last one at the end), the
+    weights of :func:`~lumped.solvers.radau.dense_weights`, ``y_n + sum_k l_k D_k``."""
+    n = T0.shape[0]
+    ny = Y0.shape[1]
+    for r in range(ts.shape[0]):
+        t = ts[r]
+        i = np.searchsorted(T0, t, side="right") - 1
+        i = min(max(i, 0), n - 1)
+        s = (t - T0[i]) / H[i]
+        l1 = s * (s - _C2) * (s - _C3) / _W1
+        l2 = s * (s - _C1) * (s - _C3) / _W2
+        l3 = s * (s - _C1) * (s - _C2) / _W3
+        out[r, 0] = t
+        for j in range(ny):
+            y = Y0[i, j] + (l1 * D[i, 0, j] + l2 * D[i, 1, j] + l3 * D[i, 2, j])
+            if j < N:
+                out[r, 1 + 2 * j] = y
+            elif j < 2 * N:
+                out[r, 2 + 2 * (j - N)] = y
+            else:
+                out[r, 1 + j] = y
 
 
 class Rows:
