@@ -138,12 +138,15 @@ def test_a_fold_stops_the_compiled_run_as_the_python_run():
     assert np.array_equal(fast.data, ref.data)
 
 
-def test_by_default_a_new_scene_compiles_once_a_run_is_long():
+def test_by_default_a_new_scene_compiles_once_a_run_is_long(monkeypatch):
     """``compiled=None``: a scene not compiled yet in this process starts in the Python loop
     and switches to the compiled loop after ``COMPILE_AFTER`` steps, seamlessly (the same
     run as the Python loop's); a short run stays in Python; a compiled scene starts
     compiled."""
-    from lumped.solvers.adaptive_fast import COMPILE_AFTER
+    from lumped.solvers import adaptive_fast
+
+    COMPILE_AFTER = 200  # a shorter run than the default's
+    monkeypatch.setattr(adaptive_fast, "COMPILE_AFTER", COMPILE_AFTER)
 
     lin, bing = get_law("linear_spring"), get_law("bingham")
     scene = Scene([Mass("m", m=1.0, x0=0.5)],

@@ -30,7 +30,8 @@ import math
 from collections import deque
 
 from ..scene import Mass, Scene
-from .adaptive_fast import COMPILE_AFTER, compiled_loop
+from . import adaptive_fast
+from .adaptive_fast import compiled_loop
 from .adaptive_output import DenseOutput, Rows, initial_step, output_data, row_of
 from .adaptive_setup import (
     EXTRA_OPTIONS,
@@ -227,7 +228,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     A_ = _A
     stalled = 0  # loop passes since the last accepted step (a guard against any cycle)
     while t < t_final:
-        if fast is None and stats["steps"] >= COMPILE_AFTER and stats["loop"].startswith(
+        if fast is None and stats["steps"] >= adaptive_fast.COMPILE_AFTER and stats[
+                "loop"].startswith(
                 "python: not compiled yet"):  # a long run: compile the scene's loop now
             fast, stats["loop"] = compiled_loop(scene, plan, None, stats["steps"])
             if fast is not None:

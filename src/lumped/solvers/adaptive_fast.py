@@ -25,10 +25,11 @@ BLOCK = 256
 
 
 #: With ``compiled=None``, a scene whose compiled parts are not built yet in this process
-#: starts in the Python loop and is compiled once a run has taken this many steps: a
-#: short run never pays for a compile (about a second per new scene, less from numba's
-#: disk cache), a long one soon does; the two loops give the same numbers.
-COMPILE_AFTER = 200
+#: starts in the Python loop and is compiled once a run has taken this many steps (about
+#: 0.25 s of Python steps, the order of what a compile costs: about 0.8 s of CPU for a new
+#: scene's kernels, 0.3 s from numba's disk cache): a short run never pays for a
+#: compile, a long one soon does; the two loops give the same numbers.
+COMPILE_AFTER = 2000
 
 
 def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
