@@ -373,11 +373,14 @@ def test_a_two_mass_bingham_chain_agrees_with_bdf2():
 
 
 def test_the_compiled_stage_newton_gives_the_same_run():
-    """``compiled=True``: the stage Newton of :mod:`lumped.solvers.radau_jit` (numba) in
-    place of the pure-Python one, bit for bit."""
+    """``compiled=True``: the compiled loop (:mod:`lumped.solvers.radau_loop_jit`), and the
+    stage Newton of :mod:`lumped.solvers.radau_jit` (numba) in the Python loop's own
+    solves, in place of the pure-Python ones, bit for bit."""
     scene = scenario_scene("forcing-F2")
-    ours = simulate(scene, method="radau5", t_end=1.5, rtol=1e-7)
+    ours = simulate(scene, method="radau5", t_end=1.5, rtol=1e-7, compiled=False)
     compiled = simulate(scene, method="radau5", t_end=1.5, rtol=1e-7, compiled=True)
+    assert compiled.stats.pop("loop") == "compiled"
+    assert ours.stats.pop("loop") == "python: compiled=False"
     assert np.array_equal(compiled.data, ours.data) and compiled.stats == ours.stats
     assert [(ev.t, ev.element) for ev in compiled.events] == [
         (ev.t, ev.element) for ev in ours.events]

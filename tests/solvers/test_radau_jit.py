@@ -83,6 +83,6 @@ def test_stage_solve_bit_for_bit(setup, mode_d):
                                 modes, np.array(radau.A), np.array(radau.W), U, 1e-2, x_n,
                                 v_n, f, scale, 1e-6, 10, *ws)
     assert ok == (U_ref is not None)
-    assert tuple(ws[-1]) == (it_ref, nfac_ref)
+    assert tuple(ws[-1][:2]) == (it_ref, nfac_ref)
     if ok:
         assert U.tolist() == U_ref

@@ -17,6 +17,11 @@ logic :mod:`lumped.solvers.events`; the reasons are in ``docs/theory.md``):
 
 The output holds the accepted step points, or (with ``dt``) the dense output on
 ``t_n = n dt``; ``RawRun.dense(t)`` evaluates the collocation polynomials anywhere.
+
+The loop below is the readable reference. By default the steps between events run in
+its compiled port (:mod:`lumped.solvers.radau_loop_jit`, through
+:mod:`lumped.solvers.adaptive_fast`), which returns here for every pass that needs more
+than a held-mode step (an event, a stop, a singular matrix) and gives the same numbers.
 """
 
 from __future__ import annotations
@@ -24,18 +29,19 @@ from __future__ import annotations
 import math
 from collections import deque
 
-import numpy as np
-
 from ..scene import Mass, Scene
-from .adaptive_output import DenseOutput, initial_step, row_of
+from . import adaptive_fast
+from .adaptive_fast import compiled_loop
+from .adaptive_output import DenseOutput, Rows, initial_step, output_data, row_of
 from .adaptive_setup import (
     EXTRA_OPTIONS,
+    accumulating,
     breakpoints,
     compiled_stage_solver,
     read_options,
-    scope_error,
+    scene_plan,
+    too_many,
 )
-from .branch_check import _known_monotone
 from .events import (
     apply_impacts,
     first_crossing_on,
@@ -45,7 +51,7 @@ from .events import (
     select_modes,
 )
 from .initial_state import consistent_initial_state
-from .locks import IntervalLog, cyclic_elements, indeterminate_elements
+from .locks import IntervalLog, indeterminate_elements
 from .radau import START_WEIGHTS, C, StageSystem
 from .radau import A as _A
 from .status import BranchError, Event, RawRun, SolverError, Status
@@ -64,12 +70,11 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     ``settings.dt`` (optional) samples the dense output on ``t_n = n dt``; the keywords of
     :data:`EXTRA_OPTIONS` come in ``settings.extra``.
     """
-    from ..codegen.branches import law_branches
     from .closed_form import steps_for
 
-    refused = scope_error(scene)
-    if refused:
-        raise ValueError(refused)
+    plan = scene_plan(scene)
+    if plan.refused:
+        raise ValueError(plan.refused)
     rtol = DEFAULT_RTOL if settings.rtol is None else settings.rtol
     atol = DEFAULT_ATOL if settings.atol is None else settings.atol
     opts = read_options(settings)
@@ -82,9 +87,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     masses = scene.masses
     system = StageSystem(masses, scene.elem_a, scene.elem_b,
                          [el.kind == "spring" for el in scene.elements])
-    lbs = [law_branches(el.law) for el in scene.elements]
+    lbs = plan.branches
     names = scene.element_names
-    checked = [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)]
+    checked = plan.checked
     x = [float(nd.x0) for nd in scene.nodes]
     v, F, ic = consistent_initial_state(scene, time_scale=t_final, options=settings.options)
     breaks = breakpoints(scene, t_final)
@@ -92,18 +97,20 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     events: list[Event] = []
     recent: deque = deque(maxlen=opts["zeno_events"])
     dense = DenseOutput(N, E)
-    rows = [row_of(0.0, x, v, F)]
+    rows = Rows()
+    rows.append(row_of(0.0, x, v, F))
     stats = {"steps": 0, "rejected": 0, "newton_iterations": 0, "factorizations": 0,
              "nfev": 0, "njev": 0, "events": 0, "max_newton_iterations": 0,
              "initial_newton_iterations": ic["newton_iterations"]}
     status, message = Status.SUCCESS, ""
+    fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"])
 
     modes = [0] * E
     kernels: list = [None] * E
     guards: list = [None] * E
     watched: list[int] = []
 
-    stage_solve = compiled_stage_solver(scene, modes) if opts["compiled"] else None
+    stage_solve = compiled_stage_solver(scene, modes) if opts["compiled"] is True else None
 
     def set_modes(new: list[int]) -> None:
         modes[:] = new
@@ -116,6 +123,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
 
     def change_mode(t: float, h_probe: float, cause: str) -> str:
         """Choose the mode after ``t`` and record the switches; '' or a failure message."""
+        if fast is not None:
+            fast.forget()  # x, v, F may change in place here
         sel: tuple | str = ""
         for _ in range(3):
             sel = select_modes(scene, lbs, t, x, v, F, h_probe, settings.options)
@@ -159,7 +168,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     if msg:
         raise SolverError(f"radau5: no consistent initial mode: {msg}",
                           status=Status.INCONSISTENT, t=0.0, where="", residual=math.nan)
-    rows[0] = row_of(0.0, x, v, F)
+    rows.set_first(row_of(0.0, x, v, F))
 
     def net_at(t: float) -> list[float]:
         return scene.net_forces(t, F)
@@ -170,6 +179,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     h_acc = err_acc = None
     F_seen = 0.0
     m_min = min(mi for mi in masses if mi > 0.0)
+    if fast is not None:
+        fast.setup(t_final, rtol, atol, m_min)
     dF_n: list[float] | None = None  # force slopes at t (None at the start, after events)
     target: list | None = None  # the guard being landed on and its bracket
     floor_tried = False  # a mode change was tried at the step floor since the last step
@@ -178,7 +189,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     bi = 0
     max_newton = 10
     forces_from_probe = False  # the forces at t are an event probe's (see the dense output)
-    cyclic, log = cyclic_elements(scene), IntervalLog()
+    cyclic, log = plan.cyclic, IntervalLog()
 
     def at_event(t: float, h: float, cause: str) -> tuple[Status, str] | None:
         """The mode after an event at ``t``; ``(status, message)`` if the run must stop."""
@@ -191,8 +202,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         stats["events"] = len(events)
         if msg:
             return Status.INCONSISTENT, msg
-        if _accumulating(recent, zeno_window) or len(events) > opts["max_events"]:
-            return _too_many(events, recent, t, opts)
+        if accumulating(recent, zeno_window) or len(events) > opts["max_events"]:
+            return too_many(events, recent, t, opts)
         return None
 
     def crossing(U: list[float], h: float):
@@ -206,9 +217,34 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         q, Fe = system.element_nodes(U, h, x, v, F, e)
         return guards[e](q[3], Fe[3])[which[1]], guard_tolerance(q[3], Fe[3])
 
+    def state() -> dict:
+        """The loop's state for the compiled loop (:mod:`lumped.solvers.adaptive_fast`)."""
+        return {"t": t, "h": h, "x": x, "v": v, "F": F, "dF_n": dF_n, "F_seen": F_seen,
+                "h_acc": h_acc, "err_acc": err_acc, "h_good": h_good, "stalled": stalled,
+                "t_stop": breaks[bi] if bi < len(breaks) else t_final, "t_final": t_final,
+                "prev_break": breaks[bi - 1] if bi > 0 else math.nan, "rtol": rtol,
+                "atol": atol, "m_min": m_min, "max_steps": opts["max_steps"]}
+
     A_ = _A
     stalled = 0  # loop passes since the last accepted step (a guard against any cycle)
     while t < t_final:
+        if fast is None and stats["steps"] >= adaptive_fast.COMPILE_AFTER and stats[
+                "loop"].startswith(
+                "python: not compiled yet"):  # a long run: compile the scene's loop now
+            fast, stats["loop"] = compiled_loop(scene, plan, None, stats["steps"])
+            if fast is not None:
+                fast.setup(t_final, rtol, atol, m_min)
+        if fast is not None and target is None and not kept and not forces_from_probe:
+            # the held-mode steps compiled (the same numbers as the loop below); it
+            # returns before the pass this loop must take (a stop, an event, ...)
+            st = state()
+            before = stats["steps"]
+            fast.run(st, modes, watched, stats, dense, rows)
+            t, h, x, v, F, dF_n = st["t"], st["h"], st["x"], st["v"], st["F"], st["dF_n"]
+            F_seen, h_acc, err_acc, h_good = st["F_seen"], st["h_acc"], st["err_acc"], st["h_good"]
+            stalled = st["stalled"]
+            if stats["steps"] > before:
+                floor_tried = False
         stalled += 1
         if stalled > 10_000:
             status, message = Status.STEP_TOO_SMALL, (
@@ -243,21 +279,28 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             status, message = Status.STEP_TOO_SMALL, (
                 f"radau5: step size {h!r} below its floor {h_min!r} at t = {t!r}")
             break
-        fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
-        U = (list(v) + list(F)) * 3
-        # the force scale: the largest force or load met so far (never shrinks to 0)
-        F_seen = max([F_seen] + [abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]])
-        # ... and at least the force that changes the lightest mass's velocity by its
-        # tolerance over the step (a force error below it does not show in x, v)
-        Fref = max(F_seen, m_min * (max(abs(vi) for vi in v) + atol / rtol) / h)
-        scale = ([atol + rtol * abs(vi) for vi in v]
-                 + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
-        if stage_solve is None:
-            sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale,
-                                          max_iters=max_newton)
+        # this attempt compiled (the same numbers), unless a Jacobian is singular
+        got = None if fast is None else fast.attempt(
+            t, h, x, v, F, dF_n, F_seen, breaks[bi - 1] if bi > 0 else math.nan, modes,
+            watched)
+        if got is not None:
+            sol, its, nfac, err_norm, F_seen, negative = got
         else:
-            sol, its, nfac = stage_solve(U, h, x, v, fk, scale, max_newton)
-            U = sol if sol is not None else U
+            fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
+            U = (list(v) + list(F)) * 3
+            # the force scale: the largest force or load met so far (never shrinks to 0)
+            F_seen = max([F_seen] + [abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]])
+            # ... and at least the force that changes the lightest mass's velocity by its
+            # tolerance over the step (a force error below it does not show in x, v)
+            Fref = max(F_seen, m_min * (max(abs(vi) for vi in v) + atol / rtol) / h)
+            scale = ([atol + rtol * abs(vi) for vi in v]
+                     + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
+            if stage_solve is None:
+                sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale,
+                                              max_iters=max_newton)
+            else:
+                sol, its, nfac = stage_solve(U, h, x, v, fk, scale, max_newton)
+                U = sol if sol is not None else U
         stats["newton_iterations"] += its
         stats["factorizations"] += nfac
         stats["nfev"] += its + 1
@@ -268,13 +311,14 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h *= 0.5
             h_acc = None
             continue
-        t_n0 = math.nextafter(t, math.inf) if (bi > 0 and t == breaks[bi - 1]) else t
-        net_n = scene.net_forces(t_n0, F)
-        q_n = scene.elongations(x, v)
-        jac_n = [kernels[e](q_n[e], F[e])[1:] for e in range(E)]
-        err = system.error(U, h, x, v, net_n, jac_n)
-        err_norm = math.inf if err is None else system.error_norm(
-            U, h, x, v, F, err, rtol, atol, dF_n, watched, Fref)
+        if got is None:
+            t_n0 = math.nextafter(t, math.inf) if (bi > 0 and t == breaks[bi - 1]) else t
+            net_n = scene.net_forces(t_n0, F)
+            q_n = scene.elongations(x, v)
+            jac_n = [kernels[e](q_n[e], F[e])[1:] for e in range(E)]
+            err = system.error(U, h, x, v, net_n, jac_n)
+            err_norm = math.inf if err is None else system.error_norm(
+                U, h, x, v, F, err, rtol, atol, dF_n, watched, Fref)
         fac = 0.9 * (2 * max_newton + 1) / (2 * max_newton + its)
         if not math.isfinite(err_norm):
             stats["rejected"] += 1
@@ -287,7 +331,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h = h / quot
             h_acc = None
             continue
-        hit = crossing(sol, h)
+        # (the compiled attempt has tested the samples: no negative guard, no crossing)
+        hit = crossing(sol, h) if got is None or negative else None
         if target is not None:  # a landing step: bracket the event by end-of-step values
             if hit is not None and hit[1] != target[0] and hit[0] < 1.0:
                 target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0]
@@ -396,28 +441,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     if status is not Status.SUCCESS and settings.throw:
         error = BranchError if status is Status.BRANCH_LOST else SolverError
         raise error(message, status=status, t=t, where="", residual=math.nan)
-    data = np.array(rows, dtype=float)
-    if dt is not None and dense.t0:
-        n_grid = steps_for(dt, settings.t_end)
-        grid = np.arange(n_grid + 1) * dt
-        grid = grid[grid <= t + 1e-12 * max(1.0, t)]
-        grid[-1] = min(grid[-1], t)
-        data = dense(grid)
-        data[0] = rows[0]
-    return RawRun(data, stats, status, message, events, dense if dense.t0 else None,
+    data = output_data(rows, dense, dt, settings.t_end, t)
+    return RawRun(data, stats, status, message, events, dense if len(dense) else None,
                   indeterminate=log.result())
 
-
-def _accumulating(recent: deque, window: float) -> bool:
-    return len(recent) == recent.maxlen and recent[-1] - recent[0] <= window
-
-
-def _too_many(events: list[Event], recent: deque, t: float, opts: dict) -> tuple:
-    if len(events) > opts["max_events"]:
-        return Status.TOO_MANY_EVENTS, (
-            f"radau5 stopped at t = {t!r}: more than max_events = {opts['max_events']} events")
-    names = sorted({ev.element for ev in events[-len(recent):]})
-    return Status.TOO_MANY_EVENTS, (
-        f"radau5 stopped at t = {t!r}: {len(recent)} events within "
-        f"{recent[-1] - recent[0]!r} s (elements {names}): an accumulation of events "
-        "(Zeno or chattering)")

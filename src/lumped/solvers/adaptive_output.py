@@ -8,33 +8,61 @@ import math
 
 import numpy as np
 
-from .radau import dense_weights
+from ..codegen.jit import njit, numba_enabled
+from .radau import C, dense_weights
 
-__all__ = ["DenseOutput", "row_of", "initial_step"]
+__all__ = ["DenseOutput", "Rows", "row_of", "initial_step", "output_data"]
 
 
 class DenseOutput:
-    """The collocation polynomials of the accepted steps: ``t -> rows like data``."""
+    """The collocation polynomials of the accepted steps: ``t -> rows like data``.
+
+    Steps come one at a time (:meth:`add`, the Python loop) or as blocks of arrays
+    (:meth:`extend`, the compiled loop); both keep the order of the steps."""
 
     def __init__(self, N: int, E: int) -> None:
         self.N, self.E = N, E
-        self.t0: list[float] = []
-        self.h: list[float] = []
-        self.y0: list[list[float]] = []
-        self.D: list[list[list[float]]] = []
+        self._blocks: list[tuple[np.ndarray, ...]] = []
+        self._t0: list[float] = []
+        self._h: list[float] = []
+        self._y0: list[list[float]] = []
+        self._D: list[list[list[float]]] = []
+        self._count = 0
         self._cache: tuple | None = None
 
+    def __len__(self) -> int:
+        return self._count
+
     def add(self, t: float, h: float, y0: list[float], Y: list[list[float]]) -> None:
-        self.t0.append(t)
-        self.h.append(h)
-        self.y0.append(y0)
-        self.D.append([[Yk[j] - y0[j] for j in range(len(y0))] for Yk in Y])
+        """One step: its start ``t``, size ``h``, ``y_n`` and the stage values ``Y_k``."""
+        self._t0.append(t)
+        self._h.append(h)
+        self._y0.append(y0)
+        self._D.append([[Yk[j] - y0[j] for j in range(len(y0))] for Yk in Y])
+        self._count += 1
+
+    def extend(self, t0: np.ndarray, h: np.ndarray, y0: np.ndarray, D: np.ndarray) -> None:
+        """A block of steps: starts, sizes, ``y_n`` rows and ``Y_k - y_n`` (copied)."""
+        if not len(t0):
+            return
+        self._flush()
+        self._blocks.append((t0.copy(), h.copy(), y0.copy(), D.copy()))
+        self._count += len(t0)
+
+    def _flush(self) -> None:
+        if self._t0:
+            self._blocks.append((np.array(self._t0), np.array(self._h), np.array(self._y0),
+                                 np.array(self._D)))
+            self._t0, self._h, self._y0, self._D = [], [], [], []
 
     def _arrays(self) -> tuple[np.ndarray, ...]:
-        n = len(self.t0)
+        n = self._count
         if self._cache is None or self._cache[0] != n:
-            self._cache = (n, np.array(self.t0), np.array(self.h), np.array(self.y0),
-                           np.array(self.D))
+            self._flush()
+            if len(self._blocks) > 1:
+                cols = zip(*self._blocks, strict=True)
+                self._blocks = [tuple(np.concatenate(parts) for parts in cols)]
+            self._cache = (n, *self._blocks[0])
         return self._cache[1:]
 
     def __call__(self, t) -> np.ndarray:
@@ -42,7 +70,7 @@ class DenseOutput:
         boundary the later step is used (right limits: the forces after an event)."""
         ts = np.atleast_1d(np.asarray(t, dtype=float))
         N = self.N
-        if not self.t0:
+        if not self._count:
             raise ValueError("no step was taken: the dense output is empty")
         T0, H, Y0, D = self._arrays()
         t_lo, t_hi = T0[0], T0[-1] + H[-1]
@@ -50,15 +78,84 @@ class DenseOutput:
         if bad.any():
             raise ValueError(f"`t` = {ts[bad][0]!r} is outside the solved interval "
                              f"[{t_lo!r}, {t_hi!r}]")
+        out = np.empty((len(ts), 1 + Y0.shape[1]))
+        if numba_enabled():  # the same operations compiled (no temporary arrays)
+            _evaluate(T0, H, Y0, D, ts, N, out)
+            return out
         i = np.clip(np.searchsorted(T0, ts, side="right") - 1, 0, len(T0) - 1)
         l1, l2, l3 = dense_weights((ts - T0[i]) / H[i])
         y = Y0[i] + (l1[:, None] * D[i, 0] + l2[:, None] * D[i, 1] + l3[:, None] * D[i, 2])
-        out = np.empty((len(ts), 1 + y.shape[1]))
         out[:, 0] = ts
         out[:, 1:1 + 2 * N:2] = y[:, :N]
         out[:, 2:2 + 2 * N:2] = y[:, N:2 * N]
         out[:, 1 + 2 * N:] = y[:, 2 * N:]
         return out
+
+
+_C1, _C2, _C3 = C
+_W1 = _C1 * (_C1 - _C2) * (_C1 - _C3)  # the denominators of radau.dense_weights
+_W2 = _C2 * (_C2 - _C1) * (_C2 - _C3)
+_W3 = _C3 * (_C3 - _C1) * (_C3 - _C2)
+
+
+@njit(cache=True)
+def _evaluate(T0, H, Y0, D, ts, N, out) -> None:
+    """:meth:`DenseOutput.__call__`'s numpy evaluation, operation for operation, in one
+    loop: the step ``i`` with ``T0[i] <= t < T0[i+1]`` (the last one at the end), the
+    weights of :func:`~lumped.solvers.radau.dense_weights`, ``y_n + sum_k l_k D_k``."""
+    n = T0.shape[0]
+    ny = Y0.shape[1]
+    for r in range(ts.shape[0]):
+        t = ts[r]
+        i = np.searchsorted(T0, t, side="right") - 1
+        i = min(max(i, 0), n - 1)
+        s = (t - T0[i]) / H[i]
+        l1 = s * (s - _C2) * (s - _C3) / _W1
+        l2 = s * (s - _C1) * (s - _C3) / _W2
+        l3 = s * (s - _C1) * (s - _C2) / _W3
+        out[r, 0] = t
+        for j in range(ny):
+            y = Y0[i, j] + (l1 * D[i, 0, j] + l2 * D[i, 1, j] + l3 * D[i, 2, j])
+            if j < N:
+                out[r, 1 + 2 * j] = y
+            elif j < 2 * N:
+                out[r, 2 + 2 * (j - N)] = y
+            else:
+                out[r, 1 + j] = y
+
+
+class Rows:
+    """The output rows of the accepted steps, one list at a time or as array blocks."""
+
+    def __init__(self) -> None:
+        self._blocks: list[np.ndarray] = []
+        self._rows: list[list[float]] = []
+
+    def append(self, row: list[float]) -> None:
+        self._rows.append(row)
+
+    def extend(self, block: np.ndarray) -> None:
+        if len(block):
+            self._flush()
+            self._blocks.append(block.copy())
+
+    def _flush(self) -> None:
+        if self._rows:
+            self._blocks.append(np.array(self._rows, dtype=float))
+            self._rows = []
+
+    def first(self) -> list[float]:
+        return self._rows[0] if not self._blocks else self._blocks[0][0].tolist()
+
+    def set_first(self, row: list[float]) -> None:
+        if self._blocks:
+            self._blocks[0][0] = row
+        else:
+            self._rows[0] = row
+
+    def array(self) -> np.ndarray:
+        self._flush()
+        return self._blocks[0] if len(self._blocks) == 1 else np.concatenate(self._blocks)
 
 
 def row_of(t: float, x: list[float], v: list[float], F: list[float]) -> list[float]:
@@ -85,3 +182,19 @@ def initial_step(x, v, acc, is_mass, rtol, atol, span) -> float:
     d0, d1 = math.sqrt(d0 / n), math.sqrt(d1 / n)
     h0 = 1e-6 * span if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     return min(h0, 0.1 * span) * rtol ** 0.2 / 1e-6 ** 0.2 if h0 > 0 else 1e-6 * span
+
+
+def output_data(rows: Rows, dense: DenseOutput, dt: float | None, t_end: float,
+                t: float) -> np.ndarray:
+    """``data`` of a run that reached ``t``: the accepted step points, or with ``dt`` the
+    dense output on ``t_n = n dt`` (up to ``t``; the first row exactly the initial one)."""
+    from .closed_form import steps_for
+
+    data = rows.array()
+    if dt is not None and len(dense):
+        grid = np.arange(steps_for(dt, t_end) + 1) * dt
+        grid = grid[grid <= t + 1e-12 * max(1.0, t)]
+        grid[-1] = min(grid[-1], t)
+        data = dense(grid)
+        data[0] = rows.first()
+    return data

@@ -1,23 +1,27 @@
-r"""Setup of the adaptive method ``radau5``: its keywords, the forcing's breakpoints and
-the optional compiled stage Newton.
+r"""Setup of the adaptive method ``radau5``: its keywords, the forcing's breakpoints, the
+optional compiled stage Newton and the per-scene plan (:func:`scene_plan`).
 """
 
 from __future__ import annotations
 
 import math
+import threading
+import weakref
+from collections import deque
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..scene import Scene
 
 __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "compiled_stage_solver",
-           "scope_error"]
+           "scope_error", "ScenePlan", "scene_plan", "accumulating", "too_many"]
 
 
 #: Method-specific keywords of ``radau5`` and their defaults.
 EXTRA_OPTIONS = {"max_events": 10_000, "zeno_events": 50, "zeno_window": None,
                  "max_steps": 1_000_000, "first_step": None, "restitution": 0.0,
-                 "compiled": False}
+                 "compiled": None}
 
 
 def read_options(settings) -> dict:
@@ -26,7 +30,8 @@ def read_options(settings) -> dict:
     Raises
     ------
     TypeError
-        For an unknown keyword or a non-boolean ``compiled``.
+        For an unknown keyword, or a ``compiled`` that is not ``True``, ``False`` or
+        ``None`` (``None``, the default: the compiled loop where the scene allows it).
     ValueError
         For a bad value; the message names the keyword and quotes the value.
     """
@@ -40,8 +45,8 @@ def read_options(settings) -> dict:
         if isinstance(out[key], bool) or not isinstance(out[key], int) or out[key] < 1:
             raise ValueError(f"`{key}` must be a positive integer, got {out[key]!r}")
     e = out["restitution"]
-    if not isinstance(out["compiled"], bool):
-        raise TypeError(f"`compiled` must be True or False, got {out['compiled']!r}")
+    if out["compiled"] is not None and not isinstance(out["compiled"], bool):
+        raise TypeError(f"`compiled` must be True, False or None, got {out['compiled']!r}")
     if isinstance(e, bool) or not isinstance(e, (int, float)) or not 0.0 <= e <= 1.0:
         raise ValueError(f"`restitution` must be a number in [0, 1], got {e!r}")
     for key in ("zeno_window", "first_step"):
@@ -109,3 +114,64 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
         return (Ua.tolist() if ok else None), int(out[0]), int(out[1])
 
     return run
+
+
+@dataclass
+class ScenePlan:
+    """What ``radau5`` reads from a scene's structure and laws before it steps, kept per
+    scene object (:func:`scene_plan`): the refusal (:func:`scope_error`), the laws'
+    branches, the elements whose law needs the fold check (not a known monotone one),
+    the elements on cycles of the network, ``fast`` (the compiled loop's parts or why
+    there is none, :mod:`lumped.solvers.adaptive_fast`) and ``module_loaded`` (its
+    generated module was loaded in this process when the plan was first asked)."""
+
+    refused: str | None
+    branches: list
+    checked: list[int]
+    cyclic: tuple[int, ...]
+    key: tuple
+    fast: object = None
+    module_loaded: bool | None = None
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+
+_PLANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def scene_plan(scene: Scene) -> ScenePlan:
+    """The :class:`ScenePlan` of ``scene``, made once per scene object (the nodes,
+    elements and forcing it was made from must be the same objects), so that repeated
+    runs of one scene (a benchmark, a study) skip this set-up."""
+    from ..codegen.branches import law_branches
+    from .branch_check import _known_monotone
+    from .locks import cyclic_elements
+
+    key = (scene.nodes, scene.elements, tuple(id(f) for f in scene.forcing))
+    plan = _PLANS.get(scene)
+    if plan is not None and plan.key[0] is key[0] and plan.key[1] is key[1] \
+            and plan.key[2] == key[2]:
+        return plan
+    plan = ScenePlan(scope_error(scene), [law_branches(el.law) for el in scene.elements],
+                     [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)],
+                     cyclic_elements(scene), key)
+    _PLANS[scene] = plan
+    return plan
+
+
+def accumulating(recent: deque, window: float) -> bool:
+    """The last ``recent.maxlen`` events fell within ``window`` seconds (Zeno, chattering)."""
+    return len(recent) == recent.maxlen and recent[-1] - recent[0] <= window
+
+
+def too_many(events: list, recent: deque, t: float, opts: dict) -> tuple:
+    """``(Status.TOO_MANY_EVENTS, message)``: too many events, or an accumulation."""
+    from .status import Status
+
+    if len(events) > opts["max_events"]:
+        return Status.TOO_MANY_EVENTS, (
+            f"radau5 stopped at t = {t!r}: more than max_events = {opts['max_events']} events")
+    names = sorted({ev.element for ev in events[-len(recent):]})
+    return Status.TOO_MANY_EVENTS, (
+        f"radau5 stopped at t = {t!r}: {len(recent)} events within "
+        f"{recent[-1] - recent[0]!r} s (elements {names}): an accumulation of events "
+        "(Zeno or chattering)")

@@ -103,8 +103,10 @@ def stage_evaluate(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v
 def stage_solve(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v_n, f, scale,
                 tol, max_iters, G, J, LU, perm, b, du, out) -> bool:
     """Simplified Newton on the stage system from ``U`` (overwritten); ``out`` receives
-    ``(iterations, factorisations)``. Returns False when Newton failed (singular,
-    non-finite or no convergence): the caller shrinks the step."""
+    ``(iterations, factorisations, singular)`` (``out[2] = 1`` when a factorisation
+    failed: a singular or non-finite Jacobian, left in ``J``). Returns False when Newton
+    failed (singular, non-finite or no convergence): the caller shrinks the step."""
+    out[2] = 0
     stage_evaluate(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v_n, f, G, J)
     ok = lu_factor_into(J, LU, perm)
     nfac = 1
@@ -114,6 +116,7 @@ def stage_solve(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v_n,
         out[0] = it
         out[1] = nfac
         if not ok:
+            out[2] = 1
             return False
         for j in range(size):
             b[j] = -G[j]
@@ -170,7 +173,7 @@ def compiled_stage_solve():
 
 def workspace(N: int, E: int) -> tuple[np.ndarray, ...]:
     """``(G, J, LU, perm, b, du, out)`` for :func:`stage_solve` on ``N`` nodes and ``E``
-    elements."""
+    elements (``out``: 3 counters)."""
     s = 3 * (N + E)
     return (np.zeros(s), np.zeros((s, s)), np.zeros((s, s)), np.zeros(s, dtype=np.int64),
-            np.zeros(s), np.zeros(s), np.zeros(2, dtype=np.int64))
+            np.zeros(s), np.zeros(s), np.zeros(3, dtype=np.int64))

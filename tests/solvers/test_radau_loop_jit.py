@@ -1,0 +1,182 @@
+"""The compiled inner loop of ``radau5`` (:mod:`lumped.solvers.radau_loop_jit`) against the
+pure-Python loop it ports (``compiled=False``, the readable reference): the same steps,
+dense output, events and counters; the fallback to Python and its reasons; exact sticking.
+
+The shared loop is compiled once per machine (numba's disk cache); each scene here
+compiles only its own small kernels.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from lumped import Element, Junction, Mass, Scene, get_law, simulate
+from lumped.bench.impact_scenes import impact_scene, lock_scene
+from lumped.codegen.jit import numba_enabled
+from lumped.laws import ElementLaw
+from lumped.scenarios import scenario_scene
+from lumped.scene.forcing import SineBurst
+
+pytestmark = pytest.mark.skipif(not numba_enabled(), reason="the compiled loop needs numba")
+
+
+def _chain() -> Scene:
+    """Two masses with Bingham dashpots in a chain: stick-slip of both, several events."""
+    lin, bing = get_law("linear_spring"), get_law("bingham")
+    return Scene(
+        [Mass("a", m=1.0, x0=0.3), Mass("b", m=0.7, x0=-0.1)],
+        [Element("s1", lin.bind(k=50.0), "ground", "a"),
+         Element("d1", bing.bind(gamma=0.5, tau=1.5), "ground", "a"),
+         Element("s2", lin.bind(k=30.0), "a", "b"),
+         Element("d2", bing.bind(gamma=2.0, tau=0.8), "a", "b")])
+
+
+def _user_law_scene() -> Scene:
+    """A user's Bingham written another way (``sign * Max(|F| - tau, 0)``), forced by a sine
+    burst, and a Maxwell arm through a junction (a massless node)."""
+    user = ElementLaw("my_bingham", "dashpot",
+                      "gamma*q - sign(F)*Max(Abs(F) - tau, 0)", ["gamma", "tau"])
+    lin, newt = get_law("linear_spring"), get_law("newtonian")
+    return Scene(
+        [Mass("m", m=1.0, x0=0.0), Junction("j", x0=0.0)],
+        [Element("s", lin.bind(k=100.0), "ground", "m"),
+         Element("d", user.bind(gamma=1.0, tau=1.0), "ground", "m"),
+         Element("k3", lin.bind(k=60.0), "j", "m"),
+         Element("c3", newt.bind(c=2.0), "ground", "j")],
+        {"m": SineBurst(2.0, 2.0 * math.pi, 1.5)})
+
+
+def _constant_force() -> Scene:
+    base = scenario_scene("release-0.5")
+    return Scene(base.nodes, base.elements, {"mass": 0.7})
+
+
+CASES = {
+    "forcing-F2": (lambda: scenario_scene("forcing-F2"), 3.0, 1e-8),
+    "release-0.5": (lambda: scenario_scene("release-0.5"), 3.0, 1e-6),
+    "constant-force": (_constant_force, 3.0, 1e-8),
+    "impact": (impact_scene, 1.5, 1e-8),
+    "chain": (_chain, 1.5, 1e-7),
+    "user-law+junction": (_user_law_scene, 2.5, 1e-7),
+}
+
+
+def _pair(name: str):
+    build, t_end, rtol = CASES[name]
+    scene = build()
+    kw = dict(method="radau5", t_end=t_end, rtol=rtol, atol=1e-3 * rtol)
+    return simulate(scene, compiled=False, **kw), simulate(scene, compiled=True, **kw)
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_the_compiled_loop_gives_the_python_loop_run(name):
+    ref, fast = _pair(name)
+    assert fast.stats["loop"] == "compiled"
+    assert ref.stats["loop"] == "python: compiled=False"
+    assert ref.ok and fast.ok
+    counters = ("steps", "rejected", "newton_iterations", "factorizations", "nfev", "njev",
+                "events", "max_newton_iterations")
+    assert {k: fast.stats[k] for k in counters} == {k: ref.stats[k] for k in counters}
+    assert len(ref.events) >= (1 if name == "impact" else 2)
+    assert [(ev.element, ev.kind, ev.from_branch, ev.to_branch) for ev in fast.events] == [
+        (ev.element, ev.kind, ev.from_branch, ev.to_branch) for ev in ref.events]
+    scale = np.maximum(np.abs(ref.data).max(axis=0), 1e-300)
+    assert np.all(np.abs(fast.data - ref.data) <= 1e-12 * scale)
+    t_end = ref.t[-1]
+    assert np.allclose([ev.t for ev in fast.events], [ev.t for ev in ref.events],
+                       rtol=0.0, atol=1e-12 * t_end)
+    # the dense output everywhere, including inside the steps
+    t = np.linspace(0.0, t_end, 2001)
+    assert np.all(np.abs(fast.sol(t) - ref.sol(t)) <= 1e-12 * scale)
+
+
+def test_exact_sticking_is_kept_in_the_compiled_loop():
+    # eq. (17a): the mass never moves; release-0.5: it sticks for good after its last event
+    stuck = simulate(scenario_scene("forcing-F1"), method="radau5", t_end=3.0, rtol=1e-8,
+                     compiled=True)
+    assert stuck.stats["loop"] == "compiled" and stuck.stats["steps"] > 20
+    assert np.all(stuck.v["mass"] == 0.0) and np.all(stuck.x["mass"] == 0.0)
+    sol = simulate(scenario_scene("release-0.5"), method="radau5", t_end=5.0, rtol=1e-8,
+                   compiled=True)
+    last = sol.events[-1]  # the mass comes to rest for good, stretched, at t = 3.1455
+    after = sol.t > last.t
+    assert sol.stats["loop"] == "compiled" and after.sum() >= 3
+    assert np.all(sol.v["mass"][after] == 0.0)
+    assert np.all(sol.x["mass"][after] == sol.x["mass"][after][0])
+    dense = sol.sol(np.linspace(last.t, 5.0, 101)[1:])
+    assert np.all(dense[:, 2] == 0.0)
+
+
+def test_the_fallback_to_python_says_why():
+    base = scenario_scene("release-0.5")
+    tabulated = Scene(base.nodes, base.elements, {"mass": lambda t: 0.1 * t})
+    sol = simulate(tabulated, method="radau5", t_end=0.5, compiled=True)
+    assert sol.ok and "tabulated" in sol.stats["loop"] and "'mass'" in sol.stats["loop"]
+    # locked elements in parallel: the minimum-norm split of their forces is Python's
+    sol = simulate(lock_scene(), method="radau5", t_end=1.0, compiled=True)
+    assert sol.ok and "in parallel" in sol.stats["loop"]
+    # a spring and a Bingham dashpot in parallel: only one of them can lock, compiled
+    assert simulate(base, method="radau5", t_end=0.5, compiled=True).stats["loop"] == "compiled"
+
+
+def test_a_fold_stops_the_compiled_run_as_the_python_run():
+    """``s_shaped`` pushed past its turning point: the fold check (a law that is not a known
+    monotone one) runs in the compiled loop, and the stop is the Python loop's."""
+    scene = Scene([Mass("mass", m=0.01, x0=-6.0)],
+                  [Element("s", get_law("s_shaped").bind(q0=1.0, F0=1.0), "ground", "mass"),
+                   Element("damper", get_law("newtonian").bind(c=0.05), "ground", "mass")],
+                  forces={"mass": SineBurst(9.0, 0.25)})
+    kw = dict(method="radau5", t_end=8.0, rtol=1e-8, throw=False)
+    ref, fast = simulate(scene, compiled=False, **kw), simulate(scene, compiled=True, **kw)
+    assert fast.stats["loop"] == "compiled"
+    assert fast.status is ref.status and fast.status.value == "branch_lost"
+    assert fast.message == ref.message and "'s'" in fast.message
+    assert fast.stats["steps"] == ref.stats["steps"] > 3
+    assert np.array_equal(fast.data, ref.data)
+
+
+def test_by_default_a_new_scene_compiles_once_a_run_is_long(monkeypatch):
+    """``compiled=None``: a scene not compiled yet in this process starts in the Python loop
+    and switches to the compiled loop after ``COMPILE_AFTER`` steps, seamlessly (the same
+    run as the Python loop's); a short run stays in Python; a compiled scene starts
+    compiled."""
+    from lumped.solvers import adaptive_fast
+
+    COMPILE_AFTER = 200  # a shorter run than the default's
+    monkeypatch.setattr(adaptive_fast, "COMPILE_AFTER", COMPILE_AFTER)
+
+    lin, bing = get_law("linear_spring"), get_law("bingham")
+    scene = Scene([Mass("m", m=1.0, x0=0.5)],
+                  [Element("s", lin.bind(k=123.25), "ground", "m"),
+                   Element("d", bing.bind(gamma=0.75, tau=1.25), "ground", "m")])
+    short = simulate(scene, method="radau5", t_end=0.2, rtol=1e-6)
+    assert short.stats["loop"] == "python: not compiled yet (a short run)"
+    kw = dict(method="radau5", t_end=3.0, rtol=1e-9, atol=1e-12)
+    ref = simulate(scene, compiled=False, **kw)
+    lazy = simulate(scene, **kw)
+    assert ref.stats["steps"] > COMPILE_AFTER + 50
+    assert lazy.stats["loop"] == f"compiled from step {COMPILE_AFTER}"
+    assert np.array_equal(lazy.data, ref.data) and lazy.stats["nfev"] == ref.stats["nfev"]
+    assert simulate(scene, **kw).stats["loop"] == "compiled"
+
+
+def test_the_compiled_keyword_is_checked():
+    with pytest.raises(TypeError, match=r"`compiled` must be True, False or None, got 'yes'"):
+        simulate(scenario_scene("release-0.5"), method="radau5", t_end=0.5, compiled="yes")
+
+
+def test_the_compiled_dense_output_is_the_numpy_one(monkeypatch):
+    """``sol(t)`` of ``radau5`` evaluated by the compiled loop of
+    :mod:`lumped.solvers.adaptive_output` gives the numpy evaluation's numbers, also at the
+    step points and events (the later step: right limits)."""
+    import lumped.solvers.adaptive_output as out
+
+    sol = simulate(scenario_scene("forcing-F2"), method="radau5", t_end=3.0, rtol=1e-7,
+                   compiled=True)
+    t = np.concatenate([np.linspace(0.0, 3.0, 3001), sol.t, [ev.t for ev in sol.events]])
+    fast = sol.sol(t)
+    monkeypatch.setattr(out, "numba_enabled", lambda: False)
+    assert np.array_equal(sol.sol(t), fast)
