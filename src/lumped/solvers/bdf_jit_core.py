@@ -62,7 +62,6 @@ from .newton_jit import (
 )
 
 __all__ = ["EVALUATE_TYPE", "ELEMENT_LAW_TYPE", "compiled_run_bdf_core", "forcing_into",
-           "forcing_at",
            "fast_step", "left_branch", "loop_workspace", "run_bdf_core"]
 
 FORCE_NONE, FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE = 0, 1, 2, 3
@@ -87,12 +86,6 @@ def forcing_into(step, t, fkind, fpar, ftab, f) -> int:
             return i
         f[i] = val
     return -1
-
-
-#: :func:`forcing_into` as a call, not inlined (the generated fast loops of
-#: :mod:`lumped.codegen.jit_fast` compile faster, and it is off their critical path).
-forcing_at = njit(cache=True)(forcing_into.py_func if hasattr(forcing_into, "py_func")
-                              else forcing_into)
 
 
 @njit(cache=True, inline="always")
