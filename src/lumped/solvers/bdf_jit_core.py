@@ -180,8 +180,8 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
                  dt, n_steps, bdf2, rtol, atol, max_iters, max_backtracks, free_steps,
                  fkind, fpar, ftab, xs, vs, Fs, info, finfo, wv, wm, wperm, P, cJ, cLU,
                  cperm, cvalid, counts, vec, step0=0, step_stop=-1) -> int:
-    """Advance fixed steps ``step0 + 1 .. step_stop`` (``n_steps`` when ``step_stop < 0``)
-    from ``(x0, v0, F0)`` at step ``step0``; fill rows ``step0`` to the last step taken of
+    """Advance the fixed steps from ``step0 + 1`` to ``step_stop`` (to ``n_steps`` when
+    ``step_stop < 0``) from ``(x0, v0, F0)`` at step ``step0``; fill rows ``step0`` to the last step taken of
     ``xs, vs, Fs`` and ``info, finfo`` (see the module notes); return the rows filled
     (the last step taken + 1).
 
