@@ -55,9 +55,9 @@ t0 = time.perf_counter()
 from lumped import simulate
 from lumped.scenarios import scenario_scene
 t1 = time.perf_counter()
-simulate(scenario_scene({scene!r}), method="jit-bdf2", dt=1e-4, t_end=1e-3)
+simulate(scenario_scene({scene!r}), method="jit-bdf2", dt=1e-4, t_end=1e-3, fast=True)
 t2 = time.perf_counter()
-simulate(scenario_scene({scene!r}), method="jit-bdf2", dt=1e-4, t_end=1e-3)
+simulate(scenario_scene({scene!r}), method="jit-bdf2", dt=1e-4, t_end=1e-3, fast=True)
 print(t1 - t0, t2 - t1, time.perf_counter() - t2)
 """
 
