@@ -181,9 +181,9 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
                  fkind, fpar, ftab, xs, vs, Fs, info, finfo, wv, wm, wperm, P, cJ, cLU,
                  cperm, cvalid, counts, vec, step0=0, step_stop=-1) -> int:
     """Advance the fixed steps from ``step0 + 1`` to ``step_stop`` (to ``n_steps`` when
-    ``step_stop < 0``) from ``(x0, v0, F0)`` at step ``step0``; fill rows ``step0`` to the last step taken of
-    ``xs, vs, Fs`` and ``info, finfo`` (see the module notes); return the rows filled
-    (the last step taken + 1).
+    ``step_stop < 0``) from ``(x0, v0, F0)`` at step ``step0``; fill rows ``step0`` to
+    the last step taken of ``xs, vs, Fs`` and ``info, finfo`` (see the module notes);
+    return the rows filled (the last step taken + 1).
 
     For ``step0 >= 1`` the previous state (BDF2) is read from row ``step0 - 1`` of ``xs,
     vs``: a run can be continued from any stored step (the fast path of
