@@ -12,10 +12,13 @@ are noisy:
 1. per step, on the paper's Bingham scene with forcing F2 (``dt = 1e-4``): the
    compiled generic loop alone (every step stored; the run's setup -- consistent initial
    state, forcing tables, source hash -- is timed apart), ``simulate(method="jit-...")``
-   end to end, the pure-Python generic step (``run_bdf``) and, when it exists (branch
-   ``sweep``), the compiled closed-form step storing every step
-   (``lumped.solvers.closed_form_jit.run_steps``); the issue's target is generic compiled
-   at most 3x the compiled closed form;
+   end to end, the pure-Python generic step (``run_bdf``) and the compiled closed-form
+   step storing every step (``lumped.solvers.closed_form_jit.run_steps``); the issue's
+   target is generic compiled at most 3x the compiled closed form. The compiled generic
+   loop is timed twice: the default fast path (``lumped.codegen.jit_fast``, with its
+   hand-over) and the faithful port alone (``fast=False``); both also on
+   ``examples/maxwell.toml`` and ``examples/two-masses.toml`` (their ratio is to the
+   paper scene's closed form, the only scene the closed form runs);
 2. compile time: a fresh process with an empty scene cache (``LUMPED_CACHE_DIR``; the
    solver cores' helpers come from numba's cache beside the package), then a second
    fresh process that loads the scene's machine code from the disk cache.
@@ -31,11 +34,13 @@ import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 from lumped.bench import YARDSTICK_ITERATIONS, measure_unit
 from lumped.bench.timing import time_call
 from lumped.scenarios import scenario_scene
 from lumped.simulate import simulate
+from lumped.solvers.bdf_fast_jit import run_fast_path
 from lumped.solvers.bdf_jit_core import compiled_run_bdf_core
 from lumped.solvers.fixed_step import run_bdf
 from lumped.solvers.fixed_step_jit import loop_arguments
@@ -50,26 +55,38 @@ t0 = time.perf_counter()
 from lumped import simulate
 from lumped.scenarios import scenario_scene
 t1 = time.perf_counter()
-simulate(scenario_scene({scene!r}), method="jit-bdf2", dt=1e-4, t_end=1e-3)
+simulate(scenario_scene({scene!r}), method="jit-bdf2", dt=1e-4, t_end=1e-3, fast=True)
 t2 = time.perf_counter()
-simulate(scenario_scene({scene!r}), method="jit-bdf2", dt=1e-4, t_end=1e-3)
+simulate(scenario_scene({scene!r}), method="jit-bdf2", dt=1e-4, t_end=1e-3, fast=True)
 print(t1 - t0, t2 - t1, time.perf_counter() - t2)
 """
 
 
+def _scenes():
+    from lumped.io import load_scene
+
+    root = Path(__file__).resolve().parents[1] / "examples"
+    return {SCENE: scenario_scene(SCENE), "maxwell": load_scene(root / "maxwell.toml")[0],
+            "two-masses": load_scene(root / "two-masses.toml")[0]}
+
+
 def per_step(n: int, repeats: int) -> dict[str, float]:
-    scene = scenario_scene(SCENE)
     opts = NewtonOptions()
     loop = compiled_run_bdf_core()
     variants = {}
-    for formula in ("bdf1", "bdf2"):
-        js, args, _ = loop_arguments(scene, formula, DT, n, opts)
-        variants[f"jit-{formula}: compiled loop"] = (
-            lambda m=js.module, a=args: loop(m.evaluate, m.element_law, *a))
-        variants[f"jit-{formula}: simulate() end to end"] = (
-            lambda f=formula: simulate(scene, method=f"jit-{f}", dt=DT, t_end=n * DT))
-        variants[f"jit-{formula}: setup only (loop_arguments)"] = (
-            lambda f=formula: loop_arguments(scene, f, DT, n, opts))
+    for label, scene in _scenes().items():
+        for formula in ("bdf1", "bdf2"):
+            js, args, _ = loop_arguments(scene, formula, DT, n, opts)
+            variants[f"{label} jit-{formula}: fast path (default)"] = (
+                lambda s=scene, j=js, a=args: run_fast_path(s, j, a))
+            variants[f"{label} jit-{formula}: faithful port (fast=False)"] = (
+                lambda m=js.module, a=args: loop(m.evaluate, m.element_law, *a, 0, -1))
+            if label == SCENE:
+                variants[f"{label} jit-{formula}: simulate() end to end"] = (
+                    lambda f=formula, s=scene: simulate(s, method=f"jit-{f}", dt=DT,
+                                                        t_end=n * DT))
+                variants[f"{label} jit-{formula}: setup only (loop_arguments)"] = (
+                    lambda f=formula, s=scene: loop_arguments(s, f, DT, n, opts))
     try:
         import numpy as np
 
@@ -91,8 +108,9 @@ def per_step(n: int, repeats: int) -> dict[str, float]:
             best[name] = min(best[name], time_call(fn, min_time=0.0, max_repeats=1)[1])
     per = {name: t / n for name, t in best.items()}
     n_py = max(n // 10, 1000)
+    scene = scenario_scene(SCENE)
     for formula in ("bdf1", "bdf2"):
-        per[f"{formula}: pure-Python generic step"] = time_call(
+        per[f"{SCENE} {formula}: pure-Python generic step"] = time_call(
             lambda f=formula: run_bdf(scene, method=f, dt=DT, n_steps=n_py), min_time=0.0,
             max_repeats=3)[1] / n_py
     return per
@@ -127,11 +145,11 @@ def main() -> None:
               for f in ("bdf1", "bdf2")}
     print(f"\nyardstick iteration: {unit * 1e9:.1f} ns; {args.steps} steps of dt = {DT:g}, "
           f"paper scene {SCENE}")
-    print(f"{'per step':58s} {'ns':>10s} {'yardstick':>10s} {'/ closed form':>14s}")
+    print(f"{'per step':62s} {'ns':>10s} {'yardstick':>10s} {'/ closed form':>14s}")
     for name, sec in per.items():
         ref = closed.get(re.search(r"bdf[12]", name, flags=re.I).group(0).lower())
         ratio = f"{sec / ref:14.2f}" if ref else f"{'':14s}"
-        print(f"{name:58s} {sec * 1e9:10.1f} {sec / unit:10.3f} {ratio}")
+        print(f"{name:62s} {sec * 1e9:10.1f} {sec / unit:10.3f} {ratio}")
     runs = compile_times()
     (imp0, first0, second0), (imp1, first1, _) = runs
     print(f"\ncompile: fresh process, empty scene cache: import {imp0:.2f} s, first "

@@ -19,7 +19,12 @@ one iteration of a pure-Python float loop), since shared machines are noisy:
    through :func:`lumped.sweep.simulate_many` on one thread, on all cores, and on a
    2-worker Dask LocalCluster: wall time (scenario-steps per second achieved) and CPU
    time of the process (ns per scenario-step per core, which other jobs on a shared
-   machine do not inflate).
+   machine do not inflate). A scenario-step is a step of the grid ``t_n = n dt`` of one
+   scene: the summary kernel stops at a state at rest that every later step maps onto
+   itself and counts the rest (bit for bit the same summary), so a scene that comes to
+   rest costs less than its step count.
+
+``--ensemble-only`` runs part 3 alone (for a re-measurement when the machine is quiet).
 """
 
 from __future__ import annotations
@@ -176,6 +181,8 @@ def main() -> None:
     parser.add_argument("--scenes", type=int, default=10_000)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--quick", action="store_true", help="small sizes, for a smoke test")
+    parser.add_argument("--ensemble-only", action="store_true",
+                        help="skip the per-step table and the compile times")
     args = parser.parse_args()
     if args.quick:
         args.steps, args.scenes, args.repeats = 5_000, 100, 2
@@ -184,6 +191,12 @@ def main() -> None:
     print(f"date: {time.strftime('%Y-%m-%d %H:%M')}, cpus: {os.cpu_count()}, "
           f"numba {numba.__version__} ({numba.get_num_threads()} threads), "
           f"python {sys.version.split()[0]}")
+    if not args.ensemble_only:
+        per_step_and_compile(args)
+    ensemble_report(args)
+
+
+def per_step_and_compile(args) -> None:
     unit = measure_unit() / YARDSTICK_ITERATIONS
     per = per_step(args.steps, args.repeats)
     unit = min(unit, measure_unit() / YARDSTICK_ITERATIONS)
@@ -199,6 +212,8 @@ def main() -> None:
           f"{warm[0]:.2f} s; first calls of the four kernels (compile): {cold[1]:.2f} s with "
           f"an empty cache, {warm[1]:.2f} s from the disk cache")
 
+
+def ensemble_report(args) -> None:
     unit_now = measure_unit() / YARDSTICK_ITERATIONS
     scenes, times = ensemble(args.scenes, args.steps, max(1, args.repeats // 2))
     work = scenes * args.steps
@@ -211,6 +226,7 @@ def main() -> None:
     for name, (wall, cpu) in times.items():
         print(f"{name:32s} {wall:7.2f} {work / wall:15.3e} {cpu:7.2f} "
               f"{cpu / work * 1e9:11.2f} {cpu / work / unit_now:9.3f} {base / wall:19.2f}")
+
 
 if __name__ == "__main__":
     main()

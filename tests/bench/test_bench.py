@@ -141,3 +141,21 @@ def test_command_line(tmp_path, capsys):
     assert "runs" in capsys.readouterr().out
     with pytest.raises(ValueError, match="unknown scene"):
         cmd_bench.run(parser.parse_args(["--out", str(tmp_path), "--scenes", "nope"]))
+
+
+def test_closed_form_entries_time_the_python_engine_even_once_compiled_code_is_loaded(
+        monkeypatch):
+    """``engine="auto"`` would switch to the compiled loop once ``closed_form_jit`` is
+    imported, so one table would mix the two engines: the entries pass ``engine``."""
+    from lumped.solvers import closed_form_jit
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the closed-form bench entry ran the compiled engine")
+
+    monkeypatch.setattr(closed_form_jit, "compiled_columns", refuse)
+    scene = next(s for s in bench.SCENES if s.name == "release-0.5")
+    for name in ("closed-bdf1", "closed-bdf2"):
+        entry = next(m for m in bench.METHODS if m.name == name)
+        solved = entry.solve(scene, {"dt": 1e-2}, TINY)()
+        assert solved.steps == round(scene.t_end / 1e-2)
+        assert np.all(np.isfinite(solved.x))

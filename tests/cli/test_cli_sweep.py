@@ -31,6 +31,9 @@ def test_sweep_writes_table_and_heatmap(tmp_path, capsys):
     assert (parquet["message"] == "").all()
     numeric = table.select_dtypes("number").columns.drop("message")
     pd.testing.assert_frame_equal(parquet[numeric].astype(float), table[numeric].astype(float))
+    ds = pytest.importorskip("xarray").open_dataset(out / "sweep.nc").load()
+    assert ds["stick_time"].dims == ("nodes.mass.force.amplitude", "nodes.mass.force.omega")
+    assert ds["stick_time"].values.ravel().tolist() == table["stick_time"].tolist()
     pytest.importorskip("matplotlib")
     assert (out / "stick_time.png").read_bytes()[:4] == b"\x89PNG"
 

@@ -197,3 +197,42 @@ def test_auto_engine_keeps_short_runs_in_python():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["False", "True"]
+
+
+def _stepped_summary(m, k, gamma, tau, x0, v0, code, dt, n, bdf2):
+    """Every step stored (``run_steps``), then the summary in ``summary_one``'s own
+    order of operations: the numbers the rest shortcut must reproduce bit for bit."""
+    cols = [np.zeros(n + 1) for _ in range(4)]
+    cols[0][0], cols[1][0] = x0, v0
+    assert J.run_steps(m, k, 1.0 / gamma, tau, dt, bdf2, *code, np.empty(0), *cols) == n
+    x, v, Fd, _ = cols
+    stick = cycles = events = 0
+    work = 0.0
+    for i in range(1, n + 1):
+        if v[i] == 0.0:
+            stick += 1
+            if v[i - 1] != 0.0:
+                cycles += 1
+                events += 1
+        elif v[i - 1] == 0.0 or (v[i] > 0.0) != (v[i - 1] > 0.0):
+            events += 1
+        work += dt * Fd[i] * v[i]
+    return [x[n], v[n], n, stick, cycles, events, work, Fd[n]]
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+@pytest.mark.parametrize("code", [(J.FORCE_ZERO, 0.0, 0.0, 0.0),
+                                  (J.FORCE_CONSTANT, 30.0, 0.0, 0.0),
+                                  (J.FORCE_SINE, 10.0, 5.0 * math.pi, 1.0)],
+                         ids=["zero", "constant", "sine-burst"])
+@pytest.mark.parametrize("x0,gamma", [(0.2, 1.0), (0.1, 100.0), (0.005, 1.0)])
+def test_summary_rest_shortcut_equals_stepping_to_the_end(method, code, x0, gamma):
+    """The summary kernel stops at a state at rest that every later step maps onto
+    itself: its summary is bit for bit the one of all ``n`` steps (these runs come to
+    rest long before the end, under zero, constant and switched-off forcing)."""
+    dt, n = 1e-3, 6000
+    out = np.empty(len(J.SUMMARY_FIELDS))
+    J.summary_one(1.0, 100.0, 1.0 / gamma, 1.0, dt, n, method == "bdf2", x0, 0.0, *code, out)
+    want = _stepped_summary(1.0, 100.0, gamma, 1.0, x0, 0.0, code, dt, n, method == "bdf2")
+    assert out.tolist() == want
+    assert want[3] > n // 4  # at rest for a good part of the run: the shortcut had work

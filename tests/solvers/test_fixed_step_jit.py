@@ -1,8 +1,11 @@
 """The compiled generic BDF (``jit-bdf1``, ``jit-bdf2``) against its pure-Python reference.
 
-The compiled loop is a port of :func:`lumped.solvers.fixed_step.run_bdf` operation for
-operation, so on these scenes (at most 8 unknowns, where both use the same LU) the
-results and the cost counters must be equal bit for bit, not merely close. Compiling a
+The faithful compiled loop (``fast=False``) is a port of
+:func:`lumped.solvers.fixed_step.run_bdf` operation for operation, so on these scenes (at
+most 8 unknowns, where both use the same LU) the results and the cost counters must be
+equal bit for bit, not merely close. The fast path (the default for runs of 1000 steps
+or more) is held to the reference in ``test_bdf_fast_jit.py``; the exactness tests below
+(eq. 19, a stuck velocity) run it. Compiling a
 scene takes seconds, so the scenes below are few and each is compiled once per session
 (scenes that differ only in masses, initial state or forcing share one compiled module).
 """
@@ -65,7 +68,8 @@ def custom(x0=0.4):
 
 
 def both(scene, jit, ref, dt, t_end, **kw):
-    return (simulate(scene, method=jit, dt=dt, t_end=t_end, **kw),
+    """The faithful port (``fast=False``) and the reference."""
+    return (simulate(scene, method=jit, dt=dt, t_end=t_end, fast=False, **kw),
             simulate(scene, method=ref, dt=dt, t_end=t_end, **kw))
 
 
@@ -161,10 +165,11 @@ def test_newton_failure_reports_like_the_reference():
     with pytest.raises(SolverError) as ref:
         simulate(scene, method="bdf2", dt=1e-2, t_end=4.0, options=opts)
     with pytest.raises(SolverError) as got:
-        simulate(scene, method="jit-bdf2", dt=1e-2, t_end=4.0, options=opts)
+        simulate(scene, method="jit-bdf2", dt=1e-2, t_end=4.0, options=opts, fast=False)
     assert str(got.value) == str(ref.value)
     assert got.value.status is ref.value.status
-    a = simulate(scene, method="jit-bdf2", dt=1e-2, t_end=4.0, options=opts, throw=False)
+    a = simulate(scene, method="jit-bdf2", dt=1e-2, t_end=4.0, options=opts, throw=False,
+                 fast=False)
     b = simulate(scene, method="bdf2", dt=1e-2, t_end=4.0, options=opts, throw=False)
     assert not a.ok and a.status is b.status and a.message == b.message
     assert np.array_equal(a.data, b.data)
@@ -181,20 +186,23 @@ def _run_child(code: str, **env) -> str:
 def test_second_process_loads_the_compiled_loop_from_disk():
     """The loop and the scene were compiled (and cached) by the tests above; a fresh
     process must load their machine code from the disk cache, not compile it."""
-    simulate(scenario_scene("release-0.5"), method="jit-bdf2", dt=1e-3, t_end=0.01)
+    simulate(scenario_scene("release-0.5"), method="jit-bdf2", dt=1e-3, t_end=0.01, fast=True)
     out = _run_child("""
         from lumped import simulate
         from lumped.codegen.jit import jit_scene
         from lumped.scenarios import scenario_scene
+        from lumped.codegen.jit_fast import fast_module
         from lumped.solvers.bdf_jit_core import compiled_run_bdf_core
         scene = scenario_scene("release-0.5")
-        simulate(scene, method="jit-bdf2", dt=1e-3, t_end=0.01)
+        simulate(scene, method="jit-bdf2", dt=1e-3, t_end=0.01, fast=True)
+        simulate(scene, method="jit-bdf2", dt=1e-3, t_end=0.01, fast=False)
         m = jit_scene(scene).module
-        for f in (compiled_run_bdf_core(), m.evaluate, m.element_law):
+        for f in (compiled_run_bdf_core(), m.evaluate, m.element_law,
+                  fast_module(scene).run_fast):
             print(sum(f.stats.cache_hits.values()), sum(f.stats.cache_misses.values()))
     """)
     counts = [tuple(map(int, line.split())) for line in out.splitlines()]
-    assert counts == [(1, 0)] * 3  # the loop and the scene's callbacks: loaded, not compiled
+    assert counts == [(1, 0)] * 4  # the loops and the scene's callbacks: loaded, not compiled
 
 
 def test_disabled_jit_gives_the_same_numbers():
@@ -204,9 +212,11 @@ def test_disabled_jit_gives_the_same_numbers():
         from lumped import simulate
         from lumped.scenarios import scenario_scene
         scene = scenario_scene("forcing-F2")
-        a = simulate(scene, method="jit-bdf2", dt=1e-2, t_end=0.6)
+        a = simulate(scene, method="jit-bdf2", dt=1e-2, t_end=0.6, fast=False)
         b = simulate(scene, method="bdf2", dt=1e-2, t_end=0.6)
-        print(np.array_equal(a.data, b.data) and a.stats == b.stats)
+        c = simulate(scene, method="jit-bdf2", dt=1e-2, t_end=0.6, fast=True)
+        print(np.array_equal(a.data, b.data) and a.stats == b.stats
+              and c.stats["fast_steps"] == 60 and np.allclose(c.data, b.data, 1e-12, 1e-12))
     """, NUMBA_DISABLE_JIT="1")
     assert out.strip() == "True"
 
@@ -221,8 +231,10 @@ def test_without_numba_gives_the_same_numbers():
         from lumped import simulate
         from lumped.scenarios import scenario_scene
         scene = scenario_scene("release-0.5")
-        a = simulate(scene, method="jit-bdf1", dt=1e-2, t_end=0.3)
+        a = simulate(scene, method="jit-bdf1", dt=1e-2, t_end=0.3, fast=False)
         b = simulate(scene, method="bdf1", dt=1e-2, t_end=0.3)
-        print(np.array_equal(a.data, b.data) and a.stats == b.stats)
+        c = simulate(scene, method="jit-bdf1", dt=1e-2, t_end=0.3, fast=True)
+        print(np.array_equal(a.data, b.data) and a.stats == b.stats
+              and c.stats["fast_steps"] == 30 and np.allclose(c.data, b.data, 1e-12, 1e-12))
     """)
     assert out.strip() == "True"

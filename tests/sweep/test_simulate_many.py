@@ -168,7 +168,8 @@ def test_write_and_heatmap(tmp_path):
     assert back["rest_position.mass"].isna().tolist() == \
         res.table["rest_position.mass"].isna().tolist()
     pytest.importorskip("pyarrow")
-    pd.testing.assert_frame_equal(pd.read_parquet(paths[1]), res.table)
+    parquet = next(p for p in paths if p.suffix == ".parquet")
+    pd.testing.assert_frame_equal(pd.read_parquet(parquet), res.table)
     pytest.importorskip("matplotlib")
     png = res.heatmap("rest_position", tmp_path / "map.png")
     assert png.read_bytes()[:4] == b"\x89PNG"
@@ -226,3 +227,34 @@ def test_property_batch_rows_equal_simulate_rows(sets, method):
     np.testing.assert_allclose(fast.table["dissipated_energy"], slow.table["dissipated_energy"],
                                rtol=1e-12, atol=0.0)
     assert (fast.table["dissipated_energy"] >= 0.0).all()
+
+
+def test_netcdf_round_trip_keeps_every_value_and_string(tmp_path):
+    """The NetCDF3 file (xarray's scipy engine) reads back to the same Dataset: the grid's
+    axes, floats bit for bit, counters, booleans, and the status and message strings of a
+    failed scene (a list of parameter sets gives the ``scene`` dimension)."""
+    xr = pytest.importorskip("xarray")
+    grid = simulate_many(F2, {"nodes.mass.force.amplitude": [3.0, 10.0],
+                              "elements.dashpot.parameters.tau": [0.5, 1.0, 80.0]},
+                         t_end=1.0, dt=1e-3)
+    sets = simulate_many(RELEASE, [{"elements.dashpot.F0": 0.0}, {"elements.dashpot.F0": 5.0}],
+                         t_end=0.5, dt=1e-3)
+    assert list(sets.table["status"]) == ["success", "inconsistent"]
+    for res, dims in ((grid, ("nodes.mass.force.amplitude", "elements.dashpot.parameters.tau")),
+                      (sets, ("scene",))):
+        paths = res.write(tmp_path / dims[0], stem="t")
+        nc = next(p for p in paths if p.suffix == ".nc")
+        with xr.open_dataset(nc) as back:
+            back = back.load()
+        ds = res.to_xarray()
+        assert tuple(back["status"].dims) == dims
+        assert back.attrs["parameters"] == ", ".join(res.parameters)
+        assert set(back.variables) == set(ds.variables)
+        for name in ds.variables:
+            a, b = ds[name].values, back[name].values
+            if a.dtype.kind in "fiub":
+                assert b.dtype.kind == a.dtype.kind, name
+                np.testing.assert_array_equal(a, b, err_msg=name)  # NaN == NaN here
+            else:
+                assert a.tolist() == b.tolist(), name
+    assert "breaks its law" in str(back["message"].values[1])

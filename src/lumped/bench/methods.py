@@ -72,13 +72,18 @@ class Method:
     warmup: bool = False
 
 
-def _closed_form(method: str) -> Callable[[BenchScene, dict, Ladders], Callable[[], Solved]]:
+def _closed_form(method: str, engine: str = "python"
+                 ) -> Callable[[BenchScene, dict, Ladders], Callable[[], Solved]]:
+    """The closed form (:func:`lumped.solvers.closed_form.integrate`) with an explicit
+    ``engine``: ``"auto"`` would switch to the compiled loop once
+    :mod:`lumped.solvers.closed_form_jit` is imported, and one table would mix the two."""
+
     def solve(scene: BenchScene, setting: dict, ladders: Ladders) -> Callable[[], Solved]:
         dt = setting["dt"]
 
         def run() -> Solved:
             traj = integrate(scene.osc, x0=scene.x0, v0=scene.v0, forcing=scene.force,
-                             dt=dt, t_end=scene.t_end, method=method)
+                             dt=dt, t_end=scene.t_end, method=method, engine=engine)
             return Solved(traj.t, traj.x, traj.stats["steps"], traj.stats["steps"])
 
         return run

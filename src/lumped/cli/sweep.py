@@ -6,6 +6,8 @@ Runs the scene file for every point of a grid of parameters
 * ``sweep.csv`` -- one row per scene: the parameters, ``status``, ``message``, the final
   state, rest position, stick time, stick-slip cycles, events, dissipated energy;
 * ``sweep.parquet`` -- the same table (when pyarrow is installed);
+* ``sweep.nc`` -- the same as NetCDF3 over the grid's axes (when xarray is installed;
+  :meth:`lumped.sweep.SweepResult.write_netcdf`);
 * ``<quantity>.png`` -- a heat map of ``--quantity`` over a grid of one or two paths
   (when matplotlib is installed; otherwise a note says so).
 
@@ -61,7 +63,10 @@ def run(args: argparse.Namespace) -> int:
                            backend=args.backend, progress=None if not args.quiet else False)
     column = result.column_for(args.quantity)
     written = result.write(args.out)
-    notes = []
+    suffixes = {path.suffix for path in written}
+    notes = [f"no {kind} file: {pkg} is not installed (pip install 'lumped[sweep]')"
+             for suffix, kind, pkg in ((".parquet", "Parquet", "pyarrow"),
+                                       (".nc", "NetCDF", "xarray")) if suffix not in suffixes]
     if len(grid) > 2:
         notes.append(f"no heat map: it needs one or two grid axes, got {len(grid)}")
     elif not have_matplotlib():
@@ -69,8 +74,6 @@ def run(args: argparse.Namespace) -> int:
     else:
         png = f"{args.out}/{column}.png"
         written.append(result.heatmap(column, png, title=f"{column} ({args.scene})"))
-    if len(written) == 1:
-        notes.append("no Parquet file: pyarrow is not installed (pip install 'lumped[sweep]')")
     if not args.quiet:
         table = result.table
         failed = int((table["status"] != "success").sum())

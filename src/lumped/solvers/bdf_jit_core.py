@@ -179,9 +179,15 @@ def _elongation(y, a, b) -> float:
 def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0, F0,
                  dt, n_steps, bdf2, rtol, atol, max_iters, max_backtracks, free_steps,
                  fkind, fpar, ftab, xs, vs, Fs, info, finfo, wv, wm, wperm, P, cJ, cLU,
-                 cperm, cvalid, counts, vec) -> int:
-    """Advance ``n_steps`` fixed steps from ``(x0, v0, F0)``; fill ``xs, vs, Fs`` (rows
-    ``0`` to ``n``) and ``info, finfo`` (see the module notes); return the rows filled.
+                 cperm, cvalid, counts, vec, step0=0, step_stop=-1) -> int:
+    """Advance the fixed steps from ``step0 + 1`` to ``step_stop`` (to ``n_steps`` when
+    ``step_stop < 0``) from ``(x0, v0, F0)`` at step ``step0``; fill rows ``step0`` to
+    the last step taken of ``xs, vs, Fs`` and ``info, finfo`` (see the module notes);
+    return the rows filled (the last step taken + 1).
+
+    For ``step0 >= 1`` the previous state (BDF2) is read from row ``step0 - 1`` of ``xs,
+    vs``: a run can be continued from any stored step (the fast path of
+    :mod:`lumped.codegen.jit_fast` hands single steps over this way).
 
     ``wv, wm, wperm`` is Newton's workspace (:func:`lumped.solvers.newton_jit.workspace`),
     ``P .. vec`` the loop's (:func:`loop_workspace`), both allocated by the caller.
@@ -203,11 +209,14 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
     for i in range(N):
         x[i] = x0[i]
         v[i] = v0[i]
-        xs[0, i] = x0[i]
-        vs[0, i] = v0[i]
+        xs[step0, i] = x0[i]
+        vs[step0, i] = v0[i]
+        if step0 >= 1:
+            xp[i] = xs[step0 - 1, i]
+            vp[i] = vs[step0 - 1, i]
     for e in range(E):
         F[e] = F0[e]
-        Fs[0, e] = F0[e]
+        Fs[step0, e] = F0[e]
     for c in range(checked.shape[0]):
         e = checked[c]
         q = _elongation(x if spring[e] else v, ea[e], eb[e])
@@ -219,8 +228,9 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
     total_it = res_ev = jac_ev = facts = max_it = 0
     for i in range(9):
         info[i] = 0
-    rows = 1
-    for step in range(1, n_steps + 1):
+    rows = step0 + 1
+    last = n_steps if step_stop < 0 else step_stop
+    for step in range(step0 + 1, last + 1):
         t = step * dt
         k = 0 if (not bdf2 or step == 1) else 1
         p = P[k]
@@ -328,7 +338,7 @@ def _signature():
     iv, im = i8[::1], i8[:, ::1]
     return T.int64(EVALUATE_TYPE, ELEMENT_LAW_TYPE, v, iv, iv, b1[::1], iv, v, v, v, f8, i8,
                    b1, f8, f8, i8, i8, i8, iv, m, m, m, m, m, iv, v, m, c, iv, m, c, c, im,
-                   im, iv, m)
+                   im, iv, m, i8, i8)
 
 
 if _numba is not None:

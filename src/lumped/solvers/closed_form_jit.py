@@ -189,6 +189,13 @@ def summary_one(m, k, inv_gamma, tau, dt, n, bdf2, x0, v0, kind, p0, p1, p2, out
 
     A non-finite value stops the run; ``out`` then holds the values up to the last good
     step (``steps_done < n`` says so).
+
+    Rest to the end: once a step maps a state at rest onto itself (``x_new == x``, ``v_new
+    == v == 0``, and for BDF2 also ``x == x_prev``, ``v_prev == 0``) under a force that
+    no longer changes (zero, constant, or a sine burst after its switch-off), every later
+    step receives the same inputs and returns the same outputs, bit for bit; the loop
+    stops there and counts the remaining steps as stuck (no events, no work). The
+    summary is exactly the one of stepping to the end; only the time differs.
     """
     x = x0
     v = v0
@@ -217,6 +224,13 @@ def summary_one(m, k, inv_gamma, tau, dt, n, bdf2, x0, v0, kind, p0, p1, p2, out
         elif v == 0.0 or (v_new > 0.0) != (v > 0.0):
             events += 1
         work += dt * F_d * v_new
+        if (v_new == 0.0 and v == 0.0 and x_new == x
+                and (not use2 or (x_prev == x and v_prev == 0.0))
+                and (kind != FORCE_SINE or t > p2) and kind != FORCE_SAMPLED
+                and (not bdf2 or use2)):
+            stick += n - i  # the fixed point of every remaining step
+            F_d_last = F_d
+            break
         x_prev = x
         v_prev = v
         x = x_new

@@ -1,13 +1,18 @@
 r"""``jit-bdf1`` / ``jit-bdf2``: the generic fixed-step BDF of
 :mod:`lumped.solvers.fixed_step`, compiled with numba.
 
-:func:`run_bdf_jit` runs the scene's generated module (:mod:`lumped.codegen.jit`) on
-the step loop of :mod:`lumped.solvers.bdf_jit_core`: the step system, the semismooth
-Newton with its convergence tests and law-row scales, the singleton-first LU and the
-fold check, all compiled and cached on disk. It is a port, operation for operation, of
-:func:`lumped.solvers.fixed_step.run_bdf` (the readable reference): on systems of at
-most 8 unknowns the two give the same numbers bit for bit, and the same counters; above
-that the reference hands the LU to LAPACK and they agree to round-off.
+:func:`run_bdf_jit` runs, by default, the scene's generated fast loop
+(:mod:`lumped.codegen.jit_fast`, driven by :mod:`lumped.solvers.bdf_fast_jit`): the step
+system unrolled, the laws inlined, a Newton specialised to the scene's size, agreeing
+with the reference to the Newton tolerance (round-off on piecewise-linear laws). The
+steps it cannot take go to the faithful port, the scene's generated module
+(:mod:`lumped.codegen.jit`) on the step loop of :mod:`lumped.solvers.bdf_jit_core`: the
+step system, the semismooth Newton with its convergence tests and law-row scales, the
+singleton-first LU and the fold check, all compiled and cached on disk. That port
+(alone with ``fast=False``) follows :func:`lumped.solvers.fixed_step.run_bdf` (the
+readable reference) operation for operation: on systems of at most 8 unknowns the two
+give the same numbers bit for bit, and the same counters; above that the reference
+hands the LU to LAPACK and they agree to round-off.
 
 Scope: every scene :func:`~lumped.solvers.fixed_step.run_bdf` runs, with laws given as
 sympy residuals (a hand-written kernel cannot be compiled: ``ValueError``), except
@@ -32,11 +37,13 @@ from .newton import NewtonCode, NewtonOptions, NewtonResult
 from .status import BranchError, RawRun, Status
 from .step_system import _newton_failure
 
-__all__ = ["JIT_METHODS", "run_bdf_jit", "loop_arguments", "forcing_arrays",
+__all__ = ["JIT_METHODS", "FAST_MIN_STEPS", "run_bdf_jit", "loop_arguments", "forcing_arrays",
            "refuse_position_locks"]
 
 #: Compiled method name -> step formula.
 JIT_METHODS = {"jit-bdf1": "bdf1", "jit-bdf2": "bdf2"}
+#: ``fast=None`` takes the fast path from this many steps on (see :func:`run_bdf_jit`).
+FAST_MIN_STEPS = 1000
 
 
 def forcing_arrays(scene: Scene, dt: float, n_steps: int):
@@ -121,10 +128,21 @@ def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,
 
 
 def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
-                options: NewtonOptions | None = None, throw: bool = True) -> RawRun:
+                options: NewtonOptions | None = None, throw: bool = True,
+                fast: bool | None = None) -> RawRun:
     """Advance ``scene`` by ``n_steps`` compiled BDF steps (``method`` ``jit-bdf1`` or
-    ``jit-bdf2``); the same output, counters and errors as
-    :func:`~lumped.solvers.fixed_step.run_bdf`.
+    ``jit-bdf2``); the same output and errors as :func:`~lumped.solvers.fixed_step.run_bdf`.
+
+    With ``fast=True`` the scene's generated fast loop takes every step it can and hands
+    the others to the faithful port (:mod:`lumped.solvers.bdf_fast_jit`:
+    the reference's numbers to round-off on piecewise-linear laws, its solution to the
+    Newton tolerance otherwise; ``stats`` adds ``fast_steps`` and ``handovers``). With
+    ``fast=False``, or a step system of more than
+    :data:`~lumped.codegen.jit_fast.MAX_FAST_UNKNOWNS` unknowns, the faithful port alone
+    runs: the reference's numbers and counters bit for bit. ``fast=None`` (the default)
+    is ``True`` for runs of at least :data:`FAST_MIN_STEPS` steps: the fast loop is
+    compiled per scene (a few seconds the first time on a machine, then from the disk
+    cache), which a short run does not pay back.
 
     Raises
     ------
@@ -140,8 +158,21 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
     options = options or NewtonOptions()
     from .bdf_jit_core import compiled_run_bdf_core
 
+    if fast is not None and not isinstance(fast, bool):
+        raise TypeError(f"`fast` must be True, False or None, got {fast!r}")
+    if fast is None:
+        fast = n_steps >= FAST_MIN_STEPS
     js, args, ic_stats = loop_arguments(scene, JIT_METHODS[method], dt, n_steps, options)
-    rows = compiled_run_bdf_core()(js.module.evaluate, js.module.element_law, *args)
+    from ..codegen.jit_fast import MAX_FAST_UNKNOWNS
+
+    if fast and len(scene.nodes) + len(scene.elements) <= MAX_FAST_UNKNOWNS:
+        from .bdf_fast_jit import run_fast_path
+
+        rows, stats = run_fast_path(scene, js, args)
+    else:
+        fast = False
+        rows = compiled_run_bdf_core()(js.module.evaluate, js.module.element_law, *args, 0,
+                                       -1)
     N, E = len(scene.nodes), len(scene.elements)
     xs, vs, Fs, info, finfo, wv = args[19:25]
     status, message = Status.SUCCESS, ""
@@ -179,13 +210,14 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
     data[:, 1:1 + 2 * N:2] = xs[:rows]
     data[:, 2:2 + 2 * N:2] = vs[:rows]
     data[:, 1 + 2 * N:] = Fs[:rows]
-    stats = {
-        "steps": rows - 1,
-        "newton_iterations": int(info[4]),
-        "residual_evals": int(info[5]),
-        "jacobian_evals": int(info[6]),
-        "factorizations": int(info[7]),
-        "max_newton_iterations": int(info[8]),
-        "initial_newton_iterations": ic_stats["newton_iterations"],
-    }
+    if not fast:
+        stats = {
+            "steps": rows - 1,
+            "newton_iterations": int(info[4]),
+            "residual_evals": int(info[5]),
+            "jacobian_evals": int(info[6]),
+            "factorizations": int(info[7]),
+            "max_newton_iterations": int(info[8]),
+        }
+    stats["initial_newton_iterations"] = ic_stats["newton_iterations"]
     return RawRun(data, stats, status, message)

@@ -42,6 +42,7 @@ __all__ = [
     "workspace",
     "lu_factor_into",
     "lu_solve_into",
+    "inverse_into",
     "newton",
 ]
 
@@ -136,6 +137,21 @@ def lu_solve_into(LU, perm, b, y) -> None:
         for j in range(i + 1, n):
             s -= LU[i, j] * y[j]
         y[i] = s / LU[i, i]
+
+
+@njit(cache=True)
+def inverse_into(LU, perm, b, y, inv) -> None:
+    """``inv = A^{-1}`` from the factors of :func:`lu_factor_into`, column by column
+    (``A^{-1} e_c`` by :func:`lu_solve_into`; ``b, y`` are work vectors). A singleton
+    pivot of 1 (the row ``v = 0`` of a stuck dashpot) gives an exact row of ``inv``."""
+    n = LU.shape[0]
+    for c in range(n):
+        for r in range(n):
+            b[r] = 0.0
+        b[c] = 1.0
+        lu_solve_into(LU, perm, b, y)
+        for r in range(n):
+            inv[r, c] = y[r]
 
 
 @njit(cache=True, inline="always")

@@ -7,8 +7,9 @@ Built-in methods (the same names on the command line):
     scene.
 ``jit-bdf1``, ``jit-bdf2``
     The same steps compiled with numba (:mod:`lumped.solvers.fixed_step_jit`): the same
-    numbers, much faster per step, after a one-off compile cached on disk. Not for
-    scenes with a position lock (a taut string) or with hand-written kernels.
+    numbers to the Newton tolerance (``fast=False``: bit for bit), much faster per step,
+    after a one-off compile cached on disk. Not for scenes with a position lock (a taut
+    string) or with hand-written kernels.
 ``closed-bdf1``, ``closed-bdf2``
     The closed-form steps of :mod:`lumped.solvers.closed_form` (``closed-bdf1`` is the
     paper's Algorithm 1). Only for a scene that is exactly one mass with one
@@ -204,9 +205,10 @@ def _run_jit(method: str) -> Runner:
     def runner(scene: Scene, settings: RunSettings) -> RawRun:
         from .fixed_step_jit import run_bdf_jit
 
-        dt, n_steps = _fixed_step_grid(method, settings)
+        dt, n_steps = _fixed_step_grid(method, settings, ("fast",))
+        fast = settings.extra.get("fast")
         raw = run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
-                          options=settings.options, throw=False)
+                          options=settings.options, throw=False, fast=fast)
         if raw.status in _NEWTON_FAILURES:
             # a step the compiled Newton cannot take (indeterminate forces: a singular
             # step matrix; a hard point of a law): the whole run on the reference solver,
@@ -218,7 +220,7 @@ def _run_jit(method: str) -> Runner:
                           events=out.events, indeterminate=out.indeterminate)
         if raw.status is not Status.SUCCESS and settings.throw:
             return run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
-                               options=settings.options, throw=True)
+                               options=settings.options, throw=True, fast=fast)
         return raw
 
     return runner

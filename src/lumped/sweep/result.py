@@ -84,9 +84,17 @@ class SweepResult:
         return ds.assign_coords({d: np.asarray(self.grid[d]) for d in dims})
 
     def write(self, out: str | Path, *, stem: str = "sweep") -> list[Path]:
-        """Write ``<stem>.csv`` and, with pyarrow, ``<stem>.parquet`` into ``out``.
+        """Write the table into ``out``: ``<stem>.csv``, and ``<stem>.nc`` with xarray and
+        ``<stem>.parquet`` with pyarrow (both in the ``sweep`` and ``test`` extras).
 
-        The CSV has full (round-trip) precision; a missing value is an empty cell.
+        The CSV has full (round-trip) precision; a missing value is an empty cell. The
+        NetCDF file is :meth:`to_xarray` written by xarray's ``scipy`` engine (NetCDF3
+        classic, readable by every NetCDF library; no extra dependency): the grid's axes
+        are its dimensions (``scene`` for a list of parameter sets), strings (``status``,
+        ``message``, ``method``) are stored as UTF-8 character arrays, counters as 32-bit
+        integers (NetCDF3 has no 64-bit integer), booleans as bytes that xarray reads back
+        as booleans, a missing ``rest_position`` as NaN (masked by ``at_rest``). The global
+        attributes ``parameters`` (comma-separated) and ``backend`` say how it was made.
         Returns the paths written.
         """
         out = Path(out)
@@ -95,6 +103,12 @@ class SweepResult:
         self.table.to_csv(csv, index=False, float_format="%.17g")
         written = [csv]
         try:
+            import xarray  # noqa: F401
+        except ImportError:  # the `sweep` extra brings it
+            pass
+        else:
+            written.append(self.write_netcdf(out / f"{stem}.nc"))
+        try:
             import pyarrow  # noqa: F401
         except ImportError:
             return written
@@ -102,6 +116,19 @@ class SweepResult:
         self.table.to_parquet(parquet, index=False)
         written.append(parquet)
         return written
+
+    def write_netcdf(self, path: str | Path) -> Path:
+        """Write :meth:`to_xarray` to ``path`` as NetCDF3 (xarray's ``scipy`` engine; see
+        :meth:`write`) and return the path. Read it back with
+        ``xarray.open_dataset(path)``."""
+        ds = self.to_xarray()
+        ds.attrs["parameters"] = ", ".join(self.parameters)
+        ds.attrs["backend"] = self.backend
+        ds.attrs["source"] = "lumped.sweep.simulate_many"
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        ds.to_netcdf(path, engine="scipy", format="NETCDF3_64BIT")
+        return path
 
     def heatmap(self, quantity: str, path: str | Path, *, title: str | None = None) -> Path:
         """Plot ``quantity`` over a grid of one axis (a line) or two (a heat map) to ``path``.
