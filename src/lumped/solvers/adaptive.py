@@ -43,6 +43,7 @@ from .events import (
     guard_tolerance,
     hold_rate_locks,
     select_modes,
+    snap_to_locks,
 )
 from .initial_state import consistent_initial_state
 from .locks import IntervalLog, cyclic_elements, indeterminate_elements
@@ -117,6 +118,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     def change_mode(t: float, h_probe: float, cause: str) -> str:
         """Choose the mode after ``t`` and record the switches; '' or a failure message."""
         sel: tuple | str = ""
+        if cause == "guard":  # rates within the tolerance of a lock: exactly on it
+            snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v))
         for _ in range(3):
             sel = select_modes(scene, lbs, t, x, v, F, h_probe, settings.options)
             if not isinstance(sel, str) and (sel[0] != modes or cause != "guard"):
@@ -290,11 +293,14 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         hit = crossing(sol, h)
         if target is not None:  # a landing step: bracket the event by end-of-step values
             if hit is not None and hit[1] != target[0] and hit[0] < 1.0:
-                target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0]
-                h = hit[0] * h
+                # another guard crosses first; at t itself: no landing, the event is at t
+                at_t = hit[0] * h <= 16 * _EPS * max(1.0, abs(t))
+                target = None if at_t else [hit[1], 0.0, math.inf, h,
+                                            end_guard(sol, h, hit[1])[0], 0, 0, target[7]]
+                h = h if at_t else hit[0] * h
                 continue
             g_end, tol = end_guard(sol, h, target[0])
-            which, h_lo, g_lo, h_hi, g_hi, count, _ = target
+            which, h_lo, g_lo, h_hi, g_hi, count = target[:6]
             width = 8.0 * _EPS * max(1.0, abs(t))
             if not (abs(g_end) <= tol or h_hi - h_lo <= width or count >= 40):
                 target[5] += 1
@@ -328,7 +334,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 # step is accepted unless a guard fails later in it
                 kept = modes == old
                 continue
-            target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0]
+            # (which, h_lo, g_lo, h_hi, g_hi, count, side, the step that found it)
+            target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0, h]
             h = s_hit * h
             continue
         folded = [e for e in checked
@@ -362,6 +369,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         dense.add(t, h, x + v + F0, Y)
         dF_n = system.end_slope(sol, h, F)
         event_here = target is not None
+        h_found = target[7] if event_here else 0.0
         target = None
         t_prev, t = t, (t_stop if to_stop else t + h)
         x = Y[2][:N]
@@ -380,7 +388,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h_new = h / max(quot, facgus)
         h_acc, err_acc = h, max(1e-2, err_norm)
         h_good, floor_tried, kept, stalled = h, False, False, 0
-        h = h_new
+        # after a landing the step goes on from the size that found the event (the
+        # landing step can be ulps long when the event sits at the step's start)
+        h = max(h_new, h_found)
         is_break = to_stop and bi < len(breaks) and t == breaks[bi]
         if is_break:
             bi += 1

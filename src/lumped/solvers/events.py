@@ -32,7 +32,7 @@ from .radau import dense_weights
 from .step_system import _make_evaluate
 
 __all__ = ["SAMPLES", "first_crossing", "first_crossing_on", "select_modes", "hold_rate_locks",
-           "apply_impacts", "guard_tolerance", "fold_crossed"]
+           "snap_to_locks", "apply_impacts", "guard_tolerance", "fold_crossed"]
 
 #: Points ``s`` in ``(0, 1]`` of a step where the guards are sampled (in order).
 SAMPLES = tuple(k / 8.0 for k in range(1, 9))
@@ -186,6 +186,57 @@ def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
             continue
         done.append(e)
     return done
+
+
+def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[float],
+                  F: list[float], tol: float) -> list[int]:
+    r"""Put every element that sits on a lock, up to the step's tolerance, exactly on it.
+
+    An element is *on a lock* at an event when one of its law's locking branches with a
+    known value ``L`` (:attr:`BranchInfo.locks`, ``lock_value``; a stuck dashpot,
+    ``q' = 0``, or a taut string, ``q = L``) admits its force (every guard of that branch
+    at ``(L, F_e)`` above ``-sqrt(eps) (1 + |F_e|)``) and its rate is within ``tol`` of the
+    lock's rate (``|q - L| <= tol`` for a dashpot, ``|q'| <= tol`` for a spring).
+
+    The velocities ``v`` are moved, in place, to the nearest ones in the kinetic-energy norm
+    that hold all those rates exactly (:func:`lumped.solvers.impacts` with targets: momentum
+    conserved, a change of at most ``tol``). Why: where a slip branch ends flat
+    (``dq/dF = 0`` at the yield force, Herschel-Bulkley ``n > 1``) a force located on its
+    guard to round-off still leaves a rate of the order of the Newton tolerance, and the
+    vanishing probe step of :func:`select_modes` reads ``m q' / h_p`` as a force far
+    beyond the yield force: the element would be sent to the opposite slip branch.
+
+    Returns
+    -------
+    list of int
+        The elements held (empty: ``v`` is unchanged).
+    """
+    from .impacts import _solve
+
+    slack = math.sqrt(2.220446049250313e-16)
+    held, target = [], []
+    q_x = scene.elongations(x, [0.0] * len(x))
+    for e, el in enumerate(scene.elements):
+        lb = branches[e]
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        for info in lb.info:
+            L = info.lock_value
+            if not info.locks or L is None:
+                continue
+            dashpot = el.kind == "dashpot"
+            off = rate - L if dashpot else rate
+            if abs(off) > tol or (not dashpot and abs(q_x[e] - L) > slack * (1.0 + abs(L))):
+                continue
+            gs = lb.guards_for(info.index)(L if dashpot else q_x[e], F[e])
+            if all(g >= -slack * (1.0 + abs(F[e])) for g in gs):
+                held.append(e)
+                target.append(float(L) if dashpot else 0.0)
+                break
+    if held:
+        v_new, _, _ = _solve(scene, v, held, 0.0, target=target)
+        v[:] = v_new
+    return held
 
 
 def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Sequence[int],

@@ -1,0 +1,80 @@
+"""Regressions of ``radau5`` on networks drawn by the random-network property suite
+(``tests/solvers/test_random_networks.py``, issue 11): each scene is one that used to stop
+or crash, written out, with the property it broke checked directly."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from lumped import simulate
+from lumped.laws import get_law
+from lumped.scene import Element, Junction, Mass, Scene
+
+
+def _hb(gamma: float, tau: float, n: float):
+    return get_law("herschel_bulkley").bind(gamma=gamma, tau=tau, n=n)
+
+
+def test_a_shear_thickening_dashpot_stops_and_sticks():
+    # Herschel-Bulkley n = 1.5 ends its slip flat (dq/dF = 0 at the yield force): the
+    # located stop left a rate of the Newton tolerance, read by the mode probe as a force
+    # far beyond the yield force, and the run chattered between the slip branches down
+    # to the step floor (STEP_TOO_SMALL at t = 0.158)
+    m = tau = 0.10326537141315197
+    scene = Scene([Mass("m", m=m, x0=-0.0011156382459216359, v0=-1.8425469184371508)],
+                  [Element("c", get_law("newtonian").bind(c=1.0), "ground", "m"),
+                   Element("hb", _hb(1.0, tau, 1.5), "ground", "m")])
+    sol = simulate(scene, method="radau5", t_end=0.5, rtol=1e-4, atol=1e-6)
+    assert sol.ok, sol.message
+    stops = [ev for ev in sol.events if ev.element == "hb"]
+    assert [ev.to_branch for ev in stops] == [2], stops  # slip- -> stick, once
+    after = sol.t > stops[0].t
+    assert np.all(sol.v["m"][after] == 0.0)  # exactly stuck: no creep
+    assert np.ptp(sol.x["m"][after]) == 0.0
+    assert np.all(np.abs(sol.F["hb"][after]) <= tau)
+
+
+def test_two_masses_lock_up_through_a_shear_thickening_dashpot():
+    # the dashpot between two sliding masses sticks once their velocities meet; the event
+    # was followed by a step of a few ulps and the run stopped at the step floor
+    tau = 0.3120390150414847
+    scene = Scene([Mass("m0", m=1.0, x0=0.0, v0=0.0),
+                   Mass("m1", m=0.9955170557221744, x0=0.886383055900569,
+                        v0=-0.6437874517344546)],
+                  [Element("s", get_law("string_spring").bind(k=0.20536360332235568,
+                                                              L=0.4891710442489269),
+                           "ground", "m0"),
+                   Element("hb", _hb(0.702933798960849, tau, 1.5), "m0", "m1")])
+    for rtol in (1e-4, 1e-6, 1e-8):
+        sol = simulate(scene, method="radau5", t_end=0.55, rtol=rtol, atol=1e-2 * rtol)
+        assert sol.ok, (rtol, sol.message)
+        stick = [ev for ev in sol.events if ev.element == "hb" and ev.to_branch == 2]
+        assert len(stick) == 1, sol.events
+        after = sol.t > stick[0].t
+        assert after.any()
+        assert np.all(sol.v["m1"][after] - sol.v["m0"][after] == 0.0)
+        assert np.all(np.abs(sol.F["hb"][after]) <= tau)
+
+
+def test_a_second_guard_at_the_start_of_a_landing_step_is_an_event_there():
+    # while a step was being landed on one guard, another guard was found violated at the
+    # step's start: the landing step got the size 0 (ZeroDivisionError in the force scale)
+    scene = Scene(
+        [Mass("m0", m=2.455142536481585, x0=0.0, v0=0.12893473126304267),
+         Mass("m1", m=0.23815728484872456, x0=0.37131797589775695, v0=0.75),
+         Junction("j2", x0=-0.8533718525219758),
+         Mass("m3", m=1.0, x0=-0.8546583583029737, v0=1.9604850523154989)],
+        [Element("e0", get_law("linear_spring").bind(k=21.079841838522917), "ground", "m0"),
+         Element("e1", get_law("coulomb").bind(tau=0.08229975900818783, r=3.9807301201594547),
+                 "ground", "m1"),
+         Element("e2", _hb(4.4072621346783105, 0.01454737992373308, 1.0), "m0", "j2"),
+         Element("e3", get_law("bingham").bind(gamma=0.830085188952237, tau=1.0), "j2", "m3"),
+         Element("e4", get_law("linear_spring").bind(k=6.024592843506649), "j2", "m1"),
+         Element("e5", _hb(0.1, 1.0, 1.0), "m1", "ground"),
+         Element("e6", get_law("string_spring").bind(k=0.1, L=1.2333079907944104), "m3", "m1")])
+    dt = 0.018712942283937217
+    for k in range(3):
+        h = dt / 2**k
+        sol = simulate(scene, method="radau5", dt=h, t_end=27 * dt, rtol=h**2, atol=h**3)
+        assert sol.ok, sol.message
+        assert np.all(np.isfinite(sol.data))
