@@ -78,3 +78,53 @@ def test_a_second_guard_at_the_start_of_a_landing_step_is_an_event_there():
         sol = simulate(scene, method="radau5", dt=h, t_end=27 * dt, rtol=h**2, atol=h**3)
         assert sol.ok, sol.message
         assert np.all(np.isfinite(sol.data))
+
+
+def test_stuck_dashpots_in_parallel_share_the_load_within_their_cones():
+    # a junction held by a Coulomb and a Bingham dashpot in parallel (both stuck) against
+    # a spring: the split is free, and the minimum-norm correction put the Coulomb element
+    # above its yield force; the split is now in proportion to the yield forces
+    tau_c, tau_b = 0.02575926016363935, 0.4921047605730337
+    scene = Scene(
+        [Mass("m0", m=1.3824187360077447, x0=0.0, v0=-0.3079424336235115),
+         Junction("j1", x0=-0.853783592355712)],
+        [Element("e0", get_law("coulomb").bind(tau=1.0, r=1.0), "ground", "m0"),
+         Element("e1", get_law("coulomb").bind(tau=tau_c, r=2.020977723336808), "m0", "j1"),
+         Element("e2", get_law("string_spring").bind(k=0.43867229930777846,
+                                                     L=0.022031875816461186), "ground", "j1"),
+         Element("e3", get_law("coulomb").bind(tau=0.24027567711852846, r=94.4565858571075),
+                 "ground", "m0"),
+         Element("e4", get_law("bingham").bind(gamma=1.0, tau=tau_b), "m0", "j1")])
+    for h in (0.025, 0.0125):
+        sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3)
+        assert sol.ok, sol.message
+        F1, F4 = sol.F["e1"], sol.F["e4"]
+        assert np.all(np.abs(F1) <= tau_c * (1 + 1e-9))
+        assert np.all(np.abs(F4) <= tau_b * (1 + 1e-9))
+        # the pair carries the spring's pull on the junction
+        assert np.allclose(F1 + F4, -sol.F["e2"], rtol=1e-6, atol=1e-9)
+        both = (np.abs(sol.v["m0"]) == 0.0)
+        assert both.any()
+        assert np.allclose(F1[both] / tau_c, F4[both] / tau_b, rtol=1e-6, atol=1e-9)
+
+
+def test_initial_forces_that_miss_a_law_are_taken_from_the_probe():
+    # a junction between a slipping Herschel-Bulkley (n = 2) and a slipping Bingham
+    # dashpot: the initial state gave both the force -0.01 (no law holds there) and the
+    # first stage Newton failed at every step size (STEP_TOO_SMALL at t = 0)
+    scene = Scene(
+        [Mass("m0", m=1.0, x0=-0.4924278832010035, v0=0.0),
+         Junction("j1", x0=0.29358509095443863), Junction("j2", x0=0.0),
+         Mass("m3", m=3.127965730978995, x0=-0.8957004524460324, v0=1.5601441271035386)],
+        [Element("e0", get_law("string_spring").bind(k=28.32633531649131, L=1.0), "ground",
+                 "m0"),
+         Element("e1", _hb(1.0, 1.0, 2.0), "m0", "j1"),
+         Element("e2", get_law("newtonian").bind(c=3.1622776601683795), "ground", "j2"),
+         Element("e3", get_law("bingham").bind(gamma=0.27709420484354375, tau=0.01), "j1",
+                 "m3")])
+    sol = simulate(scene, method="radau5", t_end=0.2, rtol=1e-6, atol=1e-9)
+    assert sol.ok, sol.message
+    # the series pair carries one force: (F - 1)^2 + 0.277 (F - 0.01) = 1.56 at t = 0
+    F0 = sol.F["e1"][0]
+    assert F0 == sol.F["e3"][0]
+    assert abs((F0 - 1.0) ** 2 + 0.27709420484354375 * (F0 - 0.01) - 1.5601441271035386) < 1e-6

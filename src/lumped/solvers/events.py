@@ -32,7 +32,7 @@ from .radau import dense_weights
 from .step_system import _make_evaluate
 
 __all__ = ["SAMPLES", "first_crossing", "first_crossing_on", "select_modes", "hold_rate_locks",
-           "snap_to_locks", "apply_impacts", "guard_tolerance", "fold_crossed"]
+           "snap_to_locks", "lock_cones", "apply_impacts", "guard_tolerance", "fold_crossed"]
 
 #: Points ``s`` in ``(0, 1]`` of a step where the guards are sampled (in order).
 SAMPLES = tuple(k / 8.0 for k in range(1, 9))
@@ -237,6 +237,44 @@ def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[floa
         v_new, _, _ = _solve(scene, v, held, 0.0, target=target)
         v[:] = v_new
     return held
+
+
+def lock_cones(branches: Sequence, modes: Sequence[int], F: Sequence[float],
+               elements: Sequence[int]) -> dict[int, tuple[float, float]]:
+    r"""The force interval each locked element of ``elements`` admits, as ``e -> (centre,
+    half-width)``: where every guard of its locking branch (at ``q`` = the lock's value) is
+    non-negative, read off the guards' slopes in ``F`` at ``F_e`` (exact for the affine
+    guards of the built-in laws: Bingham, Coulomb, Herschel-Bulkley stuck,
+    ``|F| <= tau``). An interval open on a side (a taut string) gets the centre ``F_e`` and
+    a half-width ``1e3`` times the largest finite one or force, so that it takes the load
+    the others do not (:func:`lumped.solvers.radau._cone_solver`). Elements not on a lock
+    with a known value are left out."""
+    out: dict[int, tuple[float, float]] = {}
+    open_: list[int] = []
+    big = 1.0 + max((abs(f) for f in F), default=0.0)
+    for e in elements:
+        info = branches[e].info[modes[e]]
+        if not info.locks or info.lock_value is None:
+            continue
+        L, F0 = float(info.lock_value), float(F[e])
+        guards = branches[e].guards_for(modes[e])
+        d = 1.0 + abs(F0)
+        g0, g1 = guards(L, F0), guards(L, F0 + d)
+        lo, hi = -math.inf, math.inf
+        for a, b in zip(g0, g1, strict=True):
+            slope = (b - a) / d
+            if slope > 0.0:
+                lo = max(lo, F0 - a / slope)
+            elif slope < 0.0:
+                hi = min(hi, F0 - a / slope)
+        if math.isfinite(lo) and math.isfinite(hi) and hi > lo:
+            out[e] = (0.5 * (lo + hi), 0.5 * (hi - lo))
+            big = max(big, 0.5 * (hi - lo))
+        else:
+            open_.append(e)
+    for e in open_:
+        out[e] = (float(F[e]), 1e3 * big)
+    return out
 
 
 def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Sequence[int],
