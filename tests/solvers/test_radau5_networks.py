@@ -128,3 +128,32 @@ def test_initial_forces_that_miss_a_law_are_taken_from_the_probe():
     F0 = sol.F["e1"][0]
     assert F0 == sol.F["e3"][0]
     assert abs((F0 - 1.0) ** 2 + 0.27709420484354375 * (F0 - 0.01) - 1.5601441271035386) < 1e-6
+
+
+def test_a_slow_impact_is_applied_not_spread_over_ever_shorter_steps():
+    # a string goes taut at 0.04 m/s, below the old impact threshold (1e3 times the
+    # velocity tolerance, 0.4 m/s at rtol 6e-4): no impulse was applied, the taut string
+    # carried the momentum as a force m v / h and the step shrank to the floor
+    scene = Scene(
+        [Junction("j0", x0=0.0), Mass("m1", m=1.0000000230258512, x0=6.103515625e-05, v0=0.0),
+         Mass("m2", m=0.2587129260934172, x0=0.0, v0=0.5994366228360115),
+         Mass("m3", m=0.6223325920962172, x0=0.0, v0=0.6712395516689065)],
+        [Element("e0", get_law("coulomb").bind(tau=0.016242412438282172, r=100.0), "ground",
+                 "j0"),
+         Element("e1", get_law("string_spring").bind(k=9.99976974414163,
+                                                     L=0.0015786515341629993), "ground", "m1"),
+         Element("e2", get_law("linear_spring").bind(k=1.2589254117941673), "j0", "m2"),
+         Element("e3", get_law("newtonian").bind(c=1.0), "j0", "m3"),
+         Element("e4", get_law("linear_spring").bind(k=1.8193771168531416), "m1", "ground"),
+         Element("e5", get_law("implicit_spring").bind(k=0.10853499651109838,
+                                                       L0=0.00720867165550684, F0=1.0),
+                 "m2", "m1"),
+         Element("e6", get_law("bingham").bind(gamma=1.0, tau=0.06826804612256446), "m2",
+                 "m1")])
+    h = 0.025
+    sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3)
+    assert sol.ok, sol.message
+    impacts = [ev for ev in sol.events if ev.kind == "impact"]
+    assert impacts and impacts[0].element == "e1"
+    assert impacts[0].impulse != 0.0 and impacts[0].energy_lost >= 0.0
+    assert np.all(sol.x["m1"] <= 0.0015786515341629993 * (1 + 1e-9))

@@ -136,7 +136,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             return sel
         new, v_p, F_p = sel
         scale_v = atol + rtol * max(abs(vi) for vi in v)
-        hit = apply_impacts(scene, lbs, modes, new, x, v, 1e3 * scale_v, opts["restitution"])
+        hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, opts["restitution"])
         if isinstance(hit, str):
             return f"impact at t = {t!r}: {hit}"
         if hit[0]:
