@@ -125,6 +125,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     def change_mode(t: float, h_probe: float, cause: str) -> str:
         """Choose the mode after ``t`` and record the switches; '' or a failure message."""
         sel: tuple | str = ""
+        h0 = h_probe
         if cause == "guard":  # rates within the tolerance of a lock: exactly on it
             snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v))
         for _ in range(3):
@@ -144,8 +145,12 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 events.append(Event(t, names[e], "impact", modes[e], new[e], impulse=impulse,
                                     energy_lost=hit[1] if e == hit[0][0][0] else 0.0))
                 recent.append(t)
-            # the mode after the impact, from the velocities after it
-            sel = select_modes(scene, lbs, t, x, v, F, h_probe, settings.options)
+            # the mode after the impact, from the velocities after it (the probe's guess:
+            # the forces before it; a failed probe is tried longer, as above)
+            for k in range(3):
+                sel = select_modes(scene, lbs, t, x, v, F, h0 * 1000.0 ** k, settings.options)
+                if not isinstance(sel, str):
+                    break
             if isinstance(sel, str):
                 return sel
             new, v_p, F_p = sel

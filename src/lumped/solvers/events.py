@@ -315,6 +315,7 @@ def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Seq
                 "ends approach: an impact, and lumped.solvers.impacts is not available")
     v_after, impulses, lost = impact_velocities(scene, x, v, locked, restitution)
     v[:] = v_after
+    inner, gaps = [], []
     for e in hits:
         L = branches[e].info[new[e]].lock_value
         a, b = ea[e], eb[e]
@@ -322,6 +323,14 @@ def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Seq
             x[b], v[b] = float(L), 0.0
         elif L is not None and b < 0 and a >= 0:
             x[a], v[a] = -float(L), 0.0
+        elif L is not None and a >= 0 and b >= 0:
+            inner.append(e)
+            gaps.append(float(L) - (x[b] - x[a]))
+    if inner:  # between two nodes: the least move (kinetic-energy norm) onto q = L
+        from .impacts import _solve
+
+        dx, _, _ = _solve(scene, [0.0] * len(x), inner, 0.0, target=gaps)
+        x[:] = [xi + di for xi, di in zip(x, dx, strict=True)]
     return [(e, impulses[locked.index(e)]) for e in hits], lost
 
 
