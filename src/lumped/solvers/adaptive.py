@@ -48,7 +48,9 @@ from .events import (
     fold_crossed,
     guard_tolerance,
     hold_rate_locks,
+    lock_cones,
     select_modes,
+    snap_to_locks,
 )
 from .initial_state import consistent_initial_state
 from .locks import IntervalLog, indeterminate_elements
@@ -109,6 +111,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     kernels: list = [None] * E
     guards: list = [None] * E
     watched: list[int] = []
+    on_cycles = plan.cyclic
+    cones: dict[int, tuple[float, float]] = {}  # locks in parallel: the force split rule
 
     stage_solve = compiled_stage_solver(scene, modes) if opts["compiled"] is True else None
 
@@ -120,12 +124,19 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             guards[e] = lbs[e].guards_for(new[e])
             if lbs[e].count > 1:
                 watched.append(e)
+        cones.clear()
+        locked = lock_cones(lbs, new, F, on_cycles)
+        if len(locked) > 1:
+            cones.update(locked)
 
     def change_mode(t: float, h_probe: float, cause: str) -> str:
         """Choose the mode after ``t`` and record the switches; '' or a failure message."""
         if fast is not None:
             fast.forget()  # x, v, F may change in place here
         sel: tuple | str = ""
+        h0 = h_probe
+        if cause == "guard":  # rates within the tolerance of a lock: exactly on it
+            snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v))
         for _ in range(3):
             sel = select_modes(scene, lbs, t, x, v, F, h_probe, settings.options)
             if not isinstance(sel, str) and (sel[0] != modes or cause != "guard"):
@@ -135,7 +146,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             return sel
         new, v_p, F_p = sel
         scale_v = atol + rtol * max(abs(vi) for vi in v)
-        hit = apply_impacts(scene, lbs, modes, new, x, v, 1e3 * scale_v, opts["restitution"])
+        hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, opts["restitution"])
         if isinstance(hit, str):
             return f"impact at t = {t!r}: {hit}"
         if hit[0]:
@@ -143,15 +154,22 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 events.append(Event(t, names[e], "impact", modes[e], new[e], impulse=impulse,
                                     energy_lost=hit[1] if e == hit[0][0][0] else 0.0))
                 recent.append(t)
-            # the mode after the impact, from the velocities after it
-            sel = select_modes(scene, lbs, t, x, v, F, h_probe, settings.options)
+            # the mode after the impact, from the velocities after it (the probe's guess:
+            # the forces before it; a failed probe is tried longer, as above)
+            for k in range(3):
+                sel = select_modes(scene, lbs, t, x, v, F, h0 * 1000.0 ** k, settings.options)
+                if not isinstance(sel, str):
+                    break
             if isinstance(sel, str):
                 return sel
             new, v_p, F_p = sel
         for p in range(N):
             if not is_mass[p]:
                 v[p] = v_p[p]
-        if cause != "start":  # at t = 0 the consistent initial forces stay
+        # at t = 0 the consistent initial forces stay, unless they miss a law at the
+        # probe's junction velocities (the initial state can leave a junction between
+        # two slipping dashpots unresolved)
+        if cause != "start" or not _laws_hold(lbs, new, scene.elongations(x, v), F):
             F[:] = F_p
         for e in range(E):
             if new[e] != modes[e] and not any(ev.t == t and ev.element == names[e]
@@ -297,7 +315,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                      + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
             if stage_solve is None:
                 sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale,
-                                              max_iters=max_newton)
+                                              max_iters=max_newton, cones=cones or None)
             else:
                 sol, its, nfac = stage_solve(U, h, x, v, fk, scale, max_newton)
                 U = sol if sol is not None else U
@@ -335,11 +353,14 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         hit = crossing(sol, h) if got is None or negative else None
         if target is not None:  # a landing step: bracket the event by end-of-step values
             if hit is not None and hit[1] != target[0] and hit[0] < 1.0:
-                target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0]
-                h = hit[0] * h
+                # another guard crosses first; at t itself: no landing, the event is at t
+                at_t = hit[0] * h <= 16 * _EPS * max(1.0, abs(t))
+                target = None if at_t else [hit[1], 0.0, math.inf, h,
+                                            end_guard(sol, h, hit[1])[0], 0, 0, target[7]]
+                h = h if at_t else hit[0] * h
                 continue
             g_end, tol = end_guard(sol, h, target[0])
-            which, h_lo, g_lo, h_hi, g_hi, count, _ = target
+            which, h_lo, g_lo, h_hi, g_hi, count = target[:6]
             width = 8.0 * _EPS * max(1.0, abs(t))
             if not (abs(g_end) <= tol or h_hi - h_lo <= width or count >= 40):
                 target[5] += 1
@@ -373,7 +394,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 # step is accepted unless a guard fails later in it
                 kept = modes == old
                 continue
-            target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0]
+            # (which, h_lo, g_lo, h_hi, g_hi, count, side, the step that found it)
+            target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0, h]
             h = s_hit * h
             continue
         folded = [e for e in checked
@@ -407,6 +429,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         dense.add(t, h, x + v + F0, Y)
         dF_n = system.end_slope(sol, h, F)
         event_here = target is not None
+        h_found = target[7] if event_here else 0.0
         target = None
         t_prev, t = t, (t_stop if to_stop else t + h)
         x = Y[2][:N]
@@ -425,7 +448,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h_new = h / max(quot, facgus)
         h_acc, err_acc = h, max(1e-2, err_norm)
         h_good, floor_tried, kept, stalled = h, False, False, 0
-        h = h_new
+        # after a landing the step goes on from the size that found the event (the
+        # landing step can be ulps long when the event sits at the step's start)
+        h = max(h_new, h_found)
         is_break = to_stop and bi < len(breaks) and t == breaks[bi]
         if is_break:
             bi += 1
@@ -445,3 +470,12 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     return RawRun(data, stats, status, message, events, dense if len(dense) else None,
                   indeterminate=log.result())
 
+
+def _laws_hold(lbs: list, modes: list[int], q: list[float], F: list[float]) -> bool:
+    """Whether every element's law holds at ``(q_e, F_e)`` on its branch, to ``1e-8``
+    relative to the size of its terms."""
+    for e, (qe, Fe) in enumerate(zip(q, F, strict=True)):
+        R, Rq, RF = lbs[e].kernel_for(modes[e])(qe, Fe)
+        if not abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe)):
+            return False
+    return True

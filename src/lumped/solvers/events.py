@@ -32,7 +32,7 @@ from .radau import dense_weights
 from .step_system import _make_evaluate
 
 __all__ = ["SAMPLES", "first_crossing", "first_crossing_on", "select_modes", "hold_rate_locks",
-           "apply_impacts", "guard_tolerance", "fold_crossed"]
+           "snap_to_locks", "lock_cones", "apply_impacts", "guard_tolerance", "fold_crossed"]
 
 #: Points ``s`` in ``(0, 1]`` of a step where the guards are sampled (in order).
 SAMPLES = tuple(k / 8.0 for k in range(1, 9))
@@ -188,6 +188,95 @@ def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
     return done
 
 
+def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[float],
+                  F: list[float], tol: float) -> list[int]:
+    r"""Put every element that sits on a lock, up to the step's tolerance, exactly on it.
+
+    An element is *on a lock* at an event when one of its law's locking branches with a
+    known value ``L`` (:attr:`BranchInfo.locks`, ``lock_value``; a stuck dashpot,
+    ``q' = 0``, or a taut string, ``q = L``) admits its force (every guard of that branch
+    at ``(L, F_e)`` above ``-sqrt(eps) (1 + |F_e|)``) and its rate is within ``tol`` of the
+    lock's rate (``|q - L| <= tol`` for a dashpot, ``|q'| <= tol`` for a spring).
+
+    The velocities ``v`` are moved, in place, to the nearest ones in the kinetic-energy norm
+    that hold all those rates exactly (:func:`lumped.solvers.impacts` with targets: momentum
+    conserved, a change of at most ``tol``). Why: where a slip branch ends flat
+    (``dq/dF = 0`` at the yield force, Herschel-Bulkley ``n > 1``) a force located on its
+    guard to round-off still leaves a rate of the order of the Newton tolerance, and the
+    vanishing probe step of :func:`select_modes` reads ``m q' / h_p`` as a force far
+    beyond the yield force: the element would be sent to the opposite slip branch.
+
+    Returns
+    -------
+    list of int
+        The elements held (empty: ``v`` is unchanged).
+    """
+    from .impacts import _solve
+
+    slack = math.sqrt(2.220446049250313e-16)
+    held, target = [], []
+    q_x = scene.elongations(x, [0.0] * len(x))
+    for e, el in enumerate(scene.elements):
+        lb = branches[e]
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        for info in lb.info:
+            L = info.lock_value
+            if not info.locks or L is None:
+                continue
+            dashpot = el.kind == "dashpot"
+            off = rate - L if dashpot else rate
+            if abs(off) > tol or (not dashpot and abs(q_x[e] - L) > slack * (1.0 + abs(L))):
+                continue
+            gs = lb.guards_for(info.index)(L if dashpot else q_x[e], F[e])
+            if all(g >= -slack * (1.0 + abs(F[e])) for g in gs):
+                held.append(e)
+                target.append(float(L) if dashpot else 0.0)
+                break
+    if held:
+        v_new, _, _ = _solve(scene, v, held, 0.0, target=target)
+        v[:] = v_new
+    return held
+
+
+def lock_cones(branches: Sequence, modes: Sequence[int], F: Sequence[float],
+               elements: Sequence[int]) -> dict[int, tuple[float, float]]:
+    r"""The force interval each locked element of ``elements`` admits, as ``e -> (centre,
+    half-width)``: where every guard of its locking branch (at ``q`` = the lock's value) is
+    non-negative, read off the guards' slopes in ``F`` at ``F_e`` (exact for the affine
+    guards of the built-in laws: Bingham, Coulomb, Herschel-Bulkley stuck,
+    ``|F| <= tau``). An interval open on a side (a taut string) gets the centre ``F_e`` and
+    a half-width ``1e3`` times the largest finite one or force, so that it takes the load
+    the others do not (:func:`lumped.solvers.radau._cone_solver`). Elements not on a lock
+    with a known value are left out."""
+    out: dict[int, tuple[float, float]] = {}
+    open_: list[int] = []
+    big = 1.0 + max((abs(f) for f in F), default=0.0)
+    for e in elements:
+        info = branches[e].info[modes[e]]
+        if not info.locks or info.lock_value is None:
+            continue
+        L, F0 = float(info.lock_value), float(F[e])
+        guards = branches[e].guards_for(modes[e])
+        d = 1.0 + abs(F0)
+        g0, g1 = guards(L, F0), guards(L, F0 + d)
+        lo, hi = -math.inf, math.inf
+        for a, b in zip(g0, g1, strict=True):
+            slope = (b - a) / d
+            if slope > 0.0:
+                lo = max(lo, F0 - a / slope)
+            elif slope < 0.0:
+                hi = min(hi, F0 - a / slope)
+        if math.isfinite(lo) and math.isfinite(hi) and hi > lo:
+            out[e] = (0.5 * (lo + hi), 0.5 * (hi - lo))
+            big = max(big, 0.5 * (hi - lo))
+        else:
+            open_.append(e)
+    for e in open_:
+        out[e] = (float(F[e]), 1e3 * big)
+    return out
+
+
 def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Sequence[int],
                   x: list[float], v: list[float], threshold: float,
                   restitution: float = 0.0) -> tuple[list[tuple[int, float]], float] | str:
@@ -226,6 +315,7 @@ def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Seq
                 "ends approach: an impact, and lumped.solvers.impacts is not available")
     v_after, impulses, lost = impact_velocities(scene, x, v, locked, restitution)
     v[:] = v_after
+    inner, gaps = [], []
     for e in hits:
         L = branches[e].info[new[e]].lock_value
         a, b = ea[e], eb[e]
@@ -233,6 +323,14 @@ def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Seq
             x[b], v[b] = float(L), 0.0
         elif L is not None and b < 0 and a >= 0:
             x[a], v[a] = -float(L), 0.0
+        elif L is not None and a >= 0 and b >= 0:
+            inner.append(e)
+            gaps.append(float(L) - (x[b] - x[a]))
+    if inner:  # between two nodes: the least move (kinetic-energy norm) onto q = L
+        from .impacts import _solve
+
+        dx, _, _ = _solve(scene, [0.0] * len(x), inner, 0.0, target=gaps)
+        x[:] = [xi + di for xi, di in zip(x, dx, strict=True)]
     return [(e, impulses[locked.index(e)]) for e in hits], lost
 
 

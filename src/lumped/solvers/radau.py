@@ -69,6 +69,47 @@ def _solver(J: list[list[float]]) -> Callable[[list[float]], list[float]]:
     return min_norm_solver(J)
 
 
+def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[float, float]],
+                 N: int, n: int) -> Callable[[list[float]], list[float]]:
+    """``solve(b)`` for a singular ``J`` whose free directions split the force among locked
+    elements in parallel: of all the solutions, the one whose new forces minimise
+    ``sum (F_e - c_e)^2 / w_e`` over the elements of ``cones`` (``e -> (c_e, w_e)``, the
+    centre and half-width of the force interval the element's lock admits) and the
+    correction's norm over the other unknowns. Two stuck dashpots in parallel share a load
+    ``S`` in proportion to their capacities (each within its cone whenever ``|S|`` is within
+    the sum), a rigid lock (``w_e`` huge) takes what the others do not.
+
+    With ``du = D z + o`` (``D = sqrt(w_e)``, ``o = c_e - U_j`` on those forces; ``D = 1``,
+    ``o = 0`` elsewhere; ``U`` the iterate, read at every call): ``z`` is the minimum-norm
+    solution of ``J D z = b - J o``."""
+    import numpy as np
+
+    size = len(U)
+    D = np.ones(size)
+    cols = [(k * n + N + e, c) for k in range(3) for e, (c, _) in cones.items()]
+    for k in range(3):
+        for e, (_, w) in cones.items():
+            D[k * n + N + e] = math.sqrt(w)
+    A = np.array(J, dtype=float)
+    pinv = np.linalg.pinv(A * D, rcond=size * 2.220446049250313e-16)
+    # a row with one nonzero (a stuck dashpot to ground: ``V = 0``) fixes its unknown by
+    # one division, exactly, as the LU's singleton pivots do
+    single = [(i, int(nz[0]), float(A[i, nz[0]])) for i in range(size)
+              for nz in [np.flatnonzero(A[i])] if len(nz) == 1]
+
+    def solve(b: list[float]) -> list[float]:
+        o = np.zeros(size)
+        for j, c in cols:  # ``U`` is the caller's iterate, updated in place
+            o[j] = c - U[j]
+        z = pinv @ (np.asarray(b, dtype=float) - A @ o)
+        du = (D * z + o).tolist()
+        for i, j, a in single:
+            du[j] = b[i] / a
+        return du
+
+    return solve
+
+
 def _inverse3(M: Sequence[Sequence[float]]) -> tuple[tuple[float, ...], ...]:
     (a, b, c), (d, e, f), (g, h, i) = M
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
@@ -224,7 +265,9 @@ class StageSystem:
 
     def solve(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
               f: list[list[float]], kernels: Sequence[Callable], scale: list[float],
-              tol: float = 1e-3, max_iters: int = 10) -> tuple[list[float] | None, int, int]:
+              tol: float = 1e-3, max_iters: int = 10,
+              cones: dict[int, tuple[float, float]] | None = None,
+              ) -> tuple[list[float] | None, int, int]:
         """Newton on the stage system from the guess ``U`` (modified in place).
 
         Converged when ``max_j |dU_j| / scale_j <= tol``; the Jacobian is refactored when
@@ -232,10 +275,12 @@ class StageSystem:
         ``(U or None, iterations, factorisations)``; ``None`` when Newton failed
         (non-finite or no convergence): the caller shrinks the step.  A singular Jacobian
         (locked elements in parallel: the split of their forces is free) is solved by the
-        minimum-norm correction, the rule of the fixed-step methods.
+        minimum-norm correction, the rule of the fixed-step methods, or, when ``cones``
+        names the locked elements in parallel (``e -> (centre, half-width)`` of the force
+        interval their lock admits), by the split of :func:`_cone_solver`.
         """
         G, J = self.evaluate(U, h, x_n, v_n, f, kernels)
-        solve = _solver(J)
+        solve = self._solver(J, U, cones)
         nfac = 1
         prev = math.inf
         for it in range(1, max_iters + 1):
@@ -253,10 +298,18 @@ class StageSystem:
                 return U, it, nfac
             G, J2 = self.evaluate(U, h, x_n, v_n, f, kernels)
             if worst > 0.5 * prev:
-                solve = _solver(J2)
+                solve = self._solver(J2, U, cones)
                 nfac += 1
             prev = worst
         return None, max_iters, nfac
+
+    def _solver(self, J: list[list[float]], U: list[float],
+                cones: dict[int, tuple[float, float]] | None):
+        # locks in parallel make J singular, but only to round-off once the stage rows
+        # mix: an LU would then pick the split from the round-off; the SVD does not
+        if cones and all(math.isfinite(a) for row in J for a in row):
+            return _cone_solver(J, U, cones, self.N, self.n)
+        return _solver(J)
 
     # -- the error estimate ---------------------------------------------------------------
     def error(self, U: list[float], h: float, x_n: list[float], v_n: list[float],

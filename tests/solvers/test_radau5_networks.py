@@ -1,0 +1,181 @@
+"""Regressions of ``radau5`` on networks drawn by the random-network property suite
+(``tests/solvers/test_random_networks.py``, issue 11): each scene is one that used to stop
+or crash, written out, with the property it broke checked directly."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from lumped import simulate
+from lumped.laws import get_law
+from lumped.scene import Element, Junction, Mass, Scene
+
+
+def _hb(gamma: float, tau: float, n: float):
+    return get_law("herschel_bulkley").bind(gamma=gamma, tau=tau, n=n)
+
+
+def test_a_shear_thickening_dashpot_stops_and_sticks():
+    # Herschel-Bulkley n = 1.5 ends its slip flat (dq/dF = 0 at the yield force): the
+    # located stop left a rate of the Newton tolerance, read by the mode probe as a force
+    # far beyond the yield force, and the run chattered between the slip branches down
+    # to the step floor (STEP_TOO_SMALL at t = 0.158)
+    m = tau = 0.10326537141315197
+    scene = Scene([Mass("m", m=m, x0=-0.0011156382459216359, v0=-1.8425469184371508)],
+                  [Element("c", get_law("newtonian").bind(c=1.0), "ground", "m"),
+                   Element("hb", _hb(1.0, tau, 1.5), "ground", "m")])
+    sol = simulate(scene, method="radau5", t_end=0.5, rtol=1e-4, atol=1e-6)
+    assert sol.ok, sol.message
+    stops = [ev for ev in sol.events if ev.element == "hb"]
+    assert [ev.to_branch for ev in stops] == [2], stops  # slip- -> stick, once
+    after = sol.t > stops[0].t
+    assert np.all(sol.v["m"][after] == 0.0)  # exactly stuck: no creep
+    assert np.ptp(sol.x["m"][after]) == 0.0
+    assert np.all(np.abs(sol.F["hb"][after]) <= tau)
+
+
+def test_two_masses_lock_up_through_a_shear_thickening_dashpot():
+    # the dashpot between two sliding masses sticks once their velocities meet; the event
+    # was followed by a step of a few ulps and the run stopped at the step floor
+    tau = 0.3120390150414847
+    scene = Scene([Mass("m0", m=1.0, x0=0.0, v0=0.0),
+                   Mass("m1", m=0.9955170557221744, x0=0.886383055900569,
+                        v0=-0.6437874517344546)],
+                  [Element("s", get_law("string_spring").bind(k=0.20536360332235568,
+                                                              L=0.4891710442489269),
+                           "ground", "m0"),
+                   Element("hb", _hb(0.702933798960849, tau, 1.5), "m0", "m1")])
+    for rtol in (1e-4, 1e-6, 1e-8):
+        sol = simulate(scene, method="radau5", t_end=0.55, rtol=rtol, atol=1e-2 * rtol)
+        assert sol.ok, (rtol, sol.message)
+        stick = [ev for ev in sol.events if ev.element == "hb" and ev.to_branch == 2]
+        assert len(stick) == 1, sol.events
+        after = sol.t > stick[0].t
+        assert after.any()
+        assert np.all(sol.v["m1"][after] - sol.v["m0"][after] == 0.0)
+        assert np.all(np.abs(sol.F["hb"][after]) <= tau)
+
+
+def test_a_second_guard_at_the_start_of_a_landing_step_is_an_event_there():
+    # while a step was being landed on one guard, another guard was found violated at the
+    # step's start: the landing step got the size 0 (ZeroDivisionError in the force scale)
+    scene = Scene(
+        [Mass("m0", m=2.455142536481585, x0=0.0, v0=0.12893473126304267),
+         Mass("m1", m=0.23815728484872456, x0=0.37131797589775695, v0=0.75),
+         Junction("j2", x0=-0.8533718525219758),
+         Mass("m3", m=1.0, x0=-0.8546583583029737, v0=1.9604850523154989)],
+        [Element("e0", get_law("linear_spring").bind(k=21.079841838522917), "ground", "m0"),
+         Element("e1", get_law("coulomb").bind(tau=0.08229975900818783, r=3.9807301201594547),
+                 "ground", "m1"),
+         Element("e2", _hb(4.4072621346783105, 0.01454737992373308, 1.0), "m0", "j2"),
+         Element("e3", get_law("bingham").bind(gamma=0.830085188952237, tau=1.0), "j2", "m3"),
+         Element("e4", get_law("linear_spring").bind(k=6.024592843506649), "j2", "m1"),
+         Element("e5", _hb(0.1, 1.0, 1.0), "m1", "ground"),
+         Element("e6", get_law("string_spring").bind(k=0.1, L=1.2333079907944104), "m3", "m1")])
+    dt = 0.018712942283937217
+    for k in range(3):
+        h = dt / 2**k
+        sol = simulate(scene, method="radau5", dt=h, t_end=27 * dt, rtol=h**2, atol=h**3)
+        assert sol.ok, sol.message
+        assert np.all(np.isfinite(sol.data))
+
+
+def test_stuck_dashpots_in_parallel_share_the_load_within_their_cones():
+    # a junction held by a Coulomb and a Bingham dashpot in parallel (both stuck) against
+    # a spring: the split is free, and the minimum-norm correction put the Coulomb element
+    # above its yield force; the split is now in proportion to the yield forces
+    tau_c, tau_b = 0.02575926016363935, 0.4921047605730337
+    scene = Scene(
+        [Mass("m0", m=1.3824187360077447, x0=0.0, v0=-0.3079424336235115),
+         Junction("j1", x0=-0.853783592355712)],
+        [Element("e0", get_law("coulomb").bind(tau=1.0, r=1.0), "ground", "m0"),
+         Element("e1", get_law("coulomb").bind(tau=tau_c, r=2.020977723336808), "m0", "j1"),
+         Element("e2", get_law("string_spring").bind(k=0.43867229930777846,
+                                                     L=0.022031875816461186), "ground", "j1"),
+         Element("e3", get_law("coulomb").bind(tau=0.24027567711852846, r=94.4565858571075),
+                 "ground", "m0"),
+         Element("e4", get_law("bingham").bind(gamma=1.0, tau=tau_b), "m0", "j1")])
+    for h in (0.025, 0.0125):
+        sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3)
+        assert sol.ok, sol.message
+        F1, F4 = sol.F["e1"], sol.F["e4"]
+        assert np.all(np.abs(F1) <= tau_c * (1 + 1e-9))
+        assert np.all(np.abs(F4) <= tau_b * (1 + 1e-9))
+        # the pair carries the spring's pull on the junction
+        assert np.allclose(F1 + F4, -sol.F["e2"], rtol=1e-6, atol=1e-9)
+        both = (np.abs(sol.v["m0"]) == 0.0)
+        assert both.any()
+        assert np.allclose(F1[both] / tau_c, F4[both] / tau_b, rtol=1e-6, atol=1e-9)
+
+
+def test_initial_forces_that_miss_a_law_are_taken_from_the_probe():
+    # a junction between a slipping Herschel-Bulkley (n = 2) and a slipping Bingham
+    # dashpot: the initial state gave both the force -0.01 (no law holds there) and the
+    # first stage Newton failed at every step size (STEP_TOO_SMALL at t = 0)
+    scene = Scene(
+        [Mass("m0", m=1.0, x0=-0.4924278832010035, v0=0.0),
+         Junction("j1", x0=0.29358509095443863), Junction("j2", x0=0.0),
+         Mass("m3", m=3.127965730978995, x0=-0.8957004524460324, v0=1.5601441271035386)],
+        [Element("e0", get_law("string_spring").bind(k=28.32633531649131, L=1.0), "ground",
+                 "m0"),
+         Element("e1", _hb(1.0, 1.0, 2.0), "m0", "j1"),
+         Element("e2", get_law("newtonian").bind(c=3.1622776601683795), "ground", "j2"),
+         Element("e3", get_law("bingham").bind(gamma=0.27709420484354375, tau=0.01), "j1",
+                 "m3")])
+    sol = simulate(scene, method="radau5", t_end=0.2, rtol=1e-6, atol=1e-9)
+    assert sol.ok, sol.message
+    # the series pair carries one force: (F - 1)^2 + 0.277 (F - 0.01) = 1.56 at t = 0
+    F0 = sol.F["e1"][0]
+    assert F0 == sol.F["e3"][0]
+    assert abs((F0 - 1.0) ** 2 + 0.27709420484354375 * (F0 - 0.01) - 1.5601441271035386) < 1e-6
+
+
+def test_a_slow_impact_is_applied_not_spread_over_ever_shorter_steps():
+    # a string goes taut at 0.04 m/s, below the old impact threshold (1e3 times the
+    # velocity tolerance, 0.4 m/s at rtol 6e-4): no impulse was applied, the taut string
+    # carried the momentum as a force m v / h and the step shrank to the floor
+    scene = Scene(
+        [Junction("j0", x0=0.0), Mass("m1", m=1.0000000230258512, x0=6.103515625e-05, v0=0.0),
+         Mass("m2", m=0.2587129260934172, x0=0.0, v0=0.5994366228360115),
+         Mass("m3", m=0.6223325920962172, x0=0.0, v0=0.6712395516689065)],
+        [Element("e0", get_law("coulomb").bind(tau=0.016242412438282172, r=100.0), "ground",
+                 "j0"),
+         Element("e1", get_law("string_spring").bind(k=9.99976974414163,
+                                                     L=0.0015786515341629993), "ground", "m1"),
+         Element("e2", get_law("linear_spring").bind(k=1.2589254117941673), "j0", "m2"),
+         Element("e3", get_law("newtonian").bind(c=1.0), "j0", "m3"),
+         Element("e4", get_law("linear_spring").bind(k=1.8193771168531416), "m1", "ground"),
+         Element("e5", get_law("implicit_spring").bind(k=0.10853499651109838,
+                                                       L0=0.00720867165550684, F0=1.0),
+                 "m2", "m1"),
+         Element("e6", get_law("bingham").bind(gamma=1.0, tau=0.06826804612256446), "m2",
+                 "m1")])
+    h = 0.025
+    sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3)
+    assert sol.ok, sol.message
+    impacts = [ev for ev in sol.events if ev.kind == "impact"]
+    assert impacts and impacts[0].element == "e1"
+    assert impacts[0].impulse != 0.0 and impacts[0].energy_lost >= 0.0
+    assert np.all(sol.x["m1"] <= 0.0015786515341629993 * (1 + 1e-9))
+
+
+def test_the_mode_after_an_impact_gets_a_longer_probe_when_the_short_one_fails():
+    # an implicit spring beside a string between two masses: after the string's impact
+    # the mode probe (one implicit step of the full laws, from the forces before the
+    # impact) failed at its one size and the run stopped as INCONSISTENT
+    scene = Scene(
+        [Mass("m0", m=0.2690049343155606, x0=0.998257274676968, v0=1e-05),
+         Mass("m1", m=1.023292992280754, x0=0.8639871491412778, v0=-1.164477525441242)],
+        [Element("e0", get_law("linear_spring").bind(k=4.315803394252424), "ground", "m0"),
+         Element("e1", get_law("implicit_spring").bind(k=4.567424155756598, L0=1.0,
+                                                       F0=2.6503495682417277), "m0", "m1"),
+         Element("e2", get_law("string_spring").bind(k=0.26028196531557674,
+                                                     L=0.09344000952435165), "m0", "m1"),
+         Element("e3", get_law("linear_spring").bind(k=1.023292992280754), "m0", "ground")])
+    for h in (0.0125, 0.00625):
+        sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3)
+        assert sol.ok, sol.message
+        impacts = [ev for ev in sol.events if ev.kind == "impact"]
+        assert [ev.element for ev in impacts] == ["e2"]
+        q = sol.x["m1"] - sol.x["m0"]
+        assert q.max() <= 0.09344000952435165 * (1 + 1e-9)
