@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 
 from ..scene import Junction, Mass, Scene
-from .junction_balance import junction_velocities, refuse_unbalanced_junctions
+from .junction_balance import refuse_unbalanced_junctions
 from .newton import (
     NewtonCode,
     NewtonOptions,
@@ -224,13 +224,13 @@ def consistent_initial_state(
     res = newton_solve(evaluate, u0, ic_options, min_norm=True, check_scaled=True)
     if res.code is not NewtonCode.SUCCESS:
         # restarts: the junctions' velocities from their balances solved one by one
-        # (lumped.solvers.junction_balance.junction_velocities), then every junction
+        # (lumped.solvers.globalize.balance_sweeps), then every junction
         # moving with each dashpot neighbour in turn (see
         # lumped.solvers.globalize.stuck_guesses), the masses' accelerations zero; each
         # by plain Newton, then with every free force on its own law (nonlinear
         # elimination, see lumped.solvers.globalize.force_projector: a law steep in F,
         # Herschel-Bulkley n < 1 near its yield force, is solved in its inverse form)
-        from .globalize import stuck_guesses
+        from .globalize import balance_sweeps, stuck_guesses
 
         def project(u: list[float]) -> list[float]:
             out = list(u)
@@ -250,10 +250,12 @@ def consistent_initial_state(
         free = [e for e in range(E) if pinned[e] is None]
         starts = [u0] + [[0.0 if is_mass[i] else g[i] for i in range(N)] + g[N:]
                          for g in stuck_guesses(scene, v0, u0[N:])]
-        balanced = junction_velocities(scene, pinned, v0, f)
+        junctions = [i for i in range(N) if not is_mass[i]]
+        balanced = balance_sweeps(
+            evaluate, project, list(u0), junctions,
+            lambda u: [v0[i] if is_mass[i] else u[i] for i in range(N)])
         if balanced is not None:  # the junctions' monotone balances solved one by one
-            starts.insert(1, project([0.0 if is_mass[i] else balanced[i] for i in range(N)]
-                                     + u0[N:]))
+            starts.insert(1, balanced)
         for start in starts:
             for proj in (None, project):
                 if start is u0 and proj is None:

@@ -34,7 +34,7 @@ from collections.abc import Callable, Sequence
 
 from ..scene import Junction, Scene
 
-__all__ = ["force_range", "junction_velocities", "refuse_unbalanced_junctions"]
+__all__ = ["force_range", "refuse_unbalanced_junctions"]
 
 #: Rates probed for the range of a dashpot: far beyond any physical rate, first one with
 #: finite residuals on both sides wins.
@@ -191,93 +191,3 @@ def _interval(bound: tuple[float | None, float | None]) -> str:
         return f"|F| <= {hi!r}"
     return f"{'-inf' if lo is None else repr(lo)} <= F <= {'inf' if hi is None else repr(hi)}"
 
-
-def junction_velocities(scene: Scene, pinned: Sequence[float | None], v0: Sequence[float],
-                        f: Sequence[float], sweeps: int = 50) -> list[float] | None:
-    """Velocities of the massless junctions at ``t = 0`` that balance them, by nonlinear
-    Gauss-Seidel: each junction's balance, with the other velocities fixed, is a scalar
-    equation ``g_j(w) = f_j`` whose left side never decreases in ``w`` (every dashpot at
-    the junction pushes back harder the faster it moves, a passive law), solved by
-    bracketing and bisection. This is the velocity-level part of the limit system of
-    :func:`lumped.solvers.initial_state.consistent_initial_state` (the masses' velocities
-    are ``v0``; springs at junctions carry the forces ``pinned``), a monotone problem
-    where Newton may fail from a poor start (steep laws, several friction elements).
-
-    Returns the node velocities (``v0`` at masses), a starting point for Newton, or None
-    when some junction's balance cannot be bracketed (the state is then refused by
-    :func:`refuse_unbalanced_junctions`).
-    """
-    from .initial_state import _scalar_root
-
-    nodes, elements = scene.nodes, scene.elements
-    ea, eb = scene.elem_a, scene.elem_b
-    junctions = [i for i, nd in enumerate(nodes) if isinstance(nd, Junction)]
-    v = list(v0)
-    touching = {
-        j: [(e, 1.0 if eb[e] == j else -1.0) for e, el in enumerate(elements)
-            if j in (ea[e], eb[e]) and ea[e] != eb[e]]
-        for j in junctions
-    }
-    guess = [0.0] * len(elements)
-
-    def force(e: int) -> float:
-        if pinned[e] is not None:
-            return pinned[e]
-        el = elements[e]
-        if el.kind == "spring":
-            return guess[e]  # a spring left free at its known elongation (taut string)
-        qb = v[eb[e]] if eb[e] >= 0 else 0.0
-        qa = v[ea[e]] if ea[e] >= 0 else 0.0
-        try:
-            F, _ = _scalar_root(el.law.kernel, qb - qa, guess[e])
-        except ValueError:
-            return math.nan
-        return F
-
-    def balance(j: int, w: float) -> float:
-        v[j] = w
-        return sum(s * force(e) for e, s in touching[j]) - f[j]
-
-    for _ in range(sweeps):
-        moved = 0.0
-        for j in junctions:
-            w0 = v[j]
-            g0 = balance(j, w0)
-            if not math.isfinite(g0):
-                return None
-            if g0 == 0.0:
-                continue
-            # bracket: g increases with w
-            direction = -1.0 if g0 > 0.0 else 1.0
-            step = 1e-3 * (1.0 + abs(w0))
-            inside, outside = w0, None
-            for _ in range(200):
-                w = w0 + direction * step
-                g = balance(j, w)
-                if not math.isfinite(g):
-                    return None
-                if (g > 0.0) != (g0 > 0.0) or g == 0.0:
-                    outside = w
-                    break
-                inside = w
-                step *= 2.0
-            if outside is None:
-                return None
-            for _ in range(200):
-                mid = 0.5 * (inside + outside)
-                if mid in (inside, outside):
-                    break
-                g = balance(j, mid)
-                if (g > 0.0) == (g0 > 0.0) and g != 0.0:
-                    inside = mid
-                else:
-                    outside = mid
-            v[j] = outside
-            for e, _ in touching[j]:
-                F = force(e)
-                if math.isfinite(F):
-                    guess[e] = F
-            moved = max(moved, abs(v[j] - w0) / (1.0 + abs(v[j])))
-        if moved <= 1e-15:
-            break
-    return v
