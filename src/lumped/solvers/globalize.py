@@ -63,6 +63,20 @@ def force_projector(scene: Scene, h: float, x_hat: list[float]):
                 free.append((k, q))
         return out
 
+    def ulp_scales(u: list[float]) -> list[tuple[int, float]]:
+        """``(row, rho / eps)`` per law row: ``rho`` the largest change of ``R`` when ``F``
+        moves to a floating-point neighbour, the round-off floor of the row at ``u``
+        (where the law is steep in ``F`` no float may give a smaller residual)."""
+        out = []
+        for k, a, b, is_spring, kernel in items:
+            q = elongation(u, a, b, is_spring)
+            R = kernel(q, u[k])[0]
+            rho = max(abs(kernel(q, math.nextafter(u[k], d))[0] - R)
+                      for d in (-math.inf, math.inf))
+            out.append((k, rho / 2.220446049250313e-16))
+        return out
+
+    project.ulp_scales = ulp_scales
     return project
 
 
@@ -95,7 +109,7 @@ def stuck_guesses(scene: Scene, v: list[float], F: list[float]) -> list[list[flo
 
 
 def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anchors,
-                   sweeps: int = 50) -> list[float] | None:
+                   links: list[tuple[int, int]] = (), sweeps: int = 50) -> list[float] | None:
     """A starting point for Newton from the nodes' balances solved one at a time
     (nonlinear Gauss-Seidel).
 
@@ -110,64 +124,106 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
     ``1e-15``) or ``sweeps`` sweeps. Where the balance jumps across zero (a dashpot
     sticks: its force fills an interval at rate 0), the bisection ends at adjacent floats
     around the jump; the velocity is then snapped to the value in that bracket at which a
-    rate vanishes exactly (0, or one of ``anchors(u)``: the other nodes' velocities), so
-    that Newton starts on the stuck pieces. Returns the projected point, or
-    None if some balance cannot be bracketed (a non-finite row where it starts).
+    rate vanishes exactly (0, or one of ``anchors(u)``: every node's velocity, by index),
+    so that Newton starts on the stuck pieces. Nodes joined by stuck dashpots (``links``:
+    the ends ``(a, b)`` of the dashpots, rate ``u_b - u_a`` exactly zero) also move as one
+    cluster, the sum of their rows solved for a common shift (their inner forces cancel
+    in it): one node at a time cannot break a cluster free that must slip as a whole.
+    So do the two ends of every dashpot: where a law is steep in its rate (Herschel-Bulkley
+    ``n > 1`` near its yield force, ``dF/dq -> infinity``) single moves are tiny, while
+    the pair's common shift is set by the softer rest of the network.
+    Returns the projected point, or None if some balance cannot be bracketed (a
+    non-finite row where it starts).
 
     Used as a restart of :func:`solve_globalized` and, with the masses' accelerations
     held, for the junctions at ``t = 0`` (:mod:`lumped.solvers.initial_state`).
     """
     u = project(list(start))
 
-    def g(i: int, w: float) -> float:
-        u[i] = w
-        return evaluate(project(u))[0][i]
+    def solve(group: list[int]) -> float | None:
+        """Shift the velocities of ``group`` together by the ``s`` that zeroes the sum of
+        their balance rows (the forces inside the group cancel in it); the relative move,
+        or None if it cannot be bracketed."""
+        base = [u[i] for i in group]
+        others = [c for k, c in enumerate(anchors(u)) if k not in group]
+
+        def g(s: float) -> float:
+            for i, b in zip(group, base, strict=True):
+                u[i] = b + s
+            G = evaluate(project(u))[0]
+            return sum(G[i] for i in group)
+
+        g0 = g(0.0)
+        if not math.isfinite(g0):
+            return None
+        if g0 == 0.0:
+            return 0.0
+        sign0 = g0 > 0.0
+        direction = -1.0 if sign0 else 1.0
+        step = 1e-3 * (1.0 + max(abs(b) for b in base))
+        inside, outside = 0.0, None
+        for _ in range(200):
+            gs = g(direction * step)
+            # beyond the root, or where no force exists (a string past its length): the
+            # root lies before
+            if not math.isfinite(gs) or gs == 0.0 or (gs > 0.0) != sign0:
+                outside = direction * step
+                break
+            inside = direction * step
+            step *= 2.0
+        if outside is None:
+            g(0.0)
+            return None
+        for _ in range(1100):
+            mid = 0.5 * (inside + outside)
+            if mid in (inside, outside):
+                break
+            gm = g(mid)
+            if math.isfinite(gm) and gm != 0.0 and (gm > 0.0) == sign0:
+                inside = mid
+            else:
+                outside = mid
+        lo, hi = min(inside, outside), max(inside, outside)
+        snap = [c - b for c in (0.0, *others) for b in base if lo <= c - b <= hi]
+        if snap:
+            shift = snap[0]
+        else:  # the side where the balance has crossed zero (or is zero), if finite
+            shift = outside if math.isfinite(g(outside)) else inside
+        g(shift)
+        return max(abs(shift) / (1.0 + abs(b + shift)) for b in base)
 
     for _ in range(sweeps):
         moved = 0.0
-        for i in nodes:
-            w0 = u[i]
-            g0 = g(i, w0)
-            if not math.isfinite(g0):
+        groups = ([[i] for i in nodes] + _stuck_clusters(u, nodes, links)
+                  + [[a, b] for a, b in links if a in nodes and b in nodes and a != b])
+        for group in groups:
+            d = solve(group)
+            if d is None:
                 return None
-            if g0 == 0.0:
-                continue
-            sign0 = g0 > 0.0
-            direction = -1.0 if sign0 else 1.0
-            step = 1e-3 * (1.0 + abs(w0))
-            inside, outside = w0, None
-            for _ in range(200):
-                w = w0 + direction * step
-                gw = g(i, w)
-                # beyond the root, or where no force exists (a string past its length):
-                # the root lies before
-                if not math.isfinite(gw) or gw == 0.0 or (gw > 0.0) != sign0:
-                    outside = w
-                    break
-                inside = w
-                step *= 2.0
-            if outside is None:
-                u[i] = w0
-                return None
-            for _ in range(1100):
-                mid = 0.5 * (inside + outside)
-                if mid in (inside, outside):
-                    break
-                gm = g(i, mid)
-                if math.isfinite(gm) and gm != 0.0 and (gm > 0.0) == sign0:
-                    inside = mid
-                else:
-                    outside = mid
-            lo, hi = min(inside, outside), max(inside, outside)
-            snap = [c for c in [0.0, *anchors(u)] if lo <= c <= hi]
-            if snap:
-                u[i] = snap[0]
-            else:  # the side where the balance has crossed zero (or is zero), if finite
-                u[i] = outside if math.isfinite(g(i, outside)) else inside
-            moved = max(moved, abs(u[i] - w0) / (1.0 + abs(u[i])))
+            moved = max(moved, d)
         if moved <= 1e-15:
             break
     return project(u)
+
+
+def _stuck_clusters(u: list[float], nodes: list[int],
+                    links: list[tuple[int, int]]) -> list[list[int]]:
+    """Groups of two or more of ``nodes`` joined by links of rate exactly zero."""
+    parent = {i: i for i in nodes}
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b in links:
+        if a in parent and b in parent and u[a] == u[b]:
+            parent[find(a)] = find(b)
+    groups: dict[int, list[int]] = {}
+    for i in nodes:
+        groups.setdefault(find(i), []).append(i)
+    return [g for g in groups.values() if len(g) > 1]
 
 
 def split_free_forces(scene: Scene, evaluate, project, u: list[float]) -> list[float]:
@@ -230,15 +286,18 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
     its = res_ev = jac = facts = 0
 
     def starts():
-        yield list(v) + list(F)
+        yield list(v) + list(F), False
         N = len(scene.nodes)
+        links = [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
+                 if el.kind == "dashpot"]
         swept = balance_sweeps(evaluate, project, list(v) + list(F), list(range(N)),
-                               lambda u: u[:N])
+                               lambda u: u[:N], links)
         if swept is not None:
-            yield split_free_forces(scene, evaluate, project, swept)
-        yield from stuck_guesses(scene, v, F)
+            yield split_free_forces(scene, evaluate, project, swept), True
+        for guess in stuck_guesses(scene, v, F):
+            yield guess, False
 
-    for start in starts():
+    for start, swept in starts():
         for proj in (None, project):
             res = newton_solve(evaluate, start, options, None, min_norm=True, project=proj,
                                check_scaled=True)
@@ -256,6 +315,21 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
                     break
                 res.code = NewtonCode.DIVERGED
             first = first or res
+        if res.code is not NewtonCode.SUCCESS and swept:
+            # Newton could not polish the swept point (locks in parallel whose rows are
+            # proportional only up to rounding: a near-singular matrix, no minimum-norm
+            # step; or a law steep in F whose root lies between two floats). The point
+            # itself has every force on its law, each node balanced by bisection with the
+            # others held: keep it if the residual test holds there, each law row measured
+            # against its round-off floor (the change of R over one ulp of F).
+            G, J, S = evaluate(start)
+            res_ev += 1
+            S = list(S)
+            for k, floor in project.ulp_scales(start):
+                if floor > S[k] and math.isfinite(floor):
+                    S[k] = floor
+            if _residual_ok(G, S, options.rtol, options.atol):
+                res = NewtonResult(list(start), NewtonCode.SUCCESS, 0, 0, 0, 0, G, 0, J)
         if res.code is NewtonCode.SUCCESS:
             break
     else:
