@@ -24,15 +24,16 @@ from .initial_state import _scalar_root
 from .newton import NewtonCode, NewtonOptions, NewtonResult, _residual_ok, newton_solve
 
 __all__ = [
-    "balance_sweeps", "force_projector", "solve_globalized", "split_free_forces", "stuck_guesses",
+    "balance_sweeps", "force_projector", "laws_hold", "solve_globalized", "split_free_forces",
+    "stuck_guesses",
 ]
 
 
-def force_projector(scene: Scene, h: float, x_hat: list[float]):
+def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool = False):
     """``u -> u'``: every element's force replaced by the root of its own law at the
     elongation (rate) that ``u``'s velocities give, where the law fixes the force there
-    (a stuck dashpot's force is left as is if its law admits it, else moved to a force
-    it admits). See ``project`` of
+    (a stuck dashpot's force is left as is; with ``admit=True`` only if its law admits
+    it, else moved to a force it admits). See ``project`` of
     :func:`~lumped.solvers.newton.newton_solve`."""
     N = len(scene.nodes)
     items = [(N + e, scene.elem_a[e], scene.elem_b[e], el.kind == "spring", el.law.kernel)
@@ -55,7 +56,7 @@ def force_projector(scene: Scene, h: float, x_hat: list[float]):
                 F, fixed = _scalar_root(kernel, q, u[k])
             except ValueError:  # no force at this q: leave it to Newton
                 continue
-            if math.isfinite(F) and (fixed or kernel(q, u[k])[0] != 0.0):
+            if math.isfinite(F) and (fixed or (admit and kernel(q, u[k])[0] != 0.0)):
                 # a force the law fixes; or, where the law leaves it free (a stuck
                 # dashpot), one it admits if the iterate's is not
                 out[k] = F
@@ -78,6 +79,34 @@ def force_projector(scene: Scene, h: float, x_hat: list[float]):
 
     project.ulp_scales = ulp_scales
     return project
+
+
+def laws_hold(scene: Scene, h: float, x_hat: list[float], u: list[float], rtol: float,
+              atol: float) -> bool:
+    """Every element's law holds at the step's solution ``u`` (velocities, forces) to
+    Newton's residual test, ``|R| <= rtol S + atol`` (``S`` from
+    :func:`~lumped.solvers.step_system._law_scale`), read from the kernels directly.
+
+    Newton applies its last correction without evaluating where it lands (it is below
+    the update tolerance); taken with the Jacobian of one piece of a law in a direction
+    the balances leave free (locks in parallel), it can leave a stuck dashpot ``1e-8``
+    beyond its yield force. This check costs one kernel call per element and no
+    residual evaluation, so the counters of a step that passes are unchanged."""
+    from .step_system import _law_scale
+
+    N = len(scene.nodes)
+    for e, el in enumerate(scene.elements):
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        if el.kind == "spring":
+            q = ((x_hat[b] + h * u[b]) if b >= 0 else 0.0) - ((x_hat[a] + h * u[a]) if a >= 0
+                                                               else 0.0)
+        else:
+            q = (u[b] if b >= 0 else 0.0) - (u[a] if a >= 0 else 0.0)
+        F = u[N + e]
+        R, Rq, RF = el.law.kernel(q, F)
+        if not abs(R) <= rtol * _law_scale(el.law.kernel, q, F, R, Rq, RF) + atol:
+            return False
+    return True
 
 
 def stuck_guesses(scene: Scene, v: list[float], F: list[float]) -> list[list[float]]:
@@ -109,7 +138,7 @@ def stuck_guesses(scene: Scene, v: list[float], F: list[float]) -> list[list[flo
 
 
 def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anchors,
-                   links: list[tuple[int, int]] = (), sweeps: int = 50) -> list[float] | None:
+                   links: list[tuple[int, int]] = (), sweeps: int = 20) -> list[float] | None:
     """A starting point for Newton from the nodes' balances solved one at a time
     (nonlinear Gauss-Seidel).
 
@@ -122,10 +151,11 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
     yield force, several friction elements on one node), where Newton on the whole
     system may wander. The nodes ``nodes`` are swept until no velocity moves (relative
     ``1e-15``) or ``sweeps`` sweeps. Where the balance jumps across zero (a dashpot
-    sticks: its force fills an interval at rate 0), the bisection ends at adjacent floats
-    around the jump; the velocity is then snapped to the value in that bracket at which a
-    rate vanishes exactly (0, or one of ``anchors(u)``: every node's velocity, by index),
-    so that Newton starts on the stuck pieces. Nodes joined by stuck dashpots (``links``:
+    sticks: its force fills an interval at rate 0), the root is the velocity at which a
+    rate vanishes exactly (0, or one of ``anchors(u)``: every node's velocity, by index):
+    the candidates inside the bracket are tried first (a sign change between their float
+    neighbours), so that Newton starts on the stuck pieces; else bisection to a width of
+    ``1e-16`` of the velocities. Nodes joined by stuck dashpots (``links``:
     the ends ``(a, b)`` of the dashpots, rate ``u_b - u_a`` exactly zero) also move as one
     cluster, the sum of their rows solved for a common shift (their inner forces cancel
     in it): one node at a time cannot break a cluster free that must slip as a whole.
@@ -174,20 +204,28 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
         if outside is None:
             g(0.0)
             return None
-        for _ in range(1100):
-            mid = 0.5 * (inside + outside)
-            if mid in (inside, outside):
-                break
-            gm = g(mid)
-            if math.isfinite(gm) and gm != 0.0 and (gm > 0.0) == sign0:
-                inside = mid
-            else:
-                outside = mid
         lo, hi = min(inside, outside), max(inside, outside)
-        snap = [c - b for c in (0.0, *others) for b in base if lo <= c - b <= hi]
-        if snap:
-            shift = snap[0]
-        else:  # the side where the balance has crossed zero (or is zero), if finite
+        cands = sorted({c - b for c in (0.0, *others) for b in base if lo < c - b < hi},
+                       key=lambda c: abs(c - inside))
+        shift = None
+        for c in cands[:8]:
+            # a jump across zero at c: a rate vanishes there and a dashpot sticks
+            gl, gr = g(math.nextafter(c, -math.inf)), g(math.nextafter(c, math.inf))
+            if math.isfinite(gl) and math.isfinite(gr) and gl <= 0.0 <= gr:
+                shift = c
+                break
+        if shift is None:
+            width = 1e-16 * (1.0 + max(abs(b) for b in base))
+            for _ in range(200):
+                mid = 0.5 * (inside + outside)
+                if mid in (inside, outside) or abs(outside - inside) <= width:
+                    break
+                gm = g(mid)
+                if math.isfinite(gm) and gm != 0.0 and (gm > 0.0) == sign0:
+                    inside = mid
+                else:
+                    outside = mid
+            # the side where the balance has crossed zero (or is zero), if finite
             shift = outside if math.isfinite(g(outside)) else inside
         g(shift)
         return max(abs(shift) / (1.0 + abs(b + shift)) for b in base)
@@ -226,7 +264,8 @@ def _stuck_clusters(u: list[float], nodes: list[int],
     return [g for g in groups.values() if len(g) > 1]
 
 
-def split_free_forces(scene: Scene, evaluate, project, u: list[float]) -> list[float]:
+def split_free_forces(scene: Scene, evaluate, project, u: list[float],
+                      rows: list[int] | None = None) -> list[float]:
     r"""At fixed velocities, the forces the laws leave free (stuck dashpots, taut strings)
     chosen to balance the nodes: the bounded least-squares problem
 
@@ -239,7 +278,9 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float]) -> list[f
     terms ``S_i`` and ``mu = 1e-12``: where the balances fix the forces this is their
     solution, where they do not (locked elements in parallel) the small penalty picks the
     change of least norm, the rule of the minimum-norm Newton step. Newton then polishes
-    from the result (the velocities, found by :func:`balance_sweeps`, stay)."""
+    from the result (the velocities, found by :func:`balance_sweeps`, stay). ``rows``: the
+    balance rows to satisfy (default every node's; the initial state's masses have free
+    accelerations, so only its junctions' rows count there)."""
     import numpy as np
     from scipy.optimize import lsq_linear
 
@@ -252,9 +293,12 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float]) -> list[f
         return u
     G, J, S = evaluate(u)
     ks = [k for k, _ in free]
-    w = np.array([1.0 / max(S[i], 1e-300) for i in range(N)])
-    A = np.array([[J[i][k] for k in ks] for i in range(N)]) * w[:, None]
-    rhs = -np.array(G[:N]) * w
+    rows = list(range(N)) if rows is None else rows
+    if not rows:
+        return u
+    w = np.array([1.0 / max(S[i], 1e-300) for i in rows])
+    A = np.array([[J[i][k] for k in ks] for i in rows]) * w[:, None]
+    rhs = -np.array([G[i] for i in rows]) * w
     lo, hi = [], []
     for k, q in free:
         a, b = force_range(scene.elements[k - N].law.kernel, q, u[k])
@@ -275,18 +319,28 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float]) -> list[f
 
 
 def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: list[float],
-                     F: list[float], options: NewtonOptions) -> NewtonResult:
+                     F: list[float], options: NewtonOptions, *,
+                     sweeps: bool = False) -> NewtonResult:
     """The step system ``evaluate`` solved from the restart points: the previous solution,
     the nodes' balances solved one at a time (:func:`balance_sweeps`) and every
     :func:`stuck_guesses` point, each first by plain (minimum-norm) Newton, then with
     nonlinear elimination (:func:`force_projector`). The first success is returned, else
-    the first failure (the counters add up over all attempts)."""
-    project = force_projector(scene, h, x_hat)
+    the first failure (the counters add up over all attempts).
+
+    ``sweeps=True`` (the fixed-step methods) adds the :func:`balance_sweeps` start, keeps
+    a Newton success only where the residual test holds after its last correction, and
+    accepts the swept point itself when Newton cannot polish it. The default leaves the
+    solve as ``radau5``'s event probes were tuned with (their step control reads the
+    probe's success; see the report of branch s2-netbdf)."""
+    project = force_projector(scene, h, x_hat, admit=sweeps)
     first: NewtonResult | None = None
     its = res_ev = jac = facts = 0
 
     def starts():
         yield list(v) + list(F), False
+        if not sweeps:
+            yield from ((g, False) for g in stuck_guesses(scene, v, F))
+            return
         N = len(scene.nodes)
         links = [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
                  if el.kind == "dashpot"]
@@ -300,12 +354,12 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
     for start, swept in starts():
         for proj in (None, project):
             res = newton_solve(evaluate, start, options, None, min_norm=True, project=proj,
-                               check_scaled=True)
+                               check_scaled=sweeps)
             its += res.iterations
             res_ev += res.residual_evals
             jac += res.jacobian_evals
             facts += res.factorizations
-            if res.code is NewtonCode.SUCCESS:
+            if res.code is NewtonCode.SUCCESS and sweeps:
                 # the last correction is applied unevaluated: keep the solution only if
                 # the residual test holds where it landed (after nonlinear elimination a
                 # correction may leave a friction element's interval by 1e-8)

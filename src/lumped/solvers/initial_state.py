@@ -251,9 +251,10 @@ def consistent_initial_state(
         starts = [u0] + [[0.0 if is_mass[i] else g[i] for i in range(N)] + g[N:]
                          for g in stuck_guesses(scene, v0, u0[N:])]
         junctions = [i for i in range(N) if not is_mass[i]]
-        balanced = balance_sweeps(
-            evaluate, project, list(u0), junctions,
-            lambda u: [v0[i] if is_mass[i] else u[i] for i in range(N)])
+        # no snapping onto other nodes' velocities here (anchors: none): in the limit
+        # system a junction stuck to a neighbour leaves the stuck forces to the
+        # accelerations' rows, which Newton settles from a start a hair off the kink
+        balanced = balance_sweeps(evaluate, project, list(u0), junctions, lambda u: [0.0] * N)
         if balanced is not None:  # the junctions' monotone balances solved one by one
             starts.insert(1, balanced)
         for start in starts:
