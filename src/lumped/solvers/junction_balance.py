@@ -147,7 +147,7 @@ def refuse_unbalanced_junctions(scene: Scene, pinned: Sequence[float | None],
     m, n = len(junctions), len(free)
     # rows in units of their own terms, so that the imbalance is relative; a row with no
     # terms (a junction joined only by unbounded dashpots, unloaded) in the largest units
-    scale = np.maximum(scale, 1e-9 * max(float(scale.max()), 1e-300))
+    scale = np.maximum(scale, max(1e-9 * float(scale.max()), 1e-300))
     A = np.zeros((m, n + 2 * m))
     for j, ends in enumerate(coef):
         for r, s in ends:
