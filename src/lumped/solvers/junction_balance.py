@@ -156,8 +156,11 @@ def refuse_unbalanced_junctions(scene: Scene, pinned: Sequence[float | None],
     A[:, n + m:] = -np.eye(m)
     w = 1.0 / scale
     c = np.concatenate([np.zeros(n), np.ones(2 * m)])
-    res = linprog(c, A_eq=A * w[:, None], b_eq=b * w,
-                  bounds=bounds + [(0.0, None)] * (2 * m), method="highs")
+    try:
+        res = linprog(c, A_eq=A * w[:, None], b_eq=b * w,
+                      bounds=bounds + [(0.0, None)] * (2 * m), method="highs")
+    except ValueError:  # non-finite data (a law gave no finite range): no verdict
+        return
     if res.status != 0:
         return  # no verdict: leave the failure to Newton's report
     gap = res.x[n:n + m] + res.x[n + m:]
