@@ -88,6 +88,21 @@ def test_initial_force_near_the_yield_force(m, k, gamma, tau, x0, sign, ulps):
     assert sol.column("v_mass")[0] == 0.0
 
 
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+@pytest.mark.parametrize("ulps", [10**6, 10**8])
+def test_initial_force_a_hair_above_the_yield_force_with_large_gamma(sign, ulps):
+    """Found by the hypothesis test above (``F(0) - k x0 = tau (1 + 2e-10)``, gamma 842):
+    Newton reached the kink ``F = tau`` (the answer) on the stuck piece, whose row
+    ``eps a = 0`` then asked for a last correction of ``F`` back to ``F(0) - k x0``, as
+    large as the tolerance; it was applied unchecked (``F`` off by ``2e-10``)."""
+    m, k, gamma, tau, x0 = 0.125, 8190.04, 842.0, 1.001, 0.5
+    F0 = k * x0 + sign * tau * (1.0 + ulps * 2.0**-52)
+    sol = simulate(scene_of(m, k, gamma, tau, x0=x0, forcing=F0), method="bdf1", dt=1e-3,
+                   t_end=1e-3)
+    assert sol.column("F_dashpot")[0] == sign * tau
+    assert sol.column("v_mass")[0] == 0.0
+
+
 @pytest.mark.parametrize("method", ["bdf1", "bdf2"])
 @pytest.mark.parametrize("amplitude", [1.0 + 1e-12, 1.0, 1.0 - 1e-12])
 def test_square_forcing_at_the_yield_force_equals_closed_form(method, amplitude):

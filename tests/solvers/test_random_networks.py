@@ -29,6 +29,7 @@ import os
 
 import numpy as np
 import pytest
+from _yield_check import check_yield
 from hypothesis import HealthCheck, assume, event, given, settings
 from hypothesis import strategies as st
 
@@ -49,7 +50,6 @@ GENERIC = tuple(sorted(m for m in METHOD_REGISTRY if m not in NOT_GENERIC))
 
 SPRINGS = ("linear_spring", "string_spring", "implicit_spring")
 DASHPOTS = ("newtonian", "bingham", "coulomb", "herschel_bulkley")
-YIELDING = ("bingham", "coulomb", "herschel_bulkley")
 T_END = 0.5
 DT = 0.025
 #: Coarsest step as a fraction of the scene's fastest time scale (see :func:`grid`).
@@ -182,7 +182,7 @@ def check_network(scene: Scene, method: str) -> None:
     for s in sols:
         assert s.ok, s.message
         assert np.all(np.isfinite(s.data))
-        _check_yield(scene, s)
+        check_yield(scene, s)
     energies, mags = zip(*(stored_energy(scene, s) for s in sols), strict=True)
     E0 = energies[0][0]
     # round-off of the terms, and Newton's absolute tolerance on the velocities
@@ -206,28 +206,6 @@ def check_network(scene: Scene, method: str) -> None:
     # bouncing off a string) is off by O(1)
     bound = 0.5 * dt * (1.0 + vmax)
     assert d1 <= max(0.9 * d0 + 1e-7 * scale, bound), f"no convergence: {d0!r} -> {d1!r}"
-
-
-def _check_yield(scene: Scene, sol) -> None:
-    """A dashpot carries more than its yield force only while it slips at the rate its
-    law gives for that force (Coulomb: never more than ``tau``)."""
-    v = {nd.name: sol.v[nd.name] for nd in scene.nodes}
-    for el in scene.elements:
-        if el.law_name not in YIELDING:
-            continue
-        p = el.law.params
-        tau = p["tau"]
-        F = np.abs(sol.F[el.name])
-        # Newton's tolerance is relative to the forces that meet at the element's nodes
-        scale = np.abs(sol.forces).max(axis=1)
-        above = F > tau * (1 + 1e-9) + 1e-8 * scale + 1e-12
-        if el.law_name == "coulomb":
-            assert not above.any(), f"{el.name} above its yield force"
-            continue
-        q = np.abs(v.get(el.b, 0.0) - v.get(el.a, 0.0)) + np.zeros_like(F)
-        slip_rate = p["gamma"] * np.maximum(F - tau, 0.0) ** p.get("n", 1.0)
-        stuck_above = above & (q < 0.5 * slip_rate)
-        assert not stuck_above.any(), f"{el.name} stuck above its yield force"
 
 
 _SETTINGS = settings(max_examples=EXAMPLES, deadline=None,

@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 
 from ..scene import Scene
 from .branch_check import _known_monotone, _left_branch
-from .globalize import solve_globalized
+from .globalize import laws_hold, solve_globalized
 from .impact_step import halved_steps, impact_step, impulse_is_negligible
 from .impacts import lockable_elements, locking_elements
 from .initial_state import consistent_initial_state
@@ -214,10 +214,13 @@ def run_bdf(
                 max_it = it
         else:
             res = newton_solve(full, v + F, options, cache, min_norm=True)
+            if res.code is NewtonCode.SUCCESS and not laws_hold(scene, h, x_hat, res.u,
+                                                                 rtol, atol):
+                res.code = NewtonCode.DIVERGED  # the last correction left a law
             if res.code is not NewtonCode.SUCCESS:
                 total_it += res.iterations
                 res_ev += res.residual_evals
-                res = solve_globalized(scene, full, h, x_hat, v, F, options)
+                res = solve_globalized(scene, full, h, x_hat, v, F, options, sweeps=True)
             total_it += res.iterations
             res_ev += res.residual_evals
             jac_ev += res.jacobian_evals

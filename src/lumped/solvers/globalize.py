@@ -21,38 +21,92 @@ import math
 
 from ..scene import Junction, Scene
 from .initial_state import _scalar_root
-from .newton import NewtonCode, NewtonOptions, NewtonResult, newton_solve
+from .newton import NewtonCode, NewtonOptions, NewtonResult, _residual_ok, newton_solve
 
-__all__ = ["force_projector", "solve_globalized", "stuck_guesses"]
+__all__ = [
+    "balance_sweeps", "force_projector", "laws_hold", "solve_globalized", "split_free_forces",
+    "stuck_guesses",
+]
 
 
-def force_projector(scene: Scene, h: float, x_hat: list[float]):
+def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool = False):
     """``u -> u'``: every element's force replaced by the root of its own law at the
     elongation (rate) that ``u``'s velocities give, where the law fixes the force there
-    (a stuck dashpot's force is left as is). See ``project`` of
+    (a stuck dashpot's force is left as is; with ``admit=True`` only if its law admits
+    it, else moved to a force it admits). See ``project`` of
     :func:`~lumped.solvers.newton.newton_solve`."""
     N = len(scene.nodes)
     items = [(N + e, scene.elem_a[e], scene.elem_b[e], el.kind == "spring", el.law.kernel)
              for e, el in enumerate(scene.elements)]
 
-    def project(u: list[float]) -> list[float]:
+    def elongation(u: list[float], a: int, b: int, is_spring: bool) -> float:
+        if is_spring:
+            qb = x_hat[b] + h * u[b] if b >= 0 else 0.0
+            qa = x_hat[a] + h * u[a] if a >= 0 else 0.0
+        else:
+            qb = u[b] if b >= 0 else 0.0
+            qa = u[a] if a >= 0 else 0.0
+        return qb - qa
+
+    def project(u: list[float], free: list[tuple[int, float]] | None = None) -> list[float]:
         out = list(u)
         for k, a, b, is_spring, kernel in items:
-            if is_spring:
-                qb = x_hat[b] + h * u[b] if b >= 0 else 0.0
-                qa = x_hat[a] + h * u[a] if a >= 0 else 0.0
-            else:
-                qb = u[b] if b >= 0 else 0.0
-                qa = u[a] if a >= 0 else 0.0
+            q = elongation(u, a, b, is_spring)
             try:
-                F, fixed = _scalar_root(kernel, qb - qa, u[k])
+                F, fixed = _scalar_root(kernel, q, u[k])
             except ValueError:  # no force at this q: leave it to Newton
                 continue
-            if fixed and math.isfinite(F):
+            if math.isfinite(F) and (fixed or (admit and kernel(q, u[k])[0] != 0.0)):
+                # a force the law fixes; or, where the law leaves it free (a stuck
+                # dashpot), one it admits if the iterate's is not
                 out[k] = F
+            if not fixed and free is not None:
+                free.append((k, q))
         return out
 
+    def ulp_scales(u: list[float]) -> list[tuple[int, float]]:
+        """``(row, rho / eps)`` per law row: ``rho`` the largest change of ``R`` when ``F``
+        moves to a floating-point neighbour, the round-off floor of the row at ``u``
+        (where the law is steep in ``F`` no float may give a smaller residual)."""
+        out = []
+        for k, a, b, is_spring, kernel in items:
+            q = elongation(u, a, b, is_spring)
+            R = kernel(q, u[k])[0]
+            rho = max(abs(kernel(q, math.nextafter(u[k], d))[0] - R)
+                      for d in (-math.inf, math.inf))
+            out.append((k, rho / 2.220446049250313e-16))
+        return out
+
+    project.ulp_scales = ulp_scales
     return project
+
+
+def laws_hold(scene: Scene, h: float, x_hat: list[float], u: list[float], rtol: float,
+              atol: float) -> bool:
+    """Every element's law holds at the step's solution ``u`` (velocities, forces) to
+    Newton's residual test, ``|R| <= rtol S + atol`` (``S`` from
+    :func:`~lumped.solvers.step_system._law_scale`), read from the kernels directly.
+
+    Newton applies its last correction without evaluating where it lands (it is below
+    the update tolerance); taken with the Jacobian of one piece of a law in a direction
+    the balances leave free (locks in parallel), it can leave a stuck dashpot ``1e-8``
+    beyond its yield force. This check costs one kernel call per element and no
+    residual evaluation, so the counters of a step that passes are unchanged."""
+    from .step_system import _law_scale
+
+    N = len(scene.nodes)
+    for e, el in enumerate(scene.elements):
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        if el.kind == "spring":
+            q = ((x_hat[b] + h * u[b]) if b >= 0 else 0.0) - ((x_hat[a] + h * u[a]) if a >= 0
+                                                               else 0.0)
+        else:
+            q = (u[b] if b >= 0 else 0.0) - (u[a] if a >= 0 else 0.0)
+        F = u[N + e]
+        R, Rq, RF = el.law.kernel(q, F)
+        if not abs(R) <= rtol * _law_scale(el.law.kernel, q, F, R, Rq, RF) + atol:
+            return False
+    return True
 
 
 def stuck_guesses(scene: Scene, v: list[float], F: list[float]) -> list[list[float]]:
@@ -83,25 +137,253 @@ def stuck_guesses(scene: Scene, v: list[float], F: list[float]) -> list[list[flo
     return out
 
 
+def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anchors,
+                   links: list[tuple[int, int]] = (), sweeps: int = 20) -> list[float] | None:
+    """A starting point for Newton from the nodes' balances solved one at a time
+    (nonlinear Gauss-Seidel).
+
+    With every force on its own law (``project``, see :func:`force_projector`), node
+    ``i``'s balance row ``G_i`` depends on the velocities alone, and with the others fixed
+    it never decreases in ``v_i``: inertia ``(m_i / h)(v_i - v_hat_i)`` grows, and every
+    element of a passive law pushes back harder the faster (further) its end moves. So
+    ``G_i(v_i) = 0`` is a monotone scalar equation -- solvable by bracketing and
+    bisection whatever the laws' slopes (a Herschel-Bulkley law flat or steep at its
+    yield force, several friction elements on one node), where Newton on the whole
+    system may wander. The nodes ``nodes`` are swept until no velocity moves (relative
+    ``1e-15``) or ``sweeps`` sweeps. Where the balance jumps across zero (a dashpot
+    sticks: its force fills an interval at rate 0), the root is the velocity at which a
+    rate vanishes exactly (0, or one of ``anchors(u)``: every node's velocity, by index):
+    the candidates inside the bracket are tried first (a sign change between their float
+    neighbours), so that Newton starts on the stuck pieces; else bisection to a width of
+    ``1e-16`` of the velocities. Nodes joined by stuck dashpots (``links``:
+    the ends ``(a, b)`` of the dashpots, rate ``u_b - u_a`` exactly zero) also move as one
+    cluster, the sum of their rows solved for a common shift (their inner forces cancel
+    in it): one node at a time cannot break a cluster free that must slip as a whole.
+    So do the two ends of every dashpot: where a law is steep in its rate (Herschel-Bulkley
+    ``n > 1`` near its yield force, ``dF/dq -> infinity``) single moves are tiny, while
+    the pair's common shift is set by the softer rest of the network.
+    Returns the projected point, or None if some balance cannot be bracketed (a
+    non-finite row where it starts).
+
+    Used as a restart of :func:`solve_globalized` and, with the masses' accelerations
+    held, for the junctions at ``t = 0`` (:mod:`lumped.solvers.initial_state`).
+    """
+    u = project(list(start))
+
+    def solve(group: list[int]) -> float | None:
+        """Shift the velocities of ``group`` together by the ``s`` that zeroes the sum of
+        their balance rows (the forces inside the group cancel in it); the relative move,
+        or None if it cannot be bracketed."""
+        base = [u[i] for i in group]
+        others = [c for k, c in enumerate(anchors(u)) if k not in group]
+
+        def g(s: float) -> float:
+            for i, b in zip(group, base, strict=True):
+                u[i] = b + s
+            G = evaluate(project(u))[0]
+            return sum(G[i] for i in group)
+
+        g0 = g(0.0)
+        if not math.isfinite(g0):
+            return None
+        if g0 == 0.0:
+            return 0.0
+        sign0 = g0 > 0.0
+        direction = -1.0 if sign0 else 1.0
+        step = 1e-3 * (1.0 + max(abs(b) for b in base))
+        inside, outside = 0.0, None
+        for _ in range(200):
+            gs = g(direction * step)
+            # beyond the root, or where no force exists (a string past its length): the
+            # root lies before
+            if not math.isfinite(gs) or gs == 0.0 or (gs > 0.0) != sign0:
+                outside = direction * step
+                break
+            inside = direction * step
+            step *= 2.0
+        if outside is None:
+            g(0.0)
+            return None
+        lo, hi = min(inside, outside), max(inside, outside)
+        cands = sorted({c - b for c in (0.0, *others) for b in base if lo < c - b < hi},
+                       key=lambda c: abs(c - inside))
+        shift = None
+        for c in cands[:8]:
+            # a jump across zero at c: a rate vanishes there and a dashpot sticks
+            gl, gr = g(math.nextafter(c, -math.inf)), g(math.nextafter(c, math.inf))
+            if math.isfinite(gl) and math.isfinite(gr) and gl <= 0.0 <= gr:
+                shift = c
+                break
+        if shift is None:
+            width = 1e-16 * (1.0 + max(abs(b) for b in base))
+            for _ in range(200):
+                mid = 0.5 * (inside + outside)
+                if mid in (inside, outside) or abs(outside - inside) <= width:
+                    break
+                gm = g(mid)
+                if math.isfinite(gm) and gm != 0.0 and (gm > 0.0) == sign0:
+                    inside = mid
+                else:
+                    outside = mid
+            # the side where the balance has crossed zero (or is zero), if finite
+            shift = outside if math.isfinite(g(outside)) else inside
+        g(shift)
+        return max(abs(shift) / (1.0 + abs(b + shift)) for b in base)
+
+    for _ in range(sweeps):
+        moved = 0.0
+        groups = ([[i] for i in nodes] + _stuck_clusters(u, nodes, links)
+                  + [[a, b] for a, b in links if a in nodes and b in nodes and a != b])
+        for group in groups:
+            d = solve(group)
+            if d is None:
+                return None
+            moved = max(moved, d)
+        if moved <= 1e-15:
+            break
+    return project(u)
+
+
+def _stuck_clusters(u: list[float], nodes: list[int],
+                    links: list[tuple[int, int]]) -> list[list[int]]:
+    """Groups of two or more of ``nodes`` joined by links of rate exactly zero."""
+    parent = {i: i for i in nodes}
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b in links:
+        if a in parent and b in parent and u[a] == u[b]:
+            parent[find(a)] = find(b)
+    groups: dict[int, list[int]] = {}
+    for i in nodes:
+        groups.setdefault(find(i), []).append(i)
+    return [g for g in groups.values() if len(g) > 1]
+
+
+def split_free_forces(scene: Scene, evaluate, project, u: list[float],
+                      rows: list[int] | None = None) -> list[float]:
+    r"""At fixed velocities, the forces the laws leave free (stuck dashpots, taut strings)
+    chosen to balance the nodes: the bounded least-squares problem
+
+    .. math:: \min_{dF} \sum_i \Bigl(\frac{G_i + \sum_k J_{ik}\, dF_k}{S_i}\Bigr)^2
+              + \mu \sum_k \Bigl(\frac{dF_k}{s}\Bigr)^2,
+              \quad lo_k \le F_k + dF_k \le hi_k,
+
+    with ``[lo_k, hi_k]`` the forces element ``k``'s law admits at its elongation (rate)
+    (:func:`lumped.solvers.junction_balance.force_range`), the rows in units of their own
+    terms ``S_i`` and ``mu = 1e-12``: where the balances fix the forces this is their
+    solution, where they do not (locked elements in parallel) the small penalty picks the
+    change of least norm, the rule of the minimum-norm Newton step. Newton then polishes
+    from the result (the velocities, found by :func:`balance_sweeps`, stay). ``rows``: the
+    balance rows to satisfy (default every node's; the initial state's masses have free
+    accelerations, so only its junctions' rows count there)."""
+    import numpy as np
+    from scipy.optimize import lsq_linear
+
+    from .junction_balance import force_range
+
+    N = len(scene.nodes)
+    free: list[tuple[int, float]] = []
+    u = project(u, free)
+    if not free:
+        return u
+    G, J, S = evaluate(u)
+    ks = [k for k, _ in free]
+    rows = list(range(N)) if rows is None else rows
+    if not rows:
+        return u
+    w = np.array([1.0 / max(S[i], 1e-300) for i in rows])
+    A = np.array([[J[i][k] for k in ks] for i in rows]) * w[:, None]
+    rhs = -np.array([G[i] for i in rows]) * w
+    lo, hi = [], []
+    for k, q in free:
+        a, b = force_range(scene.elements[k - N].law.kernel, q, u[k])
+        lo.append(a - u[k])
+        hi.append(b - u[k])
+    if not all(lo_k <= 0.0 <= hi_k for lo_k, hi_k in zip(lo, hi, strict=True)):
+        return u
+    s = 1.0 + max(abs(u[k]) for k in ks)
+    mu = 1e-6  # sqrt of the penalty 1e-12
+    M = np.vstack([A, (mu / s) * np.eye(len(ks))])
+    r = np.concatenate([rhs, np.zeros(len(ks))])
+    sol = lsq_linear(M, r, bounds=(lo, hi), method="bvls")
+    if not sol.success or not np.all(np.isfinite(sol.x)):
+        return u
+    for k, d in zip(ks, sol.x, strict=True):
+        u[k] += float(d)
+    return u
+
+
 def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: list[float],
-                     F: list[float], options: NewtonOptions) -> NewtonResult:
-    """The step system ``evaluate`` solved from the restart points: the previous solution
-    and every :func:`stuck_guesses` point, each first by plain (minimum-norm) Newton, then
-    with nonlinear elimination (:func:`force_projector`). The first success is returned,
-    else the first failure (the counters add up over all attempts)."""
-    project = force_projector(scene, h, x_hat)
+                     F: list[float], options: NewtonOptions, *,
+                     sweeps: bool = False) -> NewtonResult:
+    """The step system ``evaluate`` solved from the restart points: the previous solution,
+    the nodes' balances solved one at a time (:func:`balance_sweeps`) and every
+    :func:`stuck_guesses` point, each first by plain (minimum-norm) Newton, then with
+    nonlinear elimination (:func:`force_projector`). The first success is returned, else
+    the first failure (the counters add up over all attempts).
+
+    ``sweeps=True`` (the fixed-step methods) adds the :func:`balance_sweeps` start, keeps
+    a Newton success only where the residual test holds after its last correction, and
+    accepts the swept point itself when Newton cannot polish it. The default leaves the
+    solve as ``radau5``'s event probes were tuned with (their step control reads the
+    probe's success; see the report of branch s2-netbdf)."""
+    project = force_projector(scene, h, x_hat, admit=sweeps)
     first: NewtonResult | None = None
     its = res_ev = jac = facts = 0
-    for start in [list(v) + list(F), *stuck_guesses(scene, v, F)]:
+
+    def starts():
+        yield list(v) + list(F), False
+        if not sweeps:
+            yield from ((g, False) for g in stuck_guesses(scene, v, F))
+            return
+        N = len(scene.nodes)
+        links = [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
+                 if el.kind == "dashpot"]
+        swept = balance_sweeps(evaluate, project, list(v) + list(F), list(range(N)),
+                               lambda u: u[:N], links)
+        if swept is not None:
+            yield split_free_forces(scene, evaluate, project, swept), True
+        for guess in stuck_guesses(scene, v, F):
+            yield guess, False
+
+    for start, swept in starts():
         for proj in (None, project):
-            res = newton_solve(evaluate, start, options, None, min_norm=True, project=proj)
+            res = newton_solve(evaluate, start, options, None, min_norm=True, project=proj,
+                               check_scaled=sweeps)
             its += res.iterations
             res_ev += res.residual_evals
             jac += res.jacobian_evals
             facts += res.factorizations
-            if res.code is NewtonCode.SUCCESS:
-                break
+            if res.code is NewtonCode.SUCCESS and sweeps:
+                # the last correction is applied unevaluated: keep the solution only if
+                # the residual test holds where it landed (after nonlinear elimination a
+                # correction may leave a friction element's interval by 1e-8)
+                G, _, S = evaluate(res.u)
+                res_ev += 1
+                if _residual_ok(G, S, options.rtol, options.atol):
+                    break
+                res.code = NewtonCode.DIVERGED
             first = first or res
+        if res.code is not NewtonCode.SUCCESS and swept:
+            # Newton could not polish the swept point (locks in parallel whose rows are
+            # proportional only up to rounding: a near-singular matrix, no minimum-norm
+            # step; or a law steep in F whose root lies between two floats). The point
+            # itself has every force on its law, each node balanced by bisection with the
+            # others held: keep it if the residual test holds there, each law row measured
+            # against its round-off floor (the change of R over one ulp of F).
+            G, J, S = evaluate(start)
+            res_ev += 1
+            S = list(S)
+            for k, floor in project.ulp_scales(start):
+                if floor > S[k] and math.isfinite(floor):
+                    S[k] = floor
+            if _residual_ok(G, S, options.rtol, options.atol):
+                res = NewtonResult(list(start), NewtonCode.SUCCESS, 0, 0, 0, 0, G, 0, J)
         if res.code is NewtonCode.SUCCESS:
             break
     else:

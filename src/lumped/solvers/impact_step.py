@@ -75,7 +75,8 @@ def be_substep(scene: Scene, t_end: float, h: float, x0: list[float], v0: list[f
                         rf, roundoff=True)
     res = newton_solve(ev, list(v0) + list(F0), options, min_norm=True)
     if res.code is not NewtonCode.SUCCESS:
-        res = solve_globalized(scene, ev, h, list(x0), list(v0), list(F0), options)
+        res = solve_globalized(scene, ev, h, list(x0), list(v0), list(F0), options,
+                               sweeps=True)
     v1 = res.u[:N]
     x1 = [x0[i] + h * v1[i] for i in range(N)]
     return x1, v1, res.u[N:], res

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 from ..scene import Junction, Mass, Scene
+from .junction_balance import refuse_unbalanced_junctions
 from .newton import (
     NewtonCode,
     NewtonOptions,
@@ -114,6 +115,10 @@ def consistent_initial_state(
 
     Raises
     ------
+    ValueError
+        If no law admits the initial state: an element's law admits no force at its
+        initial elongation, or no forces within the laws' ranges balance the junctions
+        (:func:`lumped.solvers.junction_balance.refuse_unbalanced_junctions`).
     InconsistentInitialForce
         If a user ``F0`` breaks its element's law or a junction's force balance.
     SolverError
@@ -141,10 +146,12 @@ def consistent_initial_state(
         a, b = ea[e], eb[e]
         if el.kind == "spring":
             q0[e] = at(x0, b) - at(x0, a)
-        elif all(i < 0 or is_mass[i] for i in (a, b)):
-            q0[e] = at(v0, b) - at(v0, a)
         else:
-            continue  # a dashpot at a junction: its rate is unknown
+            # a dashpot: the masses' part of its rate (v0 is 0 at junctions, whose
+            # velocities are unknowns of the limit system below)
+            q0[e] = at(v0, b) - at(v0, a)
+            if not all(i < 0 or is_mass[i] for i in (a, b)):
+                continue  # a dashpot at a junction: its rate is unknown
         guess = el.F0 if el.F0 is not None else 0.0
         try:
             F_root, fixed = _scalar_root(el.law.kernel, q0[e], guess)
@@ -214,20 +221,55 @@ def consistent_initial_state(
                                max_iters=max(options.max_iters, 200),
                                max_backtracks=options.max_backtracks,
                                free_steps=options.free_steps)
-    res = newton_solve(evaluate, u0, ic_options, min_norm=True)
+    res = newton_solve(evaluate, u0, ic_options, min_norm=True, check_scaled=True)
     if res.code is not NewtonCode.SUCCESS:
-        # restarts: every junction moving with each dashpot neighbour in turn (see
-        # lumped.solvers.globalize.stuck_guesses), the masses' accelerations zero
-        from .globalize import stuck_guesses
+        # restarts: the junctions' velocities from their balances solved one by one
+        # (lumped.solvers.globalize.balance_sweeps), then every junction
+        # moving with each dashpot neighbour in turn (see
+        # lumped.solvers.globalize.stuck_guesses), the masses' accelerations zero; each
+        # by plain Newton, then with every free force on its own law (nonlinear
+        # elimination, see lumped.solvers.globalize.force_projector: a law steep in F,
+        # Herschel-Bulkley n < 1 near its yield force, is solved in its inverse form)
+        from .globalize import balance_sweeps, stuck_guesses
 
-        for guess in stuck_guesses(scene, v0, u0[N:]):
-            retry = newton_solve(evaluate, [0.0 if is_mass[i] else guess[i] for i in range(N)]
-                                 + guess[N:], ic_options, min_norm=True)
-            if retry.code is NewtonCode.SUCCESS:
-                res = retry
+        def project(u: list[float]) -> list[float]:
+            out = list(u)
+            for e in free:
+                a, b = ea[e], eb[e]
+                scale = eps if spring[e] else 1.0
+                du_b = (eps * u[b] if is_mass[b] else u[b]) if b >= 0 else 0.0
+                du_a = (eps * u[a] if is_mass[a] else u[a]) if a >= 0 else 0.0
+                try:
+                    F, fixed = _scalar_root(kernels[e], q0[e] + scale * (du_b - du_a), u[N + e])
+                except ValueError:
+                    continue
+                if fixed and math.isfinite(F):
+                    out[N + e] = F
+            return out
+
+        free = [e for e in range(E) if pinned[e] is None]
+        starts = [u0] + [[0.0 if is_mass[i] else g[i] for i in range(N)] + g[N:]
+                         for g in stuck_guesses(scene, v0, u0[N:])]
+        junctions = [i for i in range(N) if not is_mass[i]]
+        # no snapping onto other nodes' velocities here (anchors: none): in the limit
+        # system a junction stuck to a neighbour leaves the stuck forces to the
+        # accelerations' rows, which Newton settles from a start a hair off the kink
+        balanced = balance_sweeps(evaluate, project, list(u0), junctions, lambda u: [0.0] * N)
+        if balanced is not None:  # the junctions' monotone balances solved one by one
+            starts.insert(1, balanced)
+        for start in starts:
+            for proj in (None, project):
+                if start is u0 and proj is None:
+                    continue  # done above
+                retry = newton_solve(evaluate, start, ic_options, min_norm=True, project=proj,
+                                     check_scaled=True)
+                if retry.code is NewtonCode.SUCCESS:
+                    res = retry
+                    break
+            if res.code is NewtonCode.SUCCESS:
                 break
     if res.code is not NewtonCode.SUCCESS:
-        _refuse_uncarried_force(scene, pinned, f)
+        refuse_unbalanced_junctions(scene, pinned, q0, f)
         err = _newton_failure(scene, res, 0.0, 0)
         raise SolverError(
             f"no consistent initial state: {err}", status=err.status, t=0.0,
@@ -263,47 +305,3 @@ def consistent_initial_state(
         "jacobian_evals": res.jacobian_evals, "factorizations": res.factorizations,
     }
     return v, F, stats
-
-
-def _refuse_uncarried_force(scene: Scene, pinned: list[float | None], f: list[float]) -> None:
-    """Raise ValueError when a junction's balance asks an element for a force its law
-    admits at no elongation (rate): e.g. a Maxwell link whose spring starts stretched
-    beyond what its Coulomb dashpot can carry. A junction with exactly one element whose
-    force is not yet fixed fixes it by its balance; this propagates through the network
-    (a junction on a single friction element fixes that force to zero, and so on)."""
-    ea, eb = scene.elem_a, scene.elem_b
-    known = list(pinned)
-    changed = True
-    while changed:
-        changed = False
-        for i, node in enumerate(scene.nodes):
-            if not isinstance(node, Junction):
-                continue
-            touching = [e for e in range(len(scene.elements)) if i in (ea[e], eb[e])]
-            free = [e for e in touching if known[e] is None]
-            if len(free) != 1:
-                continue
-            (e,) = free
-            # balance: f_i + sum_{a_e = i} F_e - sum_{b_e = i} F_e = 0
-            rest = f[i] + sum((known[k] if ea[k] == i else -known[k])
-                              for k in touching if k != e)
-            need = -rest if ea[e] == i else rest
-            el = scene.elements[e]
-            kernel = el.law.kernel
-
-            def swapped(F: float, q: float, kernel=kernel):
-                R, Rq, RF = kernel(q, F)
-                return R, RF, Rq
-
-            try:
-                _scalar_root(swapped, need, 0.0)
-            except ValueError:
-                what = "elongation" if el.kind == "spring" else "rate"
-                raise ValueError(
-                    f"inconsistent initial state: the force balance of junction {node.name!r} "
-                    f"asks element {el.name!r} for the force F = {need!r}, which its law "
-                    f"{el.law_name!r} admits at no {what} (e.g. a friction element beyond "
-                    "its yield force); change the initial positions or the parameters"
-                ) from None
-            known[e] = need
-            changed = True

@@ -159,6 +159,7 @@ def newton_solve(
     *,
     min_norm: bool = False,
     project: Callable[[list[float]], list[float]] | None = None,
+    check_scaled: bool = False,
 ) -> NewtonResult:
     """Solve ``G(u) = 0`` from ``u0`` by damped semismooth Newton (see the module notes).
 
@@ -186,6 +187,14 @@ def newton_solve(
         elongation, so that Newton acts on the reduced system where a law's graph is
         steep in ``F`` (Herschel-Bulkley with ``n < 1`` at its yield force).
 
+    check_scaled : bool
+        Check the last correction after a kink also when the update passed only the
+        scaled test (as after the plain one): keep it only if its residual test passes
+        or it stays on the same pieces. The consistent initial state needs it (its
+        vanishing-step rows ``eps a = 0`` make a stuck piece's correction of ``F`` as
+        large as the tolerance); the time steps keep the unchecked correction, which the
+        compiled twin (:mod:`lumped.solvers.newton_jit`) mirrors operation for operation.
+
     Returns
     -------
     NewtonResult
@@ -211,6 +220,25 @@ def newton_solve(
                 if not isfinite(r):
                     break
         return NewtonResult(u, code, iters, n_res, n_jac, n_fact, G, worst, J, met_singular)
+
+    def final_correction(du: list[float]) -> NewtonResult:
+        # The iterate passed both tests: apply the last (small) correction too. When the
+        # last step arrived on another piece (a kink was crossed), the correction, taken
+        # with this piece's Jacobian, may cross back and leave the solution (e.g. the
+        # stuck piece of a Bingham law at F = tau pointing into the slipping one; in the
+        # vanishing-step system of the initial state a stuck row ``eps a = 0`` asks for a
+        # correction of F as large as the tolerance). Keep it only if the residual test
+        # still passes where it lands, or on the same piece.
+        nonlocal u, G, J, S, n_res
+        u_c = [ui - di for ui, di in zip(u, du, strict=True)]
+        if solve_prev is not None and J != J_prev:
+            G_c, J_c, S_c = evaluate(u_c)
+            n_res += 1
+            if J_c != J and not (finite(G_c) and _residual_ok(G_c, S_c, rtol, atol)):
+                return result(NewtonCode.SUCCESS)
+            G, J, S = G_c, J_c, S_c
+        u = u_c
+        return result(NewtonCode.SUCCESS)
 
     def finite(vals: Sequence[float]) -> bool:
         # a NaN or an infinity anywhere makes the sum NaN or infinite
@@ -251,20 +279,7 @@ def newton_solve(
             return result(NewtonCode.NON_FINITE)
         if res_ok:
             if _update_ok(du, u, rtol, atol):
-                u_c = [ui - di for ui, di in zip(u, du, strict=True)]
-                if solve_prev is not None and J != J_prev:
-                    # The last step arrived on another piece (a kink was crossed): the
-                    # final correction, taken with this piece's Jacobian, may cross back
-                    # and leave the solution (e.g. the stuck piece of a Bingham law at
-                    # F = tau pointing into the slipping one). Keep it only if the
-                    # residual test still passes where it lands, or on the same piece.
-                    G_c, J_c, S_c = evaluate(u_c)
-                    n_res += 1
-                    if J_c != J and not (finite(G_c) and _residual_ok(G_c, S_c, rtol, atol)):
-                        return result(NewtonCode.SUCCESS)
-                    G, J, S = G_c, J_c, S_c
-                u = u_c
-                return result(NewtonCode.SUCCESS)
+                return final_correction(du)
             # At a kink the residual can be zero up to rounding while the Jacobian of the
             # piece on one side proposes a long step (no floating-point root exists on
             # either piece). Retry the update test with the Jacobian of the piece the
@@ -286,6 +301,8 @@ def newton_solve(
             # v ~ 0 of a mass under forces ~1e5): its correction is measured against
             # the terms it enters (see _update_ok_scaled).
             if _update_ok_scaled(du, u, J, S, rtol, atol):
+                if check_scaled:
+                    return final_correction(du)
                 u = [ui - di for ui, di in zip(u, du, strict=True)]
                 return result(NewtonCode.SUCCESS)
         if iters >= options.max_iters:
