@@ -241,12 +241,23 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             # returns before the pass this loop must take (a stop, an event, ...)
             st = state()
             before = stats["steps"]
-            fast.run(st, modes, watched, stats, dense, rows)
+            why = fast.run(st, modes, watched, stats, dense, rows)
             t, h, x, v, F, dF_n = st["t"], st["h"], st["x"], st["v"], st["F"], st["dF_n"]
             F_seen, h_acc, err_acc, h_good = st["F_seen"], st["h_acc"], st["err_acc"], st["h_good"]
             stalled = st["stalled"]
             if stats["steps"] > before:
                 floor_tried = False
+            if why == "stopped":  # it took the step to the stop: a time event, or the end
+                if bi < len(breaks) and t == breaks[bi]:
+                    bi += 1
+                    events.append(Event(t, "", "time", -1, -1))
+                    recent.append(t)
+                    dF_n = h_acc = None
+                    stop = at_event(t, h, "time")
+                    if stop:
+                        status, message = stop
+                        break
+                continue
         stalled += 1
         if stalled > 10_000:
             status, message = Status.STEP_TOO_SMALL, (
