@@ -114,6 +114,27 @@ def test_exact_sticking_is_kept_in_the_compiled_loop():
     assert np.all(dense[:, 2] == 0.0)
 
 
+def test_the_steps_to_a_stop_are_compiled(monkeypatch):
+    """The step that ends on a forcing breakpoint or on ``t_end`` is the compiled loop's:
+    a run without guard events makes no single attempts from Python, and gives the Python
+    loop's run (the breakpoint at t = 1.5 is a time event in both)."""
+    from lumped.solvers.adaptive_fast import CompiledLoop
+
+    base = scenario_scene("release-0.005")  # stuck from the start: no guard event
+    attempts = []
+    real = CompiledLoop.attempt
+    monkeypatch.setattr(CompiledLoop, "attempt",
+                        lambda self, *a: attempts.append(a[0]) or real(self, *a))
+    sol = simulate(base, method="radau5", t_end=2.0, rtol=1e-6, compiled=True)
+    assert sol.ok and sol.stats["loop"] == "compiled" and not sol.events
+    assert sol.t[-1] == 2.0 and attempts == []
+    kw = dict(method="radau5", t_end=2.0, rtol=1e-7, atol=1e-10)
+    scene = _user_law_scene()
+    ref, fast = simulate(scene, compiled=False, **kw), simulate(scene, compiled=True, **kw)
+    assert [ev.t for ev in fast.events if ev.kind == "time"] == [1.5]
+    assert np.array_equal(fast.data, ref.data) and fast.stats["nfev"] == ref.stats["nfev"]
+
+
 def test_the_fallback_to_python_says_why():
     base = scenario_scene("release-0.5")
     tabulated = Scene(base.nodes, base.elements, {"mass": lambda t: 0.1 * t})

@@ -114,7 +114,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     on_cycles = plan.cyclic
     cones: dict[int, tuple[float, float]] = {}  # locks in parallel: the force split rule
 
-    stage_solve = compiled_stage_solver(scene, modes) if opts["compiled"] is True else None
+    # the compiled stage Newton (compiled=True), built on first need: with the compiled
+    # loop the attempts need it only after a singular Jacobian (building it costs ~0.7 ms)
+    stage_solve = None
 
     def set_modes(new: list[int]) -> None:
         modes[:] = new
@@ -257,12 +259,23 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             # returns before the pass this loop must take (a stop, an event, ...)
             st = state()
             before = stats["steps"]
-            fast.run(st, modes, watched, stats, dense, rows)
+            why = fast.run(st, modes, watched, stats, dense, rows)
             t, h, x, v, F, dF_n = st["t"], st["h"], st["x"], st["v"], st["F"], st["dF_n"]
             F_seen, h_acc, err_acc, h_good = st["F_seen"], st["h_acc"], st["err_acc"], st["h_good"]
             stalled = st["stalled"]
             if stats["steps"] > before:
                 floor_tried = False
+            if why == "stopped":  # it took the step to the stop: a time event, or the end
+                if bi < len(breaks) and t == breaks[bi]:
+                    bi += 1
+                    events.append(Event(t, "", "time", -1, -1))
+                    recent.append(t)
+                    dF_n = h_acc = None
+                    stop = at_event(t, h, "time")
+                    if stop:
+                        status, message = stop
+                        break
+                continue
         stalled += 1
         if stalled > 10_000:
             status, message = Status.STEP_TOO_SMALL, (
@@ -313,6 +326,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             Fref = max(F_seen, m_min * (max(abs(vi) for vi in v) + atol / rtol) / h)
             scale = ([atol + rtol * abs(vi) for vi in v]
                      + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
+            if stage_solve is None and opts["compiled"] is True:
+                stage_solve = compiled_stage_solver(scene, modes)  # modes: the live list
             if stage_solve is None:
                 sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale,
                                               max_iters=max_newton, cones=cones or None)

@@ -20,7 +20,9 @@ operation (the numbers agree bit for bit):
 
 It returns to Python, with the state as at the top of the reference loop's pass that
 must run next, when any of these holds (the code in ``ist[REASON]``): the next step
-would reach the stop (:data:`STOP`), a guard turns negative in a candidate step
+would reach the stop and the room left is below the step floor (:data:`STOP`; else the
+loop takes the step to the stop, with ``h`` the room left, and returns after it:
+:data:`STOPPED`), a guard turns negative in a candidate step
 (:data:`CROSSING`: Python redoes that step and lands on the event), a law that is not a
 known monotone one crosses a fold of its graph (:data:`FOLD`: Python redoes the step and
 stops with its message), a Jacobian is singular but finite (:data:`SINGULAR`: Python's
@@ -60,9 +62,9 @@ __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", 
 (HAVE_ACC, HAVE_DF, STALLED, STEPS, REJECTED, NEWTON_ITERATIONS, FACTORIZATIONS, NFEV, NJEV,
  MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK,
  A_HIT) = range(18)
-STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD = range(1, 9)
+STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD, STOPPED = range(1, 10)
 REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "floor",
-           FULL: "full", LIMIT: "limit", ATTEMPT: "attempt",
+           FULL: "full", LIMIT: "limit", ATTEMPT: "attempt", STOPPED: "stopped",
            FOLD: "fold"}
 
 _EPS = 2.220446049250313e-16
@@ -99,16 +101,23 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, c
     while True:
         reason = 0
         single = ist[SINGLE] == 1
+        to_stop = False
         if single:
             pass
         elif ist[STALLED] + 1 > 10_000 or ist[STEPS] >= ist[MAX_STEPS]:
             reason = LIMIT
-        elif t + 1.0001 * h >= t_stop or h >= t_stop - t:
-            reason = STOP
-        elif h < 16.0 * _EPS * max(abs(t), t_final * 1e-3):
-            reason = FLOOR
         elif ist[N_OUT] >= cap:
             reason = FULL
+        elif t + 1.0001 * h >= t_stop or h >= t_stop - t:
+            # the step to the stop, as the Python loop takes it (h = the room left); a
+            # room below the step floor is Python's (it may change the mode there)
+            if t_stop - t < 16.0 * _EPS * max(abs(t), t_final * 1e-3):
+                reason = STOP
+            else:
+                h = t_stop - t
+                to_stop = True
+        elif h < 16.0 * _EPS * max(abs(t), t_final * 1e-3):
+            reason = FLOOR
         if reason:
             break
         if not single:
@@ -234,7 +243,7 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, c
             dF[e] = (_S1 * (U[N + e] - F[e]) + _S2 * (U[n + N + e] - F[e])
                      + _S3 * (U[2 * n + N + e] - F[e])) / h
         ist[HAVE_DF] = 1
-        t = t + h
+        t = t_stop if to_stop else t + h
         for i in range(N):
             s_ = 0.0
             for j in range(3):
@@ -262,6 +271,9 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, c
         fst[H_GOOD] = h
         ist[STALLED] = 0
         h = h_new
+        if to_stop:  # Python handles what happens at the stop (a time event, the end)
+            reason = STOPPED
+            break
     fst[T] = t
     fst[H] = h
     fst[F_SEEN] = F_seen
