@@ -53,7 +53,7 @@ from .events import (
     snap_to_locks,
 )
 from .initial_state import consistent_initial_state
-from .locks import IntervalLog, indeterminate_elements
+from .locks import IntervalLog, cycles_among, indeterminate_elements
 from .radau import START_WEIGHTS, C, StageSystem
 from .radau import A as _A
 from .status import BranchError, Event, RawRun, SolverError, Status
@@ -128,8 +128,11 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 watched.append(e)
         cones.clear()
         locked = lock_cones(lbs, new, F, on_cycles)
-        if len(locked) > 1:
-            cones.update(locked)
+        # only locks in parallel with each other leave their split free (a stuck link in
+        # series with another keeps its exact LU solve, and so its exact zero rate)
+        parallel = cycles_among(scene, tuple(locked)) if len(locked) > 1 else ()
+        if len(parallel) > 1:
+            cones.update({e: locked[e] for e in parallel})
 
     def change_mode(t: float, h_probe: float, cause: str) -> str:
         """Choose the mode after ``t`` and record the switches; '' or a failure message."""

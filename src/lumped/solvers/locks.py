@@ -23,7 +23,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from functools import lru_cache
 
-__all__ = ["cyclic_elements", "indeterminate_elements", "IntervalLog"]
+__all__ = ["cyclic_elements", "cycles_among", "indeterminate_elements", "IntervalLog"]
 
 @lru_cache(maxsize=256)
 def _on_cycles(n_nodes: int, edges: tuple[tuple[int, int, int], ...]) -> tuple[int, ...]:
@@ -53,6 +53,13 @@ def cyclic_elements(scene) -> tuple[int, ...]:
     """Elements on some cycle of the whole network (ground one vertex): the only ones whose
     forces can ever be indeterminate."""
     edges = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in range(len(scene.elements)))
+    return _on_cycles(len(scene.nodes), edges)
+
+
+def cycles_among(scene, elements) -> tuple[int, ...]:
+    """Those of ``elements`` that lie on a cycle of the subnetwork made of ``elements`` alone
+    (ground one vertex): e.g. of the locked elements, the ones locked in parallel."""
+    edges = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in elements)
     return _on_cycles(len(scene.nodes), edges)
 
 
