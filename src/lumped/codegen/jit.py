@@ -74,6 +74,7 @@ import sys
 import tempfile
 import threading
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -204,6 +205,23 @@ def scene_source(scene) -> tuple[str, list[int]]:
     return "\n".join(L), law_index
 
 
+def end_values_source(kind: str, a: int, b: int, x: Callable[[int], str],
+                      u: Callable[[int], str]) -> tuple[str, str, str]:
+    """Source of an element's end values in the implicit step and of ``dq/du``.
+
+    The elongation is ``q = q_b - q_a``: for a spring the end positions after the step,
+    ``x_i + h u_i`` (``x(i)`` and ``u(i)`` name the history and the unknown velocity of
+    node ``i`` in the emitted code), for a dashpot the velocities ``u_i``; ground
+    (``-1``) is ``0.0``. Returns ``(q_b, q_a, dq)`` with ``dq = "h"`` or ``"1.0"``.
+    """
+    def end(i: int) -> str:
+        if i < 0:
+            return "0.0"
+        return f"({x(i)} + h * {u(i)})" if kind == "spring" else u(i)
+
+    return end(b), end(a), ("h" if kind == "spring" else "1.0")
+
+
 def _evaluate_source(scene, law_index: list[int]) -> list[str]:
     """The unrolled step system (the twin of the reference's generated ``evaluate``)."""
     N = len(scene.nodes)
@@ -221,14 +239,8 @@ def _evaluate_source(scene, law_index: list[int]) -> list[str]:
     for e, el in enumerate(scene.elements):
         k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
         j = law_index[e]
-        if el.kind == "spring":
-            qb = f"(p[{xh + b}] + h * u[{b}])" if b >= 0 else "0.0"
-            qa = f"(p[{xh + a}] + h * u[{a}])" if a >= 0 else "0.0"
-            dq = "h"
-        else:
-            qb = f"u[{b}]" if b >= 0 else "0.0"
-            qa = f"u[{a}]" if a >= 0 else "0.0"
-            dq = "1.0"
+        qb, qa, dq = end_values_source(el.kind, a, b, lambda i: f"p[{xh + i}]",
+                                       lambda i: f"u[{i}]")
         L += [f"    q = {qb} - {qa}", f"    Fe = u[{k}]", f"    R, Rq, RF = law_{j}(q, Fe)",
               f"    G{k} = R", "    lin = abs(Rq * q) + abs(RF * Fe)", "    if roundoff:",
               f"        M = mag_{j}(q, Fe)",

@@ -56,7 +56,15 @@ import importlib.util
 import sys
 from types import ModuleType
 
-from .jit import _LOCK, _MODULES, _kernel_sources, _rename, _write_once, cache_dir
+from .jit import (
+    _LOCK,
+    _MODULES,
+    _kernel_sources,
+    _rename,
+    _write_once,
+    cache_dir,
+    end_values_source,
+)
 
 __all__ = ["MAX_FAST_ITERATIONS", "MAX_FAST_UNKNOWNS", "fast_source", "fast_module"]
 
@@ -200,14 +208,7 @@ def _evaluate_lines(scene, law_index: list[int], ind: str) -> list[str]:
             L += [f"{ind}G{i} = -f{i}", f"{ind}S{i} = abs(f{i})"]
     for e, el in enumerate(scene.elements):
         k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
-        if el.kind == "spring":
-            qb = f"(xh{b} + h * u{b})" if b >= 0 else "0.0"
-            qa = f"(xh{a} + h * u{a})" if a >= 0 else "0.0"
-            dq = "h"
-        else:
-            qb = f"u{b}" if b >= 0 else "0.0"
-            qa = f"u{a}" if a >= 0 else "0.0"
-            dq = "1.0"
+        qb, qa, dq = end_values_source(el.kind, a, b, lambda i: f"xh{i}", lambda i: f"u{i}")
         L += [f"{ind}q = {qb} - {qa}", f"{ind}R, Rq, RF{e} = law_{law_index[e]}(q, u{k})",
               f"{ind}G{k} = R", f"{ind}S{k} = abs(Rq * q) + abs(RF{e} * u{k})",
               f"{ind}g{e} = Rq * {dq}"]
