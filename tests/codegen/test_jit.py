@@ -109,13 +109,24 @@ def test_write_once_never_replaces_a_file(tmp_path):
     assert [p.name for p in path.parent.iterdir()] == ["m.py"]  # no temp file left
 
 
-def test_position_lock_is_refused():
+@pytest.mark.parametrize("method", ["jit-bdf1", "jit-bdf2"])
+def test_position_lock_runs_on_the_reference_solver(method):
+    # the compiled loop refuses a position lock by name; simulate() runs the whole scene
+    # on the reference solver (impact located in the step) and says so
     from lumped import simulate
+    from lumped.solvers.fixed_step_jit import run_bdf_jit
 
-    scene = Scene([Mass("m", 1.0, x0=0.6)],
-                  [Element("s", get_law("string_spring").bind(k=10.0, L=0.5), "ground", "m")])
+    scene = Scene([Mass("m", 1.0, v0=1.0)],
+                  [Element("s", get_law("string_spring").bind(k=1.0, L=0.5), "ground", "m")])
     with pytest.raises(ValueError, match="position lock.*'string_spring'.*element 's'"):
-        simulate(scene, method="jit-bdf1", dt=1e-3, t_end=0.01)
+        run_bdf_jit(scene, method=method, dt=1e-3, n_steps=10)
+    sol = simulate(scene, method=method, dt=1e-3, t_end=1.0)
+    ref = simulate(scene, method=method.removeprefix("jit-"), dt=1e-3, t_end=1.0)
+    assert sol.method == method
+    assert "position lock" in sol.stats["fallback"] and "element 's'" in sol.stats["fallback"]
+    np.testing.assert_array_equal(sol.data, ref.data)
+    assert [e.kind for e in sol.events] == ["impact"]
+    assert sol.events == ref.events
 
 
 def test_unwritable_cache_falls_back_to_a_temporary_directory(monkeypatch, tmp_path):

@@ -81,22 +81,31 @@ def _constant(fn) -> bool:
     return type(fn) is _Constant
 
 
-def refuse_position_locks(scene: Scene, method: str) -> None:
-    """``ValueError`` if a spring element's law has a branch that locks its elongation."""
+def position_lock(scene: Scene, method: str) -> str | None:
+    """Why ``method`` cannot run ``scene`` compiled (a spring element's law has a branch
+    that locks its elongation: a taut string), or ``None``."""
     try:
         from ..codegen.branches import law_branches
     except ImportError:  # pragma: no cover - before the branch machinery exists
-        return
+        return None
     for el in scene.elements:
         if el.kind != "spring":
             continue
         lb = law_branches(el.law)
         for i in range(lb.count):
             if lb.info[i].locks:
-                raise ValueError(
-                    f"method {method!r} does not take position locks: branch {i} of law "
-                    f"{el.law_name!r} of element {el.name!r} fixes its elongation (use "
-                    f"{JIT_METHODS[method]!r})")
+                return (f"method {method!r} does not take position locks: branch {i} of "
+                        f"law {el.law_name!r} of element {el.name!r} fixes its elongation "
+                        f"(use {JIT_METHODS[method]!r})")
+    return None
+
+
+def refuse_position_locks(scene: Scene, method: str) -> None:
+    """``ValueError`` if a spring element's law has a branch that locks its elongation
+    (:func:`position_lock`)."""
+    why = position_lock(scene, method)
+    if why is not None:
+        raise ValueError(why)
 
 
 def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,

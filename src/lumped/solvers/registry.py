@@ -8,8 +8,9 @@ Built-in methods (the same names on the command line):
 ``jit-bdf1``, ``jit-bdf2``
     The same steps compiled with numba (:mod:`lumped.solvers.fixed_step_jit`): the same
     numbers to the Newton tolerance (``fast=False``: bit for bit), much faster per step,
-    after a one-off compile cached on disk. Not for scenes with a position lock (a taut
-    string) or with hand-written kernels.
+    after a one-off compile cached on disk. Not for hand-written kernels. A scene with a
+    position lock (a taut string: impacts, indeterminate forces) and a run whose compiled
+    Newton fails run whole on the reference solver, and ``stats["fallback"]`` says why.
 ``closed-bdf1``, ``closed-bdf2``
     The closed-form steps of :mod:`lumped.solvers.closed_form` (``closed-bdf1`` is the
     paper's Algorithm 1). Only for a scene that is exactly one mass with one
@@ -18,10 +19,14 @@ Built-in methods (the same names on the command line):
 ``exact``
     The event-driven exact reference of :mod:`lumped.reference`, on the same grid; for
     that same scene with no forcing or a sine burst (``{ kind = "sine", ... }``).
+``radau5``
+    The adaptive Radau IIA (order 5) method of :mod:`lumped.solvers.adaptive`, with
+    events located inside the step (``rtol``/``atol``; no ``dt``).
 ``auto``
-    ``closed-bdf2`` for exactly that scene, ``bdf2`` otherwise (:func:`resolve_method`).
+    ``closed-bdf2`` for exactly that scene, else ``radau5``, else (a law ``radau5`` does
+    not take) ``bdf2`` (:func:`resolve_method`).
 
-All of these are fixed-step methods (they need ``dt``; the grid is ``t_n = n dt``).
+All but ``radau5`` are fixed-step methods (they need ``dt``; the grid is ``t_n = n dt``).
 A new method is one call to :func:`register_method`.
 """
 
@@ -201,23 +206,37 @@ _NEWTON_FAILURES = frozenset({Status.SINGULAR, Status.DIVERGED, Status.MAX_ITERS
                               Status.NON_FINITE})
 
 
+def _on_reference(scene: Scene, method: str, dt: float, n_steps: int,
+                  settings: RunSettings, why: str) -> RawRun:
+    """The run of ``method`` (``jit-bdf1``/``jit-bdf2``) on the reference solver, with
+    ``stats["fallback"] = why``."""
+    out = run_bdf(scene, method=method.removeprefix("jit-"), dt=dt, n_steps=n_steps,
+                  options=settings.options, throw=settings.throw)
+    stats = dict(out.stats, fallback=why)
+    return RawRun(out.as_array(), stats, out.status, out.message,
+                  events=out.events, indeterminate=out.indeterminate)
+
+
 def _run_jit(method: str) -> Runner:
     def runner(scene: Scene, settings: RunSettings) -> RawRun:
-        from .fixed_step_jit import run_bdf_jit
+        from .fixed_step_jit import position_lock, run_bdf_jit
 
         dt, n_steps = _fixed_step_grid(method, settings, ("fast",))
         fast = settings.extra.get("fast")
+        locked = position_lock(scene, method)
+        if locked is not None:
+            # impacts and locks are not compiled: the whole run on the reference solver,
+            # which locates the impact in the step and splits indeterminate forces
+            return _on_reference(scene, method, dt, n_steps, settings,
+                                 "reference solver: " + locked)
         raw = run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
                           options=settings.options, throw=False, fast=fast)
         if raw.status in _NEWTON_FAILURES:
             # a step the compiled Newton cannot take (indeterminate forces: a singular
             # step matrix; a hard point of a law): the whole run on the reference solver,
             # with its globalised Newton and minimum-norm force split (issue 11)
-            out = run_bdf(scene, method=method.removeprefix("jit-"), dt=dt, n_steps=n_steps,
-                          options=settings.options, throw=settings.throw)
-            stats = dict(out.stats, fallback=f"reference solver after: {raw.message}")
-            return RawRun(out.as_array(), stats, out.status, out.message,
-                          events=out.events, indeterminate=out.indeterminate)
+            return _on_reference(scene, method, dt, n_steps, settings,
+                                 f"reference solver after: {raw.message}")
         if raw.status is not Status.SUCCESS and settings.throw:
             return run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
                                options=settings.options, throw=True, fast=fast)
