@@ -19,6 +19,7 @@ import numpy as np
 
 from lumped import simulate
 from lumped.bench.peers import _scipy_solver
+from lumped.bench.report import print_and_save
 from lumped.bench.runner import measure_unit, time_call
 from lumped.bench.scenes import GRID_DT, PAPER_SCENES, generic_scene
 from lumped.reference import exact_solution
@@ -78,10 +79,7 @@ def main() -> None:
             if not math.isfinite(err):  # pragma: no cover
                 break
     text = "\n".join(lines)
-    print(text)
-    if args.out:
-        with open(args.out, "w") as fh:
-            fh.write(text + "\n")
+    print_and_save(text, args.out)
 
 
 if __name__ == "__main__":

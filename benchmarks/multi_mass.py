@@ -36,6 +36,7 @@ from lumped import simulate
 from lumped.bench.network_peers import solve_tanh_network
 from lumped.bench.network_scenes import NETWORK_SCENES, NetworkScene, maxwell_exact
 from lumped.bench.network_study import bdf2_ladder, bdf2_limit, grid, node_x, richardson
+from lumped.bench.report import print_and_save
 from lumped.bench.timing import measure_unit, time_call
 
 GRID_DT = 1e-3
@@ -176,10 +177,7 @@ def main() -> None:
         print(f"{ns.name} done", flush=True)
     text = "\n".join([f"yardstick unit: {unit * 1e3:.2f} ms", "", *ref_lines, "",
                       *lad_lines, "", *bdf_lines, "", *summary])
-    print(text)
-    if args.out:
-        with open(args.out, "w") as fh:
-            fh.write(text + "\n")
+    print_and_save(text, args.out)
 
 
 if __name__ == "__main__":

@@ -79,6 +79,13 @@ def observed_orders(
 # --------------------------------------------------------------------------- output
 
 
+def print_and_save(text: str, out: str | Path | None) -> None:
+    """Print a benchmark script's report and, when ``out`` is given, write it there."""
+    print(text)
+    if out:
+        Path(out).write_text(text + "\n")
+
+
 def write_csv(runs: Sequence[RunResult], path: str | Path) -> Path:
     """All runs, one row each, full precision."""
     path = Path(path)
