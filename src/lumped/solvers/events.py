@@ -233,10 +233,30 @@ def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[floa
                 held.append(e)
                 target.append(float(L) if dashpot else 0.0)
                 break
-    if held:
+    if held and not _ground_locks(scene, held, target, v):
         v_new, _, _ = _solve(scene, v, held, 0.0, target=target)
         v[:] = v_new
     return held
+
+
+def _ground_locks(scene: Scene, held: Sequence[int], target: Sequence[float],
+                  v: list[float]) -> bool:
+    """The rates ``target`` of ``held`` set in place when each held element joins its own
+    mass to ground: then the nearest velocities in the kinetic-energy norm move only
+    those masses, each onto its lock (``v_b = L`` or ``v_a = -L``); ``False`` (nothing
+    changed) otherwise."""
+    nodes, vals = [], []
+    for e, L in zip(held, target, strict=True):
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        node, val = (b, L) if a < 0 <= b else ((a, -L if L != 0.0 else 0.0) if b < 0 <= a
+                                              else (-1, 0.0))
+        if node < 0 or node in nodes or not isinstance(scene.nodes[node], Mass):
+            return False
+        nodes.append(node)
+        vals.append(val)
+    for node, val in zip(nodes, vals, strict=True):
+        v[node] = float(val)
+    return True
 
 
 def lock_cones(branches: Sequence, modes: Sequence[int], F: Sequence[float],
