@@ -45,6 +45,7 @@ from .initial_state import consistent_initial_state
 from .radau import START_WEIGHTS, C, StageSystem
 from .radau import A as _A
 from .status import BranchError, RawRun, SolverError, Status
+from .stuck import hold_interval
 
 __all__ = ["run_radau5", "DEFAULT_RTOL", "DEFAULT_ATOL", "EXTRA_OPTIONS"]
 
@@ -87,7 +88,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     rows.append(row_of(0.0, x, v, F))
     stats = {"steps": 0, "rejected": 0, "newton_iterations": 0, "factorizations": 0,
              "nfev": 0, "njev": 0, "events": 0, "max_newton_iterations": 0,
-             "initial_newton_iterations": ic["newton_iterations"]}
+             "initial_newton_iterations": ic["newton_iterations"], "held_intervals": 0}
     status, message = Status.SUCCESS, ""
     fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"])
 
@@ -129,6 +130,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     max_newton = 10
 
     def at_event(t: float, h: float, cause: str) -> tuple[Status, str] | None:
+        nonlocal hold_check
+        hold_check = True  # a stuck interval may start here (lumped.solvers.stuck)
         return ms.at_event(t, h, cause, x, v, F)
 
     def crossing(U: list[float], h: float):
@@ -152,7 +155,29 @@ def run_radau5(scene: Scene, settings) -> RawRun:
 
     A_ = _A
     stalled = 0  # loop passes since the last accepted step (a guard against any cycle)
+    hold_check = True
     while t < t_final:
+        if hold_check and target is None and not kept:
+            # at rest in a mode that locks every node: the static balance up to the
+            # break-out or the stop, no steps (the same in both loops)
+            hold_check = False
+            seg = hold_interval(scene, plan, ms, t, breaks[bi] if bi < len(breaks)
+                                else t_final, x, v, F, dense, rows)
+            if seg is not None:
+                t, F, broke = seg
+                stats["held_intervals"] += 1
+                dF_n = h_acc = None
+                stop = None
+                if broke:
+                    stop = at_event(t, h, "guard")
+                elif bi < len(breaks) and t == breaks[bi]:
+                    bi += 1
+                    ms.time_event(t)
+                    stop = at_event(t, h, "time")
+                if stop:
+                    status, message = stop
+                    break
+                continue
         if fast is None and stats["steps"] >= adaptive_fast.COMPILE_AFTER and stats[
                 "loop"].startswith(
                 "python: not compiled yet"):  # a long run: compile the scene's loop now
