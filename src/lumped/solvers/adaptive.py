@@ -40,7 +40,8 @@ from .adaptive_setup import (
     read_options,
     scene_plan,
 )
-from .events import first_crossing_on, fold_crossed, guard_tolerance
+from .crossing_root import first_root_py
+from .events import fold_crossed, guard_tolerance
 from .initial_state import consistent_initial_state
 from .radau import START_WEIGHTS, C, StageSystem
 from .radau import A as _A
@@ -138,7 +139,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         if not watched:
             return None
         nodes = [system.element_nodes(U, h, x, v, F, e) for e in watched]
-        return first_crossing_on(nodes, [guards[e] for e in watched])
+        return first_root_py(nodes, [guards[e] for e in watched])
 
     def end_guard(U: list[float], h: float, which) -> tuple[float, float]:
         e = watched[which[0]]
@@ -245,7 +246,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             t, h, x, v, F, dF_n, F_seen, breaks[bi - 1] if bi > 0 else math.nan, modes,
             watched)
         if got is not None:
-            sol, its, nfac, err_norm, F_seen, negative = got
+            sol, its, nfac, err_norm, F_seen, hit_c = got
         else:
             fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
             U = (list(v) + list(F)) * 3
@@ -294,8 +295,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h = h / quot
             h_acc = None
             continue
-        # (the compiled attempt has tested the samples: no negative guard, no crossing)
-        hit = crossing(sol, h) if got is None or negative else None
+        # (the compiled attempt has found the crossing by the same algorithm)
+        hit = crossing(sol, h) if got is None else hit_c
         if target is not None:  # a landing step: bracket the event by end-of-step values
             if hit is not None and hit[1] != target[0] and hit[0] < 1.0:
                 # another guard crosses first; at t itself: no landing, the event is at t
