@@ -231,6 +231,8 @@ def hold_interval(scene: Scene, plan, ms, t: float, t_stop: float, x: list[float
     break-out is at ``t`` itself)."""
     from .adaptive_output import row_of
 
+    if ms.cones:  # locks in parallel: their split rule is the steps' (lumped.solvers.radau)
+        return None
     fkind, fpar = forcing_kinds(scene, plan)
     hold = static_hold(scene, plan, ms.modes, x, v, F, fkind, fpar)
     if hold is None:
@@ -245,4 +247,5 @@ def hold_interval(scene: Scene, plan, ms, t: float, t_stop: float, x: list[float
             rows.append(row_of(s, x, v, hold.forces(s)))
     F1 = hold.forces(t1)
     rows.append(row_of(t1, x, v, F1))
+    ms.mark_free(t, t1, x, v, F1)  # elements on cycles whose forces are not unique
     return t1, F1, t_b is not None
