@@ -376,6 +376,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         dF_n = system.end_slope(sol, h, F)
         event_here = target is not None
         h_found = target[7] if event_here else 0.0
+        ms.hint = watched[target[0][0]] if event_here else None
         target = None
         t_prev, t = t, (t_stop if to_stop else t + h)
         x = Y[2][:N]

@@ -17,6 +17,7 @@ from ..scene import Mass, Scene
 from .adaptive_setup import accumulating, too_many
 from .events import apply_impacts, hold_rate_locks, lock_cones, select_modes, snap_to_locks
 from .locks import IntervalLog, cycles_among, indeterminate_elements
+from .mode_guess import try_modes
 from .status import Event, Status
 
 __all__ = ["ModeState"]
@@ -60,6 +61,10 @@ class ModeState:
         self.recent: deque = deque(maxlen=opts["zeno_events"])
         self.log = IntervalLog()
         self.fast = None  # the compiled loop (told when x, v, F change in place)
+        # a guessed mode is tried first when every law is monotone (lumped.solvers.
+        # mode_guess); ``hint``: the element whose guard the driver landed on
+        self.guessing = not plan.checked
+        self.hint: int | None = None
         self.forces_from_probe = False  # the forces at t are an event probe's
 
     def set_modes(self, new: list[int], F: list[float]) -> None:
@@ -93,7 +98,10 @@ class ModeState:
         h0 = h_probe
         if cause == "guard":  # rates within the tolerance of a lock: exactly on it
             snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v))
-        for _ in range(3):
+        guess = self._guesses(cause)
+        sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
+                         modes if cause == "guard" else None, 3) if guess else None) or ""
+        for _ in range(0 if sel else 3):
             sel = select_modes(scene, lbs, t, x, v, F, h_probe, options)
             if not isinstance(sel, str) and (sel[0] != modes or cause != "guard"):
                 break
@@ -136,6 +144,22 @@ class ModeState:
         self.set_modes(new, F)
         hold_rate_locks(scene, lbs, modes, v)
         return ""
+
+    def _guesses(self, cause: str) -> list[list[int]]:
+        """The modes to try before the full search: after a guard crossing, the landed
+        element on each of its other branches (every watched element when the driver
+        gave no hint and there are at most 3); at a time event the mode kept first."""
+        if not self.guessing or self.cones or cause == "start":
+            return []
+        hint, self.hint = self.hint, None
+        elements = [hint] if hint is not None else (
+            list(self.watched) if len(self.watched) <= 3 else [])
+        out = [list(self.modes)] if cause == "time" else []
+        for e in elements:
+            for b in range(self.lbs[e].count):
+                if b != self.modes[e]:
+                    out.append([b if k == e else m for k, m in enumerate(self.modes)])
+        return out
 
     def at_event(self, t: float, h: float, cause: str, x: list[float], v: list[float],
                  F: list[float]) -> tuple[Status, str] | None:

@@ -131,12 +131,15 @@ class StaticHold:
         prev = t0
         for s in self.samples(t0, t1):
             F = self.forces(s)
+            roots = []
             for e in self.free:
                 gs = guards[e](self.q[e], F[e])
                 tol = guard_tolerance(self.q[e], F[e])
                 for j, g in enumerate(gs):
-                    if g + tol < 0.0:
-                        return self._root(e, j, guards[e], prev, s), done
+                    if g + tol < 0.0:  # the earliest root of all the guards that fail
+                        roots.append(self._root(e, j, guards[e], prev, s))
+            if roots:
+                return min(roots), done
             done.append(s)
             prev = s
         return None, done[:-1]
