@@ -165,12 +165,16 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             seg = hold_interval(scene, plan, ms, t, breaks[bi] if bi < len(breaks)
                                 else t_final, x, v, F, dense, rows)
             if seg is not None:
-                t, F, broke = seg
+                t, F, broke = seg[0], list(seg[1]), seg[2]
                 stats["held_intervals"] += 1
                 dF_n = h_acc = None
                 stop = None
                 if broke:
                     stop = at_event(t, h, "guard")
+                    # the forces are continuous across a break-out: the balance's exact
+                    # values, not the probe's (off by O(h_p), which the new branch's
+                    # guard can read as a return at once)
+                    F[:] = seg[1]
                 elif bi < len(breaks) and t == breaks[bi]:
                     bi += 1
                     ms.time_event(t)

@@ -153,7 +153,13 @@ class StaticHold:
         gb = g(b)
         if gb >= 0.0:  # negative only within its tolerance's shift: the end
             return b
-        return brentq(g, a, b, xtol=4e-16 * max(1.0, abs(b)), rtol=1e-15)
+        r = brentq(g, a, b, xtol=4e-16 * max(1.0, abs(b)), rtol=1e-15)
+        # just past the crossing (the guard negative), as a landing ends: the mode
+        # selection then sees the lock's force beyond its bound, not on it
+        step = math.ulp(r)
+        while g(r) >= 0.0 and r + step < b:
+            r, step = r + step, 2.0 * step
+        return r
 
 
 def forcing_kinds(scene: Scene, plan) -> tuple[np.ndarray | None, np.ndarray | None]:
