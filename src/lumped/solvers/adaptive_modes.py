@@ -98,7 +98,7 @@ class ModeState:
         h0 = h_probe
         if cause == "guard":  # rates within the tolerance of a lock: exactly on it
             snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v))
-        guess = self._guesses(cause)
+        guess = self._guesses(cause, x, v, F)
         sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
                          modes if cause == "guard" else None, 3) if guess else None) or ""
         for _ in range(0 if sel else 3):
@@ -145,12 +145,17 @@ class ModeState:
         hold_rate_locks(scene, lbs, modes, v)
         return ""
 
-    def _guesses(self, cause: str) -> list[list[int]]:
-        """The modes to try before the full search: after a guard crossing, the landed
-        element on each of its other branches (every watched element when the driver
-        gave no hint and there are at most 3); at a time event the mode kept first."""
-        if not self.guessing or self.cones or cause == "start":
+    def _guesses(self, cause: str, x: list[float], v: list[float], F: list[float]
+                 ) -> list[list[int]]:
+        """The modes to try before the full search: at the start the branches the laws
+        read at the initial state; after a guard crossing, the landed element on each of
+        its other branches (every watched element when the driver gave no hint and there
+        are at most 3); at a time event the mode kept first."""
+        if not self.guessing or self.cones:
             return []
+        if cause == "start":
+            q = self.scene.elongations(x, v)
+            return [[self.lbs[e].branch(q[e], F[e]) for e in range(self.E)]]
         hint, self.hint = self.hint, None
         elements = [hint] if hint is not None else (
             list(self.watched) if len(self.watched) <= 3 else [])
