@@ -131,8 +131,11 @@ def _solve(J: list[list[float]], G: list[float]) -> list[float] | None:
     iterate that does not converge, or a result the branch check refuses)."""
     n = len(G)
     for c in range(n):
-        p = max(range(c, n), key=lambda r: abs(J[r][c]))
-        if not 0.0 < abs(J[p][c]) < math.inf:
+        p, big = c, abs(J[c][c])
+        for r in range(c + 1, n):
+            if abs(J[r][c]) > big:
+                p, big = r, abs(J[r][c])
+        if not 0.0 < big < math.inf:
             return None
         if p != c:
             J[c], J[p] = J[p], J[c]
