@@ -27,36 +27,26 @@ than a held-mode step (an event, a stop, a singular matrix) and gives the same n
 from __future__ import annotations
 
 import math
-from collections import deque
 
 from ..scene import Mass, Scene
 from . import adaptive_fast
 from .adaptive_fast import compiled_loop
+from .adaptive_modes import ModeState
 from .adaptive_output import DenseOutput, Rows, initial_step, output_data, row_of
 from .adaptive_setup import (
     EXTRA_OPTIONS,
-    accumulating,
     breakpoints,
     compiled_stage_solver,
     read_options,
     scene_plan,
-    too_many,
 )
-from .events import (
-    apply_impacts,
-    first_crossing_on,
-    fold_crossed,
-    guard_tolerance,
-    hold_rate_locks,
-    lock_cones,
-    select_modes,
-    snap_to_locks,
-)
+from .crossing_root import first_root_py
+from .events import fold_crossed, guard_tolerance
 from .initial_state import consistent_initial_state
-from .locks import IntervalLog, cycles_among, indeterminate_elements
 from .radau import START_WEIGHTS, C, StageSystem
 from .radau import A as _A
-from .status import BranchError, Event, RawRun, SolverError, Status
+from .status import BranchError, RawRun, SolverError, Status
+from .stuck import hold_interval
 
 __all__ = ["run_radau5", "DEFAULT_RTOL", "DEFAULT_ATOL", "EXTRA_OPTIONS"]
 
@@ -89,103 +79,31 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     masses = scene.masses
     system = StageSystem(masses, scene.elem_a, scene.elem_b,
                          [el.kind == "spring" for el in scene.elements])
-    lbs = plan.branches
-    names = scene.element_names
     checked = plan.checked
     x = [float(nd.x0) for nd in scene.nodes]
     v, F, ic = consistent_initial_state(scene, time_scale=t_final, options=settings.options)
     breaks = breakpoints(scene, t_final)
     zeno_window = opts["zeno_window"] or 1e-6 * t_final
-    events: list[Event] = []
-    recent: deque = deque(maxlen=opts["zeno_events"])
     dense = DenseOutput(N, E)
     rows = Rows()
     rows.append(row_of(0.0, x, v, F))
     stats = {"steps": 0, "rejected": 0, "newton_iterations": 0, "factorizations": 0,
              "nfev": 0, "njev": 0, "events": 0, "max_newton_iterations": 0,
-             "initial_newton_iterations": ic["newton_iterations"]}
+             "initial_newton_iterations": ic["newton_iterations"], "held_intervals": 0}
     status, message = Status.SUCCESS, ""
     fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"])
 
-    modes = [0] * E
-    kernels: list = [None] * E
-    guards: list = [None] * E
-    watched: list[int] = []
-    on_cycles = plan.cyclic
-    cones: dict[int, tuple[float, float]] = {}  # locks in parallel: the force split rule
+    ms = ModeState(scene, plan, settings, opts, rtol, atol, stats, zeno_window)
+    ms.fast = fast
+    modes, kernels, guards, watched, cones = ms.modes, ms.kernels, ms.guards, ms.watched, \
+        ms.cones
+    events, recent = ms.events, ms.recent
 
     # the compiled stage Newton (compiled=True), built on first need: with the compiled
     # loop the attempts need it only after a singular Jacobian (building it costs ~0.7 ms)
     stage_solve = None
 
-    def set_modes(new: list[int]) -> None:
-        modes[:] = new
-        watched.clear()
-        for e in range(E):
-            kernels[e] = lbs[e].kernel_for(new[e])
-            guards[e] = lbs[e].guards_for(new[e])
-            if lbs[e].count > 1:
-                watched.append(e)
-        cones.clear()
-        locked = lock_cones(lbs, new, F, on_cycles)
-        # only locks in parallel with each other leave their split free (a stuck link in
-        # series with another keeps its exact LU solve, and so its exact zero rate)
-        parallel = cycles_among(scene, tuple(locked)) if len(locked) > 1 else ()
-        if len(parallel) > 1:
-            cones.update({e: locked[e] for e in parallel})
-
-    def change_mode(t: float, h_probe: float, cause: str) -> str:
-        """Choose the mode after ``t`` and record the switches; '' or a failure message."""
-        if fast is not None:
-            fast.forget()  # x, v, F may change in place here
-        sel: tuple | str = ""
-        h0 = h_probe
-        if cause == "guard":  # rates within the tolerance of a lock: exactly on it
-            snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v))
-        for _ in range(3):
-            sel = select_modes(scene, lbs, t, x, v, F, h_probe, settings.options)
-            if not isinstance(sel, str) and (sel[0] != modes or cause != "guard"):
-                break
-            h_probe *= 1000.0  # a failed or undecided probe: a longer one
-        if isinstance(sel, str):
-            return sel
-        new, v_p, F_p = sel
-        scale_v = atol + rtol * max(abs(vi) for vi in v)
-        hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, opts["restitution"])
-        if isinstance(hit, str):
-            return f"impact at t = {t!r}: {hit}"
-        if hit[0]:
-            for e, impulse in hit[0]:
-                events.append(Event(t, names[e], "impact", modes[e], new[e], impulse=impulse,
-                                    energy_lost=hit[1] if e == hit[0][0][0] else 0.0))
-                recent.append(t)
-            # the mode after the impact, from the velocities after it (the probe's guess:
-            # the forces before it; a failed probe is tried longer, as above)
-            for k in range(3):
-                sel = select_modes(scene, lbs, t, x, v, F, h0 * 1000.0 ** k, settings.options)
-                if not isinstance(sel, str):
-                    break
-            if isinstance(sel, str):
-                return sel
-            new, v_p, F_p = sel
-        for p in range(N):
-            if not is_mass[p]:
-                v[p] = v_p[p]
-        # at t = 0 the consistent initial forces stay, unless they miss a law at the
-        # probe's junction velocities (the initial state can leave a junction between
-        # two slipping dashpots unresolved)
-        if cause != "start" or not _laws_hold(lbs, new, scene.elongations(x, v), F):
-            F[:] = F_p
-        for e in range(E):
-            if new[e] != modes[e] and not any(ev.t == t and ev.element == names[e]
-                                              and ev.kind == "impact" for ev in events[-E:]):
-                events.append(Event(t, names[e], "switch", modes[e], new[e]))
-                recent.append(t)
-        set_modes(new)
-        hold_rate_locks(scene, lbs, modes, v)
-        return ""
-
-    msg = change_mode(0.0, 1e-9 * t_final, "start")
+    msg = ms.change_mode(0.0, 1e-9 * t_final, "start", x, v, F)
     events.clear()
     recent.clear()
     if msg:
@@ -211,29 +129,17 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     t = 0.0
     bi = 0
     max_newton = 10
-    forces_from_probe = False  # the forces at t are an event probe's (see the dense output)
-    cyclic, log = plan.cyclic, IntervalLog()
 
     def at_event(t: float, h: float, cause: str) -> tuple[Status, str] | None:
-        """The mode after an event at ``t``; ``(status, message)`` if the run must stop."""
-        nonlocal forces_from_probe
-        msg = change_mode(t, max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t))), cause)
-        forces_from_probe = True
-        if cyclic and not msg:  # forces not unique from the event on
-            free = indeterminate_elements(scene, scene.elongations(x, v), F, cyclic)
-            log.mark(t, t, [names[e] for e in free])
-        stats["events"] = len(events)
-        if msg:
-            return Status.INCONSISTENT, msg
-        if accumulating(recent, zeno_window) or len(events) > opts["max_events"]:
-            return too_many(events, recent, t, opts)
-        return None
+        nonlocal hold_check
+        hold_check = True  # a stuck interval may start here (lumped.solvers.stuck)
+        return ms.at_event(t, h, cause, x, v, F)
 
     def crossing(U: list[float], h: float):
         if not watched:
             return None
         nodes = [system.element_nodes(U, h, x, v, F, e) for e in watched]
-        return first_crossing_on(nodes, [guards[e] for e in watched])
+        return first_root_py(nodes, [guards[e] for e in watched])
 
     def end_guard(U: list[float], h: float, which) -> tuple[float, float]:
         e = watched[which[0]]
@@ -250,14 +156,41 @@ def run_radau5(scene: Scene, settings) -> RawRun:
 
     A_ = _A
     stalled = 0  # loop passes since the last accepted step (a guard against any cycle)
+    hold_check = True
     while t < t_final:
+        if hold_check and target is None and not kept:
+            # at rest in a mode that locks every node: the static balance up to the
+            # break-out or the stop, no steps (the same in both loops)
+            hold_check = False
+            seg = hold_interval(scene, plan, ms, t, breaks[bi] if bi < len(breaks)
+                                else t_final, x, v, F, dense, rows)
+            if seg is not None:
+                t, F, broke = seg[0], list(seg[1]), seg[2]
+                stats["held_intervals"] += 1
+                dF_n = h_acc = None
+                stop = None
+                if broke:
+                    stop = at_event(t, h, "guard")
+                    # the forces are continuous across a break-out: the balance's exact
+                    # values, not the probe's (off by O(h_p), which the new branch's
+                    # guard can read as a return at once)
+                    F[:] = seg[1]
+                elif bi < len(breaks) and t == breaks[bi]:
+                    bi += 1
+                    ms.time_event(t)
+                    stop = at_event(t, h, "time")
+                if stop:
+                    status, message = stop
+                    break
+                continue
         if fast is None and stats["steps"] >= adaptive_fast.COMPILE_AFTER and stats[
                 "loop"].startswith(
                 "python: not compiled yet"):  # a long run: compile the scene's loop now
             fast, stats["loop"] = compiled_loop(scene, plan, None, stats["steps"])
+            ms.fast = fast
             if fast is not None:
                 fast.setup(t_final, rtol, atol, m_min)
-        if fast is not None and target is None and not kept and not forces_from_probe:
+        if fast is not None and target is None and not kept and not ms.forces_from_probe:
             # the held-mode steps compiled (the same numbers as the loop below); it
             # returns before the pass this loop must take (a stop, an event, ...)
             st = state()
@@ -271,8 +204,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             if why == "stopped":  # it took the step to the stop: a time event, or the end
                 if bi < len(breaks) and t == breaks[bi]:
                     bi += 1
-                    events.append(Event(t, "", "time", -1, -1))
-                    recent.append(t)
+                    ms.time_event(t)
                     dF_n = h_acc = None
                     stop = at_event(t, h, "time")
                     if stop:
@@ -318,7 +250,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             t, h, x, v, F, dF_n, F_seen, breaks[bi - 1] if bi > 0 else math.nan, modes,
             watched)
         if got is not None:
-            sol, its, nfac, err_norm, F_seen, negative = got
+            sol, its, nfac, err_norm, F_seen, hit_c = got
         else:
             fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
             U = (list(v) + list(F)) * 3
@@ -367,8 +299,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h = h / quot
             h_acc = None
             continue
-        # (the compiled attempt has tested the samples: no negative guard, no crossing)
-        hit = crossing(sol, h) if got is None or negative else None
+        # (the compiled attempt has found the crossing by the same algorithm)
+        hit = crossing(sol, h) if got is None else hit_c
         if target is not None:  # a landing step: bracket the event by end-of-step values
             if hit is not None and hit[1] != target[0] and hit[0] < 1.0:
                 # another guard crosses first; at t itself: no landing, the event is at t
@@ -436,18 +368,19 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 Xk.append(x[i] + h * s_)
             Y.append(Xk + sol[k * n:k * n + N] + sol[k * n + N:k * n + n])
         F0 = F
-        if forces_from_probe:
+        if ms.forces_from_probe:
             # the forces at t came from the event's vanishing probe step, whose round-off
             # is magnified by m / h_probe; the stage forces hold the laws and the balance,
             # so the dense output starts from their quadratic (exact for a linear relation
             # such as a load shared by locked elements)
             F0 = [sum(w * Yk[2 * N + e] for w, Yk in zip(START_WEIGHTS, Y, strict=True))
                   for e in range(E)]
-            forces_from_probe = False
+            ms.forces_from_probe = False
         dense.add(t, h, x + v + F0, Y)
         dF_n = system.end_slope(sol, h, F)
         event_here = target is not None
         h_found = target[7] if event_here else 0.0
+        ms.hint = watched[target[0][0]] if event_here else None
         target = None
         t_prev, t = t, (t_stop if to_stop else t + h)
         x = Y[2][:N]
@@ -455,9 +388,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         F = Y[2][2 * N:]
         stats["steps"] += 1
         rows.append(row_of(t, x, v, F))
-        if cyclic:  # locked elements in parallel: forces not unique (lumped.solvers.locks)
-            free = indeterminate_elements(scene, scene.elongations(x, v), F, cyclic)
-            log.mark(t_prev, t, [names[e] for e in free])
+        ms.mark_free(t_prev, t, x, v, F)  # locks on cycles: forces not unique
         # the step size for the next step (Gustafsson's predictive controller)
         h_new = h / quot
         if h_acc is not None and err_norm > 0.0:
@@ -472,8 +403,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         is_break = to_stop and bi < len(breaks) and t == breaks[bi]
         if is_break:
             bi += 1
-            events.append(Event(t, "", "time", -1, -1))
-            recent.append(t)
+            ms.time_event(t)
         if event_here or is_break:
             dF_n = h_acc = None
             stop = at_event(t, h, "guard" if event_here else "time")
@@ -486,14 +416,5 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         raise error(message, status=status, t=t, where="", residual=math.nan)
     data = output_data(rows, dense, dt, settings.t_end, t)
     return RawRun(data, stats, status, message, events, dense if len(dense) else None,
-                  indeterminate=log.result())
+                  indeterminate=ms.log.result())
 
-
-def _laws_hold(lbs: list, modes: list[int], q: list[float], F: list[float]) -> bool:
-    """Whether every element's law holds at ``(q_e, F_e)`` on its branch, to ``1e-8``
-    relative to the size of its terms."""
-    for e, (qe, Fe) in enumerate(zip(q, F, strict=True)):
-        R, Rq, RF = lbs[e].kernel_for(modes[e])(qe, Fe)
-        if not abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe)):
-            return False
-    return True

@@ -159,8 +159,8 @@ class CompiledLoop:
         self.N, self.E = len(js.masses), len(js.ea)
         self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(
             self.N, self.E, self.E, BLOCK)
-        self.fst = np.zeros(14)
-        self.ist = np.zeros(18, dtype=np.int64)
+        self.fst = np.zeros(15)
+        self.ist = np.zeros(20, dtype=np.int64)
         self.calls = 0
         self._akey: tuple | None = None
         self._arrays: tuple = ()
@@ -212,9 +212,9 @@ class CompiledLoop:
                 dF_n: list[float] | None, F_seen: float, prev_break: float, modes: list[int],
                 watched: list[int]):
         """One step of size ``h`` from ``t``, not accepted: ``(U or None, its, nfac,
-        err_norm, F_seen, negative)`` as the Python loop computes them (``negative``: some
-        guard is negative at a sample of the step, the test of
-        :func:`lumped.solvers.events.first_crossing_on`), or ``None`` when a Jacobian is
+        err_norm, F_seen, hit)`` as the Python loop computes them (``hit``: ``(s, (w, j))``,
+        the first guard crossing on the step, :func:`lumped.solvers.crossing_root.
+        first_root`, or ``None``), or ``None`` when a Jacobian is
         singular (the Python loop's minimum-norm solve must run).
 
         The state lists are converted to arrays once while they are the same objects
@@ -240,8 +240,10 @@ class CompiledLoop:
         if ok < 0:
             return None
         U = self.ws[0, :3 * (self.N + self.E)].tolist() if ok else None
+        hit = ((float(fst[L.A_ROOT]), (int(ist[L.A_W]), int(ist[L.A_J])))
+               if ok and ist[L.A_HIT] else None)
         return (U, int(ist[L.A_ITS]), int(ist[L.A_NFAC]), float(fst[L.A_ERR]),
-                float(fst[L.F_SEEN]), bool(ist[L.A_HIT]))
+                float(fst[L.F_SEEN]), hit)
 
     def run(self, st: dict, modes: list[int], watched: list[int], stats: dict, dense,
             rows) -> str:

@@ -29,9 +29,16 @@ class DenseOutput:
         self._D: list[list[list[float]]] = []
         self._count = 0
         self._cache: tuple | None = None
+        self._static: list[tuple[float, float, object]] = []
 
     def __len__(self) -> int:
-        return self._count
+        return self._count + len(self._static)
+
+    def add_static(self, t0: float, t1: float, hold) -> None:
+        """A stuck interval ``[t0, t1]`` without steps: ``hold.y0`` (``x, v, F`` at ``t0``)
+        and ``hold.forces_many(ts)``, the forces of the static balance
+        (:class:`lumped.solvers.stuck.StaticHold`)."""
+        self._static.append((t0, t1, hold))
 
     def add(self, t: float, h: float, y0: list[float], Y: list[list[float]]) -> None:
         """One step: its start ``t``, size ``h``, ``y_n`` and the stage values ``Y_k``."""
@@ -70,18 +77,49 @@ class DenseOutput:
         boundary the later step is used (right limits: the forces after an event)."""
         ts = np.atleast_1d(np.asarray(t, dtype=float))
         N = self.N
-        if not self._count:
+        if not len(self):
             raise ValueError("no step was taken: the dense output is empty")
-        T0, H, Y0, D = self._arrays()
-        t_lo, t_hi = T0[0], T0[-1] + H[-1]
+        if self._count:
+            T0, H, Y0, D = self._arrays()
+            t_lo, t_hi = T0[0], T0[-1] + H[-1]
+        else:
+            t_lo, t_hi = math.inf, -math.inf
+        for s0, s1, _ in self._static:
+            t_lo, t_hi = min(t_lo, s0), max(t_hi, s1)
         bad = ~((ts >= t_lo) & (ts <= t_hi))
         if bad.any():
             raise ValueError(f"`t` = {ts[bad][0]!r} is outside the solved interval "
                              f"[{t_lo!r}, {t_hi!r}]")
-        out = np.empty((len(ts), 1 + Y0.shape[1]))
+        out = np.empty((len(ts), 1 + 2 * N + self.E))
+        if self._count:
+            self._polynomials(ts, out)
+        for s0, s1, hold in self._static:
+            # [s0, s1): a step that starts at s1 owns s1 (right limits); the end is closed
+            # when nothing follows
+            closed = s1 == t_hi and not (self._count and bool(np.isin(s1, T0)))
+            if numba_enabled():
+                _static_fill(ts, s0, s1, closed, *hold.arrays(), N, out)
+                continue
+            inside = (ts >= s0) & ((ts < s1) | ((ts == s1) & closed))
+            if inside.any():
+                sel = ts[inside]
+                y0 = hold.y0
+                rows = np.empty((len(sel), out.shape[1]))
+                rows[:, 0] = sel
+                rows[:, 1:1 + 2 * N:2] = y0[:N]
+                rows[:, 2:2 + 2 * N:2] = y0[N:2 * N]
+                rows[:, 1 + 2 * N:] = hold.forces_many(sel)
+                out[inside] = rows
+        return out
+
+    def _polynomials(self, ts: np.ndarray, out: np.ndarray) -> None:
+        """The collocation polynomials at ``ts`` into ``out`` (each ``t`` on the step with
+        ``T0[i] <= t < T0[i+1]``, the first or last one outside them)."""
+        N = self.N
+        T0, H, Y0, D = self._arrays()
         if numba_enabled():  # the same operations compiled (no temporary arrays)
             _evaluate(T0, H, Y0, D, ts, N, out)
-            return out
+            return
         i = np.clip(np.searchsorted(T0, ts, side="right") - 1, 0, len(T0) - 1)
         l1, l2, l3 = dense_weights((ts - T0[i]) / H[i])
         y = Y0[i] + (l1[:, None] * D[i, 0] + l2[:, None] * D[i, 1] + l3[:, None] * D[i, 2])
@@ -89,7 +127,6 @@ class DenseOutput:
         out[:, 1:1 + 2 * N:2] = y[:, :N]
         out[:, 2:2 + 2 * N:2] = y[:, N:2 * N]
         out[:, 1 + 2 * N:] = y[:, 2 * N:]
-        return out
 
 
 _C1, _C2, _C3 = C
@@ -122,6 +159,38 @@ def _evaluate(T0, H, Y0, D, ts, N, out) -> None:
                 out[r, 2 + 2 * (j - N)] = y
             else:
                 out[r, 1 + j] = y
+
+
+@njit(cache=True)
+def _static_fill(ts, s0, s1, closed, y0, fkind, fpar, c, minv, free, N, out) -> None:
+    """A stuck interval's rows at the ``ts`` in ``[s0, s1)`` (``[s0, s1]`` if ``closed``):
+    ``x, v`` of ``y0``, the forces of ``y0`` but those of ``free``, which follow the static
+    balance ``-K_free^-1 (f(t) + c)`` (:class:`lumped.solvers.stuck.StaticHold`; the
+    forcing by the scalar formulas of its kinds: 1 constant, 2 sine burst)."""
+    E = y0.shape[0] - 2 * N
+    g = np.empty(N)
+    for r in range(ts.shape[0]):
+        t = ts[r]
+        if not (t >= s0 and (t < s1 or (closed and t == s1))):
+            continue
+        out[r, 0] = t
+        for i in range(N):
+            out[r, 1 + 2 * i] = y0[i]
+            out[r, 2 + 2 * i] = y0[N + i]
+            kind = fkind[i]
+            f = 0.0
+            if kind == 1:
+                f = fpar[i, 0]
+            elif kind == 2 and not t > fpar[i, 2]:
+                f = fpar[i, 0] * math.sin(fpar[i, 1] * t)
+            g[i] = f + c[i]
+        for e in range(E):
+            out[r, 1 + 2 * N + e] = y0[2 * N + e]
+        for k in range(free.shape[0]):
+            s_ = 0.0
+            for i in range(N):
+                s_ += minv[k, i] * g[i]
+            out[r, 1 + 2 * N + free[k]] = s_
 
 
 class Rows:

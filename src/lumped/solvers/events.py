@@ -141,10 +141,7 @@ def select_modes(
     qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
     evaluate = _make_evaluate(scene, h_probe, cm, [0.0] * N, [1.0] * N, uref, x_hat, f,
                               qs, rq, rf, roundoff=True)
-    opts = options or NewtonOptions()
-    probe_opts = NewtonOptions(rtol=min(opts.rtol, 1e-12), atol=min(opts.atol, 1e-14),
-                               max_iters=max(opts.max_iters, 100),
-                               max_backtracks=opts.max_backtracks, free_steps=opts.free_steps)
+    probe_opts = _probe_options(options)
     # as the fixed-step methods: locks in parallel (a singular step) by the minimum-norm
     # correction, hard points of a law (Herschel-Bulkley n < 1 at its yield force) by the
     # globalised solve
@@ -160,6 +157,23 @@ def select_modes(
     q = scene.elongations(x_p, v_p)
     modes = [branches[e].branch(q[e], F_p[e]) for e in range(E)]
     return modes, v_p, F_p
+
+
+_PROBE_OPTIONS: dict = {}
+
+
+def _probe_options(options: NewtonOptions | None) -> NewtonOptions:
+    """The Newton options of the probe step: ``options`` tightened (made once per
+    ``options``, whose checks cost more than a probe's Newton iteration)."""
+    got = _PROBE_OPTIONS.get(options)
+    if got is None:
+        opts = options or NewtonOptions()
+        got = NewtonOptions(rtol=min(opts.rtol, 1e-12), atol=min(opts.atol, 1e-14),
+                            max_iters=max(opts.max_iters, 100),
+                            max_backtracks=opts.max_backtracks, free_steps=opts.free_steps)
+        if len(_PROBE_OPTIONS) < 64:
+            _PROBE_OPTIONS[options] = got
+    return got
 
 
 def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
@@ -233,10 +247,30 @@ def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[floa
                 held.append(e)
                 target.append(float(L) if dashpot else 0.0)
                 break
-    if held:
+    if held and not _ground_locks(scene, held, target, v):
         v_new, _, _ = _solve(scene, v, held, 0.0, target=target)
         v[:] = v_new
     return held
+
+
+def _ground_locks(scene: Scene, held: Sequence[int], target: Sequence[float],
+                  v: list[float]) -> bool:
+    """The rates ``target`` of ``held`` set in place when each held element joins its own
+    mass to ground: then the nearest velocities in the kinetic-energy norm move only
+    those masses, each onto its lock (``v_b = L`` or ``v_a = -L``); ``False`` (nothing
+    changed) otherwise."""
+    nodes, vals = [], []
+    for e, L in zip(held, target, strict=True):
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        node, val = (b, L) if a < 0 <= b else ((a, -L if L != 0.0 else 0.0) if b < 0 <= a
+                                              else (-1, 0.0))
+        if node < 0 or node in nodes or not isinstance(scene.nodes[node], Mass):
+            return False
+        nodes.append(node)
+        vals.append(val)
+    for node, val in zip(nodes, vals, strict=True):
+        v[node] = float(val)
+    return True
 
 
 def lock_cones(branches: Sequence, modes: Sequence[int], F: Sequence[float],

@@ -31,11 +31,12 @@ are full (:data:`FULL`), ``max_steps`` or the stall limit (:data:`LIMIT`). With
 ``ist[SINGLE] = 1`` it makes one attempt of size ``h`` for the Python loop and returns
 (:data:`ATTEMPT`) its outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular),
 ``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]``, ``ist[A_HIT]`` (1 when a guard is
-negative at a sample: only then must Python look for the crossing) and the stage values
-in ``ws[0]``.
+negative at a sample), the first crossing's root ``fst[A_ROOT]`` on guard ``ist[A_J]``
+of watched element ``ist[A_W]`` (:func:`lumped.solvers.crossing_root.first_root`, the
+Python loop's algorithm) and the stage values in ``ws[0]``.
 
 State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. A_ERR``)
-and ``ist`` (ints, indices ``HAVE_ACC .. A_HIT``).  The forcing is ``(fkind, fpar)`` of
+and ``ist`` (ints, indices ``HAVE_ACC .. A_J``).  The forcing is ``(fkind, fpar)`` of
 :func:`lumped.solvers.bdf_jit_core.forcing_into` (kinds 0 none, 1 constant, 2 sine burst;
 a tabulated forcing is not taken here).
 """
@@ -47,6 +48,7 @@ import math
 import numpy as np
 
 from ..codegen.jit import njit, numba_enabled
+from .crossing_root import first_root
 from .radau import END_SLOPES, C
 from .radau_jit import stage_solve
 from .radau_step_jit import crossed, finite, folded, forces, step_error
@@ -57,11 +59,11 @@ __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", 
 
 # fst: float state
 (T, H, F_SEEN, H_ACC, ERR_ACC, H_GOOD, T_STOP, T_FINAL, RTOL, ATOL, M_MIN, PREV_BREAK,
- TWO, A_ERR) = range(14)
+ TWO, A_ERR, A_ROOT) = range(15)
 # ist: int state and counters
 (HAVE_ACC, HAVE_DF, STALLED, STEPS, REJECTED, NEWTON_ITERATIONS, FACTORIZATIONS, NFEV, NJEV,
  MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK,
- A_HIT) = range(18)
+ A_HIT, A_W, A_J) = range(20)
 STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD, STOPPED = range(1, 10)
 REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "floor",
            FULL: "full", LIMIT: "limit", ATTEMPT: "attempt", STOPPED: "stopped",
@@ -165,9 +167,12 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, c
                                          rhs, err, fst[TWO])
                 if fst[A_ERR] != -1.0:
                     ist[A_OK] = 1
-                    ist[A_HIT] = watched.shape[0] > 0 and crossed(
-                        branch_guards, ea, eb, spring, modes, watched, A, h, x, v, F, U, N, n,
-                        qn, Fn, gbuf)
+                    ist[A_HIT] = 0
+                    if watched.shape[0] > 0:  # the crossing's root too (the landing's)
+                        fst[A_ROOT] = first_root(branch_guards, ea, eb, spring, modes,
+                                                 watched, A, h, x, v, F, U, N, n, qn, Fn,
+                                                 gbuf, ist[A_W:A_J + 1])
+                        ist[A_HIT] = fst[A_ROOT] >= 0.0
             break
         if not ok and out[2] == 1:
             if finite(J):

@@ -1,0 +1,208 @@
+r"""The mode of the ``radau5`` driver: which branch of its law every element is held on,
+and what happens at an event (a guard crossing, a time event, the start).
+
+:class:`ModeState` is the small state object of :func:`lumped.solvers.adaptive.run_radau5`
+that owns the held branches (``modes``), their kernels and guards, the elements whose
+guards are watched, the force-split cones of locks in parallel, and the event record.
+:meth:`ModeState.at_event` chooses the mode after an event by a vanishing implicit step of
+the full laws (:func:`lumped.solvers.events.select_modes`), applies impacts, records the
+switches and tests for an accumulation of events.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+from ..scene import Mass, Scene
+from .adaptive_setup import accumulating, too_many
+from .events import apply_impacts, hold_rate_locks, lock_cones, select_modes, snap_to_locks
+from .locks import IntervalLog, cycles_among, indeterminate_elements
+from .mode_guess import try_modes
+from .status import Event, Status
+
+__all__ = ["ModeState"]
+
+_EPS = 2.220446049250313e-16
+
+
+class ModeState:
+    """The held branches of a run and its events (see the module notes).
+
+    Parameters
+    ----------
+    scene : Scene
+    plan : ScenePlan
+        The scene's :func:`~lumped.solvers.adaptive_setup.scene_plan` (branches, cycles).
+    settings : RunSettings
+        ``options`` (the Newton options of the probe step) are read from it.
+    opts : dict
+        The ``radau5`` keywords (:func:`~lumped.solvers.adaptive_setup.read_options`).
+    rtol, atol : float
+        The run's tolerances (the rate scale below which a rate snaps onto a lock).
+    stats : dict
+        The run's counters (``events`` is kept up to date).
+    """
+
+    def __init__(self, scene: Scene, plan, settings, opts: dict, rtol: float, atol: float,
+                 stats: dict, zeno_window: float) -> None:
+        self.scene, self.lbs, self.settings, self.opts = scene, plan.branches, settings, opts
+        self.rtol, self.atol, self.stats = rtol, atol, stats
+        self.names = scene.element_names
+        self.N, self.E = len(scene.nodes), len(scene.elements)
+        self.is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+        self.cyclic = plan.cyclic
+        self.zeno_window = zeno_window
+        self.modes = [0] * self.E
+        self.kernels: list = [None] * self.E
+        self.guards: list = [None] * self.E
+        self.watched: list[int] = []
+        self.cones: dict[int, tuple[float, float]] = {}  # locks in parallel: force split
+        self.events: list[Event] = []
+        self.recent: deque = deque(maxlen=opts["zeno_events"])
+        self.log = IntervalLog()
+        self.fast = None  # the compiled loop (told when x, v, F change in place)
+        # a guessed mode is tried first when every law is monotone (lumped.solvers.
+        # mode_guess); ``hint``: the element whose guard the driver landed on
+        self.guessing = not plan.checked
+        self.hint: int | None = None
+        self.forces_from_probe = False  # the forces at t are an event probe's
+
+    def set_modes(self, new: list[int], F: list[float]) -> None:
+        """Hold every element on branch ``new[e]`` (the list ``modes`` is kept)."""
+        lbs, E = self.lbs, self.E
+        self.modes[:] = new
+        self.watched.clear()
+        for e in range(E):
+            self.kernels[e] = lbs[e].kernel_for(new[e])
+            self.guards[e] = lbs[e].guards_for(new[e])
+            if lbs[e].count > 1:
+                self.watched.append(e)
+        self.cones.clear()
+        locked = lock_cones(lbs, new, F, self.cyclic)
+        # only locks in parallel with each other leave their split free (a stuck link in
+        # series with another keeps its exact LU solve, and so its exact zero rate)
+        parallel = cycles_among(self.scene, tuple(locked)) if len(locked) > 1 else ()
+        if len(parallel) > 1:
+            self.cones.update({e: locked[e] for e in parallel})
+
+    def change_mode(self, t: float, h_probe: float, cause: str, x: list[float],
+                    v: list[float], F: list[float]) -> str:
+        """Choose the mode after ``t`` and record the switches (``x, v, F`` in place);
+        '' or a failure message."""
+        scene, lbs, modes, names, events = self.scene, self.lbs, self.modes, self.names, \
+            self.events
+        rtol, atol, options = self.rtol, self.atol, self.settings.options
+        if self.fast is not None:
+            self.fast.forget()  # x, v, F may change in place here
+        sel: tuple | str = ""
+        h0 = h_probe
+        if cause == "guard":  # rates within the tolerance of a lock: exactly on it
+            snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v))
+        guess = self._guesses(cause, x, v, F)
+        sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
+                         modes if cause == "guard" else None, 3) if guess else None) or ""
+        for _ in range(0 if sel else 3):
+            sel = select_modes(scene, lbs, t, x, v, F, h_probe, options)
+            if not isinstance(sel, str) and (sel[0] != modes or cause != "guard"):
+                break
+            h_probe *= 1000.0  # a failed or undecided probe: a longer one
+        if isinstance(sel, str):
+            return sel
+        new, v_p, F_p = sel
+        scale_v = atol + rtol * max(abs(vi) for vi in v)
+        hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"])
+        if isinstance(hit, str):
+            return f"impact at t = {t!r}: {hit}"
+        if hit[0]:
+            for e, impulse in hit[0]:
+                events.append(Event(t, names[e], "impact", modes[e], new[e], impulse=impulse,
+                                    energy_lost=hit[1] if e == hit[0][0][0] else 0.0))
+                self.recent.append(t)
+            # the mode after the impact, from the velocities after it (the probe's guess:
+            # the forces before it; a failed probe is tried longer, as above)
+            for k in range(3):
+                sel = select_modes(scene, lbs, t, x, v, F, h0 * 1000.0 ** k, options)
+                if not isinstance(sel, str):
+                    break
+            if isinstance(sel, str):
+                return sel
+            new, v_p, F_p = sel
+        for p in range(self.N):
+            if not self.is_mass[p]:
+                v[p] = v_p[p]
+        # at t = 0 the consistent initial forces stay, unless they miss a law at the
+        # probe's junction velocities (the initial state can leave a junction between
+        # two slipping dashpots unresolved)
+        if cause != "start" or not _laws_hold(lbs, new, scene.elongations(x, v), F):
+            F[:] = F_p
+        for e in range(self.E):
+            if new[e] != modes[e] and not any(ev.t == t and ev.element == names[e]
+                                              and ev.kind == "impact"
+                                              for ev in events[-self.E:]):
+                events.append(Event(t, names[e], "switch", modes[e], new[e]))
+                self.recent.append(t)
+        self.set_modes(new, F)
+        hold_rate_locks(scene, lbs, modes, v)
+        return ""
+
+    def _guesses(self, cause: str, x: list[float], v: list[float], F: list[float]
+                 ) -> list[list[int]]:
+        """The modes to try before the full search: at the start the branches the laws
+        read at the initial state; after a guard crossing, the landed element on each of
+        its other branches (every watched element when the driver gave no hint and there
+        are at most 3); at a time event the mode kept first."""
+        if not self.guessing or self.cones:
+            return []
+        if cause == "start":
+            q = self.scene.elongations(x, v)
+            return [[self.lbs[e].branch(q[e], F[e]) for e in range(self.E)]]
+        hint, self.hint = self.hint, None
+        elements = [hint] if hint is not None else (
+            list(self.watched) if len(self.watched) <= 3 else [])
+        out = [list(self.modes)] if cause == "time" else []
+        for e in elements:
+            for b in range(self.lbs[e].count):
+                if b != self.modes[e]:
+                    out.append([b if k == e else m for k, m in enumerate(self.modes)])
+        return out
+
+    def at_event(self, t: float, h: float, cause: str, x: list[float], v: list[float],
+                 F: list[float]) -> tuple[Status, str] | None:
+        """The mode after an event at ``t``; ``(status, message)`` if the run must stop."""
+        msg = self.change_mode(t, max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t))), cause,
+                               x, v, F)
+        self.forces_from_probe = True
+        if self.cyclic and not msg:  # forces not unique from the event on
+            free = indeterminate_elements(self.scene, self.scene.elongations(x, v), F,
+                                          self.cyclic)
+            self.log.mark(t, t, [self.names[e] for e in free])
+        self.stats["events"] = len(self.events)
+        if msg:
+            return Status.INCONSISTENT, msg
+        if accumulating(self.recent, self.zeno_window) or \
+                len(self.events) > self.opts["max_events"]:
+            return too_many(self.events, self.recent, t, self.opts)
+        return None
+
+    def time_event(self, t: float) -> None:
+        """Record a time event of the forcing at ``t``."""
+        self.events.append(Event(t, "", "time", -1, -1))
+        self.recent.append(t)
+
+    def mark_free(self, t0: float, t1: float, x: list[float], v: list[float],
+                  F: list[float]) -> None:
+        """Log the elements whose forces are not unique on ``[t0, t1]`` (locks on cycles)."""
+        if self.cyclic:
+            free = indeterminate_elements(self.scene, self.scene.elongations(x, v), F,
+                                          self.cyclic)
+            self.log.mark(t0, t1, [self.names[e] for e in free])
+
+
+def _laws_hold(lbs: list, modes: list[int], q: list[float], F: list[float]) -> bool:
+    """Whether every element's law holds at ``(q_e, F_e)`` on its branch, to ``1e-8``
+    relative to the size of its terms."""
+    for e, (qe, Fe) in enumerate(zip(q, F, strict=True)):
+        R, Rq, RF = lbs[e].kernel_for(modes[e])(qe, Fe)
+        if not abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe)):
+            return False
+    return True

@@ -1,0 +1,142 @@
+"""``radau5`` at events: stuck intervals without steps (:mod:`lumped.solvers.stuck`), the
+guessed mode (:mod:`lumped.solvers.mode_guess`) and the crossing root
+(:mod:`lumped.solvers.crossing_root`).
+
+Accuracy against :mod:`lumped.reference` (the exact event-driven solution); the shortcuts
+against the full paths they replace.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lumped import simulate
+from lumped.bench.network_scenes import bingham_chain
+from lumped.bench.scenes import SCENES, generic_scene
+from lumped.reference import exact_solution
+from lumped.scene.forcing import SineBurst
+from lumped.solvers import adaptive_modes
+from lumped.solvers.closed_form import BinghamOscillator
+from lumped.solvers.crossing_root import first_root_py, illinois
+
+
+def _bench(name: str):
+    return next(s for s in SCENES if s.name == name)
+
+
+def _switches(sol):
+    return [ev for ev in sol.events if ev.kind == "switch"]
+
+
+def test_a_stuck_run_takes_no_steps_and_carries_the_forcing_exactly():
+    # eq. (17a): F1 never reaches the yield force; the dashpot carries F(t) - k x = F(t)
+    bs = _bench("forcing-F1")
+    sol = simulate(generic_scene(bs), method="radau5", t_end=5.0, rtol=1e-8, atol=1e-11)
+    assert sol.stats["steps"] == 0 and sol.stats["held_intervals"] == 2
+    assert np.all(sol.x["mass"] == 0.0) and np.all(sol.v["mass"] == 0.0)
+    t = np.linspace(0.0, 5.0, 5001)
+    rows = sol.sol(t)
+    f = np.array([bs.forcing(ti) for ti in t])
+    assert np.all(rows[:, 1] == 0.0) and np.all(rows[:, 2] == 0.0)
+    assert np.all(rows[:, 3] == 0.0)  # the spring at x = 0
+    assert np.max(np.abs(rows[:, 4] - f)) <= 4e-16 * bs.forcing.amplitude
+    # the output rows lie on the balance too (the scan's samples: the forcing's extrema)
+    assert np.max(np.abs(sol.F["dashpot"] - [bs.forcing(ti) for ti in sol.t])) <= 1e-16
+    assert [ev.kind for ev in sol.events] == ["time"]
+
+
+def test_break_out_times_match_the_exact_reference():
+    bs = _bench("stick-breakout")
+    sol = simulate(generic_scene(bs), method="radau5", t_end=bs.t_end, rtol=1e-10,
+                   atol=1e-13)
+    assert sol.stats["held_intervals"] >= 8
+    ex = exact_solution(bs.osc, x0=bs.x0, v0=bs.v0, forcing=bs.forcing,
+                        t_eval=np.array([0.0, bs.t_end]))
+    exact = [ev.t for ev in ex.events if ev.kind != "forcing-off"]
+    ours = _switches(sol)
+    assert len(ours) == len(exact)
+    assert max(abs(ev.t - te) for ev, te in zip(ours, exact, strict=True)) <= 1e-10
+    t = np.linspace(0.0, bs.t_end, 4001)
+    x = exact_solution(bs.osc, x0=bs.x0, v0=bs.v0, forcing=bs.forcing, t_eval=t)
+    assert np.max(np.abs(sol.sol(t)[:, 1] - x.trajectory.x)) <= 1e-10
+
+
+@settings(max_examples=40)
+@given(k=st.floats(10.0, 1e3), tau=st.floats(0.2, 5.0), ratio=st.floats(1.05, 4.0),
+       omega=st.floats(0.5, 20.0), t_off=st.floats(0.5, 3.0))
+def test_stuck_starts_and_break_outs_against_the_reference(k, tau, ratio, omega, t_off):
+    """From rest and stuck, a sine burst above the yield force: the break-out found by the
+    scan, and every later event, at the exact times; x to the tolerance; v exactly 0
+    while stuck."""
+    osc = BinghamOscillator(m=1.0, k=k, gamma=1.0, tau=tau)
+    forcing = SineBurst(ratio * tau, omega, t_off)
+    from lumped.bench.scenes import BenchScene
+
+    bs = BenchScene("random", osc, 0.0, forcing=forcing, t_end=t_off + 1.0)
+    sol = simulate(generic_scene(bs), method="radau5", t_end=bs.t_end, rtol=1e-9,
+                   atol=1e-12 * max(1.0, tau / k))
+    assert sol.stats["held_intervals"] >= 1
+    ex = exact_solution(osc, x0=0.0, v0=0.0, forcing=forcing,
+                        t_eval=np.linspace(0.0, bs.t_end, 801))
+    # (a switch at the forcing's switch-off is the reference's "forcing-off" event)
+    exact = [ev.t for ev in ex.events if ev.kind != "forcing-off"]
+    ours = [ev for ev in _switches(sol) if ev.t != t_off]
+    assert len(ours) == len(exact)
+    assert all(abs(ev.t - te) <= 1e-8 for ev, te in zip(ours, exact, strict=True))
+    scale = ratio * tau / k
+    got = sol.sol(np.linspace(0.0, bs.t_end, 801))
+    assert np.max(np.abs(got[:, 1] - ex.trajectory.x)) <= 1e-6 * scale
+    t_first = ours[0].t if ours else math.inf  # a burst off before its peak: no event
+    assert np.all(sol.v["mass"][sol.t < t_first] == 0.0)
+
+
+@pytest.mark.parametrize("scene", ["stick-breakout", "fast-forcing", "chain-2"])
+def test_the_guessed_mode_is_the_full_search_s(scene, monkeypatch):
+    def make():
+        if scene == "chain-2":
+            return bingham_chain(2), 2.0
+        bs = _bench(scene)
+        return generic_scene(bs), min(bs.t_end, 3.0)
+
+    sc, t_end = make()
+    kw = {"method": "radau5", "t_end": t_end, "rtol": 1e-8, "atol": 1e-11}
+    fast = simulate(sc, **kw)
+    monkeypatch.setattr(adaptive_modes, "try_modes", lambda *a, **k: None)
+    sc, _ = make()
+    full = simulate(sc, **kw)
+    assert [(e.element, e.kind, e.from_branch, e.to_branch) for e in fast.events] == [
+        (e.element, e.kind, e.from_branch, e.to_branch) for e in full.events]
+    assert max(abs(e.t - f.t) for e, f in zip(fast.events, full.events, strict=True)) <= 1e-12
+    t = np.linspace(0.0, t_end, 1001)
+    a, b = fast.sol(t), full.sol(t)
+    scale = np.maximum(1.0, np.abs(b).max(axis=0))
+    assert np.all(np.abs(a - b) <= 1e-9 * scale)
+
+
+def test_the_illinois_root_is_found_to_round_off():
+    g = lambda s: (s - 0.3) * (1.0 + s * s) - 1e-3 * s  # noqa: E731
+    r = illinois(g, 0.0, 1.0, g(0.0), g(1.0)) if g(0.0) > 0 else None
+    if r is None:  # g(0) < 0 here: the guard's sign convention, flipped
+        h = lambda s: -g(s)  # noqa: E731
+        r = illinois(h, 0.0, 1.0, h(0.0), h(1.0))
+    exact = 0.3 + 1e-3 * 0.3 / (1.0 + 0.09)  # one Newton step from 0.3, then polish
+    for _ in range(5):
+        exact -= g(exact) / ((1.0 + exact * exact) + 2 * exact * (exact - 0.3) - 1e-3)
+    assert abs(r - exact) <= 4e-16
+
+
+def test_the_first_crossing_on_a_step_polynomial():
+    # a guard g = q on q(s) = 1 - 2 s (linear through the nodes): root at s = 0.5; a second
+    # guard crossing later (q + 0.5 at s = 0.75) is not the first
+    from lumped.solvers.radau import C
+
+    nodes = [(tuple(1.0 - 2.0 * s for s in (0.0, *C)), (0.0, 0.0, 0.0, 0.0))]
+    got = first_root_py(nodes, [lambda q, F: (q + 0.5, q)])
+    assert got is not None and got[1] == (0, 1) and abs(got[0] - 0.5) <= 1e-15
+    assert first_root_py(nodes, [lambda q, F: (q + 2.0,)]) is None
+    assert math.isfinite(got[0])
