@@ -33,7 +33,7 @@ from .linalg import lu_factor, lu_solve
 from .newton import min_norm_solver
 
 __all__ = ["C", "A", "W", "E_ERR", "MU_REAL", "START_WEIGHTS", "StageSystem", "dense_weights",
-           "dense_slopes", "controller_rtol", "TOL_EXPONENT"]
+           "dense_slopes"]
 
 _S6 = math.sqrt(6.0)
 #: Collocation nodes of Radau IIA (3 stages).
@@ -162,24 +162,6 @@ def dense_slopes(s: float) -> tuple[float, float, float]:
 
 #: How much looser the forces of guarded elements are held than ``x`` and ``v``.
 FORCE_TOL_FACTOR = 100.0
-
-#: The exponent of the map from the user's ``rtol`` to the controller's (see
-#: :func:`controller_rtol`).
-TOL_EXPONENT = 0.8
-
-
-def controller_rtol(rtol: float) -> float:
-    r"""The relative tolerance the error norm holds ``x`` and ``v`` to, for the user's
-    ``rtol``: ``(rtol / 10)^(4/5)`` (equal to ``rtol`` at ``1e-4``, looser below it).
-
-    The embedded estimate is of order 3 (``O(h^4)`` per step) while the step is of order 5,
-    so held to a tolerance ``tol`` the steps grow like ``tol^(-1/4)`` and the error like
-    ``tol^(5/4)``; through this map it falls in proportion to ``rtol`` (RADAU5 maps its
-    tolerance alike for its own orders: ``0.1 rtol^(2/3)``). The absolute tolerance scales
-    with it (``atol rtol_c / rtol``). Measured on the bench scenes, ``max |x - x_exact|``
-    on the 1e-3 grid is then 0.001 to 0.12 ``rtol`` at every ``rtol`` from 1e-4 to 1e-10.
-    """
-    return (0.1 * rtol) ** TOL_EXPONENT
 
 #: ``l_k'(1)``: the slope of the collocation polynomial at the end of a step.
 END_SLOPES = dense_slopes(1.0)
@@ -387,22 +369,18 @@ class StageSystem:
         set it). Scales: ``atol + rtol max(|y_n|, |y_n+1|)``, for forces
         ``rtol_F max(|F_n|, |F_n+1|, F_ref)`` with ``rtol_F = min(1e-3, 100 rtol)``: the
         forces' polynomial only has to show a guard's sign change, whose time is then
-        found on exact end-of-step values. ``x`` and ``v`` are held to
-        :func:`controller_rtol` (``atol`` scaled alike), the forces to the user's
-        ``rtol``."""
+        found on exact end-of-step values."""
         N, n, m = self.N, self.n, self.m
         A3 = A[2]
         acc = 0.0
         cnt = 0
-        rtol_c = controller_rtol(rtol)
-        atol_c = atol * (rtol_c / rtol)
         for i in range(N):
             x_new = x_n[i] + h * (A3[0] * U[i] + A3[1] * U[n + i] + A3[2] * U[2 * n + i])
-            sc = atol_c + rtol_c * max(abs(x_n[i]), abs(x_new))
+            sc = atol + rtol * max(abs(x_n[i]), abs(x_new))
             acc += (err[i] / sc) ** 2
             cnt += 1
             if m[i] > 0.0:
-                sc = atol_c + rtol_c * max(abs(v_n[i]), abs(U[2 * n + i]))
+                sc = atol + rtol * max(abs(v_n[i]), abs(U[2 * n + i]))
                 acc += (err[N + i] / sc) ** 2
                 cnt += 1
         if dF_n is not None:

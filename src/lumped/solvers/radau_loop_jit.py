@@ -10,9 +10,8 @@ operation (the numbers agree bit for bit):
    (max |v| + atol / rtol) / h)``;
 2. the filtered error estimate of RADAU5 and its norm
    (:func:`lumped.solvers.radau_step_jit.step_error`): ``(mu / h M - J) e = f(y_n) + M
-   sum_k E_k Z_k / h``, RMS of ``e / (atol_c + rtol_c max(|y_n|, |y_n+1|))`` over ``x``
-   and the masses' ``v`` (``rtol_c`` of :func:`lumped.solvers.radau.controller_rtol`,
-   ``atol_c = atol rtol_c / rtol``), and of the guarded elements' forces (to ``rtol``);
+   sum_k E_k Z_k / h``, RMS of ``e / (atol + rtol max(|y_n|, |y_n+1|))`` over ``x``, the
+   masses' ``v`` and the guarded elements' forces;
 3. Gustafsson's predictive step control, ``h_new = h / max(quot, facgus)``;
 4. the guards of the watched elements on the step's collocation polynomial at the
    samples ``s = k / 8`` of :data:`lumped.solvers.events.SAMPLES` (only *detected*: the

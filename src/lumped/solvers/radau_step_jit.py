@@ -23,7 +23,7 @@ from ..codegen.jit import njit
 from .bdf_jit_core import _bit, _sign, forcing_into
 from .events import SAMPLES
 from .newton_jit import lu_factor_into, lu_solve_into
-from .radau import E_ERR, FORCE_TOL_FACTOR, MU_REAL, TOL_EXPONENT, C
+from .radau import E_ERR, FORCE_TOL_FACTOR, MU_REAL, C
 
 __all__ = ["element_nodes", "folded", "crossed", "error_norm", "step_error", "forces",
            "finite"]
@@ -31,7 +31,6 @@ __all__ = ["element_nodes", "folded", "crossed", "error_norm", "step_error", "fo
 _C0, _C1, _C2 = C
 _E0, _E1, _E2 = E_ERR
 _SAMPLES = tuple(SAMPLES)
-_TOL_EXPONENT = TOL_EXPONENT
 # the denominators of radau.dense_weights
 _D1 = _C0 * (_C0 - _C1) * (_C0 - _C2)
 _D2 = _C1 * (_C1 - _C0) * (_C1 - _C2)
@@ -140,9 +139,8 @@ def crossed(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, 
 @njit(cache=True)
 def error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x_n, v_n, F_n,
                 net_n, dF, have_dF, rtol, atol, F_ref, M, LU, perm, rhs, err, two) -> float:
-    """The scaled RMS error of the step (``StageSystem.error`` then ``error_norm``, ``x``
-    and ``v`` held to :func:`lumped.solvers.radau.controller_rtol`); NaN for a non-finite
-    system, -1.0 for a singular finite one (Python's minimum norm).
+    """The scaled RMS error of the step (``StageSystem.error`` then ``error_norm``);
+    NaN for a non-finite system, -1.0 for a singular finite one (Python's minimum norm).
 
     ``two`` is 2.0, a run-time value: CPython's ``y ** 2`` is the C library's ``pow``, which
     differs from ``y * y`` in the last bit now and then, and numba (LLVM) turns a constant
@@ -198,15 +196,13 @@ def error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x_n,
     lu_solve_into(LU, perm, rhs, err)
     acc = 0.0
     cnt = 0
-    rtol_c = (0.1 * rtol) ** _TOL_EXPONENT  # radau.controller_rtol
-    atol_c = atol * (rtol_c / rtol)
     for i in range(N):
         x_new = x_n[i] + h * (A[2, 0] * U[i] + A[2, 1] * U[n + i] + A[2, 2] * U[2 * n + i])
-        sc = atol_c + rtol_c * max(abs(x_n[i]), abs(x_new))
+        sc = atol + rtol * max(abs(x_n[i]), abs(x_new))
         acc += (err[i] / sc) ** two
         cnt += 1
         if masses[i] > 0.0:
-            sc = atol_c + rtol_c * max(abs(v_n[i]), abs(U[2 * n + i]))
+            sc = atol + rtol * max(abs(v_n[i]), abs(U[2 * n + i]))
             acc += (err[N + i] / sc) ** two
             cnt += 1
     if have_dF:
