@@ -11,7 +11,25 @@ import numpy as np
 from ..codegen.jit import njit, numba_enabled
 from .radau import C, dense_weights
 
-__all__ = ["DenseOutput", "Rows", "row_of", "initial_step", "output_data"]
+__all__ = ["DenseOutput", "Rows", "row_of", "initial_step", "output_data",
+           "position_weights"]
+
+
+def position_weights(s):
+    r"""``L_k(s) = int_0^s l_k``, ``k = 1..3``: the integrals of the Lagrange weights of
+    :func:`~lumped.solvers.radau.dense_weights` (``s`` a float or an array).
+
+    The dense output of a position integrates the collocation cubic of its velocity,
+    ``x(t_n + s h) = x_n + h (s v_n + sum_k L_k(s) (V_k - v_n))``: a quartic whose error
+    is ``h`` times that of the velocity's cubic, ``O(h^5)`` per step, where the cubic
+    through ``x_n`` and the stage positions ``X_k`` is ``O(h^4)``. It meets the step's
+    ends: ``L_k(1) = b_k = a_3k`` (the 3-point Radau quadrature integrates the cubic of
+    the node ``0`` to zero), so ``x(t_n + h) = X_3``, and its slope is ``v`` at both ends;
+    a held position (``V_k = v_n = 0``) stays exact.
+    """
+    ss = s * s
+    return tuple((ss * (3.0 * ss - 4.0 * (ca + cb) * s + 6.0 * ca * cb)) / (12.0 * d)
+                 for ca, cb, d in _L_NODES)
 
 
 class DenseOutput:
@@ -121,10 +139,15 @@ class DenseOutput:
             _evaluate(T0, H, Y0, D, ts, N, out)
             return
         i = np.clip(np.searchsorted(T0, ts, side="right") - 1, 0, len(T0) - 1)
-        l1, l2, l3 = dense_weights((ts - T0[i]) / H[i])
+        s = (ts - T0[i]) / H[i]
+        l1, l2, l3 = dense_weights(s)
         y = Y0[i] + (l1[:, None] * D[i, 0] + l2[:, None] * D[i, 1] + l3[:, None] * D[i, 2])
+        L1, L2, L3 = position_weights(s)
+        V = slice(N, 2 * N)
+        x = Y0[i, :N] + H[i][:, None] * (s[:, None] * Y0[i, V] + (
+            L1[:, None] * D[i, 0, V] + L2[:, None] * D[i, 1, V] + L3[:, None] * D[i, 2, V]))
         out[:, 0] = ts
-        out[:, 1:1 + 2 * N:2] = y[:, :N]
+        out[:, 1:1 + 2 * N:2] = x
         out[:, 2:2 + 2 * N:2] = y[:, N:2 * N]
         out[:, 1 + 2 * N:] = y[:, 2 * N:]
 
@@ -133,13 +156,16 @@ _C1, _C2, _C3 = C
 _W1 = _C1 * (_C1 - _C2) * (_C1 - _C3)  # the denominators of radau.dense_weights
 _W2 = _C2 * (_C2 - _C1) * (_C2 - _C3)
 _W3 = _C3 * (_C3 - _C1) * (_C3 - _C2)
+# (the other two nodes, the denominator) of each weight, for position_weights
+_L_NODES = ((_C2, _C3, _W1), (_C1, _C3, _W2), (_C1, _C2, _W3))
 
 
 @njit(cache=True)
 def _evaluate(T0, H, Y0, D, ts, N, out) -> None:
     """:meth:`DenseOutput.__call__`'s numpy evaluation, operation for operation, in one
     loop: the step ``i`` with ``T0[i] <= t < T0[i+1]`` (the last one at the end), the
-    weights of :func:`~lumped.solvers.radau.dense_weights`, ``y_n + sum_k l_k D_k``."""
+    weights of :func:`~lumped.solvers.radau.dense_weights`, ``y_n + sum_k l_k D_k``, and
+    for the positions :func:`position_weights`, ``x_n + h (s v_n + sum_k L_k D_k^v)``."""
     n = T0.shape[0]
     ny = Y0.shape[1]
     for r in range(ts.shape[0]):
@@ -150,12 +176,19 @@ def _evaluate(T0, H, Y0, D, ts, N, out) -> None:
         l1 = s * (s - _C2) * (s - _C3) / _W1
         l2 = s * (s - _C1) * (s - _C3) / _W2
         l3 = s * (s - _C1) * (s - _C2) / _W3
+        ss = s * s
+        L1 = (ss * (3.0 * ss - 4.0 * (_C2 + _C3) * s + 6.0 * _C2 * _C3)) / (12.0 * _W1)
+        L2 = (ss * (3.0 * ss - 4.0 * (_C1 + _C3) * s + 6.0 * _C1 * _C3)) / (12.0 * _W2)
+        L3 = (ss * (3.0 * ss - 4.0 * (_C1 + _C2) * s + 6.0 * _C1 * _C2)) / (12.0 * _W3)
         out[r, 0] = t
         for j in range(ny):
-            y = Y0[i, j] + (l1 * D[i, 0, j] + l2 * D[i, 1, j] + l3 * D[i, 2, j])
             if j < N:
-                out[r, 1 + 2 * j] = y
-            elif j < 2 * N:
+                jv = N + j
+                out[r, 1 + 2 * j] = Y0[i, j] + H[i] * (s * Y0[i, jv] + (
+                    L1 * D[i, 0, jv] + L2 * D[i, 1, jv] + L3 * D[i, 2, jv]))
+                continue
+            y = Y0[i, j] + (l1 * D[i, 0, j] + l2 * D[i, 1, j] + l3 * D[i, 2, j])
+            if j < 2 * N:
                 out[r, 2 + 2 * (j - N)] = y
             else:
                 out[r, 1 + j] = y
