@@ -49,10 +49,14 @@ def run_fast_path(scene, js, args: tuple) -> tuple[int, dict]:
     from ..codegen.jit_fast import MAX_FAST_ITERATIONS, fast_module
     from .bdf_jit_core import compiled_run_bdf_core
 
-    fm = fast_module(scene)
-    loop = compiled_run_bdf_core()
     (masses, ea, eb, spring, checked, x0, v0, F0, dt, n_steps, bdf2, rtol, atol, max_iters,
      max_backtracks, free_steps, fkind, fpar, ftab, xs, vs, Fs, info, finfo) = args[:24]
+    # what the generated source depends on: the laws and topology (the faithful module's
+    # name is the hash of its source), the massless nodes and the fold-checked elements
+    key = (js.module.__name__, (masses != 0.0).tobytes(), ea.tobytes(), eb.tobytes(),
+           spring.tobytes(), np.asarray(checked).tobytes())
+    fm = fast_module(scene, key)
+    loop = compiled_run_bdf_core()
     work = args[24:]
     N, E = xs.shape[1], Fs.shape[1]
     n = N + E
@@ -61,7 +65,6 @@ def run_fast_path(scene, js, args: tuple) -> tuple[int, dict]:
     LU = np.zeros((n, n))
     P = np.zeros(n, dtype=np.int64)
     b = np.zeros(n)
-    f = np.zeros(N)
     counts = np.zeros(6, dtype=np.int64)
     slow = np.zeros(5, dtype=np.int64)  # the faithful port's counters, summed
     info[:] = 0
@@ -72,7 +75,7 @@ def run_fast_path(scene, js, args: tuple) -> tuple[int, dict]:
     rows = 1
     while True:
         nxt = fm.run_fast(masses, dt, n_steps, bdf2, step, rtol, atol, max_it, fkind, fpar, ftab,
-                          xs, vs, Fs, Jm, LU, P, np.zeros((n, n)), b, np.zeros(n), f,
+                          xs, vs, Fs, Jm, LU, P, np.zeros((n, n)), b, np.zeros(n),
                           counts)
         rows = nxt
         if nxt > n_steps:
