@@ -153,12 +153,19 @@ def fast_source(scene) -> str:
     L += [f"        u{N + e} = F{e}" for e in range(E)]
     L += ["        done = False", "        for it in range(max_it):"]
     ind = "            "
-    L += _evaluate_lines(scene, law_index, ind)
+    g_lines, s_lines = _evaluate_lines(scene, law_index, ind)
     gsum = " + ".join(f"G{r}" for r in range(n))
+    zero = " and ".join(f"G{r} == 0.0" for r in range(n))
     res_ok = " and ".join(f"abs(G{r}) <= rtol * S{r} + atol" for r in range(n))
     same = " and ".join(f"RF{e} == kRF{e} and g{e} == kg{e}" for e in range(E)) or "True"
-    L += [f"{ind}n_res += 1", f"{ind}if not math.isfinite({gsum}):", f"{ind}    break",
-          f"{ind}same = valid and {same}", f"{ind}if not same:"]
+    L += g_lines
+    L += [f"{ind}n_res += 1", f"{ind}same = valid and {same}",
+          # a zero residual on the cached branch: the reference's tests hold, and its
+          # correction is J^{-1} 0 = 0, so it returns u (at rest, the common step)
+          f"{ind}if same and {zero}:", f"{ind}    done = True", f"{ind}    break",
+          f"{ind}if not math.isfinite({gsum}):", f"{ind}    break"]
+    L += s_lines
+    L += [f"{ind}if not same:"]
     L += _matrix_lines(scene, f"{ind}    ")
     L += [f"{ind}    n_fact += 1", f"{ind}    valid = lu_factor_into(Jm, LU, P)",
           f"{ind}    if not valid:", f"{ind}        break"]
@@ -168,7 +175,6 @@ def fast_source(scene) -> str:
     L += _solve_lines(n, ind)
     dsum = " + ".join(f"d{r}" for r in range(n))
     upd = " and ".join(f"abs(d{r}) <= rtol * abs(u{r}) + atol" for r in range(n))
-    zero = " and ".join(f"G{r} == 0.0" for r in range(n))
     lock = " or ".join(f"RF{e} == 0.0" for e in range(E)) or "False"
     L += [f"{ind}if not math.isfinite({dsum}):", f"{ind}    break",
           f"{ind}if ({res_ok}) and ({upd}):",
@@ -224,28 +230,36 @@ def _forcing_lines(N: int, ind: str) -> list[str]:
     return L
 
 
-def _evaluate_lines(scene, law_index: list[int], ind: str) -> list[str]:
+def _evaluate_lines(scene, law_index: list[int], ind: str) -> tuple[list[str], list[str]]:
     """The step system in scalars, the arithmetic of :mod:`lumped.codegen.jit`'s
-    ``evaluate`` (``roundoff=False``) term for term."""
+    ``evaluate`` (``roundoff=False``) term for term: the lines of the residual ``G`` and
+    the Jacobian's variable entries, then those of the row scales ``S`` (emitted apart:
+    they are needed only when the residual is not exactly zero)."""
     N = len(scene.nodes)
-    L: list[str] = []
+    GL: list[str] = []
+    SL: list[str] = []
     for i, m in enumerate(scene.masses):
         if m != 0.0:
-            L += [f"{ind}pp = c{i} * u{i}", f"{ind}r = c{i} * vh{i}",
-                  f"{ind}G{i} = (pp - r) - f{i}", f"{ind}S{i} = abs(pp) + abs(r) + abs(f{i})"]
+            GL += [f"{ind}pp{i} = c{i} * u{i}", f"{ind}r{i} = c{i} * vh{i}",
+                   f"{ind}G{i} = (pp{i} - r{i}) - f{i}"]
+            SL += [f"{ind}S{i} = abs(pp{i}) + abs(r{i}) + abs(f{i})"]
         else:
-            L += [f"{ind}G{i} = -f{i}", f"{ind}S{i} = abs(f{i})"]
+            GL += [f"{ind}G{i} = -f{i}"]
+            SL += [f"{ind}S{i} = abs(f{i})"]
     for e, el in enumerate(scene.elements):
         k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
         qb, qa, dq = end_values_source(el.kind, a, b, lambda i: f"xh{i}", lambda i: f"u{i}")
-        L += [f"{ind}q = {qb} - {qa}", f"{ind}R, Rq, RF{e} = law_{law_index[e]}(q, u{k})",
-              f"{ind}G{k} = R", f"{ind}S{k} = abs(Rq * q) + abs(RF{e} * u{k})",
-              f"{ind}g{e} = Rq * {dq}"]
+        GL += [f"{ind}q{e} = {qb} - {qa}",
+               f"{ind}G{k}, Rq{e}, RF{e} = law_{law_index[e]}(q{e}, u{k})",
+               f"{ind}g{e} = Rq{e} * {dq}"]
+        SL += [f"{ind}S{k} = abs(Rq{e} * q{e}) + abs(RF{e} * u{k})"]
         if a >= 0:
-            L += [f"{ind}G{a} -= u{k}", f"{ind}S{a} += abs(u{k})"]
+            GL += [f"{ind}G{a} -= u{k}"]
+            SL += [f"{ind}S{a} += abs(u{k})"]
         if b >= 0:
-            L += [f"{ind}G{b} += u{k}", f"{ind}S{b} += abs(u{k})"]
-    return L
+            GL += [f"{ind}G{b} += u{k}"]
+            SL += [f"{ind}S{b} += abs(u{k})"]
+    return GL, SL
 
 
 def _matrix_lines(scene, ind: str) -> list[str]:
