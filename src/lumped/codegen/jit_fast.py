@@ -6,6 +6,8 @@ reference solver, paid for with about 140 ns a step. :func:`fast_module` generat
 scene, a loop that does only what the common step needs, specialised to the scene's
 sizes and structure, with the laws' kernels inlined (``inline="always"``):
 
+* the forcing of :func:`lumped.solvers.bdf_jit_core.forcing_into` in scalars (kind and
+  parameters read once before the loop);
 * the unknowns ``u = (v_0 .. v_{N-1}, F_0 .. F_{E-1})``, the residual ``G`` and its row
   scales ``S`` (the linearised scales, ``roundoff=False`` in :mod:`lumped.codegen.jit`)
   are scalar locals; the step system is unrolled, in the same arithmetic, term for term
@@ -22,26 +24,39 @@ sizes and structure, with the laws' kernels inlined (``inline="always"``):
   and the long dependent chain of a triangular solve -- a step is a short chain of
   dependent operations, which is what its time is;
 * semismooth Newton from the previous step's solution: ``u <- u - J(u)^{-1} G(u)``,
-  converged once ``|G_i| <= rtol S_i + atol`` and ``|du_j| <= rtol |u_j| + atol`` for
-  all rows (the reference's tests). Its result ``u - du`` is accepted at once when the
-  Jacobian at ``u`` is the one the previous iterate (or the previous step) had (the
-  iterate lies on the smooth branch of the step before, where the correction is the
-  exact linear solve for piecewise-linear laws, up to round-off); otherwise (a law that
-  is not piecewise linear, or a branch switch in the last iteration) only when the
-  residual test holds at ``u - du`` too, the confirmation of the reference's full Newton;
+  converged at an iterate ``u`` once ``|G_i| <= rtol S_i + atol`` and the correction
+  ``d = J(u)^{-1} G(u)`` satisfies ``|d_j| <= rtol |u_j| + atol`` for all rows (the
+  reference's two tests, at the same point). The reference then returns ``u - d``; the
+  fast path returns ``u`` itself when ``d`` is round-off -- the residual is exactly zero
+  (``d = J^{-1} 0 = 0``: the step at rest, accepted before the row scales and ``d`` are
+  even computed), or ``u`` came from a correction on the same smooth branch (equal
+  Jacobian before and after) and no element is on a branch that locks its rate
+  (``dR/dF = 0``). On a piecewise-linear law that correction was the exact solve of the
+  affine step system, so ``u`` and ``u - d`` differ by round-off, and the confirming
+  evaluation at ``u`` (needed anyway to see that the branch holds) is off the chain of
+  dependent operations from one step to the next: a moving step is one correction
+  deep, not two. Otherwise (a law that is not piecewise linear, a branch switch, a stuck
+  element) it returns ``u - d`` like the reference: the second correction is what makes
+  eq. (19) exact (``F_d = f(t)`` to the last bit while stuck: the first correction
+  leaves ``F_prev - (F_prev - f)``, which is not always ``f``). The accepted value always
+  passes the reference's own tests, so it differs from the reference's by at most
+  ``rtol |u| + atol`` per step, and by round-off in the common case;
 * the fold check of :mod:`lumped.solvers.branch_check` on the elements whose law is not a
   known monotone built-in (:func:`lumped.solvers.bdf_jit_core.left_branch`).
 
 Anything else returns at once with the step it could not take: ``run_fast`` returns the
 first step it did not take (``n_steps + 1`` when it reached the end), and the driver
 (:mod:`lumped.solvers.bdf_fast_jit`) hands that step to the faithful port, which also
-reports every failure. The common step is the reference's ``_fast_step`` (two
-evaluations, two corrections, the same tests) with ``J^{-1} G`` for the LU solve, so its
-numbers agree with the reference's to round-off; at a branch switch the Newton sequence
-differs and the two agree to the Newton tolerance (see the driver's notes).
+reports every failure. Because it keeps ``u`` where the reference takes ``u - d`` (above),
+its numbers agree with the reference's to round-off on piecewise-linear laws; at a branch
+switch and on other laws the two agree to the Newton tolerance (see the driver's notes).
+At tolerances at the level of round-off (``rtol`` below about ``1e-15``) whether the
+update test passes depends on the last bit of ``d``, which the explicit inverse and the
+reference's triangular solve round differently, so there a step may converge in one
+and not in the other.
 
 Signature of the generated ``run_fast(masses, dt, n_steps, bdf2, step0, rtol, atol,
-max_it, fkind, fpar, ftab, xs, vs, Fs, Jm, LU, P, Inv, b, y, f, counts) -> int``
+max_it, fkind, fpar, ftab, xs, vs, Fs, Jm, LU, P, Inv, b, y, counts) -> int``
 (``max_it``: Newton iterations per step before the hand-over; ``Jm .. y`` workspace): the
 state at step ``step0`` (and ``step0 - 1`` for BDF2) is read from rows of ``xs, vs,
 Fs``, and steps ``step0 + 1 ..`` are written to them; ``counts`` accumulates the Newton

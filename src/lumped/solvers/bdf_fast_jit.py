@@ -15,22 +15,23 @@ at 1.
 Agreement with ``bdf1``/``bdf2`` (tested in ``tests/solvers/test_bdf_fast_jit.py``):
 
 * both solve the same step system (the same unrolled residual, term for term) with the
-  same convergence tests: an iterate ``u`` is converged when ``|G_i| <= rtol S_i + atol``
-  for every row and the correction ``du`` satisfies ``|du_j| <= rtol |u_j| + atol``, and
-  both return ``u - du``. The fast path accepts it only when ``u`` and the iterate before
-  it have the same Jacobian (the same smooth branch of every law), or when the residual
-  test holds at ``u - du`` too;
+  same convergence tests at the same point: an iterate ``u`` is converged when
+  ``|G_i| <= rtol S_i + atol`` for every row and its correction ``d = J(u)^{-1} G(u)``
+  satisfies ``|d_j| <= rtol |u_j| + atol``. The reference returns ``u - d``; the fast
+  path returns ``u`` when ``d`` is round-off by construction (a zero residual, or ``u``
+  from a correction on an unchanged smooth branch with no element stuck) and ``u - d``
+  otherwise (see :mod:`lumped.codegen.jit_fast`);
 * on a smooth branch of a piecewise-linear law the step system is affine, and both
   results are its solution up to round-off (the fast path applies ``J^{-1}`` as a matrix,
-  the reference a triangular solve); for other laws the last correction leaves an error
-  of order ``|du|^2``. The two solutions of one step therefore differ by at most about
-  ``rtol |u| + atol`` (``1e-10 |u| + 1e-12`` by default), and by round-off on
-  piecewise-linear laws; the difference is carried on by the (stable) steps that
-  follow, not amplified. Measured over 4000 steps of the paper scenes, Maxwell, two
-  masses and a quadratic drag: at most 1e-11 relative to each column's size;
+  the reference a triangular solve); elsewhere the two solutions of one step differ by
+  at most about ``rtol |u| + atol`` (``1e-10 |u| + 1e-12`` by default). The difference
+  is carried on by the (stable) steps that follow, not amplified. Measured over 4000
+  steps of the paper scenes, Maxwell, two masses and a quadratic drag: at most 1e-11
+  relative to each column's size;
 * exact properties survive: a stuck dashpot's row ``v = 0`` is a singleton pivot of 1,
-  so its row of ``J^{-1}`` is exact and the velocity is exactly 0, and the second
-  correction of every step returns the reference's exact forces of eq. (19).
+  so its row of ``J^{-1}`` is exact and the velocity is exactly 0, and a step with a
+  stuck element returns ``u - d`` like the reference, the second correction that makes
+  the forces of eq. (19) exact.
 """
 
 from __future__ import annotations
