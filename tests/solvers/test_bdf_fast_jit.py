@@ -125,3 +125,24 @@ def test_fast_keyword_is_checked():
     with pytest.raises(TypeError, match="takes no keyword argument"):
         simulate(scenario_scene("release-0.5"), method="bdf1", dt=1e-3, t_end=0.01,
                  fast=True)
+
+
+def test_fast_module_is_memoised_per_scene_structure(monkeypatch):
+    """A second run of a scene does not generate the fast loop's source again (sympy
+    printing, about 0.4 ms a run); a run of another structure does."""
+    from lumped.codegen import jit_fast
+
+    scene = scenario_scene("release-0.5")
+    first = simulate(scene, method="jit-bdf1", dt=1e-3, t_end=0.05, fast=True)
+
+    def refuse(_scene):
+        raise AssertionError("source generated again")
+
+    monkeypatch.setattr(jit_fast, "fast_source", refuse)
+    again = simulate(scenario_scene("release-0.5"), method="jit-bdf1", dt=1e-3, t_end=0.05,
+                     fast=True)
+    assert np.array_equal(first.data, again.data)
+    other = Scene([Mass("mass", 1.0, x0=0.1)],  # a spring constant no other test uses
+                  [Element("spring", get_law("linear_spring").bind(k=37.25), "ground", "mass")])
+    with pytest.raises(AssertionError, match="source generated again"):
+        simulate(other, method="jit-bdf1", dt=1e-3, t_end=0.05, fast=True)
