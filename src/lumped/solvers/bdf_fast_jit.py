@@ -15,22 +15,23 @@ at 1.
 Agreement with ``bdf1``/``bdf2`` (tested in ``tests/solvers/test_bdf_fast_jit.py``):
 
 * both solve the same step system (the same unrolled residual, term for term) with the
-  same convergence tests: an iterate ``u`` is converged when ``|G_i| <= rtol S_i + atol``
-  for every row and the correction ``du`` satisfies ``|du_j| <= rtol |u_j| + atol``, and
-  both return ``u - du``. The fast path accepts it only when ``u`` and the iterate before
-  it have the same Jacobian (the same smooth branch of every law), or when the residual
-  test holds at ``u - du`` too;
+  same convergence tests at the same point: an iterate ``u`` is converged when
+  ``|G_i| <= rtol S_i + atol`` for every row and its correction ``d = J(u)^{-1} G(u)``
+  satisfies ``|d_j| <= rtol |u_j| + atol``. The reference returns ``u - d``; the fast
+  path returns ``u`` when ``d`` is round-off by construction (a zero residual, or ``u``
+  from a correction on an unchanged smooth branch with no element stuck) and ``u - d``
+  otherwise (see :mod:`lumped.codegen.jit_fast`);
 * on a smooth branch of a piecewise-linear law the step system is affine, and both
   results are its solution up to round-off (the fast path applies ``J^{-1}`` as a matrix,
-  the reference a triangular solve); for other laws the last correction leaves an error
-  of order ``|du|^2``. The two solutions of one step therefore differ by at most about
-  ``rtol |u| + atol`` (``1e-10 |u| + 1e-12`` by default), and by round-off on
-  piecewise-linear laws; the difference is carried on by the (stable) steps that
-  follow, not amplified. Measured over 4000 steps of the paper scenes, Maxwell, two
-  masses and a quadratic drag: at most 1e-11 relative to each column's size;
+  the reference a triangular solve); elsewhere the two solutions of one step differ by
+  at most about ``rtol |u| + atol`` (``1e-10 |u| + 1e-12`` by default). The difference
+  is carried on by the (stable) steps that follow, not amplified. Measured over 4000
+  steps of the paper scenes, Maxwell, two masses and a quadratic drag: at most 1e-11
+  relative to each column's size;
 * exact properties survive: a stuck dashpot's row ``v = 0`` is a singleton pivot of 1,
-  so its row of ``J^{-1}`` is exact and the velocity is exactly 0, and the second
-  correction of every step returns the reference's exact forces of eq. (19).
+  so its row of ``J^{-1}`` is exact and the velocity is exactly 0, and a step with a
+  stuck element returns ``u - d`` like the reference, the second correction that makes
+  the forces of eq. (19) exact.
 """
 
 from __future__ import annotations
@@ -49,10 +50,14 @@ def run_fast_path(scene, js, args: tuple) -> tuple[int, dict]:
     from ..codegen.jit_fast import MAX_FAST_ITERATIONS, fast_module
     from .bdf_jit_core import compiled_run_bdf_core
 
-    fm = fast_module(scene)
-    loop = compiled_run_bdf_core()
     (masses, ea, eb, spring, checked, x0, v0, F0, dt, n_steps, bdf2, rtol, atol, max_iters,
      max_backtracks, free_steps, fkind, fpar, ftab, xs, vs, Fs, info, finfo) = args[:24]
+    # what the generated source depends on: the laws and topology (the faithful module's
+    # name is the hash of its source), the massless nodes and the fold-checked elements
+    key = (js.module.__name__, (masses != 0.0).tobytes(), ea.tobytes(), eb.tobytes(),
+           spring.tobytes(), np.asarray(checked).tobytes())
+    fm = fast_module(scene, key)
+    loop = compiled_run_bdf_core()
     work = args[24:]
     N, E = xs.shape[1], Fs.shape[1]
     n = N + E
@@ -61,7 +66,6 @@ def run_fast_path(scene, js, args: tuple) -> tuple[int, dict]:
     LU = np.zeros((n, n))
     P = np.zeros(n, dtype=np.int64)
     b = np.zeros(n)
-    f = np.zeros(N)
     counts = np.zeros(6, dtype=np.int64)
     slow = np.zeros(5, dtype=np.int64)  # the faithful port's counters, summed
     info[:] = 0
@@ -72,7 +76,7 @@ def run_fast_path(scene, js, args: tuple) -> tuple[int, dict]:
     rows = 1
     while True:
         nxt = fm.run_fast(masses, dt, n_steps, bdf2, step, rtol, atol, max_it, fkind, fpar, ftab,
-                          xs, vs, Fs, Jm, LU, P, np.zeros((n, n)), b, np.zeros(n), f,
+                          xs, vs, Fs, Jm, LU, P, np.zeros((n, n)), b, np.zeros(n),
                           counts)
         rows = nxt
         if nxt > n_steps:
