@@ -306,15 +306,22 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float],
         hi.append(b - u[k])
     if not all(lo_k <= 0.0 <= hi_k for lo_k, hi_k in zip(lo, hi, strict=True)):
         return u
+    # a law that admits a single force there (lo = hi: e.g. a regularised friction law
+    # at its kink) leaves nothing to choose: that force stays, out of the problem (the
+    # solver needs lo < hi)
+    cols = [j for j in range(len(ks)) if lo[j] < hi[j]]
+    if not cols:
+        return u
     s = 1.0 + max(abs(u[k]) for k in ks)
     mu = 1e-6  # sqrt of the penalty 1e-12
-    M = np.vstack([A, (mu / s) * np.eye(len(ks))])
-    r = np.concatenate([rhs, np.zeros(len(ks))])
-    sol = lsq_linear(M, r, bounds=(lo, hi), method="bvls")
+    M = np.vstack([A[:, cols], (mu / s) * np.eye(len(cols))])
+    r = np.concatenate([rhs, np.zeros(len(cols))])
+    sol = lsq_linear(M, r, bounds=([lo[j] for j in cols], [hi[j] for j in cols]),
+                     method="bvls")
     if not sol.success or not np.all(np.isfinite(sol.x)):
         return u
-    for k, d in zip(ks, sol.x, strict=True):
-        u[k] += float(d)
+    for j, d in zip(cols, sol.x, strict=True):
+        u[ks[j]] += float(d)
     return u
 
 

@@ -1,0 +1,47 @@
+"""Regressions of ``bdf1`` / ``bdf2`` found by the random-network property suite (issue 11,
+session 3), each scene written out as drawn (shrinking removed no element). Every run is
+checked against the laws: it completes, every value is finite and no stuck dashpot
+carries more than its yield force."""
+
+from __future__ import annotations
+
+import numpy as np
+from _yield_check import check_yield
+
+from lumped import simulate
+from lumped.laws import get_law
+from lumped.scene import Element, Junction, Mass, Scene
+
+
+def _run_ok(scene: Scene, method: str, dt: float, t_end: float):
+    sol = simulate(scene, method=method, dt=dt, t_end=t_end)
+    assert sol.ok, sol.message
+    assert np.all(np.isfinite(sol.data))
+    check_yield(scene, sol)
+    return sol
+
+
+def _regularised_friction_at_its_kink() -> Scene:
+    return Scene(
+        [Junction("j0", x0=1e-07),
+         Mass("m1", m=0.15514074039112127, x0=0.8470049591246749, v0=4.115778659662355e-163),
+         Junction("j2", x0=0.8828635113976451)],
+        [Element("e0", get_law("newtonian").bind(c=1.0), "ground", "j0"),
+         Element("e1", get_law("linear_spring").bind(k=5.623413251903491), "j0", "m1"),
+         Element("e2", get_law("bingham").bind(gamma=0.8353496399422239,
+                                               tau=0.8556632138573471), "m1", "j2"),
+         Element("e3", get_law("bingham").bind(gamma=0.9999769744141629, tau=0.1),
+                 "j2", "ground"),
+         Element("e4", get_law("coulomb").bind(tau=1.0, r=1.1219184488287222), "m1", "ground"),
+         Element("e5", get_law("string_spring").bind(k=2.3032226014767296,
+                                                     L=1.0865112268637827), "j0", "m1")])
+
+
+def test_force_split_skips_a_law_that_admits_one_force():
+    """A Coulomb element (``r`` about 1) at a rate of ``6e-17``: its law admits the one
+    force ``tau`` there (range ``[1, 1]``). The bounded least-squares split of the free
+    forces passed it as an unknown with equal bounds and scipy's ``lsq_linear`` raised
+    ``ValueError: Each lower bound must be strictly less than each upper bound`` mid-run;
+    such a force now stays out of the problem."""
+    scene = _regularised_friction_at_its_kink()
+    _run_ok(scene, "bdf2", 0.004852505455394424, 0.3882004364315539)
