@@ -6,6 +6,7 @@ carries more than its yield force."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from _convergence import assert_converges
 from _yield_check import check_yield
 
@@ -78,3 +79,37 @@ def test_grazing_impact_is_hit_only_by_the_finer_runs():
     vmax = max(float(np.abs(s.v["m0"]).max()) for s in sols)
     scale = 1.0 + max(float(np.abs(s.data).max()) for s in sols)
     assert assert_converges(sols, 1, 0.025, vmax, scale, run) >= 1
+
+
+def _stuck_pair_beside_a_taut_string() -> Scene:
+    return Scene(
+        [Mass("m0", m=9.518637920298648, x0=6.819691273682589e-48, v0=-1.401298464324817e-45),
+         Junction("j1", x0=4.154239452660722e-301),
+         Mass("m2", m=8.342263680436716, x0=0.4143373909610657, v0=1.0)],
+        [Element("e0", get_law("string_spring").bind(k=1.0, L=0.33353840317987293),
+                 "ground", "m0"),
+         Element("e1", get_law("herschel_bulkley").bind(gamma=1.0000230261160268, tau=0.01,
+                                                        n=0.5), "ground", "j1"),
+         Element("e2", get_law("string_spring").bind(k=0.2150446979556708,
+                                                     L=0.49377021443349384), "ground", "m2"),
+         Element("e3", get_law("herschel_bulkley").bind(gamma=1.0, tau=0.18843625592583219,
+                                                        n=0.5), "m2", "m0"),
+         Element("e4", get_law("herschel_bulkley").bind(gamma=0.29730122943936915,
+                                                        tau=0.015541551176491374, n=1.5),
+                 "j1", "m2"),
+         Element("e5", get_law("herschel_bulkley").bind(gamma=5.3400824641756905,
+                                                        tau=0.13362940794228548, n=1.0),
+                 "ground", "m0")])
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_node_on_a_taut_string_lands_on_zero_rate(method):
+    """``m2`` rests on its taut string ``e2``; the junction ``j1`` hangs between it and
+    ground on two stuck Herschel-Bulkley dashpots (``n = 0.5``, ``n = 1.5``). On the lock
+    every velocity below ``ulp(x) / h`` gives the same position, so the balance sweep's
+    bisection left ``m2`` at ``-5.7e-17`` instead of 0: ``e4`` then 'slipped' and carried
+    its full yield force 0.0155, which the junction's other dashpot (0.01) cannot hold,
+    and the step's Newton failed mid-run (``bdf1`` at ``t = 0.2875``, ``bdf2`` at
+    ``0.325``). The sweep now lands such a node exactly on zero rate."""
+    scene = _stuck_pair_beside_a_taut_string()
+    _run_ok(scene, method, 0.0125, 0.5)
