@@ -244,9 +244,10 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
             shift = outside if math.isfinite(g(outside)) else inside
         g(shift)
         moved = max(abs(shift) / (1.0 + abs(b + shift)) for b in base)
-        if snapped and shift != 0.0:
+        if snapped and shift != 0.0 and widths:
             # landed exactly on another node's velocity: however small the move, the
-            # neighbours' rates changed from a few ulps to zero; sweep again
+            # neighbours' rates changed from a few ulps to zero; sweep again (with
+            # ``widths`` only: the initial state's sweeps stay as they were)
             moved = max(moved, 2e-15)
         return moved
 
