@@ -29,6 +29,7 @@ import os
 
 import numpy as np
 import pytest
+from _convergence import assert_converges
 from _yield_check import check_yield
 from hypothesis import HealthCheck, assume, event, given, settings
 from hypothesis import strategies as st
@@ -197,15 +198,8 @@ def check_network(scene: Scene, method: str) -> None:
         assert energies[1].max() - E0 <= 4 * err + tol, "energy created beyond the error"
     # convergence of the displacements (continuous; velocities jump at impacts and
     # forces carry impulses): the distance to the finest run shrinks as dt halves
-    xcols = slice(1, 1 + 2 * len(scene.nodes), 2)
-    d0 = np.abs(sols[0].data[:, xcols] - sols[2].data[::4, xcols]).max()
-    d1 = np.abs(sols[1].data[:, xcols] - sols[2].data[::2, xcols]).max()
-    # either the distance shrinks, or it is already within a first-order bound
-    # (``dt |v|``): near-degenerate stick positions (spring force ~ yield force) make the
-    # distance erratic at small values, while a method that does not converge (BDF2
-    # bouncing off a string) is off by O(1)
-    bound = 0.5 * dt * (1.0 + vmax)
-    assert d1 <= max(0.9 * d0 + 1e-7 * scale, bound), f"no convergence: {d0!r} -> {d1!r}"
+    assert_converges(sols, len(scene.nodes), dt, vmax, scale,
+                     lambda h: _run_or_reject(scene, method, h, t_end))
 
 
 _SETTINGS = settings(max_examples=EXAMPLES, deadline=None,

@@ -138,7 +138,8 @@ def stuck_guesses(scene: Scene, v: list[float], F: list[float]) -> list[list[flo
 
 
 def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anchors,
-                   links: list[tuple[int, int]] = (), sweeps: int = 20) -> list[float] | None:
+                   links: list[tuple[int, int]] = (), sweeps: int = 20,
+                   widths: list[float] | None = None) -> list[float] | None:
     """A starting point for Newton from the nodes' balances solved one at a time
     (nonlinear Gauss-Seidel).
 
@@ -162,6 +163,12 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
     So do the two ends of every dashpot: where a law is steep in its rate (Herschel-Bulkley
     ``n > 1`` near its yield force, ``dF/dq -> infinity``) single moves are tiny, while
     the pair's common shift is set by the softer rest of the network.
+    ``widths[i]`` (optional): the velocity change of node ``i`` below which its position
+    ``x_hat + h v`` does not move (``ulp(x_hat) / h``). On a lock (a taut string) the
+    balance jumps across zero over that width, not between neighbouring floats: a
+    candidate is also taken when the balance changes sign across it, and the node lands
+    exactly on it (rate zero) instead of a few ulps off, where a dashpot to a stuck
+    neighbour would slip at a rate of ``1e-17`` and carry its full yield force.
     Returns the projected point, or None if some balance cannot be bracketed (a
     non-finite row where it starts).
 
@@ -208,13 +215,21 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
         cands = sorted({c - b for c in (0.0, *others) for b in base if lo < c - b < hi},
                        key=lambda c: abs(c - inside))
         shift = None
+        snapped = True
+        wide = 2.0 * max(widths[i] for i in group) if widths else 0.0
         for c in cands[:8]:
             # a jump across zero at c: a rate vanishes there and a dashpot sticks
             gl, gr = g(math.nextafter(c, -math.inf)), g(math.nextafter(c, math.inf))
             if math.isfinite(gl) and math.isfinite(gr) and gl <= 0.0 <= gr:
                 shift = c
                 break
+            if wide > 0.0:
+                gl, gr = g(c - wide), g(c + wide)
+                if math.isfinite(gl) and math.isfinite(gr) and gl <= 0.0 <= gr:
+                    shift = c
+                    break
         if shift is None:
+            snapped = False
             width = 1e-16 * (1.0 + max(abs(b) for b in base))
             for _ in range(200):
                 mid = 0.5 * (inside + outside)
@@ -228,7 +243,13 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
             # the side where the balance has crossed zero (or is zero), if finite
             shift = outside if math.isfinite(g(outside)) else inside
         g(shift)
-        return max(abs(shift) / (1.0 + abs(b + shift)) for b in base)
+        moved = max(abs(shift) / (1.0 + abs(b + shift)) for b in base)
+        if snapped and shift != 0.0 and widths:
+            # landed exactly on another node's velocity: however small the move, the
+            # neighbours' rates changed from a few ulps to zero; sweep again (with
+            # ``widths`` only: the initial state's sweeps stay as they were)
+            moved = max(moved, 2e-15)
+        return moved
 
     for _ in range(sweeps):
         moved = 0.0
@@ -306,15 +327,22 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float],
         hi.append(b - u[k])
     if not all(lo_k <= 0.0 <= hi_k for lo_k, hi_k in zip(lo, hi, strict=True)):
         return u
+    # a law that admits a single force there (lo = hi: e.g. a regularised friction law
+    # at its kink) leaves nothing to choose: that force stays, out of the problem (the
+    # solver needs lo < hi)
+    cols = [j for j in range(len(ks)) if lo[j] < hi[j]]
+    if not cols:
+        return u
     s = 1.0 + max(abs(u[k]) for k in ks)
     mu = 1e-6  # sqrt of the penalty 1e-12
-    M = np.vstack([A, (mu / s) * np.eye(len(ks))])
-    r = np.concatenate([rhs, np.zeros(len(ks))])
-    sol = lsq_linear(M, r, bounds=(lo, hi), method="bvls")
+    M = np.vstack([A[:, cols], (mu / s) * np.eye(len(cols))])
+    r = np.concatenate([rhs, np.zeros(len(cols))])
+    sol = lsq_linear(M, r, bounds=([lo[j] for j in cols], [hi[j] for j in cols]),
+                     method="bvls")
     if not sol.success or not np.all(np.isfinite(sol.x)):
         return u
-    for k, d in zip(ks, sol.x, strict=True):
-        u[k] += float(d)
+    for j, d in zip(cols, sol.x, strict=True):
+        u[ks[j]] += float(d)
     return u
 
 
@@ -344,10 +372,13 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
         N = len(scene.nodes)
         links = [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
                  if el.kind == "dashpot"]
-        swept = balance_sweeps(evaluate, project, list(v) + list(F), list(range(N)),
-                               lambda u: u[:N], links)
-        if swept is not None:
-            yield split_free_forces(scene, evaluate, project, swept), True
+        # first as before (rates snapped to zero between neighbouring floats), then with
+        # the widths of the positions' rounding (a node on a lock: see balance_sweeps)
+        for widths in (None, [abs(math.ulp(xh)) / h for xh in x_hat[:N]]):
+            swept = balance_sweeps(evaluate, project, list(v) + list(F), list(range(N)),
+                                   lambda u: u[:N], links, widths=widths)
+            if swept is not None:
+                yield split_free_forces(scene, evaluate, project, swept), True
         for guess in stuck_guesses(scene, v, F):
             yield guess, False
 
