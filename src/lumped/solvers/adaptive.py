@@ -229,10 +229,21 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             return too_many(events, recent, t, opts)
         return None
 
+    def start_forces(U: list[float]) -> list[float]:
+        """The forces at ``t`` the step's polynomial starts from: after an event the
+        stage forces' quadratic at ``s = 0`` rather than the probe's forces, whose
+        round-off (magnified by ``m / h_probe``) would put a false guard crossing into
+        the first step (a dashpot breaking out tangentially chattered: issue 11)."""
+        if not forces_from_probe:
+            return F
+        return [sum(w * U[k * n + N + e] for k, w in enumerate(START_WEIGHTS))
+                for e in range(E)]
+
     def crossing(U: list[float], h: float):
         if not watched:
             return None
-        nodes = [system.element_nodes(U, h, x, v, F, e) for e in watched]
+        F_0 = start_forces(U)
+        nodes = [system.element_nodes(U, h, x, v, F_0, e) for e in watched]
         return first_crossing_on(nodes, [guards[e] for e in watched])
 
     def end_guard(U: list[float], h: float, which) -> tuple[float, float]:
@@ -368,7 +379,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h_acc = None
             continue
         # (the compiled attempt has tested the samples: no negative guard, no crossing)
-        hit = crossing(sol, h) if got is None or negative else None
+        # (after an event the compiled test saw the probe's forces: test here)
+        hit = crossing(sol, h) if got is None or negative or forces_from_probe else None
         if target is not None:  # a landing step: bracket the event by end-of-step values
             if hit is not None and hit[1] != target[0] and hit[0] < 1.0:
                 # another guard crosses first; at t itself: no landing, the event is at t
@@ -416,8 +428,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0, h]
             h = s_hit * h
             continue
+        F_0 = start_forces(sol) if checked else F
         folded = [e for e in checked
-                  if fold_crossed(kernels[e], *system.element_nodes(sol, h, x, v, F, e))]
+                  if fold_crossed(kernels[e], *system.element_nodes(sol, h, x, v, F_0, e))]
         if folded:
             el = scene.elements[folded[0]]
             status, message = Status.BRANCH_LOST, (
@@ -435,15 +448,11 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                     s_ += A_[k][j] * sol[j * n + i]
                 Xk.append(x[i] + h * s_)
             Y.append(Xk + sol[k * n:k * n + N] + sol[k * n + N:k * n + n])
-        F0 = F
-        if forces_from_probe:
-            # the forces at t came from the event's vanishing probe step, whose round-off
-            # is magnified by m / h_probe; the stage forces hold the laws and the balance,
-            # so the dense output starts from their quadratic (exact for a linear relation
-            # such as a load shared by locked elements)
-            F0 = [sum(w * Yk[2 * N + e] for w, Yk in zip(START_WEIGHTS, Y, strict=True))
-                  for e in range(E)]
-            forces_from_probe = False
+        # the stage forces hold the laws and the balance, so after an event the dense
+        # output starts from their quadratic (exact for a linear relation such as a load
+        # shared by locked elements), not from the probe's forces (see start_forces)
+        F0 = start_forces(sol)
+        forces_from_probe = False
         dense.add(t, h, x + v + F0, Y)
         dF_n = system.end_slope(sol, h, F)
         event_here = target is not None
