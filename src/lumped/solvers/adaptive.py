@@ -122,8 +122,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         modes[:] = new
         watched.clear()
         for e in range(E):
-            kernels[e] = lbs[e].kernel_for(new[e])
-            guards[e] = lbs[e].guards_for(new[e])
+            kernels[e] = lbs[e].stage_kernel_for(new[e])
+            guards[e] = lbs[e].stage_guards_for(new[e])
             if lbs[e].count > 1:
                 watched.append(e)
         cones.clear()
@@ -502,7 +502,7 @@ def _laws_hold(lbs: list, modes: list[int], q: list[float], F: list[float]) -> b
     """Whether every element's law holds at ``(q_e, F_e)`` on its branch, to ``1e-8``
     relative to the size of its terms."""
     for e, (qe, Fe) in enumerate(zip(q, F, strict=True)):
-        R, Rq, RF = lbs[e].kernel_for(modes[e])(qe, Fe)
+        R, Rq, RF = lbs[e].stage_kernel_for(modes[e])(qe, Fe)
         if not abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe)):
             return False
     return True
