@@ -13,7 +13,7 @@ import pytest
 from lumped import simulate
 from lumped.bench.network_scenes import bingham_chain
 from lumped.laws import get_law
-from lumped.scene import Element, Mass, Scene
+from lumped.scene import Element, Junction, Mass, Scene
 from lumped.scene.forcing import SineBurst
 
 
@@ -83,3 +83,52 @@ def test_herschel_bulkley_below_one_loops_agree(n: float) -> None:
     ours.stats.pop("loop")
     assert np.array_equal(compiled.data, ours.data) and compiled.stats == ours.stats
     assert len(ours.events) >= 3
+
+
+def _network_check(scene: Scene) -> None:
+    from solvers.test_random_networks import check_network
+
+    for compiled in (False, True):
+        check_network(scene, "radau5", compiled=compiled)
+
+
+def test_a_landing_step_newton_cannot_take_ends_the_bracket() -> None:
+    # Herschel-Bulkley n = 0.3 at a junction with a Coulomb element: the stage Newton
+    # failed on the landing steps beyond a slip's end, and halving alone took the step
+    # below the one that held, down to 0: ZeroDivisionError
+    scene = Scene(
+        [Mass("m0", m=4.334013560954615, x0=-0.4797260856116278, v0=-0.35170307394384315),
+         Mass("m1", m=0.4232307618850831, x0=0.05170403855817729, v0=0.0),
+         Junction("j2", x0=0.575065479480009)],
+        [Element("e0", get_law("herschel_bulkley").bind(
+            gamma=1.2932675437969818, tau=0.01870435536284099, n=0.3), "ground", "m0"),
+         Element("e1", get_law("newtonian").bind(c=0.01735846451432035), "ground", "m1"),
+         Element("e2", get_law("herschel_bulkley").bind(
+             gamma=0.15626014192724572, tau=0.1, n=0.3), "m0", "j2"),
+         Element("e3", get_law("implicit_spring").bind(
+             k=23.70821017783261, L0=1.0, F0=12.172581027898621), "m1", "j2"),
+         Element("e4", get_law("coulomb").bind(tau=0.13065950489220737, r=72.61155647959043),
+                 "j2", "m1")])
+    _network_check(scene)
+
+
+def test_the_mode_probe_falls_back_on_the_balance_sweeps() -> None:
+    # three Coulomb elements on a loop through ground (m1, m2) stick together: the mode
+    # probe's Newton and its restarts diverged at every probe size ("no motion
+    # continues"); the balance sweeps of the fixed-step methods solve it
+    scene = Scene(
+        [Junction("j0", x0=-2.3180037170759898e-42),
+         Mass("m1", m=1.0, x0=4e-16, v0=-0.4745869781242571),
+         Mass("m2", m=0.11711915097129785, x0=1.2941885356537802e-173,
+              v0=-0.9921624563663431),
+         Mass("m3", m=1.0, x0=-0.08062488472053508, v0=4.210843702431672e-108)],
+        [Element("e0", get_law("herschel_bulkley").bind(gamma=0.5366265777189618, tau=1.0,
+                                                        n=1.0), "ground", "j0"),
+         Element("e1", get_law("coulomb").bind(tau=1.0, r=2.325244788159142), "ground", "m1"),
+         Element("e2", get_law("coulomb").bind(tau=1.0, r=1.0), "ground", "m2"),
+         Element("e3", get_law("implicit_spring").bind(k=1.0, L0=1.0, F0=1.0), "m1", "m3"),
+         Element("e4", get_law("linear_spring").bind(k=3.2289378946241682), "m1", "ground"),
+         Element("e5", get_law("coulomb").bind(tau=0.010738291444455803, r=1.0000000000000022),
+                 "m1", "m2"),
+         Element("e6", get_law("linear_spring").bind(k=0.5060153969703686), "j0", "m1")])
+    _network_check(scene)

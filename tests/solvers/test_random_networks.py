@@ -150,16 +150,17 @@ def grid(scene: Scene) -> tuple[float, float]:
     return dt, n * dt
 
 
-def _solve(scene: Scene, method: str, dt: float, t_end: float):
+def _solve(scene: Scene, method: str, dt: float, t_end: float, **extra):
     if method in FIXED_STEP_METHODS:
-        return simulate(scene, method=method, dt=dt, t_end=t_end)
+        return simulate(scene, method=method, dt=dt, t_end=t_end, **extra)
     # an adaptive method: tolerance tied to the level, output on the same grid
-    return simulate(scene, method=method, dt=dt, t_end=t_end, rtol=dt**2, atol=dt**3)
+    return simulate(scene, method=method, dt=dt, t_end=t_end, rtol=dt**2, atol=dt**3,
+                    **extra)
 
 
-def _run_or_reject(scene: Scene, method: str, dt: float, t_end: float):
+def _run_or_reject(scene: Scene, method: str, dt: float, t_end: float, **extra):
     try:
-        return _solve(scene, method, dt, t_end)
+        return _solve(scene, method, dt, t_end, **extra)
     except InconsistentInitialForce:
         raise
     except ValueError as err:
@@ -174,9 +175,11 @@ def _run_or_reject(scene: Scene, method: str, dt: float, t_end: float):
         raise
 
 
-def check_network(scene: Scene, method: str) -> None:
+def check_network(scene: Scene, method: str, **extra) -> list:
+    """Run ``scene`` with ``method`` (keywords ``extra``) at three levels and check the
+    properties of the module notes; returns the three solutions."""
     dt, t_end = grid(scene)
-    sols = [_run_or_reject(scene, method, dt / 2**k, t_end) for k in range(3)]
+    sols = [_run_or_reject(scene, method, dt / 2**k, t_end, **extra) for k in range(3)]
     assert [len(s.t) - 1 for s in sols] == [(len(sols[0].t) - 1) * 2**k for k in range(3)]
     scale = 1.0 + max(float(np.abs(s.data).max()) for s in sols)
     for s in sols:
@@ -206,6 +209,7 @@ def check_network(scene: Scene, method: str) -> None:
     # bouncing off a string) is off by O(1)
     bound = 0.5 * dt * (1.0 + vmax)
     assert d1 <= max(0.9 * d0 + 1e-7 * scale, bound), f"no convergence: {d0!r} -> {d1!r}"
+    return sols
 
 
 _SETTINGS = settings(max_examples=EXAMPLES, deadline=None,
@@ -217,7 +221,16 @@ COMPILED = tuple(m for m in GENERIC if m.startswith("jit-"))
 COMPILED_EXAMPLES = 1_000 if LARGE else 4
 
 
-@pytest.mark.parametrize("method", [m for m in GENERIC if m not in COMPILED])
+#: Methods with a compiled and a Python loop (``compiled=True/False``): ``compiled=None``
+#: picks one by what the process compiled before (order dependent), so the suite runs
+#: each loop explicitly: the Python loop on the full budget, and on a few examples both
+#: loops, which must give the same numbers (the compiled loop compiles every new scene).
+LOOPED = ("radau5",)
+LOOPED_BOTH_EXAMPLES = 1_000 if LARGE else 4
+
+
+@pytest.mark.parametrize("method", [m for m in GENERIC
+                                    if m not in COMPILED and m not in LOOPED])
 @_SETTINGS
 @given(scene=passive_networks())
 def test_random_passive_network(method: str, scene: Scene) -> None:
@@ -229,6 +242,25 @@ def test_random_passive_network(method: str, scene: Scene) -> None:
 @given(scene=passive_networks())
 def test_random_passive_network_compiled(method: str, scene: Scene) -> None:
     check_network(scene, method)
+
+
+@pytest.mark.parametrize("method", LOOPED)
+@_SETTINGS
+@given(scene=passive_networks())
+def test_random_passive_network_python_loop(method: str, scene: Scene) -> None:
+    check_network(scene, method, compiled=False)
+
+
+@pytest.mark.parametrize("method", LOOPED)
+@settings(_SETTINGS, max_examples=LOOPED_BOTH_EXAMPLES)
+@given(scene=passive_networks())
+def test_random_passive_network_both_loops(method: str, scene: Scene) -> None:
+    ours = check_network(scene, method, compiled=False)
+    compiled = check_network(scene, method, compiled=True)
+    for a, b in zip(ours, compiled, strict=True):
+        assert np.array_equal(a.data, b.data), "the compiled loop differs from Python's"
+        assert [(ev.t, ev.element, ev.kind) for ev in a.events] == [
+            (ev.t, ev.element, ev.kind) for ev in b.events]
 
 
 def test_generic_methods_listed() -> None:

@@ -342,7 +342,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                      + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
             if stage_solve is None and opts["compiled"] is True:
                 stage_solve = compiled_stage_solver(scene, modes)  # modes: the live list
-            if stage_solve is None:
+            if stage_solve is None or cones:  # (locks in parallel: the cone split)
                 sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale,
                                               max_iters=max_newton, cones=cones or None)
             else:
@@ -355,8 +355,14 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         stats["max_newton_iterations"] = max(stats["max_newton_iterations"], its)
         if sol is None:
             stats["rejected"] += 1
-            h *= 0.5
             h_acc = None
+            if target is not None and target[1] > 0.0:
+                # a landing step that Newton cannot take: no solution that far, the
+                # bracket ends there (halving alone went below the step that held, to 0)
+                target[3], target[5] = h, target[5] + 1
+                h = 0.5 * (target[1] + h)
+                continue
+            h *= 0.5
             continue
         if got is None:
             t_n0 = math.nextafter(t, math.inf) if (bi > 0 and t == breaks[bi - 1]) else t

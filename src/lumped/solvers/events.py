@@ -151,6 +151,9 @@ def select_modes(
     res = newton_solve(evaluate, list(v) + list(F), probe_opts, min_norm=True)
     if res.code is not NewtonCode.SUCCESS:
         res = solve_globalized(scene, evaluate, h_probe, x_hat, list(v), list(F), probe_opts)
+    if res.code is not NewtonCode.SUCCESS:  # the balance sweeps (issue 11)
+        res = solve_globalized(scene, evaluate, h_probe, x_hat, list(v), list(F), probe_opts,
+                               sweeps=True)
     if res.code is not NewtonCode.SUCCESS:
         return (f"no motion continues from t = {t!r}: the implicit step of the full laws "
                 f"({h_probe!r} s) failed ({res.code.value})")
