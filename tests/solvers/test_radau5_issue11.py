@@ -132,3 +132,28 @@ def test_the_mode_probe_falls_back_on_the_balance_sweeps() -> None:
                  "m1", "m2"),
          Element("e6", get_law("linear_spring").bind(k=0.5060153969703686), "j0", "m1")])
     _network_check(scene)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_slip_branch_at_zero_rate_beside_a_stuck_dashpot_is_held_stuck(compiled: bool):
+    # m1 is held by a Herschel-Bulkley n = 1.5 dashpot (tau 1) and a Bingham dashpot
+    # (tau 0.1) to ground under a load of 1.00001: both stick. The mode probe put the
+    # load on the first at a few ulps beyond its yield force at rate exactly 0 (the
+    # second's stuck row fixes it) and read it as slipping; held on that branch, which
+    # ends flat (dq/dF = 0), the stage Newton was singular: 15 000 rejected steps in
+    # 0.08 s. A dashpot exactly at a lock's rate with a force the lock admits is locked
+    scene = Scene(
+        [Mass("m0", m=3.5663700934436546, x0=0.41111799647731373, v0=0.99999),
+         Mass("m1", m=1.0, x0=0.870186492140621, v0=2.6114050307235478e-46)],
+        [Element("e0", get_law("newtonian").bind(c=0.42866553621096304), "ground", "m0"),
+         Element("e1", get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=1.5),
+                 "ground", "m1"),
+         Element("e2", get_law("bingham").bind(gamma=1.0, tau=0.1), "m1", "ground"),
+         Element("e3", get_law("newtonian").bind(c=1.0000230261160268), "m1", "m0")])
+    for h in (0.025, 0.0125, 0.00625):
+        sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                       compiled=compiled, max_steps=2000)
+        assert sol.ok, sol.message
+        assert np.all(sol.v["m1"][1:] == 0.0)  # stuck from the start, exactly
+        assert np.all(np.abs(sol.F["e1"]) <= 1.0 + 1e-9)
+        assert np.all(np.abs(sol.F["e2"]) <= 0.1 + 1e-9)

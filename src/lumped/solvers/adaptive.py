@@ -53,7 +53,7 @@ from .events import (
     snap_to_locks,
 )
 from .initial_state import consistent_initial_state
-from .locks import IntervalLog, cycles_among, indeterminate_elements
+from .locks import IntervalLog, cycles_among, indeterminate_elements, prefer_locks
 from .radau import START_WEIGHTS, C, StageSystem
 from .radau import A as _A
 from .status import BranchError, Event, RawRun, SolverError, Status
@@ -150,6 +150,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         if isinstance(sel, str):
             return sel
         new, v_p, F_p = sel
+        new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked
         scale_v = atol + rtol * max(abs(vi) for vi in v)
         hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, opts["restitution"])
         if isinstance(hit, str):
