@@ -157,3 +157,24 @@ def test_a_slip_branch_at_zero_rate_beside_a_stuck_dashpot_is_held_stuck(compile
         assert np.all(sol.v["m1"][1:] == 0.0)  # stuck from the start, exactly
         assert np.all(np.abs(sol.F["e1"]) <= 1.0 + 1e-9)
         assert np.all(np.abs(sol.F["e2"]) <= 0.1 + 1e-9)
+
+
+def test_the_output_grid_ends_inside_the_last_step() -> None:
+    # the last step ends at t_n + h, which can be an ulp short of t_end = n dt: sampling
+    # the dense output at n dt raised "outside the solved interval"
+    scene = Scene(
+        [Mass("m0", m=0.2175388664981012, x0=0.8370649725510888, v0=0.0),
+         Mass("m1", m=9.238299295139104, x0=0.0, v0=0.0)],
+        [Element("e0", get_law("bingham").bind(gamma=0.2175388664981012, tau=1.0),
+                 "ground", "m0"),
+         Element("e1", get_law("bingham").bind(gamma=0.1, tau=0.2175388664981012),
+                 "ground", "m1")])
+    from solvers.test_random_networks import grid
+
+    dt, t_end = grid(scene)
+    for k in range(3):
+        h = dt / 2**k
+        sol = simulate(scene, method="radau5", dt=h, t_end=t_end, rtol=h**2, atol=h**3,
+                       compiled=False)
+        assert sol.ok and len(sol.t) == round(t_end / h) + 1
+        assert abs(sol.t[-1] - t_end) <= 1e-15 * t_end
