@@ -19,7 +19,9 @@ silently) it asserts:
 
 Budget: ``ci`` runs :data:`CI_EXAMPLES` examples per method (:data:`COMPILED_EXAMPLES`
 for the methods that compile each scene); ``LUMPED_LARGE=1`` runs
-:data:`LARGE_EXAMPLES` (at least 10 000, for a background run; see CHANGELOG).
+:data:`LARGE_EXAMPLES` (at least 10 000, for a background run; see CHANGELOG). A method
+with a compiled and a Python loop (:data:`LOOPED`: ``radau5``) runs its Python loop on
+that budget and both loops, which must agree, on :data:`LOOPED_BOTH_EXAMPLES`.
 """
 
 from __future__ import annotations
