@@ -19,7 +19,8 @@ def check_yield(scene: Scene, sol, force_tol: float = 0.0) -> None:
     tolerance on forces, used where the rate is not a well-conditioned test: a
     Herschel-Bulkley law with ``n < 1`` maps a force error ``d`` above ``tau`` to a rate
     ``gamma d^n`` (``d = 1e-6``, ``n = 0.3``: ``0.016 gamma``), so there the force is
-    compared with the one the law gives at the rate, ``tau + (|q|/gamma)^(1/n)``. An
+    compared with the one the law gives at the rate, ``tau + (|q|/gamma)^(1/n)``, where the
+    rate is also below half the one the force gives. An
     adaptive method holds forces to ``min(1e-3, 100 rtol)`` of their scale and samples
     them on its dense output between step points."""
     v = {nd.name: sol.v[nd.name] for nd in scene.nodes}
@@ -37,13 +38,13 @@ def check_yield(scene: Scene, sol, force_tol: float = 0.0) -> None:
             continue
         q_signed = v.get(el.b, 0.0) - v.get(el.a, 0.0) + np.zeros_like(F)
         q = np.abs(q_signed)
+        slip_rate = p["gamma"] * np.maximum(F - tau, 0.0) ** p.get("n", 1.0)
+        stuck_above = above & (q < 0.5 * slip_rate)
         if p.get("n", 1.0) < 1.0:  # steep at tau: the force from the rate, in force units
             F_law = tau + (q / p["gamma"]) ** (1.0 / p["n"])
             over = F - F_law - (tau * 1e-9 + 1e-8 * scale + 1e-12 + force_tol * scale)
-            assert not (over > 0.0).any(), f"{el.name} stuck above its yield force"
+            assert not (stuck_above & (over > 0.0)).any(), f"{el.name} stuck above its yield force"
             continue
-        slip_rate = p["gamma"] * np.maximum(F - tau, 0.0) ** p.get("n", 1.0)
-        stuck_above = above & (q < 0.5 * slip_rate)
         # Newton accepts the law's row when |R| <= rtol S + atol (NewtonOptions: 1e-10,
         # 1e-12; S = _law_scale, the magnitude of the row's terms). Where dR/dF vanishes
         # at the yield force (Herschel-Bulkley n > 1) a stuck element may thus carry

@@ -243,9 +243,13 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     def crossing(U: list[float], h: float):
         if not watched:
             return None
-        F_0 = start_forces(U)
-        nodes = [system.element_nodes(U, h, x, v, F_0, e) for e in watched]
-        return first_crossing_on(nodes, [guards[e] for e in watched])
+        fns = [guards[e] for e in watched]
+        hit = first_crossing_on([system.element_nodes(U, h, x, v, F, e) for e in watched], fns)
+        if hit is None or not forces_from_probe or hit[0] == 0.0:
+            return hit  # (a guard already off at t: an event at t itself, as before)
+        F_0 = start_forces(U)  # a crossing inside the step: tested without the offset
+        return first_crossing_on([system.element_nodes(U, h, x, v, F_0, e) for e in watched],
+                                 fns)
 
     def end_guard(U: list[float], h: float, which) -> tuple[float, float]:
         e = watched[which[0]]
