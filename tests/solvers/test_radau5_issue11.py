@@ -178,3 +178,23 @@ def test_the_output_grid_ends_inside_the_last_step() -> None:
                        compiled=False)
         assert sol.ok and len(sol.t) == round(t_end / h) + 1
         assert abs(sol.t[-1] - t_end) <= 1e-15 * t_end
+
+
+def test_a_landing_with_no_step_that_holds_is_an_event_at_t() -> None:
+    # strings and Herschel-Bulkley n = 0.3 at two junctions: no landing step held, the
+    # step was halved down to 0 (ZeroDivisionError); below the step floor the event is
+    # taken at t itself and the full laws choose the mode
+    scene = Scene(
+        [Mass("m0", m=0.15613776915483743, x0=4.4103293327607247e-116, v0=-2.0),
+         Junction("j1", x0=1e-300), Junction("j2", x0=0.0001)],
+        [Element("e0", get_law("string_spring").bind(k=0.5724323862878972,
+                                                     L=0.0021920241198278836), "ground", "m0"),
+         Element("e1", get_law("herschel_bulkley").bind(
+             gamma=1.0000000000023026, tau=0.13385399000799353, n=0.3), "ground", "j1"),
+         Element("e2", get_law("herschel_bulkley").bind(
+             gamma=8.100423738830749, tau=0.01572365453562612, n=0.3), "j1", "j2"),
+         Element("e3", get_law("implicit_spring").bind(k=1.0, L0=0.14884078364216793, F0=1.0),
+                 "j2", "j1"),
+         Element("e4", get_law("string_spring").bind(k=1.0, L=1.0), "j1", "m0"),
+         Element("e5", get_law("coulomb").bind(tau=1.0, r=1.0), "j2", "ground")])
+    _network_check(scene)

@@ -368,6 +368,14 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 h = 0.5 * (target[1] + h)
                 continue
             h *= 0.5
+            if target is not None and h < h_min:  # no landing step holds: the event is
+                target, dF_n = None, None  # at t itself, the full laws choose the mode
+                old = list(modes)
+                stop = at_event(t, h_good, "guard")
+                if stop:
+                    status, message = stop
+                    break
+                kept, h = modes == old, h_good
             continue
         if got is None:
             t_n0 = math.nextafter(t, math.inf) if (bi > 0 and t == breaks[bi - 1]) else t
