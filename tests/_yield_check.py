@@ -11,9 +11,18 @@ from lumped.solvers.step_system import _law_scale
 YIELDING = ("bingham", "coulomb", "herschel_bulkley")
 
 
-def check_yield(scene: Scene, sol) -> None:
+def check_yield(scene: Scene, sol, force_tol: float = 0.0) -> None:
     """A dashpot carries more than its yield force only while it slips at the rate its
-    law gives for that force (Coulomb: never more than ``tau``)."""
+    law gives for that force (Coulomb: never more than ``tau``).
+
+    ``force_tol`` (relative to the largest force at the sample) is the method's own
+    tolerance on forces, used where the rate is not a well-conditioned test: a
+    Herschel-Bulkley law with ``n < 1`` maps a force error ``d`` above ``tau`` to a rate
+    ``gamma d^n`` (``d = 1e-6``, ``n = 0.3``: ``0.016 gamma``), so there the force is
+    compared with the one the law gives at the rate, ``tau + (|q|/gamma)^(1/n)``, where the
+    rate is also below half the one the force gives. An
+    adaptive method holds forces to ``min(1e-3, 100 rtol)`` of their scale and samples
+    them on its dense output between step points."""
     v = {nd.name: sol.v[nd.name] for nd in scene.nodes}
     for el in scene.elements:
         if el.law_name not in YIELDING:
@@ -31,6 +40,11 @@ def check_yield(scene: Scene, sol) -> None:
         q = np.abs(q_signed)
         slip_rate = p["gamma"] * np.maximum(F - tau, 0.0) ** p.get("n", 1.0)
         stuck_above = above & (q < 0.5 * slip_rate)
+        if p.get("n", 1.0) < 1.0:  # steep at tau: the force from the rate, in force units
+            F_law = tau + (q / p["gamma"]) ** (1.0 / p["n"])
+            over = F - F_law - (tau * 1e-9 + 1e-8 * scale + 1e-12 + force_tol * scale)
+            assert not (stuck_above & (over > 0.0)).any(), f"{el.name} stuck above its yield force"
+            continue
         # Newton accepts the law's row when |R| <= rtol S + atol (NewtonOptions: 1e-10,
         # 1e-12; S = _law_scale, the magnitude of the row's terms). Where dR/dF vanishes
         # at the yield force (Herschel-Bulkley n > 1) a stuck element may thus carry

@@ -386,19 +386,26 @@ def test_the_compiled_stage_newton_gives_the_same_run():
         (ev.t, ev.element) for ev in ours.events]
 
 
-def test_radau5_refuses_an_unbounded_slope_and_auto_runs_bdf2():
-    # Herschel-Bulkley with n < 1: dq/dF is infinite at the yield force, where the stage
-    # Newton of a step starting on the boundary fails at every step size (issue 11)
-    hb = get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=0.5)
+def test_radau5_refuses_an_unbounded_slope_without_inverse_form_and_auto_runs_bdf2():
+    # a steep branch (dq/dF infinite at its boundary) that radau5 cannot solve for F in
+    # closed form (two powers of F): the stage Newton of a step starting on the boundary
+    # would fail at every step size, so radau5 refuses the scene (issue 11)
+    from lumped.laws import ElementLaw
+
+    law = ElementLaw("two_powers", "dashpot",
+                     "q - Piecewise((sqrt(F - tau) + (F - tau)**2, F > tau),"
+                     " (-sqrt(-F - tau) - (-F - tau)**2, F < -tau), (0, True))", ["tau"])
     scene = Scene([Mass("m", m=1.0, x0=0.5)],
                   [Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m"),
-                   Element("d", hb, "ground", "m")])
-    with pytest.raises(ValueError, match=r"does not take element 'd'.*herschel_bulkley"):
+                   Element("d", law.bind(tau=1.0), "ground", "m")])
+    with pytest.raises(ValueError, match=r"does not take element 'd'.*two_powers.*inverse"):
         simulate(scene, method="radau5", t_end=1.0)
     with pytest.raises(ValueError, match=r"`dt` is required .*`auto` runs it .*'radau5'"):
         simulate(scene, t_end=1.0)  # auto says why it needs a step size here
     sol = simulate(scene, dt=1e-3, t_end=1.0)  # auto
     assert sol.method == "bdf2" and sol.ok
-    n_ok = Scene(scene.nodes, [scene.elements[0], Element(
-        "d", get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=2.0), "ground", "m")])
-    assert simulate(n_ok, dt=1e-3, t_end=1.0).method == "radau5"
+    # Herschel-Bulkley n < 1 is steep too, but solved in its inverse form: radau5 takes it
+    for n in (0.5, 2.0):
+        hb = Scene(scene.nodes, [scene.elements[0], Element(
+            "d", get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=n), "ground", "m")])
+        assert simulate(hb, dt=1e-3, t_end=1.0).method == "radau5"

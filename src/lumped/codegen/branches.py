@@ -95,6 +95,14 @@ class BranchInfo:
         ``dR_i/dF`` holds a negative power of an expression in ``F``: it is unbounded
         where that expression vanishes, e.g. Herschel-Bulkley with ``n < 1`` at its yield
         force (``dq/dF -> infinity``), or a pole.
+    stage : tuple of sympy.Expr or None
+        For a steep branch that can be solved for ``F`` (:func:`_inverse_form`), the
+        residual in its *inverse form* ``F - G(q)`` with its derivatives in ``q`` and
+        ``F``: the same zero set on the branch, smooth where the forward form is steep
+        (Herschel-Bulkley ``n < 1``: ``F = tau + (q/gamma)^(1/n)``, ``dG/dq -> 0`` at
+        ``q = 0``), then the steep power's base ``s F + d`` and its value ``w(q)`` on
+        the branch (``base = w^(1/p)``, continued oddly). ``None`` otherwise;
+        :meth:`LawBranches.stage_kernel_for` then uses the residual itself.
     """
 
     index: int
@@ -105,6 +113,7 @@ class BranchInfo:
     locks: bool
     lock_value: float | None
     steep: bool = False
+    stage: tuple[sp.Expr, sp.Expr, sp.Expr, sp.Expr, sp.Expr] | None = None
 
 
 class LawBranches:
@@ -135,12 +144,13 @@ class LawBranches:
             steep = any(isinstance(p, sp.Pow) and p.exp.is_negative and p.base.has(_F)
                         for p in sp.preorder_traversal(dF))
             infos.append(BranchInfo(len(infos), expr, dq, dF, path, bool(locks),
-                                    _lock_value(expr) if locks else None, steep))
+                                    _lock_value(expr) if locks else None, steep,
+                                    _inverse_form(expr) if steep else None))
         self.info: tuple[BranchInfo, ...] = tuple(infos)
         self.count = len(infos)
         self.branch: Callable[[float, float], int] = _build_selector(
             _decision_tree(residual), number)
-        self._kernels: dict[tuple[int, bool], Callable] = {}
+        self._kernels: dict[tuple[int, bool, bool], Callable] = {}
         self._guards: dict[int, Callable] = {}
 
     def kernel_for(self, i: int) -> Callable[[float, float], tuple[float, float, float]]:
@@ -157,6 +167,33 @@ class LawBranches:
         the bare body without ``try``, the form to hand to numba."""
         return self._kernel(self._check(i), guard=guard).__source__
 
+    def stage_kernel_for(self, i: int) -> Callable[[float, float], tuple[float, float, float]]:
+        """:meth:`kernel_for` ``(i)`` in the form a stage solve takes it: for a steep
+        branch with an inverse form (:attr:`BranchInfo.stage`) the kernel of ``F - G(q)``,
+        else the branch's own kernel. The two have the same zeros on the branch."""
+        return self._kernel(self._check(i), guard=True, stage=True)
+
+    def stage_source_for(self, i: int, *, guard: bool = False) -> str:
+        """The Python source of :meth:`stage_kernel_for` ``(i)`` (bare body by default,
+        the form to hand to numba)."""
+        return self._kernel(self._check(i), guard=guard, stage=True).__source__
+
+    def stage_guards_for(self, i: int) -> Callable[[float, float], tuple[float, ...]]:
+        """:meth:`guards_for` ``(i)`` for the stage solve: on a steep branch with an
+        inverse form, a guard that is a positive multiple of the steep power's base
+        ``s F + d`` is replaced by ``w(q)`` (:attr:`BranchInfo.stage`), which has the
+        same sign on the branch and crosses zero with a nonzero slope in ``q``: the force
+        ``F - F_end = w^(1/p) / s`` is flat there (``1/p > 1``), so a located end in
+        ``F`` would leave a rate of ``(round-off)^p``, far above the tolerance."""
+        i = self._check(i)
+        info = self.info[i]
+        if info.stage is None:
+            return self.guards_for(i)
+        hit = self._guards.get(-1 - i)
+        if hit is None:
+            hit = self._guards[-1 - i] = _compile_guards(info.path, info.stage[3:])
+        return hit
+
     def guards_for(self, i: int) -> Callable[[float, float], tuple[float, ...]]:
         """``guards(q, F) -> (g_1, ...)``: all ``> 0`` strictly inside branch ``i``, some
         ``< 0`` outside it (see the module notes); ``()`` for a smooth law."""
@@ -166,16 +203,17 @@ class LawBranches:
             hit = self._guards[i] = _compile_guards(self.info[i].path)
         return hit
 
-    def _kernel(self, i: int, *, guard: bool) -> Callable:
-        hit = self._kernels.get((i, guard))
+    def _kernel(self, i: int, *, guard: bool, stage: bool = False) -> Callable:
+        info = self.info[i]
+        stage = stage and info.stage is not None
+        hit = self._kernels.get((i, guard, stage))
         if hit is None:
-            info = self.info[i]
+            exprs = list(info.stage[:3]) if stage else [info.residual, info.dR_dq, info.dR_dF]
             with distribute(False):
-                hit = _build("kernel", ["q", "F"], [info.residual, info.dR_dq, info.dR_dF],
-                             guard=guard)
+                hit = _build("kernel", ["q", "F"], exprs, guard=guard)
                 hit.magnitude = _build(  # type: ignore[attr-defined]
-                    "magnitude", ["q", "F"], [magnitude_expression(info.residual)], guard=guard)
-            self._kernels[(i, guard)] = hit
+                    "magnitude", ["q", "F"], [magnitude_expression(exprs[0])], guard=guard)
+            self._kernels[(i, guard, stage)] = hit
         return hit
 
     def _check(self, i: object) -> int:
@@ -374,12 +412,29 @@ def _guard_codes(cond: sp.Basic, want: bool, printer: _Printer) -> list[str] | N
     raise ValueError(f"unsupported condition {cond} ({type(cond).__name__})")
 
 
-def _compile_guards(path: _Path) -> Callable[[float, float], tuple[float, ...]]:
-    """Compile ``guards(q, F) -> tuple`` for a branch's path (``nan`` where undefined)."""
+def _root_guard(code: str, base: sp.Expr, w: sp.Expr, printer: _Printer) -> str:
+    """``code`` (a guard), or the code of ``w`` when the guard is ``c * base``, ``c > 0``."""
+    try:
+        g = sp.sympify(code, locals={"q": _Q, "F": _F, "max": sp.Max, "min": sp.Min})
+    except (sp.SympifyError, TypeError, SyntaxError):
+        return code
+    ratio = sp.simplify(g / base)
+    if ratio.is_number and ratio.is_positive:
+        return printer.doprint(w)
+    return code
+
+
+def _compile_guards(path: _Path, root: tuple[sp.Expr, sp.Expr] | None = None
+                    ) -> Callable[[float, float], tuple[float, ...]]:
+    """Compile ``guards(q, F) -> tuple`` for a branch's path (``nan`` where undefined);
+    with ``root = (base, w)`` a guard that is a positive multiple of ``base`` becomes
+    ``w`` (:meth:`LawBranches.stage_guards_for`)."""
     printer = _Printer()
     codes: list[str] = []
     for cond, want in path:
         codes.extend(_guard_codes(cond, want, printer) or [])
+    if root is not None:
+        codes = [_root_guard(code, *root, printer) for code in codes]
     body = "(" + "".join(f"{c}, " for c in codes) + ")"
     nans = "(" + "math.nan, " * len(codes) + ")"
     source = (f"def guards(q, F):\n    try:\n        return {body}\n"
@@ -392,6 +447,46 @@ def _compile_guards(path: _Path) -> Callable[[float, float], tuple[float, ...]]:
     fn.__source__ = source  # type: ignore[attr-defined]
     fn.codes = tuple(codes)  # type: ignore[attr-defined]
     return fn  # type: ignore[return-value]
+
+
+def _inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
+    r"""A steep branch ``R = alpha(q) + beta (s F + d)^p`` (``p`` a non-integer number,
+    ``beta, s, d`` numbers, ``F`` nowhere else) solved for ``F``:
+    ``(F - G(q), -G'(q), 1, s F + d, w)`` with
+
+    .. math:: G(q) = (w^{1/p} - d) / s,\qquad w = -\alpha(q) / \beta,
+
+    and ``w^{1/p}`` continued oddly to ``w < 0`` (``-(-w)^{1/p}``), so that an iterate
+    beyond the branch's end gives a force beyond its guard (an event) rather than ``nan``.
+    ``G'(q) = r |w|^{r - 1} w'(q) / s`` (``r = 1/p``) is bounded where ``dR/dF`` is not
+    (``p < 1``: ``r > 1``). ``None`` for any other shape."""
+    pows = {node for node in sp.preorder_traversal(expr)
+            if isinstance(node, sp.Pow) and node.base.has(_F)}
+    if len(pows) != 1:
+        return None
+    (P,) = pows
+    base, p = P.base, P.exp
+    if not p.is_number or p.is_integer or not p.is_positive:
+        return None
+    slope = sp.diff(base, _F)
+    shift = sp.expand(base - slope * _F)
+    if not (slope.is_number and slope != 0 and shift.is_number):
+        return None
+    X = sp.Dummy("X")
+    rest = expr.xreplace({P: X})
+    if rest.has(_F):
+        return None
+    beta = sp.diff(rest, X)
+    alpha = sp.expand(rest - beta * X)
+    if not (beta.is_number and beta != 0) or alpha.has(X) or not alpha.has(_Q):
+        return None
+    w = -alpha / beta
+    r = 1 / p
+    root = sp.Piecewise((w ** r, w >= 0), (-((-w) ** r), True))
+    slope_root = sp.Piecewise((r * w ** (r - 1), w >= 0), (r * (-w) ** (r - 1), True))
+    G = (root - shift) / slope
+    dG = slope_root * sp.diff(w, _Q) / slope
+    return _F - G, -dG, sp.S.One, base, w
 
 
 # ---------------------------------------------------------------------------------------

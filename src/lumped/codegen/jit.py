@@ -33,9 +33,10 @@ rate (dashpot), ``F`` its force (sign convention of :mod:`lumped.scene`).
     rules (:meth:`lumped.codegen.branches.LawBranches.branch`; -1 where none holds).
 ``branch_count(e) -> int``, ``branch_law(e, i, q, F) -> (R, dR/dq, dR/dF)``
     Element ``e``'s law on its smooth branch ``i`` alone (``i < branch_count(e)``;
-    :meth:`~lumped.codegen.branches.LawBranches.kernel_for`), smooth wherever defined.
+    :meth:`~lumped.codegen.branches.LawBranches.stage_kernel_for`: a steep branch in its
+    inverse form ``F - G(q)``), smooth wherever defined.
 ``branch_guards(e, i, q, F, out) -> int``
-    The branch's guard values (:meth:`~lumped.codegen.branches.LawBranches.guards_for`:
+    The branch's guard values (:meth:`~lumped.codegen.branches.LawBranches.stage_guards_for`:
     all ``> 0`` strictly inside branch ``i``, some ``< 0`` outside; an event is a sign
     change) written to ``out[0 .. k-1]``; returns ``k`` (0 for a smooth law).
 
@@ -166,11 +167,12 @@ def _rename(source: str, name: str) -> str:
 
 def _branches(bound):
     """``(selector source, [(kernel source, guard codes), ...])`` of a law's smooth
-    branches (:func:`lumped.codegen.branches.law_branches`)."""
+    branches (:func:`lumped.codegen.branches.law_branches`; the kernels in the form the
+    stage solve of ``radau5`` takes, ``stage_source_for``)."""
     from lumped.codegen.branches import law_branches
 
     lb = law_branches(bound)
-    return lb.branch.__source__, [(lb.source_for(i), tuple(lb.guards_for(i).codes))
+    return lb.branch.__source__, [(lb.stage_source_for(i), tuple(lb.stage_guards_for(i).codes))
                                   for i in range(lb.count)]
 
 

@@ -135,11 +135,26 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         hold_check = True  # a stuck interval may start here (lumped.solvers.stuck)
         return ms.at_event(t, h, cause, x, v, F)
 
+    def start_forces(U: list[float]) -> list[float]:
+        """The forces at ``t`` the step's polynomial starts from: after an event the
+        stage forces' quadratic at ``s = 0`` rather than the probe's forces, whose
+        round-off (magnified by ``m / h_probe``) would put a false guard crossing into
+        the first step (a dashpot breaking out tangentially chattered: issue 11)."""
+        if not ms.forces_from_probe:
+            return F
+        return [sum(w * U[k * n + N + e] for k, w in enumerate(START_WEIGHTS))
+                for e in range(E)]
+
     def crossing(U: list[float], h: float):
         if not watched:
             return None
-        nodes = [system.element_nodes(U, h, x, v, F, e) for e in watched]
-        return first_root_py(nodes, [guards[e] for e in watched])
+        fns = [guards[e] for e in watched]
+        hit = first_root_py([system.element_nodes(U, h, x, v, F, e) for e in watched], fns)
+        if hit is None or not ms.forces_from_probe or hit[0] == 0.0:
+            return hit  # (a guard already off at t: an event at t itself, as before)
+        F_0 = start_forces(U)  # a crossing inside the step: tested without the offset
+        return first_root_py([system.element_nodes(U, h, x, v, F_0, e) for e in watched],
+                             fns)
 
     def end_guard(U: list[float], h: float, which) -> tuple[float, float]:
         e = watched[which[0]]
@@ -263,7 +278,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                      + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
             if stage_solve is None and opts["compiled"] is True:
                 stage_solve = compiled_stage_solver(scene, modes)  # modes: the live list
-            if stage_solve is None:
+            if stage_solve is None or cones:  # (locks in parallel: the cone split)
                 sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale,
                                               max_iters=max_newton, cones=cones or None)
             else:
@@ -276,8 +291,22 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         stats["max_newton_iterations"] = max(stats["max_newton_iterations"], its)
         if sol is None:
             stats["rejected"] += 1
-            h *= 0.5
             h_acc = None
+            if target is not None and target[1] > 0.0:
+                # a landing step that Newton cannot take: no solution that far, the
+                # bracket ends there (halving alone went below the step that held, to 0)
+                target[3], target[5] = h, target[5] + 1
+                h = 0.5 * (target[1] + h)
+                continue
+            h *= 0.5
+            if target is not None and h < h_min:  # no landing step holds: the event is
+                target, dF_n = None, None  # at t itself, the full laws choose the mode
+                old = list(modes)
+                stop = at_event(t, h_good, "guard")
+                if stop:
+                    status, message = stop
+                    break
+                kept, h = modes == old, h_good
             continue
         if got is None:
             t_n0 = math.nextafter(t, math.inf) if (bi > 0 and t == breaks[bi - 1]) else t
@@ -299,8 +328,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h = h / quot
             h_acc = None
             continue
-        # (the compiled attempt has found the crossing by the same algorithm)
-        hit = crossing(sol, h) if got is None else hit_c
+        # (the compiled attempt has found the crossing by the same algorithm; after an
+        # event it saw the probe's forces: test here from the stage forces)
+        hit = crossing(sol, h) if got is None or ms.forces_from_probe else hit_c
         if target is not None:  # a landing step: bracket the event by end-of-step values
             if hit is not None and hit[1] != target[0] and hit[0] < 1.0:
                 # another guard crosses first; at t itself: no landing, the event is at t
@@ -348,8 +378,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0, h]
             h = s_hit * h
             continue
+        F_0 = start_forces(sol) if checked else F
         folded = [e for e in checked
-                  if fold_crossed(kernels[e], *system.element_nodes(sol, h, x, v, F, e))]
+                  if fold_crossed(kernels[e], *system.element_nodes(sol, h, x, v, F_0, e))]
         if folded:
             el = scene.elements[folded[0]]
             status, message = Status.BRANCH_LOST, (
@@ -367,15 +398,11 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                     s_ += A_[k][j] * sol[j * n + i]
                 Xk.append(x[i] + h * s_)
             Y.append(Xk + sol[k * n:k * n + N] + sol[k * n + N:k * n + n])
-        F0 = F
-        if ms.forces_from_probe:
-            # the forces at t came from the event's vanishing probe step, whose round-off
-            # is magnified by m / h_probe; the stage forces hold the laws and the balance,
-            # so the dense output starts from their quadratic (exact for a linear relation
-            # such as a load shared by locked elements)
-            F0 = [sum(w * Yk[2 * N + e] for w, Yk in zip(START_WEIGHTS, Y, strict=True))
-                  for e in range(E)]
-            ms.forces_from_probe = False
+        # the stage forces hold the laws and the balance, so after an event the dense
+        # output starts from their quadratic (exact for a linear relation such as a load
+        # shared by locked elements), not from the probe's forces (see start_forces)
+        F0 = start_forces(sol)
+        ms.forces_from_probe = False
         dense.add(t, h, x + v + F0, Y)
         dF_n = system.end_slope(sol, h, F)
         event_here = target is not None

@@ -16,7 +16,7 @@ from collections import deque
 from ..scene import Mass, Scene
 from .adaptive_setup import accumulating, too_many
 from .events import apply_impacts, hold_rate_locks, lock_cones, select_modes, snap_to_locks
-from .locks import IntervalLog, cycles_among, indeterminate_elements
+from .locks import IntervalLog, cycles_among, indeterminate_elements, prefer_locks
 from .mode_guess import try_modes
 from .status import Event, Status
 
@@ -73,8 +73,8 @@ class ModeState:
         self.modes[:] = new
         self.watched.clear()
         for e in range(E):
-            self.kernels[e] = lbs[e].kernel_for(new[e])
-            self.guards[e] = lbs[e].guards_for(new[e])
+            self.kernels[e] = lbs[e].stage_kernel_for(new[e])
+            self.guards[e] = lbs[e].stage_guards_for(new[e])
             if lbs[e].count > 1:
                 self.watched.append(e)
         self.cones.clear()
@@ -109,6 +109,7 @@ class ModeState:
         if isinstance(sel, str):
             return sel
         new, v_p, F_p = sel
+        new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked
         scale_v = atol + rtol * max(abs(vi) for vi in v)
         hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"])
         if isinstance(hit, str):
@@ -202,7 +203,7 @@ def _laws_hold(lbs: list, modes: list[int], q: list[float], F: list[float]) -> b
     """Whether every element's law holds at ``(q_e, F_e)`` on its branch, to ``1e-8``
     relative to the size of its terms."""
     for e, (qe, Fe) in enumerate(zip(q, F, strict=True)):
-        R, Rq, RF = lbs[e].kernel_for(modes[e])(qe, Fe)
+        R, Rq, RF = lbs[e].stage_kernel_for(modes[e])(qe, Fe)
         if not abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe)):
             return False
     return True

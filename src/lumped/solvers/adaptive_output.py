@@ -296,7 +296,8 @@ def output_data(rows: Rows, dense: DenseOutput, dt: float | None, t_end: float,
     if dt is not None and len(dense):
         grid = np.arange(steps_for(dt, t_end) + 1) * dt
         grid = grid[grid <= t + 1e-12 * max(1.0, t)]
-        grid[-1] = min(grid[-1], t)
+        T0, H = dense._arrays()[:2]  # the last step ends at t_n + h, an ulp from t at times
+        grid[-1] = min(grid[-1], t, T0[-1] + H[-1])
         data = dense(grid)
         data[0] = rows.first()
     return data

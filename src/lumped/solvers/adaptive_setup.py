@@ -62,20 +62,23 @@ def scope_error(scene: Scene) -> str | None:
 
     A branch whose ``dR/dF`` is unbounded at its boundary
     (:attr:`lumped.codegen.branches.BranchInfo.steep`: Herschel-Bulkley with ``n < 1`` at
-    its yield force, where ``dq/dF -> infinity``) makes the stage Newton of a step that
-    starts on that boundary fail at every step size: ``radau5`` refuses such a scene
-    rather than stop mid-run, and ``auto`` runs ``bdf2`` there (its globalised Newton
-    takes such points).
+    its yield force, where ``dq/dF -> infinity``) is solved in its inverse form
+    ``F = G(q)`` (:attr:`~lumped.codegen.branches.BranchInfo.stage`), smooth there. A
+    steep branch with no such form would make the stage Newton of a step that starts on
+    that boundary fail at every step size: ``radau5`` refuses such a scene rather than
+    stop mid-run, and ``auto`` runs ``bdf2`` there (its globalised Newton takes such
+    points).
     """
     from ..codegen.branches import law_branches
 
     for el in scene.elements:
         lb = law_branches(el.law)
         for info in lb.info:
-            if info.steep:
+            if info.steep and info.stage is None:
                 return (f"method 'radau5' does not take element {el.name!r}: branch "
                         f"{info.index} of its law {el.law_name!r} has an unbounded dR/dF "
-                        f"({info.dR_dF}) at its boundary; use 'bdf2' (or 'auto')")
+                        f"({info.dR_dF}) at its boundary and no inverse form F = G(q); "
+                        "use 'bdf2' (or 'auto')")
     return None
 
 

@@ -23,7 +23,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from functools import lru_cache
 
-__all__ = ["cyclic_elements", "cycles_among", "indeterminate_elements", "IntervalLog"]
+__all__ = ["cyclic_elements", "cycles_among", "indeterminate_elements", "IntervalLog",
+           "prefer_locks"]
 
 @lru_cache(maxsize=256)
 def _on_cycles(n_nodes: int, edges: tuple[tuple[int, int, int], ...]) -> tuple[int, ...]:
@@ -116,3 +117,38 @@ class IntervalLog:
         for name, (t0, t1) in self._open.items():
             out.setdefault(name, []).append((t0, t1))
         return out
+
+
+def prefer_locks(scene, branches: Sequence, modes: Sequence[int], v: Sequence[float],
+                 F: Sequence[float]) -> list[int]:
+    """``modes`` with every dashpot that sits *exactly* on a rate lock put on that lock.
+
+    A dashpot whose rate ``q`` at the velocities ``v`` equals the value ``L`` of one of
+    its law's locking branches bit for bit (:attr:`BranchInfo.locks`, ``lock_value``;
+    ``q = 0`` for a stuck dashpot), and whose force ``F_e`` that branch admits up to
+    ``sqrt(eps) (1 + |F_e|)`` (its guards at ``(L, F_e)``), is on the lock: a slip branch
+    at zero rate and the stuck branch at its yield force are the same point of the law.
+    The mode probe at an event may read such an element as slipping when a load is shared
+    by locks in parallel (its Newton puts one element's force a few ulps beyond its
+    yield force, the other's rate fixes the common rate to 0). Held on a slip branch that
+    ends flat (Herschel-Bulkley ``n > 1``: ``dq/dF = 0`` at the yield force) the stage
+    Newton is singular there and the step fell to its floor. A rate that is not exactly
+    ``L`` (a break-out, however slow) keeps the probe's branch.
+    """
+    eps_slack = 1.4901161193847656e-08  # sqrt(eps)
+    out = list(modes)
+    ea, eb = scene.elem_a, scene.elem_b
+    for e, el in enumerate(scene.elements):
+        lb = branches[e]
+        if el.kind != "dashpot" or lb.info[out[e]].locks:
+            continue
+        a, b = ea[e], eb[e]
+        rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        for info in lb.info:
+            if not info.locks or info.lock_value is None or rate != info.lock_value:
+                continue
+            gs = lb.guards_for(info.index)(info.lock_value, F[e])
+            if all(g >= -eps_slack * (1.0 + abs(F[e])) for g in gs):
+                out[e] = info.index
+                break
+    return out

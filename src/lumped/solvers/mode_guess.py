@@ -71,7 +71,7 @@ def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float
     N, E = len(scene.nodes), len(scene.elements)
     n = N + E
     ea, eb = scene.elem_a, scene.elem_b
-    kernels = [branches[e].kernel_for(modes[e]) for e in range(E)]
+    kernels = [branches[e].stage_kernel_for(modes[e]) for e in range(E)]
     spring = [el.kind == "spring" for el in scene.elements]
     cm = [nd.m / h_p if isinstance(nd, Mass) else 0.0 for nd in scene.nodes]
     u = list(v) + list(F)

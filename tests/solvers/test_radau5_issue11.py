@@ -1,0 +1,200 @@
+"""Regressions of ``radau5`` from issue 11 (session 3): a tangential break-out that
+chattered, hard points of a law (Herschel-Bulkley ``n < 1``), and networks drawn by the
+random-network property suite (``tests/solvers/test_random_networks.py``) that used to
+stop; each checks the property it broke directly."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from lumped import simulate
+from lumped.bench.network_scenes import bingham_chain
+from lumped.laws import get_law
+from lumped.scene import Element, Junction, Mass, Scene
+from lumped.scene.forcing import SineBurst
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_tangential_break_out_does_not_chatter(compiled: bool) -> None:
+    # d1 breaks out at t = 0.858 with its load crossing the yield force slowly: the slip
+    # rate grows like t^2, far below the round-off of the force. The first slip step's
+    # polynomial started from the mode probe's force (off by m / h_probe times its
+    # round-off), which put a false guard crossing into the step: slip -> stick -> slip
+    # every 3e-10 s, and the run stopped with TOO_MANY_EVENTS
+    scene = bingham_chain(3)
+    t_end = 0.87 if not compiled else 1.0  # (the Python loop: the interval that matters)
+    sol = simulate(scene, method="radau5", t_end=t_end, rtol=1e-12, atol=1e-15,
+                   compiled=compiled)
+    assert sol.ok, sol.message
+    d1 = [ev for ev in sol.events if ev.element == "d1"]
+    assert len(d1) <= 3, d1
+    # it slips from the break-out on: negative rate, force beyond the yield force
+    late = sol.t > 0.8581
+    assert np.all(sol.v["m1"][late] < 0.0)
+    assert np.all(sol.F["d1"][late] < -1.5)
+
+
+def _hb_stop_exact(t: np.ndarray, tau: float, v0: float) -> tuple[np.ndarray, np.ndarray]:
+    """A unit mass on a Herschel-Bulkley dashpot (gamma = 1, n = 1/2) to ground, sliding
+    at ``v0 > 0``: ``F = tau + v^2``, so ``v' = -(tau + v^2)`` and, with ``a = sqrt(tau)``,
+    ``phi = atan(v0 / a)``: ``v = a tan(phi - a t)``, ``x = log(cos(phi - a t) / cos(phi))``
+    until ``v = 0`` at ``t* = phi / a``; then it sticks (no load: ``|F| = 0 <= tau``)."""
+    a = np.sqrt(tau)
+    phi = np.arctan(v0 / a)
+    s = np.minimum(t, phi / a)
+    return np.log(np.cos(phi - a * s) / np.cos(phi)), a * np.tan(phi - a * s)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_herschel_bulkley_below_one_against_its_exact_stop(compiled: bool) -> None:
+    # n < 1: dq/dF is infinite at the yield force, where the slip ends. radau5 used to
+    # refuse the scene; the slip branch is now solved in its inverse form F = tau + (q /
+    # gamma)^(1/n), read from the law's expression (BranchInfo.stage)
+    tau, v0 = 0.25, 1.0
+    scene = Scene([Mass("m", m=1.0, v0=v0)],
+                  [Element("d", get_law("herschel_bulkley").bind(gamma=1.0, tau=tau, n=0.5),
+                           "ground", "m")])
+    sol = simulate(scene, method="radau5", t_end=3.0, rtol=1e-8, atol=1e-11,
+                   compiled=compiled)
+    assert sol.ok, sol.message
+    x, v = _hb_stop_exact(sol.t, tau, v0)
+    assert np.abs(sol.x["m"] - x).max() <= 1e-6
+    assert np.abs(sol.v["m"] - v).max() <= 1e-6
+    (stop,) = [ev for ev in sol.events if ev.element == "d"]
+    assert abs(stop.t - np.arctan(v0 / np.sqrt(tau)) / np.sqrt(tau)) <= 1e-8
+    assert np.all(sol.v["m"][sol.t > stop.t] == 0.0)  # stuck exactly
+
+
+@pytest.mark.parametrize("n", [0.3, 0.8])
+def test_herschel_bulkley_below_one_loops_agree(n: float) -> None:
+    # the compiled loop takes the inverse form from the generated module: the same numbers
+    scene = Scene([Mass("m", m=1.0, x0=0.2, v0=1.0)],
+                  [Element("d", get_law("herschel_bulkley").bind(gamma=1.0, tau=0.5, n=n),
+                           "ground", "m"),
+                   Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m")],
+                  {"m": SineBurst(3.0, 2 * math.pi, 3.0)})
+    ours = simulate(scene, method="radau5", t_end=2.0, rtol=1e-7, compiled=False)
+    compiled = simulate(scene, method="radau5", t_end=2.0, rtol=1e-7, compiled=True)
+    assert ours.ok and compiled.ok
+    assert compiled.stats.pop("loop") == "compiled"
+    ours.stats.pop("loop")
+    assert np.array_equal(compiled.data, ours.data) and compiled.stats == ours.stats
+    assert len(ours.events) >= 3
+
+
+def _network_check(scene: Scene) -> None:
+    from solvers.test_random_networks import check_network
+
+    for compiled in (False, True):
+        check_network(scene, "radau5", compiled=compiled)
+
+
+def test_a_landing_step_newton_cannot_take_ends_the_bracket() -> None:
+    # Herschel-Bulkley n = 0.3 at a junction with a Coulomb element: the stage Newton
+    # failed on the landing steps beyond a slip's end, and halving alone took the step
+    # below the one that held, down to 0: ZeroDivisionError
+    scene = Scene(
+        [Mass("m0", m=4.334013560954615, x0=-0.4797260856116278, v0=-0.35170307394384315),
+         Mass("m1", m=0.4232307618850831, x0=0.05170403855817729, v0=0.0),
+         Junction("j2", x0=0.575065479480009)],
+        [Element("e0", get_law("herschel_bulkley").bind(
+            gamma=1.2932675437969818, tau=0.01870435536284099, n=0.3), "ground", "m0"),
+         Element("e1", get_law("newtonian").bind(c=0.01735846451432035), "ground", "m1"),
+         Element("e2", get_law("herschel_bulkley").bind(
+             gamma=0.15626014192724572, tau=0.1, n=0.3), "m0", "j2"),
+         Element("e3", get_law("implicit_spring").bind(
+             k=23.70821017783261, L0=1.0, F0=12.172581027898621), "m1", "j2"),
+         Element("e4", get_law("coulomb").bind(tau=0.13065950489220737, r=72.61155647959043),
+                 "j2", "m1")])
+    _network_check(scene)
+
+
+def test_the_mode_probe_falls_back_on_the_balance_sweeps() -> None:
+    # three Coulomb elements on a loop through ground (m1, m2) stick together: the mode
+    # probe's Newton and its restarts diverged at every probe size ("no motion
+    # continues"); the balance sweeps of the fixed-step methods solve it
+    scene = Scene(
+        [Junction("j0", x0=-2.3180037170759898e-42),
+         Mass("m1", m=1.0, x0=4e-16, v0=-0.4745869781242571),
+         Mass("m2", m=0.11711915097129785, x0=1.2941885356537802e-173,
+              v0=-0.9921624563663431),
+         Mass("m3", m=1.0, x0=-0.08062488472053508, v0=4.210843702431672e-108)],
+        [Element("e0", get_law("herschel_bulkley").bind(gamma=0.5366265777189618, tau=1.0,
+                                                        n=1.0), "ground", "j0"),
+         Element("e1", get_law("coulomb").bind(tau=1.0, r=2.325244788159142), "ground", "m1"),
+         Element("e2", get_law("coulomb").bind(tau=1.0, r=1.0), "ground", "m2"),
+         Element("e3", get_law("implicit_spring").bind(k=1.0, L0=1.0, F0=1.0), "m1", "m3"),
+         Element("e4", get_law("linear_spring").bind(k=3.2289378946241682), "m1", "ground"),
+         Element("e5", get_law("coulomb").bind(tau=0.010738291444455803, r=1.0000000000000022),
+                 "m1", "m2"),
+         Element("e6", get_law("linear_spring").bind(k=0.5060153969703686), "j0", "m1")])
+    _network_check(scene)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_slip_branch_at_zero_rate_beside_a_stuck_dashpot_is_held_stuck(compiled: bool):
+    # m1 is held by a Herschel-Bulkley n = 1.5 dashpot (tau 1) and a Bingham dashpot
+    # (tau 0.1) to ground under a load of 1.00001: both stick. The mode probe put the
+    # load on the first at a few ulps beyond its yield force at rate exactly 0 (the
+    # second's stuck row fixes it) and read it as slipping; held on that branch, which
+    # ends flat (dq/dF = 0), the stage Newton was singular: 15 000 rejected steps in
+    # 0.08 s. A dashpot exactly at a lock's rate with a force the lock admits is locked
+    scene = Scene(
+        [Mass("m0", m=3.5663700934436546, x0=0.41111799647731373, v0=0.99999),
+         Mass("m1", m=1.0, x0=0.870186492140621, v0=2.6114050307235478e-46)],
+        [Element("e0", get_law("newtonian").bind(c=0.42866553621096304), "ground", "m0"),
+         Element("e1", get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=1.5),
+                 "ground", "m1"),
+         Element("e2", get_law("bingham").bind(gamma=1.0, tau=0.1), "m1", "ground"),
+         Element("e3", get_law("newtonian").bind(c=1.0000230261160268), "m1", "m0")])
+    for h in (0.025, 0.0125, 0.00625):
+        sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                       compiled=compiled, max_steps=2000)
+        assert sol.ok, sol.message
+        assert np.all(sol.v["m1"][1:] == 0.0)  # stuck from the start, exactly
+        assert np.all(np.abs(sol.F["e1"]) <= 1.0 + 1e-9)
+        assert np.all(np.abs(sol.F["e2"]) <= 0.1 + 1e-9)
+
+
+def test_the_output_grid_ends_inside_the_last_step() -> None:
+    # the last step ends at t_n + h, which can be an ulp short of t_end = n dt: sampling
+    # the dense output at n dt raised "outside the solved interval"
+    scene = Scene(
+        [Mass("m0", m=0.2175388664981012, x0=0.8370649725510888, v0=0.0),
+         Mass("m1", m=9.238299295139104, x0=0.0, v0=0.0)],
+        [Element("e0", get_law("bingham").bind(gamma=0.2175388664981012, tau=1.0),
+                 "ground", "m0"),
+         Element("e1", get_law("bingham").bind(gamma=0.1, tau=0.2175388664981012),
+                 "ground", "m1")])
+    from solvers.test_random_networks import grid
+
+    dt, t_end = grid(scene)
+    for k in range(3):
+        h = dt / 2**k
+        sol = simulate(scene, method="radau5", dt=h, t_end=t_end, rtol=h**2, atol=h**3,
+                       compiled=False)
+        assert sol.ok and len(sol.t) == round(t_end / h) + 1
+        assert abs(sol.t[-1] - t_end) <= 1e-15 * t_end
+
+
+def test_a_landing_with_no_step_that_holds_is_an_event_at_t() -> None:
+    # strings and Herschel-Bulkley n = 0.3 at two junctions: no landing step held, the
+    # step was halved down to 0 (ZeroDivisionError); below the step floor the event is
+    # taken at t itself and the full laws choose the mode
+    scene = Scene(
+        [Mass("m0", m=0.15613776915483743, x0=4.4103293327607247e-116, v0=-2.0),
+         Junction("j1", x0=1e-300), Junction("j2", x0=0.0001)],
+        [Element("e0", get_law("string_spring").bind(k=0.5724323862878972,
+                                                     L=0.0021920241198278836), "ground", "m0"),
+         Element("e1", get_law("herschel_bulkley").bind(
+             gamma=1.0000000000023026, tau=0.13385399000799353, n=0.3), "ground", "j1"),
+         Element("e2", get_law("herschel_bulkley").bind(
+             gamma=8.100423738830749, tau=0.01572365453562612, n=0.3), "j1", "j2"),
+         Element("e3", get_law("implicit_spring").bind(k=1.0, L0=0.14884078364216793, F0=1.0),
+                 "j2", "j1"),
+         Element("e4", get_law("string_spring").bind(k=1.0, L=1.0), "j1", "m0"),
+         Element("e5", get_law("coulomb").bind(tau=1.0, r=1.0), "j2", "ground")])
+    _network_check(scene)
