@@ -90,6 +90,17 @@ class DenseOutput:
             self._cache = (n, *self._blocks[0])
         return self._cache[1:]
 
+    def span(self) -> tuple[float, float]:
+        """``(t_lo, t_hi)``: the interval the steps and the held (stuck) segments cover
+        (``(inf, -inf)`` when empty)."""
+        t_lo, t_hi = math.inf, -math.inf
+        if self._count:
+            T0, H = self._arrays()[:2]
+            t_lo, t_hi = T0[0], T0[-1] + H[-1]
+        for s0, s1, _ in self._static:
+            t_lo, t_hi = min(t_lo, s0), max(t_hi, s1)
+        return t_lo, t_hi
+
     def __call__(self, t) -> np.ndarray:
         """Rows ``(t, x_i, v_i per node, F_e)`` at the times ``t`` (vectorised). At a step
         boundary the later step is used (right limits: the forces after an event)."""
@@ -97,13 +108,9 @@ class DenseOutput:
         N = self.N
         if not len(self):
             raise ValueError("no step was taken: the dense output is empty")
+        t_lo, t_hi = self.span()
         if self._count:
             T0, H, Y0, D = self._arrays()
-            t_lo, t_hi = T0[0], T0[-1] + H[-1]
-        else:
-            t_lo, t_hi = math.inf, -math.inf
-        for s0, s1, _ in self._static:
-            t_lo, t_hi = min(t_lo, s0), max(t_hi, s1)
         bad = ~((ts >= t_lo) & (ts <= t_hi))
         if bad.any():
             raise ValueError(f"`t` = {ts[bad][0]!r} is outside the solved interval "
@@ -296,8 +303,8 @@ def output_data(rows: Rows, dense: DenseOutput, dt: float | None, t_end: float,
     if dt is not None and len(dense):
         grid = np.arange(steps_for(dt, t_end) + 1) * dt
         grid = grid[grid <= t + 1e-12 * max(1.0, t)]
-        T0, H = dense._arrays()[:2]  # the last step ends at t_n + h, an ulp from t at times
-        grid[-1] = min(grid[-1], t, T0[-1] + H[-1])
+        # the last step ends at t_n + h, an ulp from t at times
+        grid[-1] = min(grid[-1], t, dense.span()[1])
         data = dense(grid)
         data[0] = rows.first()
     return data
