@@ -55,7 +55,11 @@ def test_generic_equals_closed_form(p, formula):
     traj = integrate(osc, x0=p["x0"], v0=p["v0"], forcing=forcing, dt=p["dt"],
                      n_steps=gen.stats["steps"], method=formula)
     ref = np.column_stack([traj.t, traj.x, traj.v, traj.F_s, traj.F_d])
-    assert_columns_close(gen.data, ref)
+    # both forces come out of the node's balance, so each carries the round-off of the
+    # largest force there (a stop: F_d = 2.46 from terms of 270, 1e-11 apart)
+    scale = np.abs(ref).max(axis=0)
+    scale[3:] = scale[3:].max()
+    assert_columns_close(gen.data, ref, scale=scale)
 
 
 def test_closed_methods_reproduce_integrate_and_flip_orientation():
