@@ -326,21 +326,27 @@ def scene_module(scene) -> tuple[ModuleType, list[int]]:
     with _LOCK:
         module = _MODULES.get(digest)
         if module is None:
-            name = f"lumped_jit_{digest}"
-            path = cache_dir() / "jit" / f"{name}.py"
-            try:
-                _write_once(path, source)
-            except OSError as err:  # an unwritable cache: compile, but nothing is kept
-                warnings.warn(f"lumped: cannot write the compiled-code cache {path.parent} "
-                              f"({err}); using a temporary directory", stacklevel=2)
-                path = Path(tempfile.mkdtemp(prefix="lumped-jit-")) / f"{name}.py"
-                _write_once(path, source)
-            spec = importlib.util.spec_from_file_location(name, path)
-            module = importlib.util.module_from_spec(spec)
-            sys.modules[name] = module
-            spec.loader.exec_module(module)
-            _MODULES[digest] = module
+            module = _MODULES[digest] = import_generated(f"lumped_jit_{digest}", source)
     return module, law_index
+
+
+def import_generated(name: str, source: str) -> ModuleType:
+    """Write ``source`` to the disk cache as module ``name`` (once) and import it; an
+    unwritable cache falls back to a temporary directory, with a warning (nothing is
+    kept). The caller holds ``_LOCK`` and records the module."""
+    path = cache_dir() / "jit" / f"{name}.py"
+    try:
+        _write_once(path, source)
+    except OSError as err:  # an unwritable cache: compile, but nothing is kept
+        warnings.warn(f"lumped: cannot write the compiled-code cache {path.parent} "
+                      f"({err}); using a temporary directory", stacklevel=3)
+        path = Path(tempfile.mkdtemp(prefix="lumped-jit-")) / f"{name}.py"
+        _write_once(path, source)
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
 
 
 @dataclass(frozen=True)

@@ -67,8 +67,6 @@ iteration count of one step, and the steps taken.
 from __future__ import annotations
 
 import hashlib
-import importlib.util
-import sys
 from types import ModuleType
 
 from .jit import (
@@ -76,9 +74,8 @@ from .jit import (
     _MODULES,
     _kernel_sources,
     _rename,
-    _write_once,
-    cache_dir,
     end_values_source,
+    import_generated,
 )
 
 __all__ = ["MAX_FAST_ITERATIONS", "MAX_FAST_UNKNOWNS", "fast_source", "fast_module"]
@@ -323,14 +320,8 @@ def fast_module(scene, key: tuple | None = None) -> ModuleType:
     with _LOCK:
         module = _MODULES.get(digest)
         if module is None:
-            name = f"lumped_jitfast_{digest[5:]}"
-            path = cache_dir() / "jit" / f"{name}.py"
-            _write_once(path, source)
-            spec = importlib.util.spec_from_file_location(name, path)
-            module = importlib.util.module_from_spec(spec)
-            sys.modules[name] = module
-            spec.loader.exec_module(module)
-            _MODULES[digest] = module
+            module = _MODULES[digest] = import_generated(f"lumped_jitfast_{digest[5:]}",
+                                                         source)
         if key is not None:
             _BY_KEY[key] = module
     return module
