@@ -22,19 +22,9 @@ What the event model and the adaptive method use:
   element's force is set by the rest of the system.  Detected from the law's expression,
   never from its name.
 
-Guards from conditions (``a``, ``b`` the two sides of a relation)::
-
-    a < b,  a <= b   required true  ->  g = b - a       required false -> g = a - b
-    a > b,  a >= b   required true  ->  g = a - b       required false -> g = b - a
-    And(c1, c2)      required true  ->  the guards of c1 and the guards of c2
-    Or(c1, c2)       required true  ->  one guard  max(min(guards of c1), min(guards of c2))
-    Not(c)           the guards of c with the requirement flipped
-    ITE(c, a, b)     as Or(And(c, a), And(Not(c), b))
-
-``Eq``/``Ne`` conditions hold on sets of measure zero and give no guard.  Branches whose
-conditions contradict each other (the same condition required true and false, or
-bounds on one variable with an empty intersection, e.g. ``F >= 0`` false and ``F > 0``
-true) are dropped.
+The guards are built from the branch's conditions in :mod:`lumped.codegen.guards`, which
+also drops branches whose conditions contradict each other; the inverse form of a steep
+branch comes from :mod:`lumped.codegen.stage_forms`.
 
 Examples
 --------
@@ -54,7 +44,6 @@ Examples
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
@@ -62,7 +51,9 @@ import sympy as sp
 from sympy.core.parameters import distribute
 
 from .emit import _build, _Printer
+from .guards import compile_guards, feasible_path
 from .rewrite import magnitude_expression
+from .stage_forms import inverse_form
 
 __all__ = ["BranchInfo", "LawBranches", "law_branches"]
 
@@ -96,9 +87,10 @@ class BranchInfo:
         where that expression vanishes, e.g. Herschel-Bulkley with ``n < 1`` at its yield
         force (``dq/dF -> infinity``), or a pole.
     stage : tuple of sympy.Expr or None
-        For a steep branch that can be solved for ``F`` (:func:`_inverse_form`), the
-        residual in its *inverse form* ``F - G(q)`` with its derivatives in ``q`` and
-        ``F``: the same zero set on the branch, smooth where the forward form is steep
+        For a steep branch that can be solved for ``F``
+        (:func:`~lumped.codegen.stage_forms.inverse_form`), the residual in its
+        *inverse form* ``F - G(q)`` with its derivatives in ``q`` and ``F``: the same
+        zero set on the branch, smooth where the forward form is steep
         (Herschel-Bulkley ``n < 1``: ``F = tau + (q/gamma)^(1/n)``, ``dG/dq -> 0`` at
         ``q = 0``), then the steep power's base ``s F + d`` and its value ``w(q)`` on
         the branch (``base = w^(1/p)``, continued oddly). ``None`` otherwise;
@@ -129,7 +121,7 @@ class LawBranches:
     def __init__(self, residual: sp.Expr) -> None:
         with distribute(False):
             leaves = list(_leaves(residual, ()))
-        keep = [_feasible(path) for _, path in leaves]
+        keep = [feasible_path(path) for _, path in leaves]
         if not any(keep):
             raise ValueError(f"no branch of {residual} is admissible")
         infos, number = [], []
@@ -145,7 +137,7 @@ class LawBranches:
                         for p in sp.preorder_traversal(dF))
             infos.append(BranchInfo(len(infos), expr, dq, dF, path, bool(locks),
                                     _lock_value(expr) if locks else None, steep,
-                                    _inverse_form(expr) if steep else None))
+                                    inverse_form(expr) if steep else None))
         self.info: tuple[BranchInfo, ...] = tuple(infos)
         self.count = len(infos)
         self.branch: Callable[[float, float], int] = _build_selector(
@@ -191,7 +183,7 @@ class LawBranches:
             return self.guards_for(i)
         hit = self._guards.get(-1 - i)
         if hit is None:
-            hit = self._guards[-1 - i] = _compile_guards(info.path, info.stage[3:])
+            hit = self._guards[-1 - i] = compile_guards(info.path, info.stage[3:])
         return hit
 
     def guards_for(self, i: int) -> Callable[[float, float], tuple[float, ...]]:
@@ -200,7 +192,7 @@ class LawBranches:
         i = self._check(i)
         hit = self._guards.get(i)
         if hit is None:
-            hit = self._guards[i] = _compile_guards(self.info[i].path)
+            hit = self._guards[i] = compile_guards(self.info[i].path)
         return hit
 
     def _kernel(self, i: int, *, guard: bool, stage: bool = False) -> Callable:
@@ -381,158 +373,3 @@ def _lock_value(expr: sp.Expr) -> float | None:
     except (TypeError, ValueError):
         return None
     return out + 0.0  # no negative zero
-
-
-def _guard_codes(cond: sp.Basic, want: bool, printer: _Printer) -> list[str] | None:
-    """Guard code strings for ``cond == want``: all must be ``> 0``; ``None`` when it
-    always holds, ``["-1.0"]`` when it never does."""
-    if cond is sp.true or cond is sp.false:
-        return None if (cond is sp.true) == want else ["-1.0"]
-    if isinstance(cond, sp.Not):
-        return _guard_codes(cond.args[0], not want, printer)
-    if isinstance(cond, sp.ITE):
-        c, a, b = cond.args
-        cond = sp.Or(sp.And(c, a, evaluate=False), sp.And(sp.Not(c), b, evaluate=False),
-                     evaluate=False)
-    if isinstance(cond, sp.And | sp.Or):
-        parts = [_guard_codes(a, want, printer) for a in cond.args]
-        if isinstance(cond, sp.And) == want:  # conjunction: every part must hold
-            out = [g for p in parts if p is not None for g in p]
-            return out or None
-        if any(p is None for p in parts):  # disjunction with an always-true part
-            return None
-        alts = [p[0] if len(p) == 1 else f"min({', '.join(p)})" for p in parts]
-        return [f"max({', '.join(alts)})"]
-    if isinstance(cond, sp.core.relational.Relational):
-        if cond.rel_op in ("==", "!="):
-            return None
-        lhs, rhs = (f"({printer.doprint(side)})" for side in (cond.lhs, cond.rhs))
-        less = cond.rel_op in ("<", "<=")
-        return [f"{rhs} - {lhs}" if less == want else f"{lhs} - {rhs}"]
-    raise ValueError(f"unsupported condition {cond} ({type(cond).__name__})")
-
-
-def _root_guard(code: str, base: sp.Expr, w: sp.Expr, printer: _Printer) -> str:
-    """``code`` (a guard), or the code of ``w`` when the guard is ``c * base``, ``c > 0``."""
-    try:
-        g = sp.sympify(code, locals={"q": _Q, "F": _F, "max": sp.Max, "min": sp.Min})
-    except (sp.SympifyError, TypeError, SyntaxError):
-        return code
-    ratio = sp.simplify(g / base)
-    if ratio.is_number and ratio.is_positive:
-        return printer.doprint(w)
-    return code
-
-
-def _compile_guards(path: _Path, root: tuple[sp.Expr, sp.Expr] | None = None
-                    ) -> Callable[[float, float], tuple[float, ...]]:
-    """Compile ``guards(q, F) -> tuple`` for a branch's path (``nan`` where undefined);
-    with ``root = (base, w)`` a guard that is a positive multiple of ``base`` becomes
-    ``w`` (:meth:`LawBranches.stage_guards_for`)."""
-    printer = _Printer()
-    codes: list[str] = []
-    for cond, want in path:
-        codes.extend(_guard_codes(cond, want, printer) or [])
-    if root is not None:
-        codes = [_root_guard(code, *root, printer) for code in codes]
-    body = "(" + "".join(f"{c}, " for c in codes) + ")"
-    nans = "(" + "math.nan, " * len(codes) + ")"
-    source = (f"def guards(q, F):\n    try:\n        return {body}\n"
-              f"    except (ArithmeticError, ValueError):\n        return {nans}\n")
-    namespace: dict[str, object] = {
-        "math": math, "__builtins__": {"max": max, "min": min, "ArithmeticError":
-                                       ArithmeticError, "ValueError": ValueError}}
-    exec(compile(source, "<lumped guards>", "exec"), namespace)  # noqa: S102 (our own source)
-    fn = namespace["guards"]
-    fn.__source__ = source  # type: ignore[attr-defined]
-    fn.codes = tuple(codes)  # type: ignore[attr-defined]
-    return fn  # type: ignore[return-value]
-
-
-def _inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
-    r"""A steep branch ``R = alpha(q) + beta (s F + d)^p`` (``p`` a non-integer number,
-    ``beta, s, d`` numbers, ``F`` nowhere else) solved for ``F``:
-    ``(F - G(q), -G'(q), 1, s F + d, w)`` with
-
-    .. math:: G(q) = (w^{1/p} - d) / s,\qquad w = -\alpha(q) / \beta,
-
-    and ``w^{1/p}`` continued oddly to ``w < 0`` (``-(-w)^{1/p}``), so that an iterate
-    beyond the branch's end gives a force beyond its guard (an event) rather than ``nan``.
-    ``G'(q) = r |w|^{r - 1} w'(q) / s`` (``r = 1/p``) is bounded where ``dR/dF`` is not
-    (``p < 1``: ``r > 1``). ``None`` for any other shape."""
-    pows = {node for node in sp.preorder_traversal(expr)
-            if isinstance(node, sp.Pow) and node.base.has(_F)}
-    if len(pows) != 1:
-        return None
-    (P,) = pows
-    base, p = P.base, P.exp
-    if not p.is_number or p.is_integer or not p.is_positive:
-        return None
-    slope = sp.diff(base, _F)
-    shift = sp.expand(base - slope * _F)
-    if not (slope.is_number and slope != 0 and shift.is_number):
-        return None
-    X = sp.Dummy("X")
-    rest = expr.xreplace({P: X})
-    if rest.has(_F):
-        return None
-    beta = sp.diff(rest, X)
-    alpha = sp.expand(rest - beta * X)
-    if not (beta.is_number and beta != 0) or alpha.has(X) or not alpha.has(_Q):
-        return None
-    w = -alpha / beta
-    r = 1 / p
-    root = sp.Piecewise((w ** r, w >= 0), (-((-w) ** r), True))
-    slope_root = sp.Piecewise((r * w ** (r - 1), w >= 0), (r * (-w) ** (r - 1), True))
-    G = (root - shift) / slope
-    dG = slope_root * sp.diff(w, _Q) / slope
-    return _F - G, -dG, sp.S.One, base, w
-
-
-# ---------------------------------------------------------------------------------------
-# Pruning: paths whose conditions contradict each other
-
-
-def _affine_bound(cond: sp.Basic, want: bool):
-    """``(symbol, lo, lo_closed, hi, hi_closed)`` when ``cond == want`` is an interval of
-    one symbol (``a s + b  op  0`` with numbers ``a != 0, b``); else ``None``."""
-    if not isinstance(cond, sp.core.relational.Relational) or cond.rel_op in ("==", "!="):
-        return None
-    diff = sp.expand(cond.lhs - cond.rhs)
-    syms = diff.free_symbols
-    if len(syms) != 1:
-        return None
-    (s,) = syms
-    a, b = diff.coeff(s, 1), diff.xreplace({s: sp.S.Zero})
-    if not (a.is_Number and b.is_Number) or a == 0 or sp.expand(diff - a * s - b) != 0:
-        return None
-    op = cond.rel_op
-    if not want:
-        op = {"<": ">=", "<=": ">", ">": "<=", ">=": "<"}[op]
-    if a < 0:
-        op = {"<": ">", "<=": ">=", ">": "<", ">=": "<="}[op]
-    c = -b / a  # s op c
-    inf = sp.oo
-    if op in ("<", "<="):
-        return s, -inf, False, c, op == "<="
-    return s, c, op == ">=", inf, False
-
-
-def _feasible(path: _Path) -> bool:
-    seen: dict[sp.Basic, bool] = {}
-    box: dict[sp.Symbol, list] = {}
-    for cond, want in path:
-        if seen.setdefault(cond, want) != want:
-            return False
-        bound = _affine_bound(cond, want)
-        if bound is None:
-            continue
-        s, lo, loc, hi, hic = bound
-        cur = box.setdefault(s, [-sp.oo, False, sp.oo, False])
-        if lo > cur[0] or (lo == cur[0] and not loc):
-            cur[0], cur[1] = lo, loc
-        if hi < cur[2] or (hi == cur[2] and not hic):
-            cur[2], cur[3] = hi, hic
-        if cur[0] > cur[2] or (cur[0] == cur[2] and not (cur[1] and cur[3])):
-            return False
-    return True
