@@ -6,6 +6,7 @@ function at a time); the compiled solver loop is tested in tests/solvers."""
 from __future__ import annotations
 
 import hashlib
+import math
 from pathlib import Path
 
 import numpy as np
@@ -47,19 +48,28 @@ def test_one_kernel_per_distinct_law(js):
     assert j.spring.tolist() == [False, True, True, False]
 
 
+def _agree(got: tuple, want: tuple) -> None:
+    """Equal to 2 ulps of each entry: LLVM may fuse ``a*b + c`` into one rounding (an
+    FMA) where Python rounds twice, e.g. ``1.5*q**2 + 3.0`` at ``q = 2.494295631933623``
+    differs in the last bit."""
+    assert len(got) == len(want)
+    for g, w in zip(got, want, strict=True):
+        assert abs(g - w) <= 2 * math.ulp(max(abs(g), abs(w))), (got, want)
+
+
 @given(q=finite, F=finite)
 def test_element_laws_and_branches_match_python(js, q, F):
     scene, j = js
     m = j.module
     out = np.empty(4)
     for e, el in enumerate(scene.elements):
-        assert m.element_law(e, q, F) == el.law.kernel(q, F)
+        _agree(m.element_law(e, q, F), el.law.kernel(q, F))
         assert m.element_magnitude(e, q, F) == el.law.kernel.magnitude(q, F)
         lb = law_branches(el.law)
         assert m.branch_count(e) == lb.count
         assert m.active_branch(e, q, F) == lb.branch(q, F)
         for i in range(lb.count):
-            assert m.branch_law(e, i, q, F) == lb.kernel_for(i)(q, F)
+            _agree(m.branch_law(e, i, q, F), lb.kernel_for(i)(q, F))
             k = m.branch_guards(e, i, q, F, out)
             assert tuple(out[:k]) == lb.guards_for(i)(q, F)
 
