@@ -198,3 +198,60 @@ def test_a_landing_with_no_step_that_holds_is_an_event_at_t() -> None:
          Element("e4", get_law("string_spring").bind(k=1.0, L=1.0), "j1", "m0"),
          Element("e5", get_law("coulomb").bind(tau=1.0, r=1.0), "j2", "ground")])
     _network_check(scene)
+
+
+def _taut_string_network() -> Scene:
+    """Four masses; the stiff short string ``e2`` is taut between ``m1`` and ``m2`` (a
+    network the random-network suite drew)."""
+    law = get_law
+    nodes = [Mass("m0", m=0.13345915710905498, x0=0.1069379514466322, v0=1.2318750822695508),
+             Mass("m1", m=1.0, x0=-7.647546305389955e-305, v0=-1.505336473285424),
+             Mass("m2", m=0.7547065774783799, x0=-0.29034795908736377, v0=0.99999),
+             Mass("m3", m=3.8357315870740125, x0=0.6455111818917594, v0=0.6014553702298309)]
+    elements = [
+        Element("e0", law("newtonian").bind(c=0.0548246802197163), "ground", "m0"),
+        Element("e1", law("linear_spring").bind(k=1.0023052380778996), "ground", "m1"),
+        Element("e2", law("string_spring").bind(k=28.41624982573025, L=0.0017249147046002338),
+                "m1", "m2"),
+        Element("e3", law("herschel_bulkley").bind(gamma=1.0, tau=0.0548246802197163, n=2.0),
+                "m2", "m3"),
+        Element("e4", law("coulomb").bind(tau=0.010006628381954624, r=6.158367777600547),
+                "m3", "m1"),
+        Element("e5", law("herschel_bulkley").bind(gamma=8.085222925967306, tau=1.0, n=2.0),
+                "ground", "m0"),
+        Element("e6", law("string_spring").bind(k=0.9663002631894692, L=1.2903479590850613),
+                "m2", "m1")]
+    return Scene(nodes, elements)
+
+
+def test_the_mode_probe_accepts_a_taut_string_held_to_round_off() -> None:
+    # At t = 0.128 the taut string e2 holds m1 and m2 together. On the probe's step of
+    # 2.2e-7 s its force is fixed by the positions only to m ulp(x) / h^2 ~ 1e-3, so
+    # Newton cycled between neighbours whose residuals all met the test and stopped at
+    # max_iters: "no motion continues". Such a point is an answer for the probe.
+    from lumped.codegen.branches import law_branches
+    from lumped.solvers.events import select_modes
+
+    scene = _taut_string_network()
+    lbs = [law_branches(el.law) for el in scene.elements]
+    x = [0.18181842393929393, -0.18341770592617915, -0.1816927912215789, 0.7240601504132804]
+    v = [-4.015130217827408e-06, -0.4461916254636545, -0.4461916254636545,
+         0.6134132152581259]
+    F = [-2.201282302329075e-07, -0.18384052740604118, 0.049015607173996716,
+         1.0841957680098846, -0.010006628381954624, -1.0007046993512692,
+         -0.0016667855330346176]
+    sel = select_modes(scene, lbs, 0.1280454251252039, x, v, F, 2.220446049250313e-07)
+    assert not isinstance(sel, str), sel
+    modes, v_p, F_p = sel
+    assert modes[2] == lbs[2].branch(0.0017249147046002338, 1.0)  # e2 stays taut
+    assert v_p[1] == pytest.approx(v_p[2], abs=1e-9)  # m1 and m2 move together
+    assert all(math.isfinite(f) for f in F_p)
+
+
+@pytest.mark.parametrize("rtol", [1.7569e-4])
+def test_a_taut_string_network_runs_through(rtol: float) -> None:
+    # 1.7569e-4: the random-network suite's tolerance (dt^2) on this scene
+    sol = simulate(_taut_string_network(), method="radau5", t_end=0.5, rtol=rtol,
+                   atol=rtol ** 1.5, compiled=False)
+    assert sol.ok, sol.message
+    assert np.all(np.isfinite(sol.data))

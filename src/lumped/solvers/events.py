@@ -19,6 +19,7 @@ rate set exactly (:func:`hold_rate_locks`), so a stuck velocity is exactly zero.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 
@@ -27,7 +28,7 @@ from scipy.optimize import brentq
 from ..scene import Mass, Scene
 from .branch_check import _left_branch
 from .globalize import solve_globalized
-from .newton import NewtonCode, NewtonOptions, newton_solve
+from .newton import NewtonCode, NewtonOptions, NewtonResult, _residual_ok, newton_solve
 from .radau import dense_weights
 from .step_system import _make_evaluate
 
@@ -145,7 +146,9 @@ def select_modes(
     # as the fixed-step methods: locks in parallel (a singular step) by the minimum-norm
     # correction, hard points of a law (Herschel-Bulkley n < 1 at its yield force) by the
     # globalised solve
-    res = newton_solve(evaluate, list(v) + list(F), probe_opts, min_norm=True)
+    res = _accept_at_roundoff(
+        newton_solve(evaluate, list(v) + list(F), probe_opts, min_norm=True),
+        evaluate, probe_opts)
     if res.code is not NewtonCode.SUCCESS:
         res = solve_globalized(scene, evaluate, h_probe, x_hat, list(v), list(F), probe_opts)
     if res.code is not NewtonCode.SUCCESS:  # the balance sweeps (issue 11)
@@ -163,6 +166,23 @@ def select_modes(
     q = scene.elongations(x_p, v_p)
     modes = [branches[e].branch(q[e], F_p[e]) for e in range(E)]
     return modes, v_p, F_p
+
+
+def _accept_at_roundoff(res: NewtonResult, evaluate, options: NewtonOptions) -> NewtonResult:
+    """``res`` as a success when Newton ran out of iterations on a point whose residual
+    test holds.
+
+    A lock held by positions (a taut string, ``x_b + h v_b - x_a - h v_a = L``) fixes the
+    rates only to ``ulp(x) / h``, and the forces that hold it to ``m ulp(x) / h^2``: on
+    a probe step of ``h ~ 1e-7`` the iterates cycle between neighbours whose residuals
+    are all at round-off while the update test, which asks for ``rtol |u|`` in the force
+    of the lock, cannot pass. The probe reads branches, so such a point is an answer."""
+    if res.code is not NewtonCode.MAX_ITERS:
+        return res
+    G, _, S = evaluate(res.u)
+    if not _residual_ok(G, S, options.rtol, options.atol):
+        return res
+    return dataclasses.replace(res, code=NewtonCode.SUCCESS, residual=G)
 
 
 _PROBE_OPTIONS: dict = {}
