@@ -58,8 +58,8 @@ def test_stage_system_bit_for_bit(setup, data, h, mode_d):
     G_ref, J_ref = system.evaluate(list(U), h, list(x_n), list(v_n), f.tolist(), kernels)
     G, J, *_ = workspace(len(scene.nodes), len(scene.elements))
     A, W = np.array(radau.A), np.array(radau.W)
-    stage_evaluate(js.module.branch_law, js.masses, js.ea, js.eb, js.spring, modes, A, W,
-                   U, h, x_n, v_n, f, G, J)
+    stage_evaluate(js.module.branch_law, js.masses, js.ea, js.eb, js.spring, js.lock_q, modes,
+                   A, W, U, h, x_n, v_n, f, G, J)
     assert G.tolist() == G_ref
     assert J.tolist() == J_ref
 
@@ -80,9 +80,37 @@ def test_stage_solve_bit_for_bit(setup, mode_d):
                                            kernels, list(scale), tol=1e-6, max_iters=10)
     ws = workspace(N, E)
     ok = compiled_stage_solve()(js.module.branch_law, js.masses, js.ea, js.eb, js.spring,
-                                modes, np.array(radau.A), np.array(radau.W), U, 1e-2, x_n,
-                                v_n, f, scale, 1e-6, 10, *ws)
+                                js.lock_q, modes, np.array(radau.A), np.array(radau.W), U,
+                                1e-2, x_n, v_n, f, scale, 1e-6, 10, *ws)
     assert ok == (U_ref is not None)
     assert tuple(ws[-1][:2]) == (it_ref, nfac_ref)
     if ok:
         assert U.tolist() == U_ref
+
+
+def test_a_taut_string_is_held_on_the_velocity_level_bit_for_bit() -> None:
+    # the locking branch of string_spring (q = L): both systems use L + h sum a dV
+    scene = Scene([Mass("m1", 1.0, x0=0.1), Mass("m2", 2.0, x0=0.1 + 0.3)],
+                  [Element("s", get_law("string_spring").bind(k=5.0, L=0.3), "m1", "m2"),
+                   Element("k", get_law("linear_spring").bind(k=3.0), "ground", "m1")])
+    js = jit_scene(scene)
+    lb = law_branches(scene.elements[0].law)
+    taut = next(i for i in range(lb.count) if lb.info[i].locks)
+    assert js.lock_q[0, taut] == 0.3 and np.isnan(js.lock_q[1]).all()
+    system = radau.StageSystem(scene.masses, scene.elem_a, scene.elem_b, [True, True])
+    modes = np.array([taut, 0], dtype=np.int64)
+    kernels = [lb.kernel_for(taut), law_branches(scene.elements[1].law).kernel_for(0)]
+    rng = np.random.default_rng(7)
+    U = rng.uniform(-1.0, 1.0, 12)
+    x_n, v_n = np.array([0.1, 0.4]), np.array([0.2, 0.2])
+    f = rng.uniform(-1.0, 1.0, (3, 2))
+    h = 1e-7
+    G_ref, J_ref = system.evaluate(list(U), h, list(x_n), list(v_n), f.tolist(), kernels)
+    G, J, *_ = workspace(2, 2)
+    stage_evaluate(js.module.branch_law, js.masses, js.ea, js.eb, js.spring, js.lock_q, modes,
+                   np.array(radau.A), np.array(radau.W), U, h, x_n, v_n, f, G, J)
+    assert G.tolist() == G_ref and J.tolist() == J_ref
+    # the lock's residual is h sum_l a_kl (V_l,2 - V_l,1): no rounding of x in it
+    for k in range(3):
+        want = h * sum(radau.A[k][j] * (U[j * 4 + 1] - U[j * 4]) for j in range(3))
+        assert abs(G_ref[k * 4 + 2] - want) <= 4 * np.spacing(abs(want))

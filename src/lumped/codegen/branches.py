@@ -205,6 +205,8 @@ class LawBranches:
                 hit = _build("kernel", ["q", "F"], exprs, guard=guard)
                 hit.magnitude = _build(  # type: ignore[attr-defined]
                     "magnitude", ["q", "F"], [magnitude_expression(exprs[0])], guard=guard)
+            # the q a locking branch holds (q = L): radau5 holds it on the velocity level
+            hit.lock_value = info.lock_value if info.locks else None  # type: ignore[attr-defined]
             self._kernels[(i, guard, stage)] = hit
         return hit
 

@@ -359,6 +359,7 @@ class JitScene:
     eb: np.ndarray
     spring: np.ndarray
     law_index: np.ndarray
+    lock_q: np.ndarray
 
 
 def jit_scene(scene) -> JitScene:
@@ -371,4 +372,24 @@ def jit_scene(scene) -> JitScene:
         eb=np.array(scene.elem_b, dtype=np.int64),
         spring=np.array([el.kind == "spring" for el in scene.elements], dtype=np.bool_),
         law_index=np.array(law_index, dtype=np.int64),
+        lock_q=position_locks(scene),
     )
+
+
+def position_locks(scene) -> np.ndarray:
+    """``lock_q[e, i]``: the elongation that branch ``i`` of spring ``e`` locks
+    (:attr:`~lumped.codegen.branches.BranchInfo.lock_value`, e.g. ``L`` of a taut string),
+    ``nan`` for other branches and for dashpots; one column per branch of the law with the
+    most. ``radau5`` holds such a lock on the velocity level (see
+    :meth:`lumped.solvers.radau.StageSystem.evaluate`)."""
+    from lumped.codegen.branches import law_branches
+
+    lbs = [law_branches(el.law) for el in scene.elements]
+    out = np.full((len(lbs), max([lb.count for lb in lbs] + [1])), np.nan)
+    for e, (el, lb) in enumerate(zip(scene.elements, lbs, strict=True)):
+        if el.kind != "spring":
+            continue
+        for i, info in enumerate(lb.info):
+            if info.locks and info.lock_value is not None:
+                out[e, i] = info.lock_value
+    return out

@@ -197,6 +197,17 @@ class StageSystem:
 
         ``f[k]`` is the external force per node at ``t_n + c_k h``; ``kernels[e]`` is the
         held branch's kernel ``(q, F) -> (R, dR/dq, dR/dF)`` of element ``e``.
+
+        A spring held on a branch that locks its elongation at ``L`` (a kernel with a
+        ``lock_value``, :meth:`lumped.codegen.branches.LawBranches.kernel_for`: a taut
+        string) is held on the velocity level: its branch is affine in ``q`` with constant
+        coefficients, and its residual is taken as ``R(L) + dR/dq h sum_l a_kl (V_l,b -
+        V_l,a)``, not ``R(X_k,b - X_k,a)``: the positions carry their rounding, ``ulp(x)``,
+        which the
+        lock would turn into rates of ``ulp(x) / h`` and forces of ``m ulp(x) / h^2``,
+        so that on a short step Newton cycled at round-off and the step size fell to its
+        floor. The positions still follow the velocities, so ``q`` stays at ``L`` to
+        their rounding.
         """
         N, E, n = self.N, self.E, self.n
         m, ea, eb, spring = self.m, self.ea, self.eb, self.spring
@@ -229,7 +240,17 @@ class StageSystem:
                 if b >= 0:
                     G[base + b] += Fe
                     J[base + b][col] = 1.0
-                if spring[e]:
+                lock = getattr(kernels[e], "lock_value", None) if spring[e] else None
+                if lock is not None:  # a held position lock: on the velocity level
+                    qb = 0.0
+                    qa = 0.0
+                    if b >= 0:
+                        for j in range(3):
+                            qb += Ak[j] * U[j * n + b]
+                    if a >= 0:
+                        for j in range(3):
+                            qa += Ak[j] * U[j * n + a]
+                elif spring[e]:
                     qb = 0.0
                     qa = 0.0
                     if b >= 0:
@@ -245,7 +266,11 @@ class StageSystem:
                 else:
                     qb = U[base + b] if b >= 0 else 0.0
                     qa = U[base + a] if a >= 0 else 0.0
-                R, Rq, RF = kernels[e](qb - qa, Fe)
+                if lock is not None:  # R(L + dq) = R(L) + dR/dq dq: affine, exactly
+                    R, Rq, RF = kernels[e](lock, Fe)
+                    R += Rq * (h * (qb - qa))
+                else:
+                    R, Rq, RF = kernels[e](qb - qa, Fe)
                 lrow = J[col]
                 G[col] = R
                 lrow[col] = RF

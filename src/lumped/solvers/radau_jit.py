@@ -33,10 +33,12 @@ __all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_s
 
 
 @njit(cache=True, inline="always")
-def stage_evaluate(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v_n, f, G,
-                   J) -> None:
+def stage_evaluate(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n,
+                   f, G, J) -> None:
     """Residual ``G`` and Jacobian ``J`` of the stage system at ``U`` (``f[k, i]``: the
-    external force on node ``i`` at stage ``k``; ``modes[e]``: element ``e``'s branch)."""
+    external force on node ``i`` at stage ``k``; ``modes[e]``: element ``e``'s branch;
+    ``lock_q[e, i]``: the elongation branch ``i`` of spring ``e`` locks, ``nan`` if none,
+    :func:`lumped.codegen.jit.position_locks`)."""
     N = masses.shape[0]
     E = ea.shape[0]
     n = N + E
@@ -69,7 +71,15 @@ def stage_evaluate(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v
                 J[base + b, col] = 1.0
             qa = 0.0
             qb = 0.0
-            if spring[e]:
+            lock = lock_q[e, modes[e]] if spring[e] else math.nan
+            if lock == lock:  # a held position lock: on the velocity level
+                if b >= 0:
+                    for j in range(3):
+                        qb += A[k, j] * U[j * n + b]
+                if a >= 0:
+                    for j in range(3):
+                        qa += A[k, j] * U[j * n + a]
+            elif spring[e]:
                 if b >= 0:
                     s = 0.0
                     for j in range(3):
@@ -83,7 +93,11 @@ def stage_evaluate(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v
             else:
                 qb = U[base + b] if b >= 0 else 0.0
                 qa = U[base + a] if a >= 0 else 0.0
-            R, Rq, RF = branch_law(e, modes[e], qb - qa, Fe)
+            if lock == lock:  # R(L + dq) = R(L) + dR/dq dq: an affine lock, exactly
+                R, Rq, RF = branch_law(e, modes[e], lock, Fe)
+                R += Rq * (h * (qb - qa))
+            else:
+                R, Rq, RF = branch_law(e, modes[e], qb - qa, Fe)
             G[col] = R
             J[col, col] = RF
             if spring[e]:
@@ -100,14 +114,15 @@ def stage_evaluate(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v
                     J[col, base + a] -= Rq
 
 
-def stage_solve(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v_n, f, scale,
-                tol, max_iters, G, J, LU, perm, b, du, out) -> bool:
+def stage_solve(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n, f,
+                scale, tol, max_iters, G, J, LU, perm, b, du, out) -> bool:
     """Simplified Newton on the stage system from ``U`` (overwritten); ``out`` receives
     ``(iterations, factorisations, singular)`` (``out[2] = 1`` when a factorisation
     failed: a singular or non-finite Jacobian, left in ``J``). Returns False when Newton
     failed (singular, non-finite or no convergence): the caller shrinks the step."""
     out[2] = 0
-    stage_evaluate(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v_n, f, G, J)
+    stage_evaluate(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n, f,
+                   G, J)
     ok = lu_factor_into(J, LU, perm)
     nfac = 1
     prev = math.inf
@@ -132,8 +147,8 @@ def stage_solve(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v_n,
             return False
         if worst <= tol:
             return True
-        stage_evaluate(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x_n, v_n, f,
-                       G, J)
+        stage_evaluate(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n,
+                       v_n, f, G, J)
         if worst > 0.5 * prev:
             ok = lu_factor_into(J, LU, perm)
             nfac += 1
@@ -165,7 +180,7 @@ def compiled_stage_solve():
 
         v, m = T.float64[::1], T.float64[:, ::1]
         iv = T.int64[::1]
-        sig = T.boolean(BRANCH_LAW_TYPE, v, iv, iv, T.boolean[::1], iv, m, m, v, T.float64,
+        sig = T.boolean(BRANCH_LAW_TYPE, v, iv, iv, T.boolean[::1], m, iv, m, m, v, T.float64,
                         v, v, m, v, T.float64, T.int64, v, m, m, iv, v, v, iv)
         _COMPILED.append(njit(sig, cache=True)(stage_solve))
     return _COMPILED[0]

@@ -77,7 +77,8 @@ _S1, _S2, _S3 = END_SLOPES
 _stage = njit(cache=True)(stage_solve)
 
 
-def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, checked, A, W,
+def advance(branch_law, branch_guards, masses, ea, eb, spring, lock_q, modes, watched, checked,
+            A, W,
             fkind,
             fpar, x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
     """Steps with the modes held until a reason to return (see the module notes).
@@ -148,7 +149,8 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, modes, watched, c
                 scale[k * n + i] = atol + rtol * abs(v[i])
             for e in range(E):
                 scale[k * n + N + e] = rtol * max(abs(F[e]), F_ref)
-        ok = _stage(branch_law, masses, ea, eb, spring, modes, A, W, U, h, x, v, fk, scale,
+        ok = _stage(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x, v, fk,
+                    scale,
                     1e-3, _MAX_NEWTON, G, J, LU, perm, b, du, out)
         its = out[0]
         nfac = out[1]
@@ -314,7 +316,8 @@ def compiled_advance():
         f8 = T_.float64
         v, m, m3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
         iv = T_.int64[::1]
-        sig = T_.none(law_type(), guards_type(), v, iv, iv, T_.boolean[::1], iv, iv, iv, m, m,
+        sig = T_.none(law_type(), guards_type(), v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
+                      m,
                       iv, m, v, v, v, v, v, iv, v, v, m, m3, m, m, m3,
                       T_.int64[:, ::1])
         _COMPILED.append(njit(sig, cache=True)(advance))
