@@ -112,3 +112,17 @@ def test_steep_branches_are_the_unbounded_slopes(n, steep):
     for name, p in [("bingham", {"gamma": 1.0, "tau": 1.0}), ("s_shaped", {"q0": 1.0, "F0": 1.0}),
                     ("implicit_spring", {"k": 1.0, "L0": 0.1, "F0": 1.0})]:
         assert not any(b.steep for b in law_branches(get_law(name).bind(**p)).info)
+
+
+def test_fractional_powers_are_continued_oddly_beyond_the_branch() -> None:
+    # Herschel-Bulkley n = 3/2, forward slip branch R = q - (F - 1)^1.5: on the branch
+    # the kernel is the law's; a hair below the yield force it is finite (was nan), with
+    # R = q + (1 - F)^1.5 and dR/dF = -1.5 |F - 1|^0.5
+    lb = law_branches(get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=1.5))
+    slip = lb.branch(0.5, 2.0)
+    k = lb.kernel_for(slip)
+    b = 1.21 - 1.0
+    assert k(0.0, 1.21) == (-math.pow(b, 1.5) + 0.0, 1.0, -(1.5 * math.pow(b, 0.5)))
+    R, Rq, RF = k(0.0, 0.99)
+    assert R == pytest.approx(0.01 ** 1.5, rel=1e-12) and Rq == 1.0
+    assert RF == pytest.approx(-1.5 * 0.01 ** 0.5, rel=1e-12)

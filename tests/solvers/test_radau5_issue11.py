@@ -264,3 +264,25 @@ def test_a_taut_string_network_runs_through(rtol: float, compiled: bool) -> None
     assert taut.any()
     # the string never stretches beyond its length by more than the tolerance
     assert q.max() <= 0.0017249147046002338 + 10 * rtol ** 1.5
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_slip_branch_entered_within_its_guard_tolerance_runs_on(compiled: bool) -> None:
+    # e2 (Herschel-Bulkley n = 3/2) breaks away at t = 0.342; a step was accepted with
+    # its force 5e-6 below the yield force, inside the guard's tolerance, and the next
+    # stage started there: (F - tau)^1.5 = nan on every attempt, down to the step floor.
+    # The branch kernels now continue fractional powers oddly (odd_continuation).
+    scene = Scene(
+        [Mass("m0", m=0.23402813441765496, x0=0.047646055508569374, v0=0.294965534479148),
+         Junction("j1", x0=0.9451111473996323),
+         Mass("m2", m=1.0, x0=-0.421680266723813, v0=1.0)],
+        [Element("e0", get_law("string_spring").bind(k=4.234016908649301,
+                                                     L=0.37274998167309187), "ground", "m0"),
+         Element("e1", get_law("coulomb").bind(tau=1.0, r=62.02559667595359), "m0", "j1"),
+         Element("e2", get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=1.5),
+                 "m0", "m2")])
+    for dt in (0.025, 0.0125, 0.00625):  # the random-network suite's three runs
+        sol = simulate(scene, method="radau5", t_end=0.5, rtol=dt ** 2, atol=dt ** 3,
+                       compiled=compiled)
+        assert sol.ok, sol.message
+        assert any(ev.element == "e2" and ev.t > 0.34 for ev in sol.events)

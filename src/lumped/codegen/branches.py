@@ -53,7 +53,7 @@ from sympy.core.parameters import distribute
 from .emit import _build, _Printer
 from .guards import compile_guards, feasible_path
 from .rewrite import magnitude_expression
-from .stage_forms import inverse_form
+from .stage_forms import inverse_form, odd_continuation
 
 __all__ = ["BranchInfo", "LawBranches", "law_branches"]
 
@@ -200,7 +200,13 @@ class LawBranches:
         stage = stage and info.stage is not None
         hit = self._kernels.get((i, guard, stage))
         if hit is None:
-            exprs = list(info.stage[:3]) if stage else [info.residual, info.dR_dq, info.dR_dF]
+            if stage:
+                exprs = list(info.stage[:3])
+            else:
+                with distribute(False):
+                    odd = odd_continuation(info.residual)
+                    exprs = ([info.residual, info.dR_dq, info.dR_dF] if odd is info.residual
+                             else [odd, sp.diff(odd, _Q), sp.diff(odd, _F)])
             with distribute(False):
                 hit = _build("kernel", ["q", "F"], exprs, guard=guard)
                 hit.magnitude = _build(  # type: ignore[attr-defined]

@@ -7,13 +7,18 @@ which has the same zeros on the branch and a bounded slope there.  The adaptive 
 stage solve takes such a branch in this *inverse form*
 (:meth:`lumped.codegen.branches.LawBranches.stage_kernel_for`); the shape is read from
 the law's expression, never from its name.
+
+A branch's fractional powers ``b^p`` of an expression in ``q`` or ``F`` are defined only
+where ``b >= 0``, which holds on the branch; :func:`odd_continuation` continues them to
+``b < 0`` as ``-(-b)^p``, so that a stage iterate a hair beyond the branch's end (inside
+its guard's tolerance) gets a finite residual instead of ``nan``.
 """
 
 from __future__ import annotations
 
 import sympy as sp
 
-__all__ = ["inverse_form"]
+__all__ = ["inverse_form", "odd_continuation"]
 
 _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 
@@ -56,3 +61,22 @@ def inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
     G = (root - shift) / slope
     dG = slope_root * sp.diff(w, _Q) / slope
     return _F - G, -dG, sp.S.One, base, w
+
+
+def odd_continuation(expr: sp.Expr) -> sp.Expr:
+    r"""``expr`` with every power ``b^p`` (``p`` a non-integer number, ``b`` holding ``q``
+    or ``F``) replaced by ``b^p`` where ``b >= 0`` and ``-(-b)^p`` where ``b < 0``.
+
+    Equal to ``expr`` wherever ``expr`` is real, so on its branch. Herschel-Bulkley with
+    ``n = 3/2`` on its forward slip branch, ``R = q - gamma (F - tau)^{3/2}``: a stage
+    that starts at ``F = tau - 5e-6`` (a step accepted with its force within the guard's
+    tolerance below the yield force) had ``R = nan``, so Newton failed on every step and
+    the step size fell to its floor; now ``R = q + gamma (tau - F)^{3/2}`` there.
+    Returns ``expr`` itself when it has no such power."""
+    pows = [node for node in sp.preorder_traversal(expr)
+            if isinstance(node, sp.Pow) and node.exp.is_number and not node.exp.is_integer
+            and node.base.has(_Q, _F)]
+    if not pows:
+        return expr
+    return expr.xreplace({P: sp.Piecewise((P, P.base >= 0), (-((-P.base) ** P.exp), True))
+                          for P in pows})
