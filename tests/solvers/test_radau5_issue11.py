@@ -286,3 +286,34 @@ def test_a_slip_branch_entered_within_its_guard_tolerance_runs_on(compiled: bool
                        compiled=compiled)
         assert sol.ok, sol.message
         assert any(ev.element == "e2" and ev.t > 0.34 for ev in sol.events)
+
+
+def test_a_landing_bracket_that_closes_on_a_failed_step_lands_on_its_lower_end() -> None:
+    # At t = 0.2491 the guard of e2 (Herschel-Bulkley n = 0.8 at a junction) jumps from
+    # +1e-5 to -8e-7 within 1e-12 s of step size, and every landing step past the jump
+    # fails in Newton: the bracket was halved towards its lower end for ever, and the run
+    # stopped after 10 000 attempts. A closed bracket now lands on its lower end.
+    law = get_law
+    scene = Scene(
+        [Junction("j0", x0=-0.7254419965128105),
+         Mass("m1", m=1.0, x0=-1.401298464324817e-45, v0=-0.23830520775685793),
+         Mass("m2", m=1.0, x0=0.0, v0=1e-05),
+         Mass("m3", m=2.3478879762862217, x0=-0.4610383209769301, v0=0.6006837443989403)],
+        [Element("e0", law("coulomb").bind(tau=0.04931621043433125, r=1.448219322794247),
+                 "ground", "j0"),
+         Element("e1", law("implicit_spring").bind(k=1.0, L0=1.0, F0=7.943282347242816),
+                 "ground", "m1"),
+         Element("e2", law("herschel_bulkley").bind(gamma=1.009434940484881, tau=1.0, n=0.8),
+                 "j0", "m2"),
+         Element("e3", law("bingham").bind(gamma=1.0, tau=0.13308507382982804), "j0", "m3"),
+         Element("e4", law("linear_spring").bind(k=51.68740544481809), "m3", "m1"),
+         Element("e5", law("string_spring").bind(k=23.557034346889893, L=0.8104002666559432),
+                 "ground", "m2"),
+         Element("e6", law("herschel_bulkley").bind(gamma=1.0001405485169472,
+                                                    tau=0.033700481057004295, n=1.5),
+                 "ground", "m2")])
+    dt = 0.022904768504394473 / 2
+    sol = simulate(scene, method="radau5", t_end=0.5039049070966785, rtol=dt ** 2,
+                   atol=dt ** 3, compiled=False)
+    assert sol.ok, sol.message
+    assert sol.t[-1] == pytest.approx(0.5039049070966785)

@@ -296,7 +296,12 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 # a landing step that Newton cannot take: no solution that far, the
                 # bracket ends there (halving alone went below the step that held, to 0)
                 target[3], target[5] = h, target[5] + 1
-                h = 0.5 * (target[1] + h)
+                if h - target[1] <= 8.0 * _EPS * max(1.0, abs(t)):
+                    # the bracket is closed (a guard that jumps, the laws' solution ending
+                    # inside it): land on its lower end, which held
+                    target[3] = h = target[1]
+                else:
+                    h = 0.5 * (target[1] + h)
                 continue
             h *= 0.5
             if target is not None and h < h_min:  # no landing step holds: the event is
