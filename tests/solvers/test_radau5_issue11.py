@@ -317,3 +317,30 @@ def test_a_landing_bracket_that_closes_on_a_failed_step_lands_on_its_lower_end()
                    atol=dt ** 3, compiled=False)
     assert sol.ok, sol.message
     assert sol.t[-1] == pytest.approx(0.5039049070966785)
+
+
+def test_locks_in_series_and_parallel_keep_every_force_in_its_cone() -> None:
+    # e0 (to ground), the Coulomb e2 and e3 (m2 to ground) stick at t = 0.3855 and close
+    # a cycle ground-j0-m2-ground: e2 and e3 in series, both in parallel with e0. The split
+    # of least weighted norm put e0 at 0.742 > tau = 0.731 while e2 had room; the force
+    # that leaves its cone is now held at its bound and the split solved again
+    scene = Scene(
+        [Junction("j0", x0=0.033638933869344134),
+         Mass("m1", m=1.0925119400138679, x0=0.7104445012919904, v0=0.6248529151627644),
+         Mass("m2", m=1.0, x0=1.0, v0=9.364056003208143e-189)],
+        [Element("e0", get_law("herschel_bulkley").bind(gamma=2.7121235311828267,
+                                                        tau=0.7306672880240374, n=1.0),
+                 "ground", "j0"),
+         Element("e1", get_law("string_spring").bind(k=10.0, L=0.7893005012586076), "j0", "m1"),
+         Element("e2", get_law("coulomb").bind(tau=0.26080703562118845, r=31.622776601683793),
+                 "j0", "m2"),
+         Element("e3", get_law("herschel_bulkley").bind(gamma=1.0, tau=0.5634494867948144,
+                                                        n=0.5), "ground", "m2"),
+         Element("e4", get_law("bingham").bind(gamma=2.163422378608881,
+                                               tau=0.19938538167045725), "m1", "m2")])
+    _network_check(scene)
+    sol = simulate(scene, method="radau5", t_end=0.5, rtol=1.25e-2 ** 2, atol=1.25e-2 ** 3,
+                   compiled=False)
+    late = sol.t > 0.386
+    assert np.all(np.abs(sol.F["e0"][late]) <= 0.7306672880240374 * (1 + 1e-9))
+    assert np.all(np.abs(sol.F["e2"][late]) <= 0.26080703562118845 * (1 + 1e-9))

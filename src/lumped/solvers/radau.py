@@ -70,7 +70,8 @@ def _solver(J: list[list[float]]) -> Callable[[list[float]], list[float]]:
 
 
 def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[float, float]],
-                 N: int, n: int) -> Callable[[list[float]], list[float]]:
+                 N: int, n: int, held: dict[int, float] | None = None
+                 ) -> Callable[[list[float]], list[float]]:
     """``solve(b)`` for a singular ``J`` whose free directions split the force among locked
     elements in parallel: of all the solutions, the one whose new forces minimise
     ``sum (F_e - c_e)^2 / w_e`` over the elements of ``cones`` (``e -> (c_e, w_e)``, the
@@ -81,16 +82,18 @@ def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[fl
 
     With ``du = D z + o`` (``D = sqrt(w_e)``, ``o = c_e - U_j`` on those forces; ``D = 1``,
     ``o = 0`` elsewhere; ``U`` the iterate, read at every call): ``z`` is the minimum-norm
-    solution of ``J D z = b - J o``."""
+    solution of ``J D z = b - J o``.
+    ``held`` (stage column -> force): forces held at a bound of their interval (centre
+    moved there, weight ``1e-12 w_e``), see :meth:`StageSystem.solve`."""
     import numpy as np
 
     size = len(U)
-    D = np.ones(size)
-    cols = [(k * n + N + e, c) for k in range(3) for e, (c, _) in cones.items()]
-    for k in range(3):
-        for e, (_, w) in cones.items():
-            D[k * n + N + e] = math.sqrt(w)
+    held = held or {}
+    cols = {k * n + N + e: (c, w) for k in range(3) for e, (c, w) in cones.items()}
     A = np.array(J, dtype=float)
+    D = np.ones(size)
+    for j, (_, w) in cols.items():
+        D[j] = math.sqrt(w * 1e-12 if j in held else w)
     pinv = np.linalg.pinv(A * D, rcond=size * 2.220446049250313e-16)
     # a row with one nonzero (a stuck dashpot to ground: ``V = 0``) fixes its unknown by
     # one division, exactly, as the LU's singleton pivots do
@@ -99,8 +102,8 @@ def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[fl
 
     def solve(b: list[float]) -> list[float]:
         o = np.zeros(size)
-        for j, c in cols:  # ``U`` is the caller's iterate, updated in place
-            o[j] = c - U[j]
+        for j, (c, _) in cols.items():  # ``U`` is the caller's iterate, updated in place
+            o[j] = held.get(j, c) - U[j]
         z = pinv @ (np.asarray(b, dtype=float) - A @ o)
         du = (D * z + o).tolist()
         for i, j, a in single:
@@ -304,8 +307,49 @@ class StageSystem:
         names the locked elements in parallel (``e -> (centre, half-width)`` of the force
         interval their lock admits), by the split of :func:`_cone_solver`.
         """
+        if not cones:
+            return self._newton(U, h, x_n, v_n, f, kernels, scale, tol, max_iters, None, {})
+        # locks in series and in parallel: the split of least weighted norm can leave a
+        # cone while another split stays in every cone; hold the forces that left theirs
+        # at the bound they crossed and solve again (an active set, at most 3 passes).
+        # When no held split solves the stage (the cones cannot carry the load together:
+        # the mode probe decides whether a lock breaks), the first split stands.
+        start = list(U)
+        held: dict[int, float] = {}
+        its = nfac = 0
+        first: list[float] | None = None
+        for _ in range(3):
+            U[:] = start
+            got, k_its, k_fac = self._newton(U, h, x_n, v_n, f, kernels, scale, tol,
+                                             max_iters, cones, held)
+            its, nfac = its + k_its, nfac + k_fac
+            if got is None:
+                if first is None:
+                    return None, its, nfac
+                U[:] = first
+                return U, its, nfac
+            if first is None:
+                first = list(U)
+            out = {}
+            for k in range(3):
+                for e, (c, w) in cones.items():
+                    j = k * self.n + self.N + e
+                    if j not in held and abs(U[j] - c) > w * (1.0 + 1e-9):
+                        out[j] = c + math.copysign(w * (1.0 - 1e-6), U[j] - c)
+            if not out:
+                return got, its, nfac
+            held.update(out)
+        U[:] = first
+        return U, its, nfac
+
+    def _newton(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
+                f: list[list[float]], kernels: Sequence[Callable], scale: list[float],
+                tol: float, max_iters: int, cones: dict[int, tuple[float, float]] | None,
+                held: dict[int, float]) -> tuple[list[float] | None, int, int]:
+        """One simplified Newton solve of :meth:`solve`, with the forces of ``held`` (stage
+        column -> force) held where the cone split puts them (:func:`_cone_solver`)."""
         G, J = self.evaluate(U, h, x_n, v_n, f, kernels)
-        solve = self._solver(J, U, cones)
+        solve = self._solver(J, U, cones, held)
         nfac = 1
         prev = math.inf
         for it in range(1, max_iters + 1):
@@ -323,17 +367,17 @@ class StageSystem:
                 return U, it, nfac
             G, J2 = self.evaluate(U, h, x_n, v_n, f, kernels)
             if worst > 0.5 * prev:
-                solve = self._solver(J2, U, cones)
+                solve = self._solver(J2, U, cones, held)
                 nfac += 1
             prev = worst
         return None, max_iters, nfac
 
     def _solver(self, J: list[list[float]], U: list[float],
-                cones: dict[int, tuple[float, float]] | None):
+                cones: dict[int, tuple[float, float]] | None, held: dict[int, float]):
         # locks in parallel make J singular, but only to round-off once the stage rows
         # mix: an LU would then pick the split from the round-off; the SVD does not
         if cones and all(math.isfinite(a) for row in J for a in row):
-            return _cone_solver(J, U, cones, self.N, self.n)
+            return _cone_solver(J, U, cones, self.N, self.n, held)
         return _solver(J)
 
     # -- the error estimate ---------------------------------------------------------------
