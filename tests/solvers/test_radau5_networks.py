@@ -179,3 +179,43 @@ def test_the_mode_after_an_impact_gets_a_longer_probe_when_the_short_one_fails()
         assert [ev.element for ev in impacts] == ["e2"]
         q = sol.x["m1"] - sol.x["m0"]
         assert q.max() <= 0.09344000952435165 * (1 + 1e-9)
+
+
+def test_the_dense_output_after_a_break_out_starts_from_the_forces_of_the_laws():
+    # a Bingham dashpot holds a junction between two springs; it breaks out at t = 0.15,
+    # and the junction relaxes on a time scale (1 / (gamma sum k) = 0.025 s) below the
+    # step that follows. The dense output started every force from the quadratic through
+    # the stage forces, off by 20 % of the forces at the first output point after the
+    # break-out (a force 0.21 above a yield force of 0.17 at a rate of 2.6e-4): now only
+    # a locked element's force starts from that quadratic
+    gamma, tau = 1.0, 0.1713681369302242
+    scene = Scene([Junction("j0", x0=0.0),
+                   Mass("m1", m=7.455118563773742, x0=-0.5107355898155354,
+                        v0=0.17148312968515625),
+                   Junction("j2", x0=0.8724545547217075)],
+                  [Element("e0", get_law("bingham").bind(gamma=gamma, tau=tau), "ground", "j0"),
+                   Element("e1", get_law("linear_spring").bind(k=35.08475526383227), "j0",
+                           "m1"),
+                   Element("e2", get_law("coulomb").bind(tau=0.18229806933363357,
+                                                         r=1.484168225932148), "m1", "j2"),
+                   Element("e3", get_law("linear_spring").bind(k=4.266041707382913), "ground",
+                           "j0"),
+                   Element("e4", get_law("bingham").bind(gamma=0.1713681369302242, tau=1.0),
+                           "j2", "ground"),
+                   Element("e5", get_law("linear_spring").bind(k=0.11267230800547245), "m1",
+                           "j2")])
+    rtol = 6.25e-4
+    sol = simulate(scene, method="radau5", dt=0.025, t_end=0.5, rtol=rtol, atol=1.5625e-5,
+                   compiled=False)
+    assert sol.ok, sol.message
+    breaks = [ev.t for ev in sol.events if ev.element == "e0" and ev.to_branch == 1]
+    assert len(breaks) == 1 and 0.14 < breaks[0] < 0.15
+    ts = breaks[0] + np.linspace(0.0, 0.02, 41)
+    rows = sol.sol(ts)
+    F = rows[:, sol.columns.index("F_e0")]
+    q = rows[:, sol.columns.index("v_j0")]
+    law = tau + q / gamma  # slipping forwards: F = tau + q / gamma
+    assert np.all(q >= 0.0)
+    # the law is linear in (q, F) on the slip branch: it holds at every collocation node
+    # and at the start, so on the whole polynomial (0.036 before)
+    assert np.abs(F - law).max() <= 1e-9 * np.abs(rows[:, 7:]).max()
