@@ -219,3 +219,32 @@ def test_the_dense_output_after_a_break_out_starts_from_the_forces_of_the_laws()
     # the law is linear in (q, F) on the slip branch: it holds at every collocation node
     # and at the start, so on the whole polynomial (0.036 before)
     assert np.abs(F - law).max() <= 1e-9 * np.abs(rows[:, 7:]).max()
+
+
+def test_a_dashpot_held_at_rate_zero_by_stuck_dashpots_in_parallel_sticks_too():
+    # four dashpots in parallel stop a mass together. The mode probe split the vanishing
+    # load among them with the shear-thickening one (Herschel-Bulkley n = 2) at exactly
+    # its yield force and left it on its slip branch, at zero rate; there the stage
+    # Newton (dq/dF = 0) failed for every step above 1e-7 and the run crept on by such
+    # steps (over 10^5 attempts at dt = 0.0125). A dashpot whose ends the stuck ones hold
+    # together is stuck too.
+    scene = Scene([Mass("m0", m=0.4382286615359716, x0=-0.08070556962661102,
+                        v0=-1.338286329094136)],
+                  [Element("e0", _hb(1.0, 0.034596562505861204, 2.0), "ground", "m0"),
+                   Element("e1", get_law("bingham").bind(gamma=5.142445397106526,
+                                                         tau=0.04680512028936913),
+                           "m0", "ground"),
+                   Element("e2", get_law("bingham").bind(gamma=2.7631167059454618,
+                                                         tau=0.2485826316245413),
+                           "ground", "m0"),
+                   Element("e3", _hb(9.999999999999998, 0.05822134258027331, 0.8),
+                           "m0", "ground")])
+    for h in (0.0125, 0.00625):
+        sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                       compiled=False, max_steps=2000)
+        assert sol.ok, (h, sol.message)
+        stops = {ev.element: ev.to_branch for ev in sol.events}
+        assert stops == {"e0": 2, "e1": 2, "e2": 2, "e3": 2}, sol.events
+        after = sol.t > sol.events[0].t
+        assert after.any() and np.all(sol.v["m0"][after] == 0.0)
+        assert sol.stats["steps"] < 100

@@ -16,7 +16,13 @@ from collections import deque
 from ..scene import Mass, Scene
 from .adaptive_setup import accumulating, too_many
 from .events import apply_impacts, hold_rate_locks, lock_cones, select_modes, snap_to_locks
-from .locks import IntervalLog, cycles_among, indeterminate_elements, prefer_locks
+from .locks import (
+    IntervalLog,
+    cycles_among,
+    indeterminate_elements,
+    lock_parallel_rates,
+    prefer_locks,
+)
 from .mode_guess import try_modes
 from .status import Event, Status
 
@@ -110,6 +116,7 @@ class ModeState:
             return sel
         new, v_p, F_p = sel
         new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked
+        new = lock_parallel_rates(scene, lbs, new, F_p)  # held at rate 0 by locks: locked
         scale_v = atol + rtol * max(abs(vi) for vi in v)
         hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"])
         if isinstance(hit, str):

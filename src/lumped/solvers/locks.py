@@ -24,7 +24,7 @@ from collections.abc import Sequence
 from functools import lru_cache
 
 __all__ = ["cyclic_elements", "cycles_among", "indeterminate_elements", "IntervalLog",
-           "prefer_locks"]
+           "prefer_locks", "lock_parallel_rates"]
 
 @lru_cache(maxsize=256)
 def _on_cycles(n_nodes: int, edges: tuple[tuple[int, int, int], ...]) -> tuple[int, ...]:
@@ -148,6 +148,53 @@ def prefer_locks(scene, branches: Sequence, modes: Sequence[int], v: Sequence[fl
             if not info.locks or info.lock_value is None or rate != info.lock_value:
                 continue
             gs = lb.guards_for(info.index)(info.lock_value, F[e])
+            if all(g >= -eps_slack * (1.0 + abs(F[e])) for g in gs):
+                out[e] = info.index
+                break
+    return out
+
+
+def lock_parallel_rates(scene, branches: Sequence, modes: Sequence[int],
+                        F: Sequence[float]) -> list[int]:
+    """``modes`` with every dashpot whose rate the other locks hold at zero put on its own
+    zero-rate lock, when its force ``F_e`` is admitted there.
+
+    The elements locked in ``modes`` with a zero rate (a stuck dashpot, ``q = 0``; a taut
+    string, whose ``q = L`` holds ``dq/dt = 0``) join the nodes they connect. A dashpot
+    whose two ends are joined by a path of such elements (in parallel with a stuck one,
+    or on a cycle of them through ground) has rate exactly zero for as long as they hold:
+    on a slip branch it would slip at zero rate, which is the stuck branch's point of the
+    law when its force is within the yield force (its lock's guards at ``(0, F_e)``, to
+    ``sqrt(eps) (1 + |F_e|)``). The mode probe reads such a dashpot as slipping when it
+    splits a load among locks in parallel with one force at its yield force and the
+    common rate a round-off away from 0; on a slip branch that ends flat (Herschel-Bulkley
+    ``n > 1``, ``dq/dF = 0`` at the yield force) the stage Newton then fails for all but
+    the shortest steps, and the run crept on by steps of ``1e-7``. A dashpot whose force
+    is beyond its yield force keeps the probe's branch (the locks cannot all hold then:
+    the stage solve says so).
+    """
+    eps_slack = 1.4901161193847656e-08  # sqrt(eps)
+    out = list(modes)
+    ea, eb = scene.elem_a, scene.elem_b
+    m = len(scene.nodes) + 1  # ground (-1) is vertex m - 1
+    parent = list(range(m))
+    held = False
+    for e, el in enumerate(scene.elements):
+        info = branches[e].info[out[e]]
+        if info.locks and (el.kind == "spring" or info.lock_value == 0.0):
+            parent[_find(parent, ea[e] % m)] = _find(parent, eb[e] % m)
+            held = True
+    if not held:
+        return out
+    for e, el in enumerate(scene.elements):
+        lb = branches[e]
+        if el.kind != "dashpot" or lb.info[out[e]].locks or \
+                _find(parent, ea[e] % m) != _find(parent, eb[e] % m):
+            continue
+        for info in lb.info:
+            if not info.locks or info.lock_value != 0.0:
+                continue
+            gs = lb.guards_for(info.index)(0.0, F[e])
             if all(g >= -eps_slack * (1.0 + abs(F[e])) for g in gs):
                 out[e] = info.index
                 break
