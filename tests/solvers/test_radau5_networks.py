@@ -248,3 +248,34 @@ def test_a_dashpot_held_at_rate_zero_by_stuck_dashpots_in_parallel_sticks_too():
         after = sol.t > sol.events[0].t
         assert after.any() and np.all(sol.v["m0"][after] == 0.0)
         assert sol.stats["steps"] < 100
+
+
+def test_dashpots_in_parallel_reverse_together_under_a_load_beyond_both_yields():
+    # a Bingham and a Herschel-Bulkley (n = 0.3) dashpot in parallel reverse together at
+    # t = 0.4146 under a load beyond their joint yield force (2). The probe reads the
+    # n = 0.3 one as stuck (at a rate of 1e-9 its force is tau to the last bit); the
+    # Bingham one, beside it, must not be locked to it for that: both stuck, they
+    # carried -1.39 each, far beyond tau = 1, with rates of 1e-10 until the end
+    tau = 0.9999999999999994
+    scene = Scene([Mass("m0", m=1.0, x0=0.0, v0=1.4277634009151852),
+                   Mass("m1", m=1.0, x0=0.9829556950527372, v0=-1.5281233865957269),
+                   Mass("m2", m=1.1500610447028419, x0=-0.8805906641796053, v0=0.0)],
+                  [Element("e0", get_law("string_spring").bind(k=33.122486059526395,
+                                                               L=0.03245448988971802),
+                           "ground", "m0"),
+                   Element("e1", get_law("bingham").bind(gamma=3.3122861804522032, tau=tau),
+                           "m0", "m1"),
+                   Element("e2", get_law("string_spring").bind(k=22.48844892401142,
+                                                               L=0.14382291990228785),
+                           "m1", "m2"),
+                   Element("e3", _hb(3.1404710793065815, 1.0, 0.3), "m0", "m1")])
+    h = 0.0125
+    sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                   compiled=False)
+    assert sol.ok, sol.message
+    late = sol.t > 0.42
+    # the pair slips backwards: the load is beyond what the two can hold
+    assert np.all(sol.v["m1"][late] - sol.v["m0"][late] < -1e-3)
+    assert np.all(np.abs(sol.F["e1"][late]) > tau)
+    assert not [ev for ev in sol.events if ev.t > 0.41 and ev.element == "e1"
+                and ev.to_branch == 2]

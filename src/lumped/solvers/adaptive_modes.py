@@ -56,6 +56,7 @@ class ModeState:
         self.names = scene.element_names
         self.N, self.E = len(scene.nodes), len(scene.elements)
         self.is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+        self.m_min = min((nd.m for nd in scene.nodes if isinstance(nd, Mass)), default=1.0)
         self.cyclic = plan.cyclic
         self.zeno_window = zeno_window
         self.modes = [0] * self.E
@@ -116,7 +117,10 @@ class ModeState:
             return sel
         new, v_p, F_p = sel
         new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked
-        new = lock_parallel_rates(scene, lbs, new, F_p)  # held at rate 0 by locks: locked
+        # held at rate 0 by locks: locked, unless the probe moved it by more than the
+        # forces' round-off (sqrt(eps) of the largest) does over the probe step
+        rate_tol = 1.4901161193847656e-08 * h_probe * max(abs(f) for f in F_p) / self.m_min
+        new = lock_parallel_rates(scene, lbs, new, v_p, F_p, rate_tol)
         scale_v = atol + rtol * max(abs(vi) for vi in v)
         hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"])
         if isinstance(hit, str):

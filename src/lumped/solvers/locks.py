@@ -154,10 +154,12 @@ def prefer_locks(scene, branches: Sequence, modes: Sequence[int], v: Sequence[fl
     return out
 
 
-def lock_parallel_rates(scene, branches: Sequence, modes: Sequence[int],
-                        F: Sequence[float]) -> list[int]:
+def lock_parallel_rates(scene, branches: Sequence, modes: Sequence[int], v: Sequence[float],
+                        F: Sequence[float], rate_tol: float) -> list[int]:
     """``modes`` with every dashpot whose rate the other locks hold at zero put on its own
-    zero-rate lock, when its force ``F_e`` is admitted there.
+    zero-rate lock, when its force ``F_e`` is admitted there and its rate at the
+    velocities ``v`` is at most ``rate_tol`` (the mode probe's: what round-off in the
+    forces gives over the probe step, :meth:`ModeState.change_mode`).
 
     The elements locked in ``modes`` with a zero rate (a stuck dashpot, ``q = 0``; a taut
     string, whose ``q = L`` holds ``dq/dt = 0``) join the nodes they connect. A dashpot
@@ -171,7 +173,10 @@ def lock_parallel_rates(scene, branches: Sequence, modes: Sequence[int],
     ``n > 1``, ``dq/dF = 0`` at the yield force) the stage Newton then fails for all but
     the shortest steps, and the run crept on by steps of ``1e-7``. A dashpot whose force
     is beyond its yield force keeps the probe's branch (the locks cannot all hold then:
-    the stage solve says so).
+    the stage solve says so), and so does one with a rate above ``rate_tol``: elements
+    reversing together through zero rate under a load beyond their joint yield force
+    (the probe reads a Herschel-Bulkley ``n < 1`` dashpot as stuck at a rate of
+    ``1e-9``, where its force is ``tau`` to the last bit) must not be locked together.
     """
     eps_slack = 1.4901161193847656e-08  # sqrt(eps)
     out = list(modes)
@@ -188,8 +193,10 @@ def lock_parallel_rates(scene, branches: Sequence, modes: Sequence[int],
         return out
     for e, el in enumerate(scene.elements):
         lb = branches[e]
+        a, b = ea[e], eb[e]
         if el.kind != "dashpot" or lb.info[out[e]].locks or \
-                _find(parent, ea[e] % m) != _find(parent, eb[e] % m):
+                _find(parent, a % m) != _find(parent, b % m) or \
+                abs((v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)) > rate_tol:
             continue
         for info in lb.info:
             if not info.locks or info.lock_value != 0.0:
