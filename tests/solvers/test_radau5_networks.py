@@ -279,3 +279,32 @@ def test_dashpots_in_parallel_reverse_together_under_a_load_beyond_both_yields()
     assert np.all(np.abs(sol.F["e1"][late]) > tau)
     assert not [ev for ev in sol.events if ev.t > 0.41 and ev.element == "e1"
                 and ev.to_branch == 2]
+
+
+def test_a_coulomb_element_just_stuck_at_a_junction_stays_within_its_yield_force():
+    # a Coulomb element holds a junction to ground behind a spring; it sticks at
+    # t = 0.2010 and its force, set by the spring, turns back from tau. The dense output
+    # started that force from the quadratic through the stage forces and read it up to
+    # 5e-4 of the forces' scale beyond tau (2e-3 relative to tau) just after the stick;
+    # a lock at a junction has its force from the balance, which the probe holds
+    tau = 0.07943282347242814
+    scene = Scene([Junction("j0", x0=0.0),
+                   Mass("m1", m=0.14594436308579567, x0=0.0, v0=1.2033021639990489),
+                   Mass("m2", m=1.0, x0=0.0, v0=0.0001)],
+                  [Element("e0", get_law("coulomb").bind(tau=tau, r=1.5021892913745079),
+                           "ground", "j0"),
+                   Element("e1", get_law("linear_spring").bind(k=5.853230907282848), "j0",
+                           "m1"),
+                   Element("e2", get_law("linear_spring").bind(k=8.567936992608391), "m1",
+                           "m2")])
+    h = 0.020119789925451444
+    sol = simulate(scene, method="radau5", dt=h, t_end=25 * h, rtol=h**2, atol=h**3,
+                   compiled=False)
+    assert sol.ok, sol.message
+    sticks = [ev.t for ev in sol.events if ev.element == "e0" and ev.to_branch == 2
+              and ev.t > 0.1]
+    assert len(sticks) == 1 and 0.20 < sticks[0] < 0.21
+    rows = sol.sol(sticks[0] + np.linspace(0.0, 0.02, 201))
+    F = rows[:, sol.columns.index("F_e0")]
+    assert np.all(rows[:, sol.columns.index("v_j0")] == 0.0)
+    assert np.abs(F).max() <= tau * (1.0 + 1e-4)  # 1.002 tau before

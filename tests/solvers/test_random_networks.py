@@ -189,12 +189,12 @@ def check_network(scene: Scene, method: str, **extra) -> list:
         assert s.ok, s.message
         assert np.all(np.isfinite(s.data))
         # an adaptive method (rtol = dt^2, atol = dt^3, _solve) holds forces to
-        # min(1e-3, 100 rtol) and velocities to atol + rtol max |v|
+        # min(1e-3, 100 rtol), velocities to atol + rtol max |v|, Coulomb forces to rtol
         h = dt / 2**k
         adaptive = method not in FIXED_STEP_METHODS
         v_max = float(np.abs(s.data[:, 2:1 + 2 * len(scene.nodes):2]).max())
         check_yield(scene, s, min(1e-3, 100.0 * h**2) if adaptive else 0.0,
-                    h**3 + h**2 * v_max if adaptive else 0.0)
+                    h**3 + h**2 * v_max if adaptive else 0.0, h**2 if adaptive else 0.0)
     energies, mags = zip(*(stored_energy(scene, s) for s in sols), strict=True)
     E0 = energies[0][0]
     # round-off of the terms, and Newton's absolute tolerance on the velocities

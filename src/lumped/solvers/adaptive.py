@@ -99,6 +99,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         ms.cones
     events, recent = ms.events, ms.recent
     lbs = plan.branches
+    is_spring = [el.kind == "spring" for el in scene.elements]
 
     # the compiled stage Newton (compiled=True), built on first need: with the compiled
     # loop the attempts need it only after a singular Jacobian (building it costs ~0.7 ms)
@@ -147,20 +148,23 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 for e in range(E)]
 
     def dense_start_forces(U: list[float]) -> list[float]:
-        """The forces at ``t`` the dense output's polynomials start from. After an event
-        a locked element's force (a stuck dashpot, a taut string: set by the constraint,
-        not by its law) starts from the stage forces' quadratic, exact for a linear
-        relation such as a load shared by locks, where the probe's value carries round-off
-        magnified by ``m / h_probe`` (``m ulp(x) / h_probe^2`` for a position lock). Every
-        other element starts from the probe's force, its law's value at ``t`` to
-        ``O(h_probe)``: the quadratic is off by ``O(h^3)`` times the force's third
-        derivative when the step after the event is long and the force curved (a
-        junction's dashpot just broken out, relaxing on a time scale below the step: 20 %
-        of the force at the first output point)."""
+        """The forces at ``t`` the dense output's polynomials start from, after an event.
+
+        The probe's force, the right limit at ``t`` to ``O(h_probe)``, for every element
+        but two kinds, which start from the stage forces' quadratic at ``s = 0``: a
+        position lock (a taut string), whose force the probe fixes only to
+        ``m ulp(x) / h_probe^2``, and locks in parallel (``cones``), whose split the stage
+        solve chooses (the quadratic is exact for the linear relation of a load shared
+        by locks). The quadratic is off by ``O(h^3)`` times the force's third derivative
+        where the step after the event is long and the force curved: a junction's dashpot
+        just broken out and relaxing faster than the step (20 % of the force at the
+        first output point), a Coulomb element just stuck at a junction (its force read
+        beyond its yield force)."""
         if not ms.forces_from_probe:
             return F
         F_q = start_forces(U)
-        return [F_q[e] if lbs[e].info[modes[e]].locks else F[e] for e in range(E)]
+        return [F_q[e] if e in cones or (lbs[e].info[modes[e]].locks and is_spring[e])
+                else F[e] for e in range(E)]
 
     def crossing(U: list[float], h: float):
         if not watched:
