@@ -308,3 +308,36 @@ def test_a_coulomb_element_just_stuck_at_a_junction_stays_within_its_yield_force
     F = rows[:, sol.columns.index("F_e0")]
     assert np.all(rows[:, sol.columns.index("v_j0")] == 0.0)
     assert np.abs(F).max() <= tau * (1.0 + 1e-4)  # 1.002 tau before
+
+
+def test_a_stage_of_locks_that_cannot_carry_the_load_is_not_a_solution():
+    # a junction held to ground by a Coulomb, a Bingham and a Herschel-Bulkley (n = 2)
+    # dashpot breaks out tangentially at t = 0.4656 (the load reaches the sum of the
+    # yield forces). The probe then put the Coulomb and Bingham ones back on their
+    # locks beside the slipping n = 2 one, whose rate they hold at zero; the cone split's
+    # pseudo-inverse converged to a least-squares point that misses the laws (the n = 2
+    # dashpot carried 1.09 tau at zero rate, the Newtonian one a force at a rate of 0)
+    # and the stage was accepted for 17 ms. A stage is now accepted only at a root.
+    scene = Scene([Junction("j0", x0=1.0),
+                   Mass("m1", m=1.0000000000000004, x0=0.8507071702290694, v0=0.0)],
+                  [Element("e0", get_law("coulomb").bind(tau=0.36811548611660094,
+                                                         r=38.46409782171832),
+                           "ground", "j0"),
+                   Element("e1", get_law("linear_spring").bind(k=21.49666663099636), "j0",
+                           "m1"),
+                   Element("e2", _hb(4.936309426029256, 1.0, 2.0), "j0", "ground"),
+                   Element("e3", get_law("newtonian").bind(c=0.01), "j0", "ground"),
+                   Element("e4", get_law("bingham").bind(gamma=0.26742623143003397,
+                                                         tau=0.20015356117412916),
+                           "ground", "j0")])
+    h = 0.025
+    sol = simulate(scene, method="radau5", dt=h / 10, t_end=0.5, rtol=h**2, atol=h**3,
+                   compiled=False)
+    assert sol.ok, sol.message
+    late = sol.t > 0.47
+    v = sol.v["j0"][late]
+    # every law holds on the output grid after the break-out: the Newtonian force is
+    # c times the rate (both come from the same stages), the n = 2 force the law's
+    assert np.abs(sol.F["e3"][late] + 0.01 * v).max() <= 1e-9
+    F2 = -sol.F["e2"][late]
+    assert np.abs(v - 4.936309426029256 * np.maximum(F2 - 1.0, 0.0) ** 2).max() <= 1e-3

@@ -69,6 +69,17 @@ def _solver(J: list[list[float]]) -> Callable[[list[float]], list[float]]:
     return min_norm_solver(J)
 
 
+def _solves(G: list[float], J: list[list[float]], scale: list[float], tol: float) -> bool:
+    """Whether the residual ``G`` is one a Newton correction within the convergence test
+    removes: ``|G_i| <= 10 tol sum_j |J_ij| scale_j`` on every row (a row that no
+    unknown enters must be zero to round-off)."""
+    for g, row in zip(G, J, strict=True):
+        bound = 10.0 * tol * sum(abs(a) * sc for a, sc in zip(row, scale, strict=True))
+        if not abs(g) <= bound + 1e-300:
+            return False
+    return True
+
+
 def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[float, float]],
                  N: int, n: int, held: dict[int, float] | None = None
                  ) -> Callable[[list[float]], list[float]]:
@@ -363,9 +374,11 @@ class StageSystem:
                     worst = r  # NaN lands here too
             if not math.isfinite(worst):
                 return None, it, nfac
-            if worst <= tol:
-                return U, it, nfac
             G, J2 = self.evaluate(U, h, x_n, v_n, f, kernels)
+            if worst <= tol:
+                # the pseudo-inverse of the cone split converges to a least-squares point
+                # when the locks cannot carry the load together: only a root is a solution
+                return (U if not cones or _solves(G, J2, scale, tol) else None), it, nfac
             if worst > 0.5 * prev:
                 solve = self._solver(J2, U, cones, held)
                 nfac += 1
