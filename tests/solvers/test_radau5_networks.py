@@ -341,3 +341,35 @@ def test_a_stage_of_locks_that_cannot_carry_the_load_is_not_a_solution():
     assert np.abs(sol.F["e3"][late] + 0.01 * v).max() <= 1e-9
     F2 = -sol.F["e2"][late]
     assert np.abs(v - 4.936309426029256 * np.maximum(F2 - 1.0, 0.0) ** 2).max() <= 1e-3
+
+
+def test_a_landing_on_a_guard_flat_at_its_root_shrinks_its_bracket():
+    # a junction's Herschel-Bulkley n = 0.5 dashpot stops in finite time (its guard
+    # -F - tau falls like (t* - t)^2), while a mass held to ground through a Bingham-like
+    # and a Coulomb dashpot in series stops beside it. Landing on the flat guard, the
+    # step's polynomial put the root a hair past the end that held, 40 times over, and
+    # the event was taken 5.5e-5 s early with both velocities at 5.8e-4: the modes after
+    # it contradicted each other and the run stopped with "50 events within 0.0 s"
+    scene = Scene([Junction("j0", x0=-0.16601112764341397),
+                   Mass("m1", m=0.1040056677540292, x0=0.9638745547375112,
+                        v0=0.955654545597556),
+                   Mass("m2", m=0.16445133378700583, x0=0.0, v0=0.547220115289289),
+                   Junction("j3", x0=0.0)],
+                  [Element("e0", _hb(1.0, 0.9548815291580869, 1.0), "ground", "j0"),
+                   Element("e1", get_law("coulomb").bind(tau=1.0, r=27.788870209844845),
+                           "j0", "m1"),
+                   Element("e2", get_law("newtonian").bind(c=0.05814032225531234), "m1",
+                           "m2"),
+                   Element("e3", _hb(7.824248179601902, 0.10882530200040598, 0.5),
+                           "ground", "j3"),
+                   Element("e4", get_law("linear_spring").bind(k=20.511365346245597), "m1",
+                           "j3"),
+                   Element("e5", get_law("implicit_spring").bind(
+                       k=14.50140522840195, L0=1.0, F0=1.0000000000023026), "j3", "m1")])
+    h = 0.010900470903439562
+    sol = simulate(scene, method="radau5", dt=h, t_end=40 * h, rtol=h**2, atol=h**3,
+                   compiled=False)
+    assert sol.ok, sol.message
+    stops = [ev.t for ev in sol.events if ev.element == "e3" and ev.to_branch == 2]
+    assert stops and any(0.22 < t < 0.23 for t in stops), sol.events
+    assert len(sol.events) < 20

@@ -375,6 +375,12 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                     target[6] = -1
                     h = (hit[0] * h if hit is not None and hit[1] == which and 0.0 < hit[0] < 1.0
                          else 0.5 * (h_lo + h))
+                    if h - h_lo <= 1e-2 * (target[3] - h_lo):
+                        # the step's polynomial puts the root a hair past the end that
+                        # held, again and again where the guard is flat at its root (a
+                        # junction's Herschel-Bulkley n < 1 dashpot stopping, g ~ (t* -
+                        # t)^2): the bracket did not shrink in 40 passes. Bisect.
+                        h = 0.5 * (h_lo + target[3])
                 else:
                     if target[6] == 1:  # Illinois: the far end stayed twice, halve its value
                         target[4] *= 0.5
