@@ -127,6 +127,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     dF_n: list[float] | None = None  # force slopes at t (None at the start, after events)
     target: list | None = None  # the guard being landed on and its bracket
     floor_tried = False  # a mode change was tried at the step floor since the last step
+    infeasible_at = math.nan  # the last t where an infeasible stage had the mode chosen
+    infeasible_modes: list[int] = []  # ... and the mode the full laws kept there
     kept = False  # an event at t kept the mode (since the last step)
     t = 0.0
     bi = 0
@@ -301,7 +303,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 stage_solve = compiled_stage_solver(scene, modes)  # modes: the live list
             if stage_solve is None or cones:  # (locks in parallel: the cone split)
                 sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale,
-                                              max_iters=max_newton, cones=cones or None)
+                                              max_iters=max_newton, cones=cones or None,
+                                              least_squares=t == infeasible_at and
+                                              modes == infeasible_modes)
             else:
                 sol, its, nfac = stage_solve(U, h, x, v, fk, scale, max_newton)
                 U = sol if sol is not None else U
@@ -313,6 +317,26 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         if sol is None:
             stats["rejected"] += 1
             h_acc = None
+            if system.infeasible and target is None and t != infeasible_at:
+                # the locks in parallel cannot carry the load together (no guard sees
+                # it: the cone split keeps every force in its cone): let the full laws
+                # choose the mode at t, once per t
+                infeasible_at = t
+                old = list(modes)
+                dF_n = None
+                # (probes on the scale of the step that failed: the lock breaks within it)
+                stop = at_event(t, h, "guard")
+                if stop:
+                    status, message = stop
+                    break
+                if modes != old:
+                    h = h_good
+                    continue
+                # the full laws keep the locks (a probe's step holds where the stage's
+                # does not): the split of least squares stands, as before, until an
+                # accepted step
+                infeasible_modes = list(modes)
+                continue
             if target is not None and target[1] > 0.0:
                 # a landing step that Newton cannot take: no solution that far, the
                 # bracket ends there (halving alone went below the step that held, to 0)

@@ -199,6 +199,10 @@ class StageSystem:
         self.N = len(masses)
         self.E = len(elem_a)
         self.n = self.N + self.E
+        #: the last :meth:`solve` failed because the locks in parallel cannot carry the
+        #: load together (a least-squares point, not a root): a lock must break
+        self.infeasible = False
+        self._least_squares = False
         self.m = [float(mi) for mi in masses]
         self.ea = list(elem_a)
         self.eb = list(elem_b)
@@ -306,7 +310,7 @@ class StageSystem:
               f: list[list[float]], kernels: Sequence[Callable], scale: list[float],
               tol: float = 1e-3, max_iters: int = 10,
               cones: dict[int, tuple[float, float]] | None = None,
-              ) -> tuple[list[float] | None, int, int]:
+              least_squares: bool = False) -> tuple[list[float] | None, int, int]:
         """Newton on the stage system from the guess ``U`` (modified in place).
 
         Converged when ``max_j |dU_j| / scale_j <= tol``; the Jacobian is refactored when
@@ -316,8 +320,13 @@ class StageSystem:
         (locked elements in parallel: the split of their forces is free) is solved by the
         minimum-norm correction, the rule of the fixed-step methods, or, when ``cones``
         names the locked elements in parallel (``e -> (centre, half-width)`` of the force
-        interval their lock admits), by the split of :func:`_cone_solver`.
+        interval their lock admits), by the split of :func:`_cone_solver`. With ``cones``
+        a stage is accepted only at a root (every residual within what a converged
+        correction removes); a least-squares point of the split (the locks cannot carry
+        the load together) sets :attr:`infeasible` and fails, unless ``least_squares``.
         """
+        self.infeasible = False
+        self._least_squares = least_squares
         if not cones:
             return self._newton(U, h, x_n, v_n, f, kernels, scale, tol, max_iters, None, {})
         # locks in series and in parallel: the split of least weighted norm can leave a
@@ -338,6 +347,7 @@ class StageSystem:
                 if first is None:
                     return None, its, nfac
                 U[:] = first
+                self.infeasible = False  # (a held pass that missed a root)
                 return U, its, nfac
             if first is None:
                 first = list(U)
@@ -378,7 +388,10 @@ class StageSystem:
             if worst <= tol:
                 # the pseudo-inverse of the cone split converges to a least-squares point
                 # when the locks cannot carry the load together: only a root is a solution
-                return (U if not cones or _solves(G, J2, scale, tol) else None), it, nfac
+                if cones and not self._least_squares and not _solves(G, J2, scale, tol):
+                    self.infeasible = True
+                    return None, it, nfac
+                return U, it, nfac
             if worst > 0.5 * prev:
                 solve = self._solver(J2, U, cones, held)
                 nfac += 1
