@@ -404,3 +404,35 @@ def test_locks_whose_stage_misses_a_root_but_that_the_full_laws_keep_do_not_cree
                    atol=h**3, compiled=False, max_steps=2000)
     assert sol.ok, sol.message
     assert sol.stats["steps"] < 500
+
+
+def test_a_lock_on_a_mass_starts_its_dense_force_from_the_stage_not_the_probe():
+    # two Herschel-Bulkley dashpots in series through a mass (ground - m0 - m1) stick
+    # together at t = 0.4421, and one step of 0.05 s follows. The probe's forces of such
+    # locks are m / h_probe times the velocity the lock snapped (4e-9 here): started
+    # from them, the dense output carried e0 at 1.03 tau0 and off e1's force by 1.0
+    spring = get_law("linear_spring")
+    tau0 = 0.9999769744141629
+    scene = Scene([Mass("m0", m=0.17980888891516542, x0=-0.020199060338953023, v0=0.25),
+                   Mass("m1", m=0.9999769744141629, x0=0.5004899991292651,
+                        v0=-0.6586351403718778),
+                   Mass("m2", m=0.6465215549684276, x0=0.6998490562195463,
+                        v0=0.5695356058824541)],
+                  [Element("e0", _hb(7.942677816820884, tau0, 2.0), "ground", "m0"),
+                   Element("e1", _hb(1.0, 1.0, 0.3), "m0", "m1"),
+                   Element("e2", spring.bind(k=1.0), "m1", "m2"),
+                   Element("e3", spring.bind(k=0.1), "m2", "m1"),
+                   Element("e4", spring.bind(k=1.0), "ground", "m1"),
+                   Element("e5", spring.bind(k=1.0), "m2", "m1")])
+    h = 0.025 / 4
+    sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                   compiled=False)
+    assert sol.ok, sol.message
+    sticks = [ev.t for ev in sol.events if ev.to_branch == 2]
+    assert sticks and 0.44 < sticks[0] < 0.45
+    ts = np.linspace(sticks[0], 0.5, 59)
+    rows = sol.sol(ts)
+    F0, F1 = rows[:, sol.columns.index("F_e0")], rows[:, sol.columns.index("F_e1")]
+    assert np.all(rows[:, sol.columns.index("v_m0")] == 0.0)
+    assert np.abs(F0).max() <= tau0 * (1.0 + 1e-9)
+    assert np.abs(F0 - F1).max() <= 1e-9  # the stuck mass's balance, on every output

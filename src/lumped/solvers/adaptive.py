@@ -99,7 +99,10 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         ms.cones
     events, recent = ms.events, ms.recent
     lbs = plan.branches
-    is_spring = [el.kind == "spring" for el in scene.elements]
+    # elements between junctions and ground only (a lock there has its force from a
+    # junction's balance)
+    massless = [not any(p >= 0 and is_mass[p] for p in (scene.elem_a[e], scene.elem_b[e]))
+                and scene.elements[e].kind == "dashpot" for e in range(E)]
 
     # the compiled stage Newton (compiled=True), built on first need: with the compiled
     # loop the attempts need it only after a singular Jacobian (building it costs ~0.7 ms)
@@ -152,20 +155,23 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     def dense_start_forces(U: list[float]) -> list[float]:
         """The forces at ``t`` the dense output's polynomials start from, after an event.
 
-        The probe's force, the right limit at ``t`` to ``O(h_probe)``, for every element
-        but two kinds, which start from the stage forces' quadratic at ``s = 0``: a
-        position lock (a taut string), whose force the probe fixes only to
-        ``m ulp(x) / h_probe^2``, and locks in parallel (``cones``), whose split the stage
-        solve chooses (the quadratic is exact for the linear relation of a load shared
-        by locks). The quadratic is off by ``O(h^3)`` times the force's third derivative
-        where the step after the event is long and the force curved: a junction's dashpot
-        just broken out and relaxing faster than the step (20 % of the force at the
-        first output point), a Coulomb element just stuck at a junction (its force read
-        beyond its yield force)."""
+        The probe's force, the right limit at ``t`` to ``O(h_probe)``, for an element
+        that is not locked, or locked between junctions and ground only (its force is
+        then set by a junction's balance, an algebraic relation the probe holds). A lock
+        that a mass enters, a position lock (a taut string) and locks in parallel
+        (``cones``) start from the stage forces' quadratic at ``s = 0``: the probe fixes
+        the force of a lock on a mass only to ``m / h_probe`` times the velocity it
+        snapped (0.7 for ``4e-9``), a position lock's to ``m ulp(x) / h_probe^2``, and the
+        split of locks in parallel is the stage solve's (the quadratic is exact for a
+        load shared by locks). The quadratic is off by ``O(h^3)`` times the force's third
+        derivative where the step after the event is long and the force curved: a
+        junction's dashpot just broken out and relaxing faster than the step (20 % of the
+        force at the first output point), a Coulomb element just stuck at a junction (its
+        force read beyond its yield force)."""
         if not ms.forces_from_probe:
             return F
         F_q = start_forces(U)
-        return [F_q[e] if e in cones or (lbs[e].info[modes[e]].locks and is_spring[e])
+        return [F_q[e] if e in cones or (lbs[e].info[modes[e]].locks and not massless[e])
                 else F[e] for e in range(E)]
 
     def crossing(U: list[float], h: float):
