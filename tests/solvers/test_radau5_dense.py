@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from lumped import get_law, simulate
+from lumped.codegen.jit import numba_enabled
 from lumped.reference import exact_solution
 from lumped.scenarios import get_scenario, scenario_scene
 from lumped.solvers.adaptive_output import DenseOutput, position_weights
@@ -99,3 +100,34 @@ def test_dense_positions_are_continuous_with_slope_v():
     # the one-sided difference errs by about 1.5 d |a| (a up to k x0 / m = 50)
     assert long.sum() > 100
     assert np.max(np.abs(slope - sol.data[1:-1, 2][long])) <= 1e-4
+
+
+@pytest.mark.skipif(not numba_enabled(), reason="the compiled evaluation needs numba")
+@pytest.mark.parametrize("shuffle", [False, True])
+def test_the_compiled_dense_output_is_the_numpy_one_across_stuck_intervals(monkeypatch,
+                                                                          shuffle):
+    """A run that sticks and breaks out again and again (a held interval without steps
+    each time, :mod:`lumped.solvers.stuck`): the compiled evaluation, which leaves the rows
+    of a held interval to the static balance and walks the steps for sorted times, gives
+    the numpy evaluation's numbers at the step points, at the ends of every held interval
+    and on a grid, in order and shuffled."""
+    import lumped.solvers.adaptive_output as out
+    from lumped import Element, Mass, Scene
+    from lumped.scene.forcing import SineBurst
+
+    scene = Scene([Mass("mass", m=1.0)],
+                  [Element("spring", get_law("linear_spring").bind(k=100.0), "ground", "mass"),
+                   Element("dashpot", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground",
+                           "mass")],
+                  {"mass": SineBurst(1.5, 2.0 * math.pi, 4.0)})
+    sol = simulate(scene, method="radau5", t_end=5.0, rtol=1e-6)
+    held = sol.dense._static
+    assert sol.stats["held_intervals"] >= 8 and len(held) == sol.stats["held_intervals"]
+    ends = [s for s0, s1, _ in held for s in (s0, s1)]
+    t = np.concatenate([np.linspace(0.0, 5.0, 2001), sol.t, ends, np.nextafter(ends, 0.0),
+                        np.nextafter(ends, 9.0)])
+    t = np.clip(t, 0.0, 5.0)
+    t = np.random.default_rng(0).permutation(t) if shuffle else np.sort(t)
+    fast = sol.sol(t)
+    monkeypatch.setattr(out, "numba_enabled", lambda: False)
+    assert np.array_equal(sol.sol(t), fast)

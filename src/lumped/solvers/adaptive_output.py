@@ -48,6 +48,7 @@ class DenseOutput:
         self._count = 0
         self._cache: tuple | None = None
         self._static: list[tuple[float, float, object]] = []
+        self._table: tuple | None = None
 
     def __len__(self) -> int:
         return self._count + len(self._static)
@@ -111,20 +112,20 @@ class DenseOutput:
         t_lo, t_hi = self.span()
         if self._count:
             T0, H, Y0, D = self._arrays()
+        out = np.empty((len(ts), 1 + 2 * N + self.E))
+        if numba_enabled():  # the same numbers, in one compiled pass per part
+            self._compiled(ts, t_lo, t_hi, out)
+            return out
         bad = ~((ts >= t_lo) & (ts <= t_hi))
         if bad.any():
             raise ValueError(f"`t` = {ts[bad][0]!r} is outside the solved interval "
                              f"[{t_lo!r}, {t_hi!r}]")
-        out = np.empty((len(ts), 1 + 2 * N + self.E))
         if self._count:
             self._polynomials(ts, out)
         for s0, s1, hold in self._static:
             # [s0, s1): a step that starts at s1 owns s1 (right limits); the end is closed
             # when nothing follows
             closed = s1 == t_hi and not (self._count and bool(np.isin(s1, T0)))
-            if numba_enabled():
-                _static_fill(ts, s0, s1, closed, *hold.arrays(), N, out)
-                continue
             inside = (ts >= s0) & ((ts < s1) | ((ts == s1) & closed))
             if inside.any():
                 sel = ts[inside]
@@ -136,6 +137,42 @@ class DenseOutput:
                 rows[:, 1 + 2 * N:] = hold.forces_many(sel)
                 out[inside] = rows
         return out
+
+    def _compiled(self, ts: np.ndarray, t_lo: float, t_hi: float, out: np.ndarray) -> None:
+        """:meth:`__call__` compiled: the numpy path's rows, each evaluated once (a row in a
+        stuck interval by the static balance only; with sorted times the steps are walked
+        and each stuck interval fills only its own range of rows)."""
+        bad, ordered = _scan_times(ts, t_lo, t_hi)
+        if bad >= 0:
+            raise ValueError(f"`t` = {ts[bad]!r} is outside the solved interval "
+                             f"[{t_lo!r}, {t_hi!r}]")
+        S0, S1, closed = self._static_table(t_hi)
+        if self._count:
+            _evaluate(*self._arrays(), ts, self.N, out, S0, S1, closed, ordered)
+        for k, (s0, s1, hold) in enumerate(self._static):
+            if ordered:  # the rows this interval can own: [s0, s1] in sorted times
+                lo, hi = int(np.searchsorted(ts, s0, "left")), int(np.searchsorted(ts, s1,
+                                                                                  "right"))
+            else:
+                lo, hi = 0, len(ts)
+            if lo < hi:
+                _static_fill(ts[lo:hi], s0, s1, bool(closed[k]), *hold.arrays(), self.N,
+                             out[lo:hi])
+
+    def _static_table(self, t_hi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(S0, S1, closed)`` of the stuck intervals (cached): ``[s0, s1)``, closed at
+        ``s1`` when it ends the solved interval and no step starts there."""
+        key = (self._count, len(self._static), t_hi)
+        if self._table is None or self._table[0] != key:
+            T0 = self._arrays()[0] if self._count else np.empty(0)
+            closed = []
+            for _, s1, _ in self._static:
+                i = int(np.searchsorted(T0, s1))
+                closed.append(s1 == t_hi and not (i < len(T0) and T0[i] == s1))
+            self._table = (key, np.array([s[0] for s in self._static], dtype=float),
+                           np.array([s[1] for s in self._static], dtype=float),
+                           np.array(closed, dtype=np.bool_))
+        return self._table[1:]
 
     def _polynomials(self, ts: np.ndarray, out: np.ndarray) -> None:
         """The collocation polynomials at ``ts`` into ``out`` (each ``t`` on the step with
@@ -168,16 +205,62 @@ _L_NODES = ((_C2, _C3, _W1), (_C1, _C3, _W2), (_C1, _C2, _W3))
 
 
 @njit(cache=True)
-def _evaluate(T0, H, Y0, D, ts, N, out) -> None:
+def _scan_times(ts, t_lo, t_hi):
+    """``(index of the first time outside [t_lo, t_hi] or -1, whether ts is sorted)``."""
+    ordered = True
+    for r in range(ts.shape[0]):
+        t = ts[r]
+        if not (t >= t_lo and t <= t_hi):
+            return r, ordered
+        if r > 0 and t < ts[r - 1]:
+            ordered = False
+    return -1, ordered
+
+
+@njit(cache=True)
+def _in_static(t, S0, S1, CL) -> bool:
+    """``t`` lies in a stuck interval ``[S0[k], S1[k])`` (or at a closed ``S1[k]``) found
+    by bisection on ``S0`` (intervals in time order and disjoint)."""
+    k = np.searchsorted(S0, t, side="right") - 1
+    while k >= 0 and S1[k] >= t:
+        if t < S1[k] or (CL[k] and t == S1[k]):
+            return True
+        k -= 1
+    return False
+
+
+@njit(cache=True)
+def _evaluate(T0, H, Y0, D, ts, N, out, S0, S1, CL, ordered) -> None:
     """:meth:`DenseOutput.__call__`'s numpy evaluation, operation for operation, in one
     loop: the step ``i`` with ``T0[i] <= t < T0[i+1]`` (the last one at the end), the
     weights of :func:`~lumped.solvers.radau.dense_weights`, ``y_n + sum_k l_k D_k``, and
-    for the positions :func:`position_weights`, ``x_n + h (s v_n + sum_k L_k D_k^v)``."""
+    for the positions :func:`position_weights`, ``x_n + h (s v_n + sum_k L_k D_k^v)``.
+
+    A row in a stuck interval ``[S0[k], S1[k])`` (closed at ``S1[k]`` where ``CL[k]``) is
+    left to :func:`_static_fill`, which writes all of it. With ``ordered`` times the step
+    and the stuck interval are found by walking forward, else by bisection (the driver
+    makes the intervals in time order and disjoint; membership is tested exactly, so
+    other intervals would only leave rows to be evaluated here and overwritten)."""
     n = T0.shape[0]
     ny = Y0.shape[1]
+    ns = S0.shape[0]
+    i = -1
+    k = 0
     for r in range(ts.shape[0]):
         t = ts[r]
-        i = np.searchsorted(T0, t, side="right") - 1
+        if ns:
+            if ordered:  # the first interval that does not end before t
+                while k < ns - 1 and (S1[k] < t or (S1[k] == t and not CL[k])):
+                    k += 1
+                if S0[k] <= t and (t < S1[k] or (CL[k] and t == S1[k])):
+                    continue
+            elif _in_static(t, S0, S1, CL):
+                continue
+        if ordered and i >= 0:
+            while i + 1 < n and T0[i + 1] <= t:
+                i += 1
+        else:
+            i = np.searchsorted(T0, t, side="right") - 1
         i = min(max(i, 0), n - 1)
         s = (t - T0[i]) / H[i]
         l1 = s * (s - _C2) * (s - _C3) / _W1
