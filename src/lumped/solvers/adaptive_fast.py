@@ -198,10 +198,10 @@ class CompiledLoop:
         return x, v, F, dF
 
     def _call(self, x, v, F, dF) -> None:
-        self.fn(self.law, self.guards, self.js.masses, self.js.ea, self.js.eb, self.js.spring,
-                self.js.lock_q, self.modes_a, self.watched_a, self.checked, self.A, self.W,
-                self.fkind, self.fpar, x, v, F, dF, self.fst, self.ist, *self.outputs, self.ws,
-                self.wm, self.iw)
+        self.fn(self.law.addr, self.guards.addr, self.js.masses, self.js.ea, self.js.eb,
+                self.js.spring, self.js.lock_q, self.modes_a, self.watched_a, self.checked,
+                self.A, self.W, self.fkind, self.fpar, x, v, F, dF, self.fst, self.ist,
+                *self.outputs, self.ws, self.wm, self.iw)
         self.calls += 1
 
     def forget(self) -> None:
