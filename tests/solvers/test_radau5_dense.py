@@ -131,3 +131,50 @@ def test_the_compiled_dense_output_is_the_numpy_one_across_stuck_intervals(monke
     fast = sol.sol(t)
     monkeypatch.setattr(out, "numba_enabled", lambda: False)
     assert np.array_equal(sol.sol(t), fast)
+
+
+def test_the_output_keeps_its_steps_in_order_as_it_grows():
+    """Steps added one at a time (the Python loop), as blocks (``extend``) and written in
+    place (``block``/``commit``, the compiled loop), well past the first capacity: the
+    arrays hold them in their order, and the rows likewise."""
+    from lumped.solvers.adaptive_output import Rows
+
+    rng = np.random.default_rng(3)
+    N, E = 1, 2
+    ny = 2 * N + E
+    dense, rows = DenseOutput(N, E), Rows()
+    want_t, want_y0, want_d, want_rows = [], [], [], []
+    t = 0.0
+    for part in range(12):
+        k = int(rng.integers(1, 40))
+        y0 = rng.normal(size=(k, ny))
+        Y = rng.normal(size=(k, 3, ny))
+        r = rng.normal(size=(k, 1 + ny))
+        T0, H = t + np.arange(k, dtype=float), np.ones(k)
+        t += k
+        if part % 3 == 0:
+            for i in range(k):
+                dense.add(T0[i], H[i], y0[i].tolist(), Y[i].tolist())
+                rows.append(r[i].tolist())
+        elif part % 3 == 1:
+            dense.extend(T0, H, y0, Y - y0[:, None, :])
+            rows.extend(r)
+        else:
+            views = dense.block(k + 5)  # room for more than is kept
+            for view, val in zip(views, (T0, H, y0, Y - y0[:, None, :]), strict=True):
+                view[:k] = val
+            dense.commit(k)
+            rows.block(k + 5, 1 + ny)[:k] = r
+            rows.commit(k)
+        want_t.append(T0)
+        want_y0.append(y0)
+        want_d.append(Y - y0[:, None, :])
+        want_rows.append(r)
+    T0, H, Y0, D = dense._arrays()
+    assert len(dense) == len(T0) == sum(map(len, want_t)) > 64
+    assert np.array_equal(T0, np.concatenate(want_t)) and np.all(H == 1.0)
+    assert np.array_equal(Y0, np.concatenate(want_y0))
+    assert np.array_equal(D, np.concatenate(want_d))
+    assert np.array_equal(rows.array(), np.concatenate(want_rows))
+    rows.set_first([9.0] * (1 + ny))
+    assert rows.first() == [9.0] * (1 + ny)
