@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from lumped import get_law, simulate
+from lumped.codegen.jit import numba_enabled
 from lumped.reference import exact_solution
 from lumped.scenarios import get_scenario, scenario_scene
 from lumped.solvers.adaptive_output import DenseOutput, position_weights
@@ -99,3 +100,81 @@ def test_dense_positions_are_continuous_with_slope_v():
     # the one-sided difference errs by about 1.5 d |a| (a up to k x0 / m = 50)
     assert long.sum() > 100
     assert np.max(np.abs(slope - sol.data[1:-1, 2][long])) <= 1e-4
+
+
+@pytest.mark.skipif(not numba_enabled(), reason="the compiled evaluation needs numba")
+@pytest.mark.parametrize("shuffle", [False, True])
+def test_the_compiled_dense_output_is_the_numpy_one_across_stuck_intervals(monkeypatch,
+                                                                          shuffle):
+    """A run that sticks and breaks out again and again (a held interval without steps
+    each time, :mod:`lumped.solvers.stuck`): the compiled evaluation, which leaves the rows
+    of a held interval to the static balance and walks the steps for sorted times, gives
+    the numpy evaluation's numbers at the step points, at the ends of every held interval
+    and on a grid, in order and shuffled."""
+    import lumped.solvers.adaptive_output as out
+    from lumped import Element, Mass, Scene
+    from lumped.scene.forcing import SineBurst
+
+    scene = Scene([Mass("mass", m=1.0)],
+                  [Element("spring", get_law("linear_spring").bind(k=100.0), "ground", "mass"),
+                   Element("dashpot", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground",
+                           "mass")],
+                  {"mass": SineBurst(1.5, 2.0 * math.pi, 4.0)})
+    sol = simulate(scene, method="radau5", t_end=5.0, rtol=1e-6)
+    held = sol.dense._static
+    assert sol.stats["held_intervals"] >= 8 and len(held) == sol.stats["held_intervals"]
+    ends = [s for s0, s1, _ in held for s in (s0, s1)]
+    t = np.concatenate([np.linspace(0.0, 5.0, 2001), sol.t, ends, np.nextafter(ends, 0.0),
+                        np.nextafter(ends, 9.0)])
+    t = np.clip(t, 0.0, 5.0)
+    t = np.random.default_rng(0).permutation(t) if shuffle else np.sort(t)
+    fast = sol.sol(t)
+    monkeypatch.setattr(out, "numba_enabled", lambda: False)
+    assert np.array_equal(sol.sol(t), fast)
+
+
+def test_the_output_keeps_its_steps_in_order_as_it_grows():
+    """Steps added one at a time (the Python loop), as blocks (``extend``) and written in
+    place (``block``/``commit``, the compiled loop), well past the first capacity: the
+    arrays hold them in their order, and the rows likewise."""
+    from lumped.solvers.adaptive_output import Rows
+
+    rng = np.random.default_rng(3)
+    N, E = 1, 2
+    ny = 2 * N + E
+    dense, rows = DenseOutput(N, E), Rows()
+    want_t, want_y0, want_d, want_rows = [], [], [], []
+    t = 0.0
+    for part in range(12):
+        k = int(rng.integers(1, 40))
+        y0 = rng.normal(size=(k, ny))
+        Y = rng.normal(size=(k, 3, ny))
+        r = rng.normal(size=(k, 1 + ny))
+        T0, H = t + np.arange(k, dtype=float), np.ones(k)
+        t += k
+        if part % 3 == 0:
+            for i in range(k):
+                dense.add(T0[i], H[i], y0[i].tolist(), Y[i].tolist())
+                rows.append(r[i].tolist())
+        elif part % 3 == 1:
+            dense.extend(T0, H, y0, Y - y0[:, None, :])
+            rows.extend(r)
+        else:
+            views = dense.block(k + 5)  # room for more than is kept
+            for view, val in zip(views, (T0, H, y0, Y - y0[:, None, :]), strict=True):
+                view[:k] = val
+            dense.commit(k)
+            rows.block(k + 5, 1 + ny)[:k] = r
+            rows.commit(k)
+        want_t.append(T0)
+        want_y0.append(y0)
+        want_d.append(Y - y0[:, None, :])
+        want_rows.append(r)
+    T0, H, Y0, D = dense._arrays()
+    assert len(dense) == len(T0) == sum(map(len, want_t)) > 64
+    assert np.array_equal(T0, np.concatenate(want_t)) and np.all(H == 1.0)
+    assert np.array_equal(Y0, np.concatenate(want_y0))
+    assert np.array_equal(D, np.concatenate(want_d))
+    assert np.array_equal(rows.array(), np.concatenate(want_rows))
+    rows.set_first([9.0] * (1 + ny))
+    assert rows.first() == [9.0] * (1 + ny)

@@ -206,3 +206,25 @@ def test_the_compiled_dense_output_is_the_numpy_one(monkeypatch):
     fast = sol.sol(t)
     monkeypatch.setattr(out, "numba_enabled", lambda: False)
     assert np.array_equal(sol.sol(t), fast)
+
+
+def test_the_compiled_loop_is_called_without_python_calls_per_argument(monkeypatch):
+    """The scene's kernels reach the compiled loop as addresses: numba passes a first-class
+    function argument through ``_get_wrapper_address`` and ``_get_jit_address`` (Python
+    calls that unpickle the signature, about 3.5 us each) on every call, and the loop is
+    called once per landing attempt."""
+    from numba.experimental import function_type
+
+    scene = scenario_scene("forcing-F2")
+    kw = dict(method="radau5", t_end=3.0, rtol=1e-6, compiled=True)
+    first = simulate(scene, **kw)  # the scene's parts and their addresses, once
+    calls = []
+    for name in ("_get_wrapper_address", "_get_jit_address"):
+        real = getattr(function_type, name)
+        monkeypatch.setattr(function_type, name,
+                            lambda f, sig, real=real, name=name: calls.append(name)
+                            or real(f, sig))
+    sol = simulate(scene, **kw)
+    assert sol.stats["loop"] == "compiled" and len(sol.events) >= 2
+    assert calls == []
+    assert np.array_equal(sol.data, first.data)

@@ -150,15 +150,12 @@ class CompiledLoop:
 
     def __init__(self, js, law, guards, fkind: np.ndarray, fpar: np.ndarray,
                  checked: np.ndarray) -> None:
-        from .radau import A, W
-
         self.js, self.law, self.guards = js, law, guards
         self.fn = L.compiled_advance()
         self.fkind, self.fpar, self.checked = fkind, fpar, checked
-        self.A, self.W = np.array(A), np.array(W)
+        self.A, self.W = _butcher()
         self.N, self.E = len(js.masses), len(js.ea)
-        self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(
-            self.N, self.E, self.E, BLOCK)
+        self.outputs = self.ws = self.wm = self.iw = None  # on the first call
         self.fst = np.zeros(15)
         self.ist = np.zeros(20, dtype=np.int64)
         self.calls = 0
@@ -197,12 +194,18 @@ class CompiledLoop:
         self.watched_a = np.array(watched, dtype=np.int64)
         return x, v, F, dF
 
-    def _call(self, x, v, F, dF) -> None:
-        self.fn(self.law, self.guards, self.js.masses, self.js.ea, self.js.eb, self.js.spring,
-                self.js.lock_q, self.modes_a, self.watched_a, self.checked, self.A, self.W,
-                self.fkind, self.fpar, x, v, F, dF, self.fst, self.ist, *self.outputs, self.ws,
-                self.wm, self.iw)
+    def _call(self, x, v, F, dF, T0, HS, Y0, D, ROWS) -> None:
+        self.fn(self.law.addr, self.guards.addr, self.js.masses, self.js.ea, self.js.eb,
+                self.js.spring, self.js.lock_q, self.modes_a, self.watched_a, self.checked,
+                self.A, self.W, self.fkind, self.fpar, x, v, F, dF, self.fst, self.ist,
+                T0, HS, Y0, D, ROWS, self.ws, self.wm, self.iw)
         self.calls += 1
+
+    def _workspace(self) -> None:
+        """The compiled loop's work arrays, made on the first call (a run that is stuck
+        throughout makes none); the attempts write no output rows: their blocks hold one
+        row (a run writes its steps in place, :meth:`run`)."""
+        self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(self.N, self.E, self.E, 1)
 
     def forget(self) -> None:
         """The driver changed its state lists in place (an event): convert them again."""
@@ -235,7 +238,9 @@ class CompiledLoop:
         fst[L.T], fst[L.H], fst[L.F_SEEN], fst[L.PREV_BREAK] = t, h, F_seen, prev_break
         ist[L.SINGLE] = 1
         ist[L.HAVE_DF] = dF_n is not None
-        self._call(*self._arrays)
+        if self.ws is None:
+            self._workspace()
+        self._call(*self._arrays, *self.outputs)  # (an attempt writes no output)
         ok = int(ist[L.A_OK])
         if ok < 0:
             return None
@@ -252,14 +257,15 @@ class CompiledLoop:
         max_steps``) in place; returns the reason the loop stopped (``REASONS``)."""
         x, v, F, dF = self._load(st, modes, watched, stats)
         fst, ist = self.fst, self.ist
-        T0, HS, Y0, D, ROWS = self.outputs
-        while True:
+        width = 1 + 2 * self.N + self.E
+        if self.ws is None:
+            self._workspace()
+        while True:  # the accepted steps written in place into the output's arrays
             ist[L.N_OUT] = 0
-            self._call(x, v, F, dF)
+            self._call(x, v, F, dF, *dense.block(BLOCK), rows.block(BLOCK, width))
             k = int(ist[L.N_OUT])
-            if k:
-                dense.extend(T0[:k], HS[:k], Y0[:k], D[:k])
-                rows.extend(ROWS[:k])
+            dense.commit(k)
+            rows.commit(k)
             if ist[L.REASON] != L.FULL:
                 break
         for key, i in _COUNTERS:
@@ -274,6 +280,19 @@ class CompiledLoop:
         st["x"], st["v"], st["F"] = x.tolist(), v.tolist(), F.tolist()
         st["dF_n"] = dF.tolist() if ist[L.HAVE_DF] else None
         return L.REASONS.get(int(ist[L.REASON]), "?")
+
+
+_BUTCHER: list = []
+
+
+def _butcher() -> tuple[np.ndarray, np.ndarray]:
+    """``A`` and ``W = A^-1`` of :mod:`lumped.solvers.radau` as arrays, made once (the
+    loop only reads them)."""
+    if not _BUTCHER:
+        from .radau import A, W
+
+        _BUTCHER.extend((np.array(A), np.array(W)))
+    return _BUTCHER[0], _BUTCHER[1]
 
 
 _COUNTERS = (("steps", L.STEPS), ("rejected", L.REJECTED),

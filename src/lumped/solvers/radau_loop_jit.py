@@ -77,13 +77,20 @@ _S1, _S2, _S3 = END_SLOPES
 _stage = njit(cache=True)(stage_solve)
 
 
-def advance(branch_law, branch_guards, masses, ea, eb, spring, lock_q, modes, watched, checked,
+def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watched, checked,
             A, W,
             fkind,
             fpar, x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
     """Steps with the modes held until a reason to return (see the module notes).
 
-    ``ws`` (vectors), ``wm`` (matrices) and ``iw`` (ints) are :func:`loop_workspace`."""
+    ``law_addr`` and ``guards_addr`` are the addresses of the scene's compiled
+    ``branch_law`` and ``branch_guards`` (:func:`law_type`, :func:`guards_type`; the
+    caller keeps them alive): an integer is passed in a few nanoseconds, where numba
+    passes a first-class function argument through two Python calls that unpickle its
+    signature (about 3.5 us each, per call). ``ws`` (vectors), ``wm`` (matrices) and
+    ``iw`` (ints) are :func:`loop_workspace`."""
+    branch_law = _law_at(law_addr)
+    branch_guards = _guards_at(guards_addr)
     N = masses.shape[0]
     E = ea.shape[0]
     n = N + E
@@ -287,7 +294,28 @@ def advance(branch_law, branch_guards, masses, ea, eb, spring, lock_q, modes, wa
     ist[REASON] = reason
 
 
-_COMPILED: list = []
+def _function_at(ftype):
+    """An intrinsic ``addr -> ftype``: the first-class function whose C wrapper is at
+    ``addr`` (:func:`numba.experimental.function_type._get_wrapper_address`), as numba
+    unboxes a function argument, without its Python object (``py_addr``) and jit
+    address (``jit_addr``, 0 for a wrapper-address object): calls go through the C
+    wrapper, as they do for such an argument."""
+    from numba.core import cgutils
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def at(typingctx, addr):
+        def codegen(context, builder, signature, args):
+            fn = cgutils.create_struct_proxy(ftype)(context, builder)
+            voidptr = context.get_value_type(_T.voidptr)
+            fn.c_addr = builder.inttoptr(args[0], voidptr)
+            fn.py_addr = cgutils.get_null_value(voidptr)
+            fn.jit_addr = cgutils.get_null_value(voidptr)
+            return fn._getvalue()
+
+        return ftype(_T.int64), codegen
+
+    return at
 
 
 def law_type():
@@ -305,6 +333,15 @@ def guards_type():
     return T_.FunctionType(T_.int64(T_.int64, T_.int64, f8, f8, f8[::1]))
 
 
+if numba_enabled():
+    from numba import types as _T
+
+    _law_at = _function_at(law_type())
+    _guards_at = _function_at(guards_type())
+
+_COMPILED: list = []
+
+
 def compiled_advance():
     """:func:`advance` compiled once for every scene (numba's disk cache after the first
     time on a machine), or ``None`` without numba."""
@@ -316,7 +353,7 @@ def compiled_advance():
         f8 = T_.float64
         v, m, m3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
         iv = T_.int64[::1]
-        sig = T_.none(law_type(), guards_type(), v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
+        sig = T_.none(T_.int64, T_.int64, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
                       m,
                       iv, m, v, v, v, v, v, iv, v, v, m, m3, m, m, m3,
                       T_.int64[:, ::1])
