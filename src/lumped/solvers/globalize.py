@@ -212,7 +212,10 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
             g(0.0)
             return None
         lo, hi = min(inside, outside), max(inside, outside)
-        cands = sorted({c - b for c in (0.0, *others) for b in base if lo < c - b < hi},
+        # the bracket's ends count too: a node that starts exactly at rest (or at a
+        # neighbour's velocity) may sit on the jump itself, where a stuck dashpot's force
+        # fills the gap (its force, left as it was by ``project``, need not balance yet)
+        cands = sorted({c - b for c in (0.0, *others) for b in base if lo <= c - b <= hi},
                        key=lambda c: abs(c - inside))
         shift = None
         snapped = True
@@ -242,6 +245,16 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
                     outside = mid
             # the side where the balance has crossed zero (or is zero), if finite
             shift = outside if math.isfinite(g(outside)) else inside
+            # a rate that vanishes exactly within the bisection's width of the root is
+            # the root: the balance jumps there, but its float neighbours did not show it
+            # (a Coulomb element's ``F + r q`` rounds to ``F`` for ``|q|`` below an ulp of
+            # ``F`` over ``r``, so the jump shows ``1e-17`` away). Landing there would
+            # leave the dashpot slipping at ``1e-17`` with its full yield force, and its
+            # node's balance unmet, instead of stuck.
+            lo, hi = min(inside, outside) - width, max(inside, outside) + width
+            near = sorted((c for c in cands if lo <= c <= hi), key=lambda c: abs(c - shift))
+            if near and math.isfinite(g(near[0])):
+                shift, snapped = near[0], True
         g(shift)
         moved = max(abs(shift) / (1.0 + abs(b + shift)) for b in base)
         if snapped and shift != 0.0 and widths:
