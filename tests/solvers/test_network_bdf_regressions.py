@@ -159,3 +159,44 @@ def test_sweep_lands_on_a_jump_its_float_neighbours_hide(method, dt):
     root is now taken as the root."""
     scene = _mass_breaking_free_beside_a_stuck_mass("coulomb")
     _run_ok(scene, method, dt, 0.3)
+
+
+def _junction_between_a_stuck_and_a_creeping_dashpot(n: float, idle: bool) -> Scene:
+    """From a drawn scene (session 5, numbers rounded, a spring-mass beside it removed):
+    junction ``j0`` between a Bingham dashpot to ground (yield 0.0442) and a
+    Herschel-Bulkley dashpot (yield 0.0361, index ``n < 1``) to ``m1``, which moves at
+    ``1e-10``. With ``idle``, a second junction hangs on a Bingham dashpot alone (it
+    carries no force)."""
+    nodes = [Junction("j0", x0=0.0), Mass("m1", m=7.15, x0=0.0, v0=1e-10)]
+    elements = [
+        Element("e0", get_law("bingham").bind(gamma=0.172, tau=0.0442), "ground", "j0"),
+        Element("e1", get_law("herschel_bulkley").bind(gamma=0.18, tau=0.0361, n=n), "j0", "m1")]
+    if idle:
+        nodes.append(Junction("j3", x0=0.0))
+        elements.append(Element("e3", get_law("bingham").bind(gamma=1.0, tau=0.0326),
+                                "ground", "j3"))
+    return Scene(nodes, elements)
+
+
+@pytest.mark.parametrize("idle", [False, True])
+@pytest.mark.parametrize("n", [0.3, 0.5])
+def test_initial_state_with_a_root_between_two_floats(n, idle):
+    """The only admissible initial state: ``j0`` at rest (``e0`` stuck) and ``e1`` slipping
+    at ``1e-10`` with the force ``tau + (q / gamma)^(1/n)``, ``1e-31`` above its yield
+    force ``0.0361``: between two floats, so ``e1``'s residual is ``1e-10`` at every float
+    and no Newton start converged; the state was refused as 'no consistent initial state:
+    Newton failed (diverged)'. The swept junction velocities now get the stuck forces
+    split to balance the junctions and the accelerations from their rows, and that point
+    is kept when every law holds there to its round-off (as for the steps). With the idle
+    junction, whose balance row has no terms, the split weighted that row by ``1e300``
+    and failed; such a row now counts in the units of the forces it may receive."""
+    from lumped.solvers.initial_state import consistent_initial_state
+
+    scene = _junction_between_a_stuck_and_a_creeping_dashpot(n, idle)
+    for time_scale in (0.025, 0.0125):
+        v, F, _ = consistent_initial_state(scene, time_scale=time_scale)
+        assert v[0] == 0.0 and v[1] == 1e-10
+        assert F[1] == pytest.approx(0.0361, rel=1e-15)  # e1 on its law, a hair past tau
+        assert F[0] == pytest.approx(F[1], rel=1e-14)  # j0 balanced by the stuck e0
+    for method in ("bdf1", "bdf2"):
+        _run_ok(scene, method, 0.0125, 0.25)

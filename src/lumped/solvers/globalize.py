@@ -330,14 +330,19 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float],
     rows = list(range(N)) if rows is None else rows
     if not rows:
         return u
-    w = np.array([1.0 / max(S[i], 1e-300) for i in rows])
-    A = np.array([[J[i][k] for k in ks] for i in rows]) * w[:, None]
-    rhs = -np.array([G[i] for i in rows]) * w
     lo, hi = [], []
     for k, q in free:
         a, b = force_range(scene.elements[k - N].law.kernel, q, u[k])
         lo.append(a - u[k])
         hi.append(b - u[k])
+    # a row with no terms yet (a junction whose forces are all zero so far) in the units
+    # of the forces it may receive: a weight of 1e300 would swamp every other row
+    reach = [sum(abs(J[i][k]) * max((abs(u[k] + x) for x in (lo[j], hi[j]) if math.isfinite(x)),
+                                    default=0.0) for j, k in enumerate(ks)) for i in rows]
+    w = np.array([1.0 / (S[i] if S[i] > 0.0 else max(r, 1e-300))
+                  for i, r in zip(rows, reach, strict=True)])
+    A = np.array([[J[i][k] for k in ks] for i in rows]) * w[:, None]
+    rhs = -np.array([G[i] for i in rows]) * w
     if not all(lo_k <= 0.0 <= hi_k for lo_k, hi_k in zip(lo, hi, strict=True)):
         return u
     # a law that admits a single force there (lo = hi: e.g. a regularised friction law
