@@ -200,3 +200,39 @@ def test_initial_state_with_a_root_between_two_floats(n, idle):
         assert F[0] == pytest.approx(F[1], rel=1e-14)  # j0 balanced by the stuck e0
     for method in ("bdf1", "bdf2"):
         _run_ok(scene, method, 0.0125, 0.25)
+
+
+def _junctions_stuck_together_on_friction() -> Scene:
+    """From a drawn scene (session 5, numbers rounded, a third junction removed): ``m1``
+    drags junction ``j3`` through a Newtonian dashpot; ``j3`` hangs on a Newtonian
+    dashpot to ground and on a Coulomb element (yield 0.0397) to junction ``j2``, which
+    a weaker Coulomb element (yield 0.0345) holds to ground."""
+    return Scene(
+        [Mass("m1", m=0.236, x0=0.1, v0=-0.944), Junction("j2", x0=0.0),
+         Junction("j3", x0=-1.0)],
+        [Element("e2", get_law("coulomb").bind(tau=0.0345, r=31.2), "ground", "j2"),
+         Element("e3", get_law("newtonian").bind(c=1.0), "ground", "j3"),
+         Element("e4", get_law("coulomb").bind(tau=0.0397, r=23.7), "j3", "j2"),
+         Element("e5", get_law("newtonian").bind(c=1.0), "m1", "j3")])
+
+
+def test_initial_state_with_two_junctions_stuck_together():
+    """The admissible initial state: ``j2`` and ``j3`` move together (``e4`` stuck with
+    the force ``0.0345`` that ``e2`` carries while it slips), so ``j3``'s balance
+    ``v3 - 0.0345 + (v3 - v1) = 0`` gives ``v3 = (0.0345 + v1) / 2``. The junctions'
+    balance sweeps of the initial state snapped a velocity only onto rest, never onto
+    another node's: ``j2`` ended ``6e-17`` off ``j3``, ``e4`` 'slipped' with its full
+    yield force 0.0397, which ``e2`` cannot balance, no Newton start converged and the
+    state was refused ('no consistent initial state: Newton failed (diverged)'). The
+    sweeps now also snap a junction onto another junction's velocity (or a mass's
+    ``v0``)."""
+    from lumped.solvers.initial_state import consistent_initial_state
+
+    scene = _junctions_stuck_together_on_friction()
+    for time_scale in (0.025, 0.001):
+        v, F, _ = consistent_initial_state(scene, time_scale=time_scale)
+        assert v[1] == v[2] == pytest.approx((0.0345 - 0.944) / 2, rel=1e-12)
+        assert F[0] == pytest.approx(-0.0345, rel=1e-12)  # e2 slips backwards
+        assert F[2] == pytest.approx(0.0345, rel=1e-12)  # e4 stuck, inside its 0.0397
+    for method in ("bdf1", "bdf2"):
+        _run_ok(scene, method, 0.0125, 0.25)

@@ -296,10 +296,14 @@ def consistent_initial_state(
         starts = [u0] + [[0.0 if is_mass[i] else g[i] for i in range(N)] + g[N:]
                          for g in stuck_guesses(scene, v0, u0[N:])]
         junctions = [i for i in range(N) if not is_mass[i]]
-        # no snapping onto other nodes' velocities here (anchors: none): in the limit
-        # system a junction stuck to a neighbour leaves the stuck forces to the
-        # accelerations' rows, which Newton settles from a start a hair off the kink
-        balanced = balance_sweeps(evaluate, project, list(u0), junctions, lambda u: [0.0] * N)
+        # a junction may snap onto rest or onto a neighbour's velocity (a junction's
+        # u, a mass's v0; the mass's rate eps a is then left to Newton): two junctions
+        # joined by a stuck friction element and left a few ulps apart would make it
+        # slip with its full yield force, which no start a hair off the kink settles
+        def anchors(u: list[float]) -> list[float]:
+            return [v0[i] if is_mass[i] else u[i] for i in range(N)]
+
+        balanced = balance_sweeps(evaluate, project, list(u0), junctions, anchors)
         settled = None
         if balanced is not None:  # the junctions' monotone balances solved one by one
             starts.insert(1, balanced)
