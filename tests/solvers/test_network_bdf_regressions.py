@@ -236,3 +236,35 @@ def test_initial_state_with_two_junctions_stuck_together():
         assert F[2] == pytest.approx(0.0345, rel=1e-12)  # e4 stuck, inside its 0.0397
     for method in ("bdf1", "bdf2"):
         _run_ok(scene, method, 0.0125, 0.25)
+
+
+def _string_pulling_a_junction_on_two_coulomb_elements() -> Scene:
+    """From a drawn scene (session 5, numbers rounded, a spring to ground and an idle
+    junction removed): ``m`` moves away from junction ``j1`` at ``1.75``; a string
+    (``L = 0.0411``) joins them; ``j1`` is held to ground by two Coulomb elements in series
+    through junction ``j0`` (yield forces 0.176 and 0.033)."""
+    return Scene(
+        [Mass("m", m=1.0, x0=0.0, v0=-1.75), Junction("j1", x0=0.0), Junction("j0", x0=0.0)],
+        [Element("s", get_law("string_spring").bind(k=0.1, L=0.0411), "m", "j1"),
+         Element("c1", get_law("coulomb").bind(tau=0.176, r=10.1), "j0", "j1"),
+         Element("c0", get_law("coulomb").bind(tau=0.033, r=84.6), "ground", "j0")])
+
+
+@pytest.mark.parametrize("dt", [0.025, 0.01])
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_sweep_starts_from_a_string_past_its_length(method, dt):
+    """In the first step the string goes taut and drags ``j1`` and ``j0`` along (``c1``
+    stuck, ``c0`` slipping at its yield force 0.033, which then brakes ``m``). The step's
+    Newton failed, and the balance sweeps started with the string past its length, where
+    its law admits no force: the stale force 0 balanced every node and nothing moved, so
+    the run stopped ('Newton failed (diverged)', or with an idle junction 'no motion
+    satisfies all the laws'). A node whose balance reads such a law now first moves to
+    the nearest point where every law at it admits a force."""
+    scene = _string_pulling_a_junction_on_two_coulomb_elements()
+    sol = _run_ok(scene, method, dt, 0.3)
+    q = sol.x["j1"] - sol.x["m"]
+    assert q.max() <= 0.0411 * (1 + 1e-12)
+    assert q[-1] == pytest.approx(0.0411, rel=1e-12)
+    assert sol.F["c0"][-1] == pytest.approx(-0.033, rel=1e-12)
+    assert sol.F["c1"][-1] == pytest.approx(-0.033, rel=1e-12)  # stuck, inside 0.176
+    assert sol.v["m"][-1] == pytest.approx(-1.75 + 0.033 * 0.3, abs=1e-3)

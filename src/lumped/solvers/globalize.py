@@ -34,7 +34,9 @@ def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool =
     elongation (rate) that ``u``'s velocities give, where the law fixes the force there
     (a stuck dashpot's force is left as is; with ``admit=True`` only if its law admits
     it, else moved to a force it admits). See ``project`` of
-    :func:`~lumped.solvers.newton.newton_solve`."""
+    :func:`~lumped.solvers.newton.newton_solve`. After each call ``project.missing``
+    lists the rows of the elements whose law admits no force at their ``q`` (their
+    force is left as it was)."""
     N = len(scene.nodes)
     items = [(N + e, scene.elem_a[e], scene.elem_b[e], el.kind == "spring", el.law.kernel)
              for e, el in enumerate(scene.elements)]
@@ -50,11 +52,13 @@ def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool =
 
     def project(u: list[float], free: list[tuple[int, float]] | None = None) -> list[float]:
         out = list(u)
+        missing = project.missing = []
         for k, a, b, is_spring, kernel in items:
             q = elongation(u, a, b, is_spring)
             try:
                 F, fixed = _scalar_root(kernel, q, u[k])
             except ValueError:  # no force at this q: leave it to Newton
+                missing.append(k)
                 continue
             if math.isfinite(F) and (fixed or (admit and kernel(q, u[k])[0] != 0.0)):
                 # a force the law fixes; or, where the law leaves it free (a stuck
@@ -169,6 +173,10 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
     candidate is also taken when the balance changes sign across it, and the node lands
     exactly on it (rate zero) instead of a few ulps off, where a dashpot to a stuck
     neighbour would slip at a rate of ``1e-17`` and carry its full yield force.
+    A node (group) that starts where the law of an element at it admits no force (a
+    string past its length: ``project.missing``, see :func:`force_projector`) has no
+    balance there (its stale force would read as balanced); it first moves to the
+    nearest point, either way, where every such law admits one, and is solved from there.
     Returns the projected point, or None if some balance cannot be bracketed (a
     non-finite row where it starts).
 
@@ -177,7 +185,7 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
     """
     u = project(list(start))
 
-    def solve(group: list[int]) -> float | None:
+    def solve(group: list[int], into_domain: bool = False) -> float | None:
         """Shift the velocities of ``group`` together by the ``s`` that zeroes the sum of
         their balance rows (the forces inside the group cancel in it); the relative move,
         or None if it cannot be bracketed."""
@@ -187,10 +195,44 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
         def g(s: float) -> float:
             for i, b in zip(group, base, strict=True):
                 u[i] = b + s
-            G = evaluate(project(u))[0]
+            G, J, _ = evaluate(project(u))
+            # an element at the group whose law admits no force where it is (a string
+            # past its length, see force_projector): no balance there
+            for k in getattr(project, "missing", ()):
+                if any(J[i][k] != 0.0 for i in group):
+                    return math.nan
             return sum(G[i] for i in group)
 
         g0 = g(0.0)
+        if not math.isfinite(g0) and not into_domain:
+            # the group starts where a law at it admits no force: move to the nearest
+            # point (either way) where every one does, then solve from there
+            step = 1e-3 * (1.0 + max(abs(b) for b in base))
+            found = None
+            for _ in range(200):
+                for cand in (step, -step):
+                    if math.isfinite(g(cand)):
+                        found = cand
+                        break
+                if found is not None:
+                    break
+                step *= 2.0
+            if found is None:
+                g(0.0)
+                return None
+            bad, ok = 0.0, found
+            width = 1e-16 * (1.0 + max(abs(b) for b in base))
+            for _ in range(200):
+                mid = 0.5 * (bad + ok)
+                if mid in (bad, ok) or abs(ok - bad) <= width:
+                    break
+                if math.isfinite(g(mid)):
+                    ok = mid
+                else:
+                    bad = mid
+            g(ok)
+            moved = solve(group, into_domain=True)
+            return None if moved is None else max(moved, 2e-15)
         if not math.isfinite(g0):
             return None
         if g0 == 0.0:
