@@ -113,3 +113,158 @@ def test_node_on_a_taut_string_lands_on_zero_rate(method):
     ``0.325``). The sweep now lands such a node exactly on zero rate."""
     scene = _stuck_pair_beside_a_taut_string()
     _run_ok(scene, method, 0.0125, 0.5)
+
+
+def _mass_breaking_free_beside_a_stuck_mass(holder: str) -> Scene:
+    """Drawn by the suite (session 5; the scene's string, slack throughout, removed and
+    the numbers rounded): ``m1`` rests on two Herschel-Bulkley dashpots to ground
+    (``n = 0.3`` and ``n = 1.5``) and a Bingham dashpot to ``m0``, which its ``holder``
+    (yield force 1) keeps at rest; the spring to the moving ``m2`` loads ``m1`` until it
+    breaks free at ``t = 0.22``."""
+    holders = {"herschel_bulkley": get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=0.3),
+               "coulomb": get_law("coulomb").bind(tau=1.0, r=1.0)}
+    return Scene(
+        [Mass("m0", m=1.0, x0=0.0, v0=0.0), Mass("m1", m=0.139, x0=0.0, v0=0.0),
+         Mass("m2", m=1.0, x0=0.918, v0=1.47)],
+        [Element("e0", holders[holder], "ground", "m0"),
+         Element("e1", get_law("herschel_bulkley").bind(gamma=1.33, tau=0.0432, n=0.3),
+                 "ground", "m1"),
+         Element("e2", get_law("linear_spring").bind(k=0.142), "m1", "m2"),
+         Element("e4", get_law("bingham").bind(gamma=0.427, tau=0.0794), "m1", "m0"),
+         Element("e5", get_law("herschel_bulkley").bind(gamma=0.114, tau=0.0522, n=1.5),
+                 "m1", "ground")])
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_sweep_keeps_a_node_that_starts_on_its_jump(method):
+    """When ``m1`` breaks free, the step's Newton fails and the balance sweeps take over.
+    ``m0`` starts the pair move of ``(m1, m0)`` exactly at rest, where the stuck ``e0``'s
+    force fills the jump of the balance; but the candidates for a rate-zero landing were
+    taken strictly inside the bracket, whose end that start is, so the bisection left
+    ``m0`` at ``5.7e-17``: ``e0`` then 'slipped' with its full yield force 1, no Newton
+    could polish the point, and the run stopped ('Newton failed (diverged)', or 'no motion
+    satisfies all the laws' with ``e0, e4`` locked) at ``t = 0.22``. The bracket's ends
+    are candidates now."""
+    scene = _mass_breaking_free_beside_a_stuck_mass("herschel_bulkley")
+    _run_ok(scene, method, 0.01, 0.3)
+
+
+@pytest.mark.parametrize(("method", "dt"), [("bdf1", 0.006), ("bdf2", 0.0025)])
+def test_sweep_lands_on_a_jump_its_float_neighbours_hide(method, dt):
+    """As above with a Coulomb ``holder`` (``r = 1``): at a rate ``|q|`` below an ulp of
+    ``F`` its ``F + r q`` rounds to ``F``, so the law admits the stale force there and
+    the balance's jump at rest shows only ``1e-17`` away, not between the float
+    neighbours of the rate-zero candidate. The bisection ended ``5.7e-17`` off rest and
+    the run stopped mid-run. A rate-zero candidate within the bisection's width of its
+    root is now taken as the root."""
+    scene = _mass_breaking_free_beside_a_stuck_mass("coulomb")
+    _run_ok(scene, method, dt, 0.3)
+
+
+def _junction_between_a_stuck_and_a_creeping_dashpot(n: float, idle: bool) -> Scene:
+    """From a drawn scene (session 5, numbers rounded, a spring-mass beside it removed):
+    junction ``j0`` between a Bingham dashpot to ground (yield 0.0442) and a
+    Herschel-Bulkley dashpot (yield 0.0361, index ``n < 1``) to ``m1``, which moves at
+    ``1e-10``. With ``idle``, a second junction hangs on a Bingham dashpot alone (it
+    carries no force)."""
+    nodes = [Junction("j0", x0=0.0), Mass("m1", m=7.15, x0=0.0, v0=1e-10)]
+    elements = [
+        Element("e0", get_law("bingham").bind(gamma=0.172, tau=0.0442), "ground", "j0"),
+        Element("e1", get_law("herschel_bulkley").bind(gamma=0.18, tau=0.0361, n=n), "j0", "m1")]
+    if idle:
+        nodes.append(Junction("j3", x0=0.0))
+        elements.append(Element("e3", get_law("bingham").bind(gamma=1.0, tau=0.0326),
+                                "ground", "j3"))
+    return Scene(nodes, elements)
+
+
+@pytest.mark.parametrize("idle", [False, True])
+@pytest.mark.parametrize("n", [0.3, 0.5])
+def test_initial_state_with_a_root_between_two_floats(n, idle):
+    """The only admissible initial state: ``j0`` at rest (``e0`` stuck) and ``e1`` slipping
+    at ``1e-10`` with the force ``tau + (q / gamma)^(1/n)``, ``1e-31`` above its yield
+    force ``0.0361``: between two floats, so ``e1``'s residual is ``1e-10`` at every float
+    and no Newton start converged; the state was refused as 'no consistent initial state:
+    Newton failed (diverged)'. The swept junction velocities now get the stuck forces
+    split to balance the junctions and the accelerations from their rows, and that point
+    is kept when every law holds there to its round-off (as for the steps). With the idle
+    junction, whose balance row has no terms, the split weighted that row by ``1e300``
+    and failed; such a row now counts in the units of the forces it may receive."""
+    from lumped.solvers.initial_state import consistent_initial_state
+
+    scene = _junction_between_a_stuck_and_a_creeping_dashpot(n, idle)
+    for time_scale in (0.025, 0.0125):
+        v, F, _ = consistent_initial_state(scene, time_scale=time_scale)
+        assert v[0] == 0.0 and v[1] == 1e-10
+        assert F[1] == pytest.approx(0.0361, rel=1e-15)  # e1 on its law, a hair past tau
+        assert F[0] == pytest.approx(F[1], rel=1e-14)  # j0 balanced by the stuck e0
+    for method in ("bdf1", "bdf2"):
+        _run_ok(scene, method, 0.0125, 0.25)
+
+
+def _junctions_stuck_together_on_friction() -> Scene:
+    """From a drawn scene (session 5, numbers rounded, a third junction removed): ``m1``
+    drags junction ``j3`` through a Newtonian dashpot; ``j3`` hangs on a Newtonian
+    dashpot to ground and on a Coulomb element (yield 0.0397) to junction ``j2``, which
+    a weaker Coulomb element (yield 0.0345) holds to ground."""
+    return Scene(
+        [Mass("m1", m=0.236, x0=0.1, v0=-0.944), Junction("j2", x0=0.0),
+         Junction("j3", x0=-1.0)],
+        [Element("e2", get_law("coulomb").bind(tau=0.0345, r=31.2), "ground", "j2"),
+         Element("e3", get_law("newtonian").bind(c=1.0), "ground", "j3"),
+         Element("e4", get_law("coulomb").bind(tau=0.0397, r=23.7), "j3", "j2"),
+         Element("e5", get_law("newtonian").bind(c=1.0), "m1", "j3")])
+
+
+def test_initial_state_with_two_junctions_stuck_together():
+    """The admissible initial state: ``j2`` and ``j3`` move together (``e4`` stuck with
+    the force ``0.0345`` that ``e2`` carries while it slips), so ``j3``'s balance
+    ``v3 - 0.0345 + (v3 - v1) = 0`` gives ``v3 = (0.0345 + v1) / 2``. The junctions'
+    balance sweeps of the initial state snapped a velocity only onto rest, never onto
+    another node's: ``j2`` ended ``6e-17`` off ``j3``, ``e4`` 'slipped' with its full
+    yield force 0.0397, which ``e2`` cannot balance, no Newton start converged and the
+    state was refused ('no consistent initial state: Newton failed (diverged)'). The
+    sweeps now also snap a junction onto another junction's velocity (or a mass's
+    ``v0``)."""
+    from lumped.solvers.initial_state import consistent_initial_state
+
+    scene = _junctions_stuck_together_on_friction()
+    for time_scale in (0.025, 0.001):
+        v, F, _ = consistent_initial_state(scene, time_scale=time_scale)
+        assert v[1] == v[2] == pytest.approx((0.0345 - 0.944) / 2, rel=1e-12)
+        assert F[0] == pytest.approx(-0.0345, rel=1e-12)  # e2 slips backwards
+        assert F[2] == pytest.approx(0.0345, rel=1e-12)  # e4 stuck, inside its 0.0397
+    for method in ("bdf1", "bdf2"):
+        _run_ok(scene, method, 0.0125, 0.25)
+
+
+def _string_pulling_a_junction_on_two_coulomb_elements() -> Scene:
+    """From a drawn scene (session 5, numbers rounded, a spring to ground and an idle
+    junction removed): ``m`` moves away from junction ``j1`` at ``1.75``; a string
+    (``L = 0.0411``) joins them; ``j1`` is held to ground by two Coulomb elements in series
+    through junction ``j0`` (yield forces 0.176 and 0.033)."""
+    return Scene(
+        [Mass("m", m=1.0, x0=0.0, v0=-1.75), Junction("j1", x0=0.0), Junction("j0", x0=0.0)],
+        [Element("s", get_law("string_spring").bind(k=0.1, L=0.0411), "m", "j1"),
+         Element("c1", get_law("coulomb").bind(tau=0.176, r=10.1), "j0", "j1"),
+         Element("c0", get_law("coulomb").bind(tau=0.033, r=84.6), "ground", "j0")])
+
+
+@pytest.mark.parametrize("dt", [0.025, 0.01])
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_sweep_starts_from_a_string_past_its_length(method, dt):
+    """In the first step the string goes taut and drags ``j1`` and ``j0`` along (``c1``
+    stuck, ``c0`` slipping at its yield force 0.033, which then brakes ``m``). The step's
+    Newton failed, and the balance sweeps started with the string past its length, where
+    its law admits no force: the stale force 0 balanced every node and nothing moved, so
+    the run stopped ('Newton failed (diverged)', or with an idle junction 'no motion
+    satisfies all the laws'). A node whose balance reads such a law now first moves to
+    the nearest point where every law at it admits a force."""
+    scene = _string_pulling_a_junction_on_two_coulomb_elements()
+    sol = _run_ok(scene, method, dt, 0.3)
+    q = sol.x["j1"] - sol.x["m"]
+    assert q.max() <= 0.0411 * (1 + 1e-12)
+    assert q[-1] == pytest.approx(0.0411, rel=1e-12)
+    assert sol.F["c0"][-1] == pytest.approx(-0.033, rel=1e-12)
+    assert sol.F["c1"][-1] == pytest.approx(-0.033, rel=1e-12)  # stuck, inside 0.176
+    assert sol.v["m"][-1] == pytest.approx(-1.75 + 0.033 * 0.3, abs=1e-3)

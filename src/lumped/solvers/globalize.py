@@ -34,7 +34,9 @@ def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool =
     elongation (rate) that ``u``'s velocities give, where the law fixes the force there
     (a stuck dashpot's force is left as is; with ``admit=True`` only if its law admits
     it, else moved to a force it admits). See ``project`` of
-    :func:`~lumped.solvers.newton.newton_solve`."""
+    :func:`~lumped.solvers.newton.newton_solve`. After each call ``project.missing``
+    lists the rows of the elements whose law admits no force at their ``q`` (their
+    force is left as it was)."""
     N = len(scene.nodes)
     items = [(N + e, scene.elem_a[e], scene.elem_b[e], el.kind == "spring", el.law.kernel)
              for e, el in enumerate(scene.elements)]
@@ -50,11 +52,13 @@ def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool =
 
     def project(u: list[float], free: list[tuple[int, float]] | None = None) -> list[float]:
         out = list(u)
+        missing = project.missing = []
         for k, a, b, is_spring, kernel in items:
             q = elongation(u, a, b, is_spring)
             try:
                 F, fixed = _scalar_root(kernel, q, u[k])
             except ValueError:  # no force at this q: leave it to Newton
+                missing.append(k)
                 continue
             if math.isfinite(F) and (fixed or (admit and kernel(q, u[k])[0] != 0.0)):
                 # a force the law fixes; or, where the law leaves it free (a stuck
@@ -169,6 +173,10 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
     candidate is also taken when the balance changes sign across it, and the node lands
     exactly on it (rate zero) instead of a few ulps off, where a dashpot to a stuck
     neighbour would slip at a rate of ``1e-17`` and carry its full yield force.
+    A node (group) that starts where the law of an element at it admits no force (a
+    string past its length: ``project.missing``, see :func:`force_projector`) has no
+    balance there (its stale force would read as balanced); it first moves to the
+    nearest point, either way, where every such law admits one, and is solved from there.
     Returns the projected point, or None if some balance cannot be bracketed (a
     non-finite row where it starts).
 
@@ -177,7 +185,7 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
     """
     u = project(list(start))
 
-    def solve(group: list[int]) -> float | None:
+    def solve(group: list[int], into_domain: bool = False) -> float | None:
         """Shift the velocities of ``group`` together by the ``s`` that zeroes the sum of
         their balance rows (the forces inside the group cancel in it); the relative move,
         or None if it cannot be bracketed."""
@@ -187,10 +195,44 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
         def g(s: float) -> float:
             for i, b in zip(group, base, strict=True):
                 u[i] = b + s
-            G = evaluate(project(u))[0]
+            G, J, _ = evaluate(project(u))
+            # an element at the group whose law admits no force where it is (a string
+            # past its length, see force_projector): no balance there
+            for k in getattr(project, "missing", ()):
+                if any(J[i][k] != 0.0 for i in group):
+                    return math.nan
             return sum(G[i] for i in group)
 
         g0 = g(0.0)
+        if not math.isfinite(g0) and not into_domain:
+            # the group starts where a law at it admits no force: move to the nearest
+            # point (either way) where every one does, then solve from there
+            step = 1e-3 * (1.0 + max(abs(b) for b in base))
+            found = None
+            for _ in range(200):
+                for cand in (step, -step):
+                    if math.isfinite(g(cand)):
+                        found = cand
+                        break
+                if found is not None:
+                    break
+                step *= 2.0
+            if found is None:
+                g(0.0)
+                return None
+            bad, ok = 0.0, found
+            width = 1e-16 * (1.0 + max(abs(b) for b in base))
+            for _ in range(200):
+                mid = 0.5 * (bad + ok)
+                if mid in (bad, ok) or abs(ok - bad) <= width:
+                    break
+                if math.isfinite(g(mid)):
+                    ok = mid
+                else:
+                    bad = mid
+            g(ok)
+            moved = solve(group, into_domain=True)
+            return None if moved is None else max(moved, 2e-15)
         if not math.isfinite(g0):
             return None
         if g0 == 0.0:
@@ -212,7 +254,10 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
             g(0.0)
             return None
         lo, hi = min(inside, outside), max(inside, outside)
-        cands = sorted({c - b for c in (0.0, *others) for b in base if lo < c - b < hi},
+        # the bracket's ends count too: a node that starts exactly at rest (or at a
+        # neighbour's velocity) may sit on the jump itself, where a stuck dashpot's force
+        # fills the gap (its force, left as it was by ``project``, need not balance yet)
+        cands = sorted({c - b for c in (0.0, *others) for b in base if lo <= c - b <= hi},
                        key=lambda c: abs(c - inside))
         shift = None
         snapped = True
@@ -242,6 +287,16 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
                     outside = mid
             # the side where the balance has crossed zero (or is zero), if finite
             shift = outside if math.isfinite(g(outside)) else inside
+            # a rate that vanishes exactly within the bisection's width of the root is
+            # the root: the balance jumps there, but its float neighbours did not show it
+            # (a Coulomb element's ``F + r q`` rounds to ``F`` for ``|q|`` below an ulp of
+            # ``F`` over ``r``, so the jump shows ``1e-17`` away). Landing there would
+            # leave the dashpot slipping at ``1e-17`` with its full yield force, and its
+            # node's balance unmet, instead of stuck.
+            lo, hi = min(inside, outside) - width, max(inside, outside) + width
+            near = sorted((c for c in cands if lo <= c <= hi), key=lambda c: abs(c - shift))
+            if near and math.isfinite(g(near[0])):
+                shift, snapped = near[0], True
         g(shift)
         moved = max(abs(shift) / (1.0 + abs(b + shift)) for b in base)
         if snapped and shift != 0.0 and widths:
@@ -317,14 +372,19 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float],
     rows = list(range(N)) if rows is None else rows
     if not rows:
         return u
-    w = np.array([1.0 / max(S[i], 1e-300) for i in rows])
-    A = np.array([[J[i][k] for k in ks] for i in rows]) * w[:, None]
-    rhs = -np.array([G[i] for i in rows]) * w
     lo, hi = [], []
     for k, q in free:
         a, b = force_range(scene.elements[k - N].law.kernel, q, u[k])
         lo.append(a - u[k])
         hi.append(b - u[k])
+    # a row with no terms yet (a junction whose forces are all zero so far) in the units
+    # of the forces it may receive: a weight of 1e300 would swamp every other row
+    reach = [sum(abs(J[i][k]) * max((abs(u[k] + x) for x in (lo[j], hi[j]) if math.isfinite(x)),
+                                    default=0.0) for j, k in enumerate(ks)) for i in rows]
+    w = np.array([1.0 / (S[i] if S[i] > 0.0 else max(r, 1e-300))
+                  for i, r in zip(rows, reach, strict=True)])
+    A = np.array([[J[i][k] for k in ks] for i in rows]) * w[:, None]
+    rhs = -np.array([G[i] for i in rows]) * w
     if not all(lo_k <= 0.0 <= hi_k for lo_k, hi_k in zip(lo, hi, strict=True)):
         return u
     # a law that admits a single force there (lo = hi: e.g. a regularised friction law

@@ -18,10 +18,13 @@ from .junction_balance import refuse_unbalanced_junctions
 from .newton import (
     NewtonCode,
     NewtonOptions,
+    NewtonResult,
+    _residual_ok,
     newton_solve,
 )
 from .status import InconsistentInitialForce, SolverError
 from .step_system import (
+    _EPS,
     _law_scale,
     _newton_failure,
 )
@@ -230,33 +233,82 @@ def consistent_initial_state(
         # by plain Newton, then with every free force on its own law (nonlinear
         # elimination, see lumped.solvers.globalize.force_projector: a law steep in F,
         # Herschel-Bulkley n < 1 near its yield force, is solved in its inverse form)
-        from .globalize import balance_sweeps, stuck_guesses
+        from .globalize import balance_sweeps, split_free_forces, stuck_guesses
 
-        def project(u: list[float]) -> list[float]:
+        def elongation(u: list[float], e: int) -> float:
+            a, b = ea[e], eb[e]
+            scale = eps if spring[e] else 1.0
+            du_b = (eps * u[b] if is_mass[b] else u[b]) if b >= 0 else 0.0
+            du_a = (eps * u[a] if is_mass[a] else u[a]) if a >= 0 else 0.0
+            return q0[e] + scale * (du_b - du_a)
+
+        def project(u: list[float], free_out: list | None = None) -> list[float]:
+            """Every free force on its own law where the law fixes it; with ``free_out``
+            (see :func:`lumped.solvers.globalize.split_free_forces`) the forces it leaves
+            free are moved to one it admits if needed and listed with their ``q``."""
             out = list(u)
             for e in free:
-                a, b = ea[e], eb[e]
-                scale = eps if spring[e] else 1.0
-                du_b = (eps * u[b] if is_mass[b] else u[b]) if b >= 0 else 0.0
-                du_a = (eps * u[a] if is_mass[a] else u[a]) if a >= 0 else 0.0
+                q = elongation(u, e)
                 try:
-                    F, fixed = _scalar_root(kernels[e], q0[e] + scale * (du_b - du_a), u[N + e])
+                    F, fixed = _scalar_root(kernels[e], q, u[N + e])
                 except ValueError:
                     continue
-                if fixed and math.isfinite(F):
+                if not math.isfinite(F):
+                    continue
+                if fixed:
                     out[N + e] = F
+                elif free_out is not None:
+                    if kernels[e](q, u[N + e])[0] != 0.0:
+                        out[N + e] = F
+                    free_out.append((N + e, q))
             return out
+
+        def settle(u: list[float]) -> list[float]:
+            """From the swept junction velocities: the forces the laws leave free (stuck
+            dashpots) split to balance the junctions, then every mass's acceleration from
+            its own row (linear in it)."""
+            u = split_free_forces(scene, evaluate, project, u, rows=junctions)
+            G = evaluate(u)[0]
+            for i in range(N):
+                if is_mass[i]:
+                    u[i] -= G[i] / mass[i]
+            return u
+
+        def ulp_floor_ok(u: list[float]) -> bool:
+            """The residual test at ``u``, each law row measured against at least its
+            round-off floor (the change of ``R`` when ``F`` moves one ulp): a law steep
+            in ``F`` whose root lies between two floats (Herschel-Bulkley ``n < 1`` a hair
+            beyond its yield force) has no float with a smaller residual, and no Newton
+            step can polish it (as for the steps, see
+            :func:`lumped.solvers.globalize.solve_globalized`)."""
+            G, _, S = evaluate(u)
+            S = list(S)
+            for e in range(E):
+                k, q, F = N + e, elongation(u, e), u[N + e]
+                R = kernels[e](q, F)[0]
+                rho = max(abs(kernels[e](q, math.nextafter(F, d))[0] - R)
+                          for d in (-math.inf, math.inf))
+                if math.isfinite(rho) and rho / _EPS > S[k]:
+                    S[k] = rho / _EPS
+            return _residual_ok(G, S, ic_options.rtol, ic_options.atol)
 
         free = [e for e in range(E) if pinned[e] is None]
         starts = [u0] + [[0.0 if is_mass[i] else g[i] for i in range(N)] + g[N:]
                          for g in stuck_guesses(scene, v0, u0[N:])]
         junctions = [i for i in range(N) if not is_mass[i]]
-        # no snapping onto other nodes' velocities here (anchors: none): in the limit
-        # system a junction stuck to a neighbour leaves the stuck forces to the
-        # accelerations' rows, which Newton settles from a start a hair off the kink
-        balanced = balance_sweeps(evaluate, project, list(u0), junctions, lambda u: [0.0] * N)
+        # a junction may snap onto rest or onto a neighbour's velocity (a junction's
+        # u, a mass's v0; the mass's rate eps a is then left to Newton): two junctions
+        # joined by a stuck friction element and left a few ulps apart would make it
+        # slip with its full yield force, which no start a hair off the kink settles
+        def anchors(u: list[float]) -> list[float]:
+            return [v0[i] if is_mass[i] else u[i] for i in range(N)]
+
+        balanced = balance_sweeps(evaluate, project, list(u0), junctions, anchors)
+        settled = None
         if balanced is not None:  # the junctions' monotone balances solved one by one
             starts.insert(1, balanced)
+            settled = settle(balanced)
+            starts.insert(2, settled)
         for start in starts:
             for proj in (None, project):
                 if start is u0 and proj is None:
@@ -268,6 +320,11 @@ def consistent_initial_state(
                     break
             if res.code is NewtonCode.SUCCESS:
                 break
+        if res.code is not NewtonCode.SUCCESS and settled is not None and ulp_floor_ok(settled):
+            # no Newton polishes the settled point (a root between two floats), but every
+            # law holds there to its round-off and every node balances: keep it
+            res = NewtonResult(settled, NewtonCode.SUCCESS, res.iterations, res.residual_evals,
+                               res.jacobian_evals, res.factorizations, [], 0, [])
     if res.code is not NewtonCode.SUCCESS:
         refuse_unbalanced_junctions(scene, pinned, q0, f)
         err = _newton_failure(scene, res, 0.0, 0)
