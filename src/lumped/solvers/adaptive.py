@@ -142,6 +142,18 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         hold_check = True  # a stuck interval may start here (lumped.solvers.stuck)
         return ms.at_event(t, h, cause, x, v, F)
 
+    def choose_again(h_p: float) -> bool | None:
+        """The full laws choose the mode at ``t`` (probes on the scale ``h_p``): whether
+        it changed, or ``None`` when the run must stop (``status``, ``message`` set)."""
+        nonlocal dF_n, status, message
+        old = list(modes)
+        dF_n = None
+        stop = at_event(t, h_p, "guard")
+        if stop:
+            status, message = stop
+            return None
+        return modes != old
+
     def start_forces(U: list[float]) -> list[float]:
         """The forces at ``t`` the step's polynomial starts from: after an event the
         stage forces' quadratic at ``s = 0`` rather than the probe's forces, whose
@@ -276,13 +288,11 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             # the held branches end here (e.g. a law whose slip branch has no continuation
             # at zero rate, where Newton fails on every step): let the full laws choose
             floor_tried = True
-            old = list(modes)
-            dF_n = h_acc = None
-            stop = at_event(t, h_good, "guard")
-            if stop:
-                status, message = stop
+            h_acc = None
+            changed = choose_again(h_good)
+            if changed is None:
                 break
-            if modes != old:
+            if changed:
                 h = h_good
                 continue
         if h < h_min and target is None:
@@ -328,14 +338,11 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 # it: the cone split keeps every force in its cone): let the full laws
                 # choose the mode at t, once per t
                 infeasible_at = t
-                old = list(modes)
-                dF_n = None
                 # (probes on the scale of the step that failed: the lock breaks within it)
-                stop = at_event(t, h, "guard")
-                if stop:
-                    status, message = stop
+                changed = choose_again(h)
+                if changed is None:
                     break
-                if modes != old:
+                if changed:
                     h = h_good
                     continue
                 # the full laws keep the locks (a probe's step holds where the stage's
