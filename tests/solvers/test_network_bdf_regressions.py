@@ -268,3 +268,26 @@ def test_sweep_starts_from_a_string_past_its_length(method, dt):
     assert sol.F["c0"][-1] == pytest.approx(-0.033, rel=1e-12)
     assert sol.F["c1"][-1] == pytest.approx(-0.033, rel=1e-12)  # stuck, inside 0.176
     assert sol.v["m"][-1] == pytest.approx(-1.75 + 0.033 * 0.3, abs=1e-3)
+
+
+@pytest.mark.parametrize("method", ["bdf2", "radau5"])
+def test_a_subnormal_junction_position_is_refused_by_name_not_by_an_svd(method):
+    # a slack string pulls a junction held by friction elements that carry far less
+    # (no force balances it: a correct refusal). A junction at x0 = -2.2e-313 made the
+    # force split's row weights overflow, and the least-squares solve raised numpy's
+    # "SVD did not converge" instead of the refusal that names the junction
+    scene = Scene([Junction("j0", x0=0.0), Junction("j1", x0=0.36840776050648505),
+                   Mass("m2", m=3.2848411221652922, x0=-0.4516965006474013,
+                        v0=0.8230887650641816),
+                   Junction("j3", x0=-2.2250738585e-313)],
+                  [Element("e0", get_law("coulomb").bind(tau=0.01, r=1.0), "ground", "j0"),
+                   Element("e1", get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=2.0),
+                           "j0", "j1"),
+                   Element("e2", get_law("string_spring").bind(k=0.5564091332366734, L=0.01),
+                           "j0", "m2"),
+                   Element("e3", get_law("coulomb").bind(tau=0.06458722664674722,
+                                                         r=25.203611223514713), "j0", "j3"),
+                   Element("e4", get_law("linear_spring").bind(k=0.11849656240533082),
+                           "ground", "j3")])
+    with pytest.raises(ValueError, match="inconsistent initial state.*'j0'"):
+        simulate(scene, method=method, dt=0.025, t_end=0.5)

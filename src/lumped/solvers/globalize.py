@@ -397,8 +397,13 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float],
     mu = 1e-6  # sqrt of the penalty 1e-12
     M = np.vstack([A[:, cols], (mu / s) * np.eye(len(cols))])
     r = np.concatenate([rhs, np.zeros(len(cols))])
-    sol = lsq_linear(M, r, bounds=([lo[j] for j in cols], [hi[j] for j in cols]),
-                     method="bvls")
+    if not (np.all(np.isfinite(M)) and np.all(np.isfinite(r))):
+        return u  # (a weight from a subnormal scale overflows: no split is chosen)
+    try:
+        sol = lsq_linear(M, r, bounds=([lo[j] for j in cols], [hi[j] for j in cols]),
+                         method="bvls")
+    except np.linalg.LinAlgError:  # the SVD inside did not converge
+        return u
     if not sol.success or not np.all(np.isfinite(sol.x)):
         return u
     for j, d in zip(cols, sol.x, strict=True):
