@@ -135,23 +135,34 @@ def prefer_locks(scene, branches: Sequence, modes: Sequence[int], v: Sequence[fl
     Newton is singular there and the step fell to its floor. A rate that is not exactly
     ``L`` (a break-out, however slow) keeps the probe's branch.
     """
-    eps_slack = 1.4901161193847656e-08  # sqrt(eps)
     out = list(modes)
     ea, eb = scene.elem_a, scene.elem_b
     for e, el in enumerate(scene.elements):
         lb = branches[e]
         if el.kind != "dashpot" or lb.info[out[e]].locks:
             continue
-        a, b = ea[e], eb[e]
-        rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
-        for info in lb.info:
-            if not info.locks or info.lock_value is None or rate != info.lock_value:
-                continue
-            gs = lb.guards_for(info.index)(info.lock_value, F[e])
-            if all(g >= -eps_slack * (1.0 + abs(F[e])) for g in gs):
-                out[e] = info.index
-                break
+        got = _admitting_lock(lb, _rate(v, ea[e], eb[e]), F[e])
+        if got is not None:
+            out[e] = got
     return out
+
+
+def _rate(v: Sequence[float], a: int, b: int) -> float:
+    """``v_b - v_a``, ground (``-1``) at rest."""
+    return (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+
+
+def _admitting_lock(lb, value: float, F_e: float) -> int | None:
+    """The index of a locking branch of ``lb`` that fixes ``q = value`` and whose guards at
+    ``(value, F_e)`` admit ``F_e`` up to ``sqrt(eps) (1 + |F_e|)``; ``None`` if none."""
+    eps_slack = 1.4901161193847656e-08  # sqrt(eps)
+    for info in lb.info:
+        if not info.locks or info.lock_value is None or value != info.lock_value:
+            continue
+        gs = lb.guards_for(info.index)(info.lock_value, F_e)
+        if all(g >= -eps_slack * (1.0 + abs(F_e)) for g in gs):
+            return info.index
+    return None
 
 
 def lock_parallel_rates(scene, branches: Sequence, modes: Sequence[int], v: Sequence[float],
@@ -178,7 +189,6 @@ def lock_parallel_rates(scene, branches: Sequence, modes: Sequence[int], v: Sequ
     (the probe reads a Herschel-Bulkley ``n < 1`` dashpot as stuck at a rate of
     ``1e-9``, where its force is ``tau`` to the last bit) must not be locked together.
     """
-    eps_slack = 1.4901161193847656e-08  # sqrt(eps)
     out = list(modes)
     ea, eb = scene.elem_a, scene.elem_b
     m = len(scene.nodes) + 1  # ground (-1) is vertex m - 1
@@ -196,13 +206,9 @@ def lock_parallel_rates(scene, branches: Sequence, modes: Sequence[int], v: Sequ
         a, b = ea[e], eb[e]
         if el.kind != "dashpot" or lb.info[out[e]].locks or \
                 _find(parent, a % m) != _find(parent, b % m) or \
-                abs((v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)) > rate_tol:
+                abs(_rate(v, a, b)) > rate_tol:
             continue
-        for info in lb.info:
-            if not info.locks or info.lock_value != 0.0:
-                continue
-            gs = lb.guards_for(info.index)(0.0, F[e])
-            if all(g >= -eps_slack * (1.0 + abs(F[e])) for g in gs):
-                out[e] = info.index
-                break
+        got = _admitting_lock(lb, 0.0, F[e])
+        if got is not None:
+            out[e] = got
     return out
