@@ -436,3 +436,33 @@ def test_a_lock_on_a_mass_starts_its_dense_force_from_the_stage_not_the_probe():
     assert np.all(rows[:, sol.columns.index("v_m0")] == 0.0)
     assert np.abs(F0).max() <= tau0 * (1.0 + 1e-9)
     assert np.abs(F0 - F1).max() <= 1e-9  # the stuck mass's balance, on every output
+
+
+def test_a_snap_that_locks_nothing_does_not_flip_another_dashpots_rate():
+    # m2 is dragged off rest by e4 while e2 (Herschel-Bulkley n = 2, flat at its yield
+    # force) slips; e3 (Bingham) between m1 and m2 slips backwards from the start, its
+    # rate only 1e-7 after 3e-7 s. A landing on e2's guard snapped m2 onto e2's lock
+    # (v2 within the tolerance of 0), the probe kept e2 slipping but read e3's rate,
+    # flipped by the snap, as forward slip; the dynamics flipped it back 1e-9 s later,
+    # 50 times: "an accumulation of events" at t = 3.8e-7
+    scene = Scene([Mass("m0", m=1.0, x0=0.0, v0=-1.0 / 3.0),
+                   Mass("m1", m=2.005010443902008, x0=-0.060529666934724835, v0=0.0),
+                   Mass("m2", m=1.0, x0=-0.6376702700868764, v0=0.0)],
+                  [Element("e0", get_law("newtonian").bind(c=1.0), "ground", "m0"),
+                   Element("e1", get_law("linear_spring").bind(k=0.2927421892572526),
+                           "ground", "m1"),
+                   Element("e2", _hb(0.17173378802549774, 0.01, 2.0), "ground", "m2"),
+                   Element("e3", get_law("bingham").bind(gamma=1.0, tau=0.6813714378269906),
+                           "m1", "m2"),
+                   Element("e4", _hb(0.17173378802549774, 0.549697628143641, 1.5), "m2",
+                           "m0")])
+    h = 0.025 / 2
+    for compiled in (False, True):
+        sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                       compiled=compiled)
+        assert sol.ok, sol.message
+        e3 = [ev for ev in sol.events if ev.element == "e3"]
+        # slip- until it sticks at t = 0.135 (e4 has slowed m2 down); no reversal before
+        assert e3 and e3[0].to_branch == 2 and 0.13 < e3[0].t < 0.14, e3
+        early = sol.t < e3[0].t
+        assert np.all(sol.v["m2"][early][1:] - sol.v["m1"][early][1:] < 0.0)

@@ -101,26 +101,29 @@ class ModeState:
         rtol, atol, options = self.rtol, self.atol, self.settings.options
         if self.fast is not None:
             self.fast.forget()  # x, v, F may change in place here
-        sel: tuple | str = ""
         h0 = h_probe
+        v_free, held = list(v), []
         if cause == "guard":  # rates within the tolerance of a lock: exactly on it
-            snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v))
-        guess = self._guesses(cause, x, v, F)
-        sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
-                         modes if cause == "guard" else None, 3) if guess else None) or ""
-        for _ in range(0 if sel else 3):
-            sel = select_modes(scene, lbs, t, x, v, F, h_probe, options)
-            if not isinstance(sel, str) and (sel[0] != modes or cause != "guard"):
-                break
-            h_probe *= 1000.0  # a failed or undecided probe: a longer one
+            held = snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v))
+        hint = self.hint
+        sel = self._choose(t, h_probe, cause, x, v, F)
         if isinstance(sel, str):
             return sel
-        new, v_p, F_p = sel
-        new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked
-        # held at rate 0 by locks: locked, unless the probe moved it by more than the
-        # forces' round-off (sqrt(eps) of the largest) does over the probe step
-        rate_tol = 1.4901161193847656e-08 * h_probe * max(abs(f) for f in F_p) / self.m_min
-        new = lock_parallel_rates(scene, lbs, new, v_p, F_p, rate_tol)
+        new = sel[0][0]
+        if held and v != v_free and not any(lbs[e].info[new[e]].locks for e in held) \
+                and any(new[e] != modes[e] for e in range(self.E) if e not in held):
+            # the snap's premise failed (no element it held stays locked) and another
+            # element switched: a rate below the snap's tolerance, flipped by it, decided
+            # that switch (a Bingham dashpot between two masses sent to its other slip
+            # branch by the snap of a Herschel-Bulkley n = 2 dashpot at its flat yield
+            # end, then back, 1e-9 s later, 50 times). Choose from the state as it was.
+            v_snapped, v[:], self.hint = list(v), v_free, hint
+            again = self._choose(t, h0, cause, x, v, F)
+            if isinstance(again, str):
+                v[:] = v_snapped
+            else:
+                sel = again
+        new, v_p, F_p = sel[0]
         scale_v = atol + rtol * max(abs(vi) for vi in v)
         hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"])
         if isinstance(hit, str):
@@ -156,6 +159,31 @@ class ModeState:
         self.set_modes(new, F)
         hold_rate_locks(scene, lbs, modes, v)
         return ""
+
+    def _choose(self, t: float, h_probe: float, cause: str, x: list[float], v: list[float],
+                F: list[float]):
+        """The full laws' mode after ``t`` from ``(x, v, F)``: ``((modes, v_p, F_p),
+        h_probe)`` of the probe that decided (a guessed mode first, then the full search,
+        longer probes when one fails or keeps the mode at a guard), the elements held at
+        rate 0 put on their locks; or the failure message."""
+        scene, lbs, modes = self.scene, self.lbs, self.modes
+        guess = self._guesses(cause, x, v, F)
+        sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
+                         modes if cause == "guard" else None, 3) if guess else None) or ""
+        for _ in range(0 if sel else 3):
+            sel = select_modes(scene, lbs, t, x, v, F, h_probe, self.settings.options)
+            if not isinstance(sel, str) and (sel[0] != modes or cause != "guard"):
+                break
+            h_probe *= 1000.0  # a failed or undecided probe: a longer one
+        if isinstance(sel, str):
+            return sel
+        new, v_p, F_p = sel
+        new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked
+        # held at rate 0 by locks: locked, unless the probe moved it by more than the
+        # forces' round-off (sqrt(eps) of the largest) does over the probe step
+        rate_tol = 1.4901161193847656e-08 * h_probe * max(abs(f) for f in F_p) / self.m_min
+        new = lock_parallel_rates(scene, lbs, new, v_p, F_p, rate_tol)
+        return (new, v_p, F_p), h_probe
 
     def _guesses(self, cause: str, x: list[float], v: list[float], F: list[float]
                  ) -> list[list[int]]:
