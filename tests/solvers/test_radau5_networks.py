@@ -466,3 +466,32 @@ def test_a_snap_that_locks_nothing_does_not_flip_another_dashpots_rate():
         assert e3 and e3[0].to_branch == 2 and 0.13 < e3[0].t < 0.14, e3
         early = sol.t < e3[0].t
         assert np.all(sol.v["m2"][early][1:] - sol.v["m1"][early][1:] < 0.0)
+
+
+def test_a_junction_dashpot_stopping_in_finite_time_is_landed_on():
+    # j0 is held by a Herschel-Bulkley n = 0.5 dashpot to ground and springs to m1: its
+    # rate falls like sqrt(t* - t) as the spring force comes down to the yield force. The
+    # stage Newton near t* contracts slowly; with 10 iterations the landing bracket
+    # closed 1e-5 s before the stop, again and again, down to the step floor at t = 0.1355
+    scene = Scene([Junction("j0", x0=0.7770813773850205),
+                   Mass("m1", m=0.1758180116345555, x0=-0.21720841940226188, v0=-2.0)],
+                  [Element("e0", _hb(1.0000000002302585, 0.3304478564386472, 0.5),
+                           "ground", "j0"),
+                   Element("e1", get_law("linear_spring").bind(k=16.037463877463185),
+                           "j0", "m1"),
+                   Element("e2", get_law("string_spring").bind(k=77.95904875266385, L=1.0),
+                           "ground", "m1"),
+                   Element("e3", get_law("implicit_spring").bind(
+                       k=0.5879830471161323, L0=0.7194099745370769, F0=1.2695603448004291),
+                           "m1", "j0")])
+    dt = 0.008622867277034168
+    for k in range(3):
+        h = dt / 2**k
+        sol = simulate(scene, method="radau5", dt=h, t_end=0.3449146910813667, rtol=h**2,
+                       atol=h**3)
+        assert sol.ok, (k, sol.message)
+        stops = [ev.t for ev in sol.events if ev.element == "e0" and ev.to_branch == 2]
+        assert stops, sol.events
+        after = (sol.t > stops[0]) & (sol.t < min([ev.t for ev in sol.events
+                                                   if ev.t > stops[0]], default=1.0))
+        assert np.all(sol.v["j0"][after] == 0.0)

@@ -131,6 +131,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     target: list | None = None  # the guard being landed on and its bracket
     floor_tried = False  # a mode change was tried at the step floor since the last step
     infeasible_at = math.nan  # the last t where an infeasible stage had the mode chosen
+    U: list[float] = []  # the Python attempt's stage values, force scale (``attempt``)
+    Fref = 0.0
     infeasible_modes: list[int] = []  # ... and the mode the full laws kept there
     kept = False  # an event at t kept the mode (since the last step)
     t = 0.0
@@ -196,6 +198,30 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         F_0 = start_forces(U)  # a crossing inside the step: tested without the offset
         return first_root_py([system.element_nodes(U, h, x, v, F_0, e) for e in watched],
                              fns)
+
+    def attempt(h: float, iters: int) -> tuple[list[float] | None, int, int]:
+        """The stage solve of a step of size ``h`` from ``(t, x, v, F)`` in Python (the
+        compiled stage Newton when ``compiled=True``): ``(U or None, iterations,
+        factorisations)``; sets ``U``, ``Fref`` and ``F_seen`` for the error estimate."""
+        nonlocal U, Fref, F_seen, stage_solve
+        fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
+        U = (list(v) + list(F)) * 3
+        # the force scale: the largest force or load met so far (never shrinks to 0)
+        F_seen = max([F_seen] + [abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]])
+        # ... and at least the force that changes the lightest mass's velocity by its
+        # tolerance over the step (a force error below it does not show in x, v)
+        Fref = max(F_seen, m_min * (max(abs(vi) for vi in v) + atol / rtol) / h)
+        scale = ([atol + rtol * abs(vi) for vi in v]
+                 + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
+        if stage_solve is None and opts["compiled"] is True:
+            stage_solve = compiled_stage_solver(scene, modes)  # modes: the live list
+        if stage_solve is None or cones:  # (locks in parallel: the cone split)
+            return system.solve(U, h, x, v, fk, kernels, scale, max_iters=iters,
+                                cones=cones or None, least_squares=t == infeasible_at
+                                and modes == infeasible_modes)
+        got = stage_solve(U, h, x, v, fk, scale, iters)
+        U = got[0] if got[0] is not None else U
+        return got
 
     def end_guard(U: list[float], h: float, which) -> tuple[float, float]:
         e = watched[which[0]]
@@ -306,25 +332,15 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         if got is not None:
             sol, its, nfac, err_norm, F_seen, hit_c = got
         else:
-            fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
-            U = (list(v) + list(F)) * 3
-            # the force scale: the largest force or load met so far (never shrinks to 0)
-            F_seen = max([F_seen] + [abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]])
-            # ... and at least the force that changes the lightest mass's velocity by its
-            # tolerance over the step (a force error below it does not show in x, v)
-            Fref = max(F_seen, m_min * (max(abs(vi) for vi in v) + atol / rtol) / h)
-            scale = ([atol + rtol * abs(vi) for vi in v]
-                     + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
-            if stage_solve is None and opts["compiled"] is True:
-                stage_solve = compiled_stage_solver(scene, modes)  # modes: the live list
-            if stage_solve is None or cones:  # (locks in parallel: the cone split)
-                sol, its, nfac = system.solve(U, h, x, v, fk, kernels, scale,
-                                              max_iters=max_newton, cones=cones or None,
-                                              least_squares=t == infeasible_at and
-                                              modes == infeasible_modes)
-            else:
-                sol, its, nfac = stage_solve(U, h, x, v, fk, scale, max_newton)
-                U = sol if sol is not None else U
+            sol, its, nfac = attempt(h, max_newton)
+        if sol is None and target is not None:
+            # a landing step near the singular end of a branch (a junction's
+            # Herschel-Bulkley n < 1 dashpot stopping in finite time, its rate ~ sqrt(t* -
+            # t)): Newton contracts slowly there and 10 iterations missed steps that 60
+            # take; the bracket closed early, 1e-5 s before the stop, again and again
+            # down to the step floor. Once more, with a longer budget
+            sol, its_more, nfac_more = attempt(h, 6 * max_newton)
+            its, nfac, got = its + its_more, nfac + nfac_more, None
         stats["newton_iterations"] += its
         stats["factorizations"] += nfac
         stats["nfev"] += its + 1
