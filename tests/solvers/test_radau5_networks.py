@@ -495,3 +495,35 @@ def test_a_junction_dashpot_stopping_in_finite_time_is_landed_on():
         after = (sol.t > stops[0]) & (sol.t < min([ev.t for ev in sol.events
                                                    if ev.t > stops[0]], default=1.0))
         assert np.all(sol.v["j0"][after] == 0.0)
+
+
+def test_a_coulomb_element_stuck_at_an_impact_starts_within_its_yield_force():
+    # string e4 goes taut between the masses (an impact) and, 1e-8 s later, the Coulomb
+    # element e3 from the junction to m0 sticks. Its dense force started from the stage
+    # forces' quadratic at the event, 1.1e-4 above tau (8.7e-5 of the forces' scale, at
+    # every tolerance: the quadratic's own error on a long first step)
+    coulomb = get_law("coulomb")
+    string = get_law("string_spring")
+    tau = 0.5929578407459635
+    scene = Scene([Mass("m0", m=8.075292535507861, x0=-1e-12, v0=-1.6319263663308945),
+                   Junction("j1", x0=0.0),
+                   Mass("m2", m=1.0000000230258512, x0=0.0, v0=1.7132340141314328)],
+                  [Element("e0", coulomb.bind(tau=0.44097768602273063, r=8.601602750772301),
+                           "ground", "m0"),
+                   Element("e1", coulomb.bind(tau=0.6813580953779323, r=7.234390310619049),
+                           "ground", "j1"),
+                   Element("e2", string.bind(k=14.490439902847692, L=0.04827234933063953),
+                           "j1", "m2"),
+                   Element("e3", coulomb.bind(tau=tau, r=18.385998684699626), "j1", "m0"),
+                   Element("e4", string.bind(k=43.915202814660816, L=0.00772605053242873),
+                           "m2", "m0")])
+    h = 0.025 / 4
+    for compiled in (False, True):
+        sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                       compiled=compiled)
+        assert sol.ok, sol.message
+        stuck = [ev.t for ev in sol.events if ev.element == "e3" and ev.to_branch == 2]
+        assert stuck and 0.448 < stuck[-1] < 0.449, sol.events
+        ts = np.linspace(stuck[-1], 0.5, 201)
+        F3 = sol.sol(ts)[:, sol.columns.index("F_e3")]
+        assert np.abs(F3).max() <= tau * (1.0 + 1e-9)

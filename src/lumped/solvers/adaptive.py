@@ -55,6 +55,22 @@ DEFAULT_ATOL = 1e-9
 _EPS = 2.220446049250313e-16
 
 
+def _admitted(guard, q0: float, F0: float, q1: float, F1: float) -> float:
+    """``F0`` if ``guard(q0, F0)`` holds (every value ``>= 0``), else the force on the
+    segment from ``(q0, F0)`` to ``(q1, F1)`` nearest ``F0`` that it admits (bisection;
+    ``F0`` when ``(q1, F1)`` is not admitted either)."""
+    if min(guard(q0, F0), default=0.0) >= 0.0 or not min(guard(q1, F1), default=0.0) >= 0.0:
+        return F0
+    lo, hi = 0.0, 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if min(guard(q0 + mid * (q1 - q0), F0 + mid * (F1 - F0))) >= 0.0:
+            hi = mid
+        else:
+            lo = mid
+    return F0 + hi * (F1 - F0)
+
+
 def run_radau5(scene: Scene, settings) -> RawRun:
     """The ``radau5`` runner: ``(scene, RunSettings) -> RawRun`` (see the module notes).
 
@@ -166,7 +182,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         return [sum(w * U[k * n + N + e] for k, w in enumerate(START_WEIGHTS))
                 for e in range(E)]
 
-    def dense_start_forces(U: list[float]) -> list[float]:
+    def dense_start_forces(U: list[float], h: float) -> list[float]:
         """The forces at ``t`` the dense output's polynomials start from, after an event.
 
         The probe's force, the right limit at ``t`` to ``O(h_probe)``, for an element
@@ -185,8 +201,17 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         if not ms.forces_from_probe:
             return F
         F_q = start_forces(U)
-        return [F_q[e] if e in cones or (lbs[e].info[modes[e]].locks and not massless[e])
-                else F[e] for e in range(E)]
+        out = []
+        for e in range(E):
+            if not (e in cones or (lbs[e].info[modes[e]].locks and not massless[e])):
+                out.append(F[e])
+                continue
+            # a lock admits the force at the event: a quadratic start beyond its guards
+            # (a Coulomb element just stuck beside a string gone taut, 2e-4 tau above it)
+            # is moved back along the way to the first stage, which the guards admit
+            q, Fe = system.element_nodes(U, h, x, v, F_q, e)
+            out.append(_admitted(guards[e], q[0], Fe[0], q[1], Fe[1]))
+        return out
 
     def crossing(U: list[float], h: float):
         if not watched:
@@ -483,7 +508,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                     s_ += A_[k][j] * sol[j * n + i]
                 Xk.append(x[i] + h * s_)
             Y.append(Xk + sol[k * n:k * n + N] + sol[k * n + N:k * n + n])
-        F0 = dense_start_forces(sol)
+        F0 = dense_start_forces(sol, h)
         ms.forces_from_probe = False
         dense.add(t, h, x + v + F0, Y)
         dF_n = system.end_slope(sol, h, F)
