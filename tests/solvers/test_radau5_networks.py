@@ -527,3 +527,30 @@ def test_a_coulomb_element_stuck_at_an_impact_starts_within_its_yield_force():
         ts = np.linspace(stuck[-1], 0.5, 201)
         F3 = sol.sol(ts)[:, sol.columns.index("F_e3")]
         assert np.abs(F3).max() <= tau * (1.0 + 1e-9)
+
+
+def test_a_string_just_taut_between_stuck_dashpots_is_not_split_below_its_length_force():
+    # at rest from t = 0.245: e0 stuck at j0, e3's string taut at exactly L (its spring
+    # force k L, no extra tension), e2 stuck at m2 - three locks on a cycle. The cone of
+    # the taut branch, F >= k L, was made symmetric about the force, so the stage split
+    # put the string at 1e-4 (pushing); its guard then failed at the start of every
+    # step: an event each step, thousands of them, and the run took minutes
+    scene = Scene([Junction("j0", x0=0.9533455418797838),
+                   Junction("j1", x0=0.3362295001883455),
+                   Mass("m2", m=0.5600920701120036, x0=-0.15096518246809487, v0=0.0)],
+                  [Element("e0", _hb(1.0, 0.9999999999999994, 0.8), "ground", "j0"),
+                   Element("e1", get_law("newtonian").bind(c=0.12024974333851363), "j0",
+                           "j1"),
+                   Element("e2", get_law("bingham").bind(gamma=0.1676884126582077, tau=1.0),
+                           "ground", "m2"),
+                   Element("e3", get_law("string_spring").bind(
+                       k=67.00762849933474, L=0.0037733413527028777), "j0", "m2")])
+    k, L = 67.00762849933474, 0.0037733413527028777
+    h = 0.01828511026740422
+    sol = simulate(scene, method="radau5", dt=h, t_end=0.5119830874873181, rtol=h**2,
+                   atol=h**3, compiled=False, max_steps=500)
+    assert sol.ok, sol.message
+    assert len(sol.events) < 20, len(sol.events)
+    rest = sol.t > 0.25
+    assert np.all(sol.v["m2"][rest] == 0.0)
+    assert np.all(sol.F["e3"][rest] >= k * L * (1.0 - 1e-9))

@@ -63,7 +63,8 @@ class ModeState:
         self.kernels: list = [None] * self.E
         self.guards: list = [None] * self.E
         self.watched: list[int] = []
-        self.cones: dict[int, tuple[float, float]] = {}  # locks in parallel: force split
+        # locks in parallel: force split (centre, half-width, lo, hi)
+        self.cones: dict[int, tuple[float, float, float, float]] = {}
         self.events: list[Event] = []
         self.recent: deque = deque(maxlen=opts["zeno_events"])
         self.log = IntervalLog()

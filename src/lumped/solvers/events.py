@@ -300,17 +300,19 @@ def _ground_locks(scene: Scene, held: Sequence[int], target: Sequence[float],
 
 
 def lock_cones(branches: Sequence, modes: Sequence[int], F: Sequence[float],
-               elements: Sequence[int]) -> dict[int, tuple[float, float]]:
+               elements: Sequence[int]) -> dict[int, tuple[float, float, float, float]]:
     r"""The force interval each locked element of ``elements`` admits, as ``e -> (centre,
-    half-width)``: where every guard of its locking branch (at ``q`` = the lock's value) is
-    non-negative, read off the guards' slopes in ``F`` at ``F_e`` (exact for the affine
-    guards of the built-in laws: Bingham, Coulomb, Herschel-Bulkley stuck,
-    ``|F| <= tau``). An interval open on a side (a taut string) gets the centre ``F_e`` and
-    a half-width ``1e3`` times the largest finite one or force, so that it takes the load
-    the others do not (:func:`lumped.solvers.radau._cone_solver`). Elements not on a lock
-    with a known value are left out."""
-    out: dict[int, tuple[float, float]] = {}
-    open_: list[int] = []
+    half-width, lo, hi)``: where every guard of its locking branch (at ``q`` = the lock's
+    value) is non-negative, read off the guards' slopes in ``F`` at ``F_e`` (exact for the
+    affine guards of the built-in laws: Bingham, Coulomb, Herschel-Bulkley stuck,
+    ``|F| <= tau``). ``lo, hi`` are the interval's ends; the centre and half-width weigh
+    the split (:func:`lumped.solvers.radau._cone_solver`). An interval open on a side (a
+    taut string, ``F >= k L``) gets the centre ``F_e`` and a half-width ``1e3`` times the
+    largest finite one or force, so that it takes the load the others do not, and keeps
+    its finite end as ``lo`` or ``hi``: a split below a taut string's ``k L`` (a string
+    pushing) is held there. Elements not on a lock with a known value are left out."""
+    out: dict[int, tuple[float, float, float, float]] = {}
+    open_: list[tuple[int, float, float]] = []
     big = 1.0 + max((abs(f) for f in F), default=0.0)
     for e in elements:
         info = branches[e].info[modes[e]]
@@ -328,12 +330,12 @@ def lock_cones(branches: Sequence, modes: Sequence[int], F: Sequence[float],
             elif slope < 0.0:
                 hi = min(hi, F0 - a / slope)
         if math.isfinite(lo) and math.isfinite(hi) and hi > lo:
-            out[e] = (0.5 * (lo + hi), 0.5 * (hi - lo))
+            out[e] = (0.5 * (lo + hi), 0.5 * (hi - lo), lo, hi)
             big = max(big, 0.5 * (hi - lo))
         else:
-            open_.append(e)
-    for e in open_:
-        out[e] = (float(F[e]), 1e3 * big)
+            open_.append((e, lo, hi))
+    for e, lo, hi in open_:
+        out[e] = (float(F[e]), 1e3 * big, lo, hi)
     return out
 
 

@@ -80,13 +80,14 @@ def _solves(G: list[float], J: list[list[float]], scale: list[float], tol: float
     return True
 
 
-def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[float, float]],
+def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[float, ...]],
                  N: int, n: int, held: dict[int, float] | None = None
                  ) -> Callable[[list[float]], list[float]]:
     """``solve(b)`` for a singular ``J`` whose free directions split the force among locked
     elements in parallel: of all the solutions, the one whose new forces minimise
-    ``sum (F_e - c_e)^2 / w_e`` over the elements of ``cones`` (``e -> (c_e, w_e)``, the
-    centre and half-width of the force interval the element's lock admits) and the
+    ``sum (F_e - c_e)^2 / w_e`` over the elements of ``cones`` (``e -> (c_e, w_e, lo_e,
+    hi_e)``, the centre and half-width of the force interval ``[lo_e, hi_e]`` the
+    element's lock admits, :func:`lumped.solvers.events.lock_cones`) and the
     correction's norm over the other unknowns. Two stuck dashpots in parallel share a load
     ``S`` in proportion to their capacities (each within its cone whenever ``|S|`` is within
     the sum), a rigid lock (``w_e`` huge) takes what the others do not.
@@ -100,7 +101,7 @@ def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[fl
 
     size = len(U)
     held = held or {}
-    cols = {k * n + N + e: (c, w) for k in range(3) for e, (c, w) in cones.items()}
+    cols = {k * n + N + e: (c, w) for k in range(3) for e, (c, w, *_) in cones.items()}
     A = np.array(J, dtype=float)
     D = np.ones(size)
     for j, (_, w) in cols.items():
@@ -309,7 +310,7 @@ class StageSystem:
     def solve(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
               f: list[list[float]], kernels: Sequence[Callable], scale: list[float],
               tol: float = 1e-3, max_iters: int = 10,
-              cones: dict[int, tuple[float, float]] | None = None,
+              cones: dict[int, tuple[float, ...]] | None = None,
               least_squares: bool = False) -> tuple[list[float] | None, int, int]:
         """Newton on the stage system from the guess ``U`` (modified in place).
 
@@ -353,10 +354,15 @@ class StageSystem:
                 first = list(U)
             out = {}
             for k in range(3):
-                for e, (c, w) in cones.items():
+                for e, (_, w, lo, hi) in cones.items():
                     j = k * self.n + self.N + e
-                    if j not in held and abs(U[j] - c) > w * (1.0 + 1e-9):
-                        out[j] = c + math.copysign(w * (1.0 - 1e-6), U[j] - c)
+                    if j in held:
+                        continue
+                    # (an end held a hair inside, where the branch's guards are > 0)
+                    if U[j] > hi + 1e-9 * w:
+                        out[j] = hi - 0.5e-6 * (hi - max(lo, hi - 2.0 * w))
+                    elif U[j] < lo - 1e-9 * w:
+                        out[j] = lo + 0.5e-6 * (min(hi, lo + 2.0 * w) - lo)
             if not out:
                 return got, its, nfac
             held.update(out)
@@ -365,7 +371,7 @@ class StageSystem:
 
     def _newton(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
                 f: list[list[float]], kernels: Sequence[Callable], scale: list[float],
-                tol: float, max_iters: int, cones: dict[int, tuple[float, float]] | None,
+                tol: float, max_iters: int, cones: dict[int, tuple[float, ...]] | None,
                 held: dict[int, float]) -> tuple[list[float] | None, int, int]:
         """One simplified Newton solve of :meth:`solve`, with the forces of ``held`` (stage
         column -> force) held where the cone split puts them (:func:`_cone_solver`)."""
@@ -399,7 +405,7 @@ class StageSystem:
         return None, max_iters, nfac
 
     def _solver(self, J: list[list[float]], U: list[float],
-                cones: dict[int, tuple[float, float]] | None, held: dict[int, float]):
+                cones: dict[int, tuple[float, ...]] | None, held: dict[int, float]):
         # locks in parallel make J singular, but only to round-off once the stage rows
         # mix: an LU would then pick the split from the round-off; the SVD does not
         if cones and all(math.isfinite(a) for row in J for a in row):
