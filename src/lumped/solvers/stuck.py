@@ -39,6 +39,7 @@ from scipy.optimize import brentq
 
 from ..scene import Scene
 from .events import guard_tolerance
+from .rest_balance import rest_inverse
 
 __all__ = ["StaticHold", "static_hold", "forcing_kinds"]
 
@@ -213,21 +214,11 @@ def _structure(scene: Scene, branches: Sequence, modes: Sequence[int]):
             free.append(e)
         elif info.dR_dF.is_number and info.dR_dF == 0:
             return None
-    if len(free) != N:
+    got = rest_inverse(N, tuple(zip(scene.elem_a, scene.elem_b, strict=True)), tuple(free))
+    if got is None:
         return None
-    K = np.zeros((N, len(scene.elements)))
-    for e, (a, b) in enumerate(zip(scene.elem_a, scene.elem_b, strict=True)):
-        if a >= 0:
-            K[a, e] += 1.0
-        if b >= 0:
-            K[b, e] -= 1.0
-    Kf = K[:, free]
-    if abs(np.linalg.det(Kf)) < 0.5:  # an incidence matrix: det is an integer
-        return None
-    # a regular incidence matrix is unimodular: its inverse is integral
-    minv = (-np.round(np.linalg.inv(Kf))).tolist()
-    fixed = [e for e in range(K.shape[1]) if e not in free]
-    return free, minv, K.tolist(), fixed
+    minv, K, fixed = got
+    return free, minv, K, fixed
 
 
 def hold_interval(scene: Scene, plan, ms, t: float, t_stop: float, x: list[float],
