@@ -107,7 +107,8 @@ class ModeState:
             snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v))
         guess = self._guesses(cause, x, v, F)
         sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
-                         modes if cause == "guard" else None, 3) if guess else None) or ""
+                         modes if cause == "guard" else None, 3, self.fast)
+               if guess else None) or ""
         for _ in range(0 if sel else 3):
             sel = select_modes(scene, lbs, t, x, v, F, h_probe, options)
             if not isinstance(sel, str) and (sel[0] != modes or cause != "guard"):
