@@ -416,10 +416,11 @@ def output_data(rows: Rows, dense: DenseOutput, dt: float | None, t_end: float,
                 t: float) -> np.ndarray:
     """``data`` of a run that reached ``t``: the accepted step points, or with ``dt`` the
     dense output on ``t_n = n dt`` (up to ``t``; the first row exactly the initial one)."""
-    from .closed_form import steps_for
-
     data = rows.array()
     if dt is not None and len(dense):
+        from .closed_form import steps_for
+
+
         grid = np.arange(steps_for(dt, t_end) + 1) * dt
         grid = grid[grid <= t + 1e-12 * max(1.0, t)]
         # the last step ends at t_n + h, an ulp from t at times

@@ -103,6 +103,19 @@ def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
     return best, True
 
 
+_MONOTONE: dict[int, tuple[object, bool]] = {}
+
+
+def _monotone(bound) -> bool:
+    """:func:`lumped.solvers.branch_check._known_monotone`, kept per bound law object."""
+    got = _MONOTONE.get(id(bound))
+    if got is None or got[0] is not bound:
+        if len(_MONOTONE) > 256:
+            _MONOTONE.clear()
+        got = _MONOTONE[id(bound)] = (bound, _known_monotone(bound))
+    return got[1]
+
+
 def _rest_forces(scene: Scene, pinned: list[float | None], q0: list[float],
                  f: list[float]) -> list[float] | None:
     """The forces of the limit system when it needs no Newton (every node a mass), or
@@ -125,8 +138,7 @@ def _rest_forces(scene: Scene, pinned: list[float | None], q0: list[float],
         return F
     elements = scene.elements
     for e in free:
-        if not (elements[e].kind == "dashpot" and q0[e] == 0.0
-                and _known_monotone(elements[e].law)):
+        if not (elements[e].kind == "dashpot" and q0[e] == 0.0 and _monotone(elements[e].law)):
             return None
     got = rest_inverse(len(scene.nodes), tuple(zip(scene.elem_a, scene.elem_b, strict=True)),
                        free)
