@@ -61,9 +61,13 @@ class StaticHold:
         self.F0 = list(F)
         self.q = scene.elongations(x, v)
         self._arrays: tuple | None = None
-        # a forcing that is absent or constant gives the same forces at every time
+        # a forcing that is absent or constant gives the same forces at every time; the
+        # scan's samples are asked for twice (the scan, the output rows)
         self._steady: list[float] | None = None
+        self._seen: dict[float, list[float]] = {}
         self.varying = bool((fkind == 2).any())
+        self._kinds = [(int(k), float(p[0]), float(p[1]), float(p[2]))
+                       for k, p in zip(fkind, fpar, strict=True)]
 
     def forces(self, t: float) -> list[float]:
         """Every element's force at ``t`` (the forcing's own values)."""
@@ -71,10 +75,16 @@ class StaticHold:
             if self._steady is None:
                 self._steady = self._forces(t)
             return list(self._steady)
-        return self._forces(t)
+        got = self._seen.get(t)
+        if got is None:
+            got = self._seen[t] = self._forces(t)
+        return list(got)
 
     def _forces(self, t: float) -> list[float]:
-        f = self.scene.external_forces(t)
+        # the forcing by its kind's formula (``scene.external_forces(t)``, the same
+        # values: kinds 0 none, 1 constant, 2 sine burst)
+        f = [0.0 if k == 0 else a if k == 1 else (0.0 if t > t_off else a * math.sin(w * t))
+             for k, a, w, t_off in self._kinds]
         g = [fi + ci for fi, ci in zip(f, self.c, strict=True)]
         F = list(self.F0)
         for r, e in enumerate(self.free):
