@@ -166,9 +166,13 @@ class ModeState:
         are at most 3); at a time event the mode kept first."""
         if not self.guessing or self.cones:
             return []
-        if cause == "start":
-            q = self.scene.elongations(x, v)
-            return [[self.lbs[e].branch(q[e], F[e]) for e in range(self.E)]]
+        if cause == "start":  # (then each element with branches on its others: a force
+            q = self.scene.elongations(x, v)  # at a yield limit reads as the lock)
+            read = [self.lbs[e].branch(q[e], F[e]) for e in range(self.E)]
+            multi = [e for e in range(self.E) if self.lbs[e].count > 1]
+            return [read] + [[b if k == e else m for k, m in enumerate(read)] for e in
+                             (multi if len(multi) <= 3 else []) for b in
+                             range(self.lbs[e].count) if b != read[e]]
         hint, self.hint = self.hint, None
         elements = [hint] if hint is not None else (
             list(self.watched) if len(self.watched) <= 3 else [])
