@@ -11,6 +11,7 @@ of the dashpots, the ``energy()`` ledger, a ``plot()`` and tables (``to_csv``,
 from __future__ import annotations
 
 import html
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -96,7 +97,9 @@ class Solution:
             raise ValueError(
                 f"`data` has shape {self.data.shape}, expected (n, {len(self.columns)})"
             )
-        if not np.all(np.isfinite(self.data)):
+        # (a finite sum is the common case, one pass; a sum that overflows is checked
+        # value by value)
+        if not (math.isfinite(self.data.sum()) or np.isfinite(self.data).all()):
             r, c = np.argwhere(~np.isfinite(self.data))[0]
             raise FloatingPointError(
                 f"non-finite {self.columns[c]} = {self.data[r, c]!r} at row {r}"

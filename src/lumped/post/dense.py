@@ -49,6 +49,9 @@ def check_times(t: object, t_first: float, t_last: float) -> tuple[np.ndarray, b
     arr = np.atleast_1d(arr)
     if arr.ndim != 1:
         raise ValueError(f"`t` must be a scalar or a 1-D array, got shape {arr.shape}")
+    # (the common case in two reductions: a NaN makes both comparisons false)
+    if arr.size and arr.min() >= t_first and arr.max() <= t_last:
+        return arr, scalar
     bad = ~np.isfinite(arr) | (arr < t_first) | (arr > t_last)
     if bad.any():
         raise ValueError(

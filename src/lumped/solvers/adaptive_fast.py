@@ -17,6 +17,7 @@ import numpy as np
 
 from ..scene import Scene
 from . import radau_loop_jit as L
+from .mode_guess_jit import branch_type, compiled_probe_modes, probe_workspace
 
 __all__ = ["CompiledLoop", "compiled_loop"]
 
@@ -95,7 +96,8 @@ def _parts(scene: Scene, plan) -> tuple | str:
         return f"python: {err}"
     return (js, _pointer(js.module.branch_law, L.law_type()),
             _pointer(js.module.branch_guards, L.guards_type()), fkind, fpar,
-            np.array(plan.checked, dtype=np.int64))
+            np.array(plan.checked, dtype=np.int64),
+            _pointer(js.module.active_branch, branch_type()))
 
 
 def _locks_in_parallel(scene: Scene, lbs: list, cyclic) -> bool:
@@ -149,8 +151,9 @@ class CompiledLoop:
     """The compiled loop of one scene: its generated kernels, arrays and output blocks."""
 
     def __init__(self, js, law, guards, fkind: np.ndarray, fpar: np.ndarray,
-                 checked: np.ndarray) -> None:
-        self.js, self.law, self.guards = js, law, guards
+                 checked: np.ndarray, branch) -> None:
+        self.js, self.law, self.guards, self.branch = js, law, guards, branch
+        self._probe: tuple | None = None
         self.fn = L.compiled_advance()
         self.fkind, self.fpar, self.checked = fkind, fpar, checked
         self.A, self.W = _butcher()
@@ -206,6 +209,22 @@ class CompiledLoop:
         throughout makes none); the attempts write no output rows: their blocks hold one
         row (a run writes its steps in place, :meth:`run`)."""
         self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(self.N, self.E, self.E, 1)
+
+    def probe_modes(self, candidates, current, f: list[float], x: list[float],
+                    v: list[float], F: list[float], h_p: float) -> tuple[int, np.ndarray]:
+        """:func:`lumped.solvers.mode_guess_jit.probe_modes` on the scene's kernels:
+        ``(the index of the confirmed candidate or UNDECIDED or REFUSED, out)`` with
+        ``v_p, F_p`` in ``out`` (see :func:`lumped.solvers.mode_guess.try_modes`)."""
+        if self._probe is None:
+            self._probe = (compiled_probe_modes(), *probe_workspace(self.N, self.E))
+        fn, out, wm = self._probe
+        js = self.js
+        cands = np.array(candidates, dtype=np.int64).reshape(len(candidates), self.E)
+        cur = _NO_MODE if current is None else np.array(current, dtype=np.int64)
+        k = fn(self.law.addr, self.branch.addr, js.masses, js.ea, js.eb, js.spring, cands,
+               cur, np.array(f, dtype=float), np.array(x, dtype=float),
+               np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
+        return k, out
 
     def forget(self) -> None:
         """The driver changed its state lists in place (an event): convert them again."""
@@ -282,6 +301,7 @@ class CompiledLoop:
         return L.REASONS.get(int(ist[L.REASON]), "?")
 
 
+_NO_MODE = np.zeros(0, dtype=np.int64)
 _BUTCHER: list = []
 
 

@@ -170,7 +170,8 @@ class ModeState:
         scene, lbs, modes = self.scene, self.lbs, self.modes
         guess = self._guesses(cause, x, v, F)
         sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
-                         modes if cause == "guard" else None, 3) if guess else None) or ""
+                         modes if cause == "guard" else None, 3, self.fast)
+               if guess else None) or ""
         for _ in range(0 if sel else 3):
             sel = select_modes(scene, lbs, t, x, v, F, h_probe, self.settings.options)
             if not isinstance(sel, str) and (sel[0] != modes or cause != "guard"):
@@ -194,9 +195,13 @@ class ModeState:
         are at most 3); at a time event the mode kept first."""
         if not self.guessing or self.cones:
             return []
-        if cause == "start":
-            q = self.scene.elongations(x, v)
-            return [[self.lbs[e].branch(q[e], F[e]) for e in range(self.E)]]
+        if cause == "start":  # (then each element with branches on its others: a force
+            q = self.scene.elongations(x, v)  # at a yield limit reads as the lock)
+            read = [self.lbs[e].branch(q[e], F[e]) for e in range(self.E)]
+            multi = [e for e in range(self.E) if self.lbs[e].count > 1]
+            return [read] + [[b if k == e else m for k, m in enumerate(read)] for e in
+                             (multi if len(multi) <= 3 else []) for b in
+                             range(self.lbs[e].count) if b != read[e]]
         hint, self.hint = self.hint, None
         elements = [hint] if hint is not None else (
             list(self.watched) if len(self.watched) <= 3 else [])

@@ -303,7 +303,8 @@ def _static_fill(ts, s0, s1, closed, y0, fkind, fpar, c, minv, free, N, out) -> 
     ``x, v`` of ``y0``, the forces of ``y0`` but those of ``free``, which follow the static
     balance ``-K_free^-1 (f(t) + c)`` (:class:`lumped.solvers.stuck.StaticHold`; the
     forcing by the scalar formulas of its kinds: 1 constant, 2 sine burst). The row is
-    made once and copied; only a sine burst makes the free forces anew at each time."""
+    made once and copied; only a sine burst that is on makes the free forces anew at each
+    time (after the last burst's ``t_off`` they are those of any later time)."""
     width = out.shape[1]
     row = np.empty(width)
     for i in range(N):
@@ -312,16 +313,19 @@ def _static_fill(ts, s0, s1, closed, y0, fkind, fpar, c, minv, free, N, out) -> 
     for e in range(width - 1 - 2 * N):
         row[1 + 2 * N + e] = y0[2 * N + e]
     g = np.empty(N)
-    varying = False
+    t_on = -math.inf  # the forcing varies up to the latest t_off of a sine burst
     for i in range(N):
-        varying = varying or fkind[i] == 2
+        if fkind[i] == 2:
+            t_on = max(t_on, fpar[i, 2])
     fresh = True
+    steady = False  # the row holds the forces of a time when no sine burst is on
     for r in range(ts.shape[0]):
         t = ts[r]
         if not (t >= s0 and (t < s1 or (closed and t == s1))):
             continue
-        if fresh or varying:
+        if fresh or not (steady and t > t_on):
             fresh = False
+            steady = t > t_on
             for i in range(N):
                 kind = fkind[i]
                 f = 0.0
@@ -416,10 +420,11 @@ def output_data(rows: Rows, dense: DenseOutput, dt: float | None, t_end: float,
                 t: float) -> np.ndarray:
     """``data`` of a run that reached ``t``: the accepted step points, or with ``dt`` the
     dense output on ``t_n = n dt`` (up to ``t``; the first row exactly the initial one)."""
-    from .closed_form import steps_for
-
     data = rows.array()
     if dt is not None and len(dense):
+        from .closed_form import steps_for
+
+
         grid = np.arange(steps_for(dt, t_end) + 1) * dt
         grid = grid[grid <= t + 1e-12 * max(1.0, t)]
         # the last step ends at t_n + h, an ulp from t at times

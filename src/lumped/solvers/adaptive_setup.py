@@ -146,15 +146,15 @@ def scene_plan(scene: Scene) -> ScenePlan:
     """The :class:`ScenePlan` of ``scene``, made once per scene object (the nodes,
     elements and forcing it was made from must be the same objects), so that repeated
     runs of one scene (a benchmark, a study) skip this set-up."""
-    from ..codegen.branches import law_branches
-    from .branch_check import _known_monotone
-    from .locks import cyclic_elements
-
     key = (scene.nodes, scene.elements, tuple(id(f) for f in scene.forcing))
     plan = _PLANS.get(scene)
     if plan is not None and plan.key[0] is key[0] and plan.key[1] is key[1] \
             and plan.key[2] == key[2]:
         return plan
+    from ..codegen.branches import law_branches
+    from .branch_check import _known_monotone
+    from .locks import cyclic_elements
+
     plan = ScenePlan(scope_error(scene), [law_branches(el.law) for el in scene.elements],
                      [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)],
                      cyclic_elements(scene), key)

@@ -12,8 +12,10 @@ and junction velocities follow from the laws.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 from ..scene import Junction, Mass, Scene
+from .branch_check import _known_monotone
 from .junction_balance import refuse_unbalanced_junctions
 from .newton import (
     NewtonCode,
@@ -22,6 +24,7 @@ from .newton import (
     _residual_ok,
     newton_solve,
 )
+from .rest_balance import rest_forces, rest_inverse
 from .status import InconsistentInitialForce, SolverError
 from .step_system import (
     _EPS,
@@ -30,6 +33,17 @@ from .step_system import (
 )
 
 __all__ = ["consistent_initial_state"]
+
+_DEFAULT_OPTIONS = NewtonOptions()
+
+
+@lru_cache(maxsize=32)
+def _ic_options(options: NewtonOptions) -> NewtonOptions:
+    """``options`` with the budget of the one initial solve per run (degenerate yields
+    converge linearly): at least 200 iterations (made once per ``options``)."""
+    return NewtonOptions(rtol=options.rtol, atol=options.atol,
+                         max_iters=max(options.max_iters, 200),
+                         max_backtracks=options.max_backtracks, free_steps=options.free_steps)
 
 
 # ---------------------------------------------------------------------------------------
@@ -89,6 +103,54 @@ def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
     return best, True
 
 
+_MONOTONE: dict[int, tuple[object, bool]] = {}
+
+
+def _monotone(bound) -> bool:
+    """:func:`lumped.solvers.branch_check._known_monotone`, kept per bound law object."""
+    got = _MONOTONE.get(id(bound))
+    if got is None or got[0] is not bound:
+        if len(_MONOTONE) > 256:
+            _MONOTONE.clear()
+        got = _MONOTONE[id(bound)] = (bound, _known_monotone(bound))
+    return got[1]
+
+
+def _rest_forces(scene: Scene, pinned: list[float | None], q0: list[float],
+                 f: list[float]) -> list[float] | None:
+    """The forces of the limit system when it needs no Newton (every node a mass), or
+    ``None``: every force fixed by its law (the accelerations, which the result does not
+    hold, are then the only unknowns), or the others held by the balance with every mass
+    at rest, one per node on a regular incidence matrix
+    (:func:`lumped.solvers.rest_balance.rest_forces`, the held interval's formula), each
+    admitted by its law at its ``q0`` exactly (``R(q0, F) = 0``: with the accelerations
+    zero the limit system holds, its mass rows to round-off).
+
+    The forces so held are those of dashpots at rest (``q0 = 0``: their rows
+    ``R(eps (a_b - a_a), F) = 0`` then fix the accelerations) whose laws have no folds
+    (:func:`lumped.solvers.branch_check._known_monotone`): the limit system has one
+    solution, which Newton finds too. A force the law leaves free at ``q0 != 0`` (a taut
+    string, whose row sees ``q0 + eps^2 a``, which rounds to ``q0``) leaves the
+    accelerations to Newton's minimum-norm rule: not taken here."""
+    free = tuple(e for e, Fp in enumerate(pinned) if Fp is None)
+    F = [0.0 if Fp is None else Fp for Fp in pinned]
+    if not free:
+        return F
+    elements = scene.elements
+    for e in free:
+        if not (elements[e].kind == "dashpot" and q0[e] == 0.0 and _monotone(elements[e].law)):
+            return None
+    got = rest_inverse(len(scene.nodes), tuple(zip(scene.elem_a, scene.elem_b, strict=True)),
+                       free)
+    if got is None:
+        return None
+    F, _ = rest_forces(*got, free, f, F)
+    for e in free:
+        if not (math.isfinite(F[e]) and elements[e].law.kernel(q0[e], F[e])[0] == 0.0):
+            return None
+    return F
+
+
 def consistent_initial_state(
     scene: Scene, *, time_scale: float = 1.0, options: NewtonOptions | None = None
 ) -> tuple[list[float], list[float], dict]:
@@ -127,13 +189,11 @@ def consistent_initial_state(
     SolverError
         If the algebraic system has no solution Newton can find.
     """
-    options = options or NewtonOptions()
+    options = options or _DEFAULT_OPTIONS
     nodes, elements = scene.nodes, scene.elements
-    N, E = len(nodes), len(elements)
-    n = N + E
+    E = len(elements)
     eps = 1e-20 * time_scale
     is_mass = [isinstance(nd, Mass) for nd in nodes]
-    mass = [nd.m if isinstance(nd, Mass) else 0.0 for nd in nodes]
     v0 = [nd.v0 if isinstance(nd, Mass) else 0.0 for nd in nodes]
     x0 = [nd.x0 for nd in nodes]
     ea, eb = scene.elem_a, scene.elem_b
@@ -167,6 +227,54 @@ def consistent_initial_state(
             ) from None
         if fixed:
             pinned[e] = F_root
+    F_rest = _rest_forces(scene, pinned, q0, f) if all(is_mass) else None
+    if F_rest is not None:  # at rest, the load held by locks: no Newton
+        v, F = list(v0), F_rest
+        stats = {"newton_iterations": 0, "residual_evals": 0, "jacobian_evals": 0,
+                 "factorizations": 0}
+    else:
+        v, F, stats = _limit_system(scene, pinned, q0, f, eps, options)
+    user = [e for e, el in enumerate(elements) if el.F0 is not None]
+    if user:
+        q_init = scene.elongations(x0, v)
+        for e in user:
+            el = elements[e]
+            R, Rq, RF = el.law.kernel(q_init[e], el.F0)
+            tol = 1e-9 * (abs(Rq * q_init[e]) + abs(RF * el.F0)) + 1e-12
+            if not abs(R) <= tol:
+                raise InconsistentInitialForce(
+                    f"initial force F0 = {el.F0!r} of element {el.name!r} breaks its law "
+                    f"{el.law_name!r}: R(q={q_init[e]!r}, F={el.F0!r}) = {R!r} != 0"
+                )
+            F[e] = el.F0
+        net = scene.net_forces(0.0, F)
+        for i, node in enumerate(nodes):
+            if isinstance(node, Junction):
+                scale = abs(f[i]) + sum(abs(F[e]) for e in range(E) if i in (ea[e], eb[e]))
+                if not abs(net[i]) <= 1e-9 * scale + 1e-12:
+                    raise InconsistentInitialForce(
+                        f"initial forces break the force balance of junction {node.name!r}: "
+                        f"net force {net[i]!r} != 0"
+                    )
+    return v, F, stats
+
+
+def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: list[float],
+                  eps: float, options: NewtonOptions
+                  ) -> tuple[list[float], list[float], dict]:
+    """Step 2 of :func:`consistent_initial_state`: the limit ``h -> 0`` of an implicit
+    step, by Newton's method; ``(v, F, stats)``."""
+    nodes, elements = scene.nodes, scene.elements
+    N, E = len(nodes), len(elements)
+    n = N + E
+    is_mass = [isinstance(nd, Mass) for nd in nodes]
+    mass = [nd.m if isinstance(nd, Mass) else 0.0 for nd in nodes]
+    v0 = [nd.v0 if isinstance(nd, Mass) else 0.0 for nd in nodes]
+    ea, eb = scene.elem_a, scene.elem_b
+
+    def at(vals: list[float], i: int) -> float:
+        return vals[i] if i >= 0 else 0.0
+
     # 2. the limit system
     kernels = [el.law.kernel for el in elements]
     spring = [el.kind == "spring" for el in elements]
@@ -220,10 +328,7 @@ def consistent_initial_state(
         for Fp, el in zip(pinned, elements, strict=True)
     ]
     # one solve per run: allow a generous budget (degenerate yields converge linearly)
-    ic_options = NewtonOptions(rtol=options.rtol, atol=options.atol,
-                               max_iters=max(options.max_iters, 200),
-                               max_backtracks=options.max_backtracks,
-                               free_steps=options.free_steps)
+    ic_options = _ic_options(options)
     res = newton_solve(evaluate, u0, ic_options, min_norm=True, check_scaled=True)
     if res.code is not NewtonCode.SUCCESS:
         # restarts: the junctions' velocities from their balances solved one by one
@@ -335,28 +440,6 @@ def consistent_initial_state(
     u = res.u
     v = [v0[i] if is_mass[i] else u[i] for i in range(N)]
     F = list(u[N:])
-    user = [e for e, el in enumerate(elements) if el.F0 is not None]
-    if user:
-        q_init = scene.elongations(x0, v)
-        for e in user:
-            el = elements[e]
-            R, Rq, RF = el.law.kernel(q_init[e], el.F0)
-            tol = 1e-9 * (abs(Rq * q_init[e]) + abs(RF * el.F0)) + 1e-12
-            if not abs(R) <= tol:
-                raise InconsistentInitialForce(
-                    f"initial force F0 = {el.F0!r} of element {el.name!r} breaks its law "
-                    f"{el.law_name!r}: R(q={q_init[e]!r}, F={el.F0!r}) = {R!r} != 0"
-                )
-            F[e] = el.F0
-        net = scene.net_forces(0.0, F)
-        for i, node in enumerate(nodes):
-            if isinstance(node, Junction):
-                scale = abs(f[i]) + sum(abs(F[e]) for e in range(E) if i in (ea[e], eb[e]))
-                if not abs(net[i]) <= 1e-9 * scale + 1e-12:
-                    raise InconsistentInitialForce(
-                        f"initial forces break the force balance of junction {node.name!r}: "
-                        f"net force {net[i]!r} != 0"
-                    )
     stats = {
         "newton_iterations": res.iterations, "residual_evals": res.residual_evals,
         "jacobian_evals": res.jacobian_evals, "factorizations": res.factorizations,

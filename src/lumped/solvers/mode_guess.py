@@ -30,6 +30,7 @@ import math
 from collections.abc import Sequence
 
 from ..scene import Mass, Scene
+from .mode_guess_jit import REFUSED
 
 __all__ = ["try_modes"]
 
@@ -38,7 +39,7 @@ _MAX_ITERS = 30
 
 def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[int]],
               t: float, x: list[float], v: list[float], F: list[float], h_p: float,
-              current: Sequence[int] | None = None, longer: int = 1
+              current: Sequence[int] | None = None, longer: int = 1, fast=None
               ) -> tuple[list[int], list[float], list[float]] | None:
     """The first of ``candidates`` (modes) that the full laws confirm after the probe step
     of size ``h_p`` from ``t`` (see the module notes): ``(modes, v_p, F_p)``, or ``None``.
@@ -46,9 +47,23 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
     With ``current`` (a guard event) a result that reads as ``current`` is undecided, as
     in :func:`~lumped.solvers.adaptive_modes.ModeState.change_mode`: if no candidate is
     confirmed and one is undecided, the probe is tried ``1000`` times longer, up to
-    ``longer`` sizes in all."""
+    ``longer`` sizes in all.
+
+    With ``fast`` (the run's :class:`~lumped.solvers.adaptive_fast.CompiledLoop`) the
+    probes and the branch reads run compiled
+    (:func:`lumped.solvers.mode_guess_jit.probe_modes`, the same numbers); the loop below
+    is the reference."""
     for _ in range(longer):
         f = scene.external_forces(t + h_p)
+        if fast is not None:
+            k, out = fast.probe_modes(candidates, current, f, x, v, F, h_p)
+            if k >= 0:
+                N = len(x)
+                return list(candidates[k]), out[:N].tolist(), out[N:].tolist()
+            if k == REFUSED:
+                return None
+            h_p *= 1000.0
+            continue
         undecided = False
         for modes in candidates:
             got = _probe(scene, branches, modes, f, x, v, F, h_p)

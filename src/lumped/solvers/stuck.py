@@ -38,7 +38,9 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..scene import Scene
+from .adaptive_output import row_of
 from .events import guard_tolerance
+from .rest_balance import rest_inverse
 
 __all__ = ["StaticHold", "static_hold", "forcing_kinds"]
 
@@ -59,10 +61,30 @@ class StaticHold:
         self.F0 = list(F)
         self.q = scene.elongations(x, v)
         self._arrays: tuple | None = None
+        # a forcing that is absent or constant gives the same forces at every time; the
+        # scan's samples are asked for twice (the scan, the output rows)
+        self._steady: list[float] | None = None
+        self._seen: dict[float, list[float]] = {}
+        self.varying = bool((fkind == 2).any())
+        self._kinds = [(int(k), float(p[0]), float(p[1]), float(p[2]))
+                       for k, p in zip(fkind, fpar, strict=True)]
 
     def forces(self, t: float) -> list[float]:
         """Every element's force at ``t`` (the forcing's own values)."""
-        f = self.scene.external_forces(t)
+        if not self.varying:
+            if self._steady is None:
+                self._steady = self._forces(t)
+            return list(self._steady)
+        got = self._seen.get(t)
+        if got is None:
+            got = self._seen[t] = self._forces(t)
+        return list(got)
+
+    def _forces(self, t: float) -> list[float]:
+        # the forcing by its kind's formula (``scene.external_forces(t)``, the same
+        # values: kinds 0 none, 1 constant, 2 sine burst)
+        f = [0.0 if k == 0 else a if k == 1 else (0.0 if t > t_off else a * math.sin(w * t))
+             for k, a, w, t_off in self._kinds]
         g = [fi + ci for fi, ci in zip(f, self.c, strict=True)]
         F = list(self.F0)
         for r, e in enumerate(self.free):
@@ -121,12 +143,13 @@ class StaticHold:
             prev = p
         return out
 
-    def breakout(self, t0: float, t1: float, guards: Sequence, modes: Sequence[int]
-                 ) -> tuple[float | None, list[float]]:
+    def breakout(self, t0: float, t1: float, guards: Sequence, modes: Sequence[int],
+                 fast=None) -> tuple[float | None, list[float]]:
         """The first time in ``(t0, t1]`` where a guard of a locked element turns negative
         (shifted by its round-off tolerance, as a step's crossing test), refined to a root
         of the guard; ``(None, samples)`` if none. ``samples`` are the scan's times before
-        it (for the output rows)."""
+        it (for the output rows). With ``fast`` (the run's compiled loop) the root is
+        found compiled (:mod:`lumped.solvers.stuck_jit`, the same numbers)."""
         done: list[float] = []
         prev = t0
         for s in self.samples(t0, t1):
@@ -137,14 +160,23 @@ class StaticHold:
                 tol = guard_tolerance(self.q[e], F[e])
                 for j, g in enumerate(gs):
                     if g + tol < 0.0:  # the earliest root of all the guards that fail
-                        roots.append(self._root(e, j, guards[e], prev, s))
+                        roots.append(self._root(e, j, guards[e], prev, s, modes, fast))
             if roots:
                 return min(roots), done
             done.append(s)
             prev = s
         return None, done[:-1]
 
-    def _root(self, e: int, j: int, guard, a: float, b: float) -> float:
+    def _root(self, e: int, j: int, guard, a: float, b: float,
+              modes: Sequence[int] | None = None, fast=None) -> float:
+        if fast is not None:  # compiled, the same numbers (nan: the reference says why)
+            _, fkind, fpar, c, minv, _ = self.arrays()
+            r = _breakout_root()(fast.guards.addr, e, modes[e], j, self.q[e],
+                                 self.free.index(e), fkind, fpar, c, minv, a, b,
+                                 np.zeros(64))  # (the guard values)
+            if r == r:
+                return r
+
         def g(t: float) -> float:
             return guard(self.q[e], self.forces(t)[e])[j]
 
@@ -160,6 +192,12 @@ class StaticHold:
         while g(r) >= 0.0 and r + step < b:
             r, step = r + step, 2.0 * step
         return r
+
+
+def _breakout_root():
+    from .stuck_jit import compiled_breakout_root
+
+    return compiled_breakout_root()
 
 
 def forcing_kinds(scene: Scene, plan) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -213,21 +251,11 @@ def _structure(scene: Scene, branches: Sequence, modes: Sequence[int]):
             free.append(e)
         elif info.dR_dF.is_number and info.dR_dF == 0:
             return None
-    if len(free) != N:
+    got = rest_inverse(N, tuple(zip(scene.elem_a, scene.elem_b, strict=True)), tuple(free))
+    if got is None:
         return None
-    K = np.zeros((N, len(scene.elements)))
-    for e, (a, b) in enumerate(zip(scene.elem_a, scene.elem_b, strict=True)):
-        if a >= 0:
-            K[a, e] += 1.0
-        if b >= 0:
-            K[b, e] -= 1.0
-    Kf = K[:, free]
-    if abs(np.linalg.det(Kf)) < 0.5:  # an incidence matrix: det is an integer
-        return None
-    # a regular incidence matrix is unimodular: its inverse is integral
-    minv = (-np.round(np.linalg.inv(Kf))).tolist()
-    fixed = [e for e in range(K.shape[1]) if e not in free]
-    return free, minv, K.tolist(), fixed
+    minv, K, fixed = got
+    return free, minv, K, fixed
 
 
 def hold_interval(scene: Scene, plan, ms, t: float, t_stop: float, x: list[float],
@@ -238,15 +266,13 @@ def hold_interval(scene: Scene, plan, ms, t: float, t_stop: float, x: list[float
     into ``dense`` and ``rows``; returns ``(t_1, F(t_1), broke_out)`` where ``t_1`` is the
     break-out time or ``t_stop``, or ``None`` (the steps must run: not stuck, or the
     break-out is at ``t`` itself)."""
-    from .adaptive_output import row_of
-
     if ms.cones:  # locks in parallel: their split rule is the steps' (lumped.solvers.radau)
         return None
     fkind, fpar = forcing_kinds(scene, plan)
     hold = static_hold(scene, plan, ms.modes, x, v, F, fkind, fpar)
     if hold is None:
         return None
-    t_b, samples = hold.breakout(t, t_stop, ms.guards, ms.modes)
+    t_b, samples = hold.breakout(t, t_stop, ms.guards, ms.modes, ms.fast)
     if t_b is not None and t_b - t <= 16 * 2.220446049250313e-16 * max(1.0, abs(t)):
         return None
     t1 = t_stop if t_b is None else t_b

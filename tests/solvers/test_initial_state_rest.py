@@ -1,0 +1,125 @@
+"""The consistent initial state's shortcut without Newton (every force fixed by its law,
+or the rest held by locks on a regular balance) against the limit system it skips."""
+
+from __future__ import annotations
+
+import math
+
+from hypothesis import HealthCheck, event, given, settings
+from hypothesis import strategies as st
+
+from lumped.laws import get_law
+from lumped.scene import Element, Mass, Scene
+from lumped.solvers import initial_state
+from lumped.solvers.initial_state import consistent_initial_state
+
+DASHPOTS = ("newtonian", "bingham", "coulomb", "herschel_bulkley")
+SPRINGS = ("linear_spring", "string_spring")
+
+
+def _with_newton(scene: Scene, time_scale: float):
+    """The initial state by the limit system's Newton (the shortcut off)."""
+    keep = initial_state._rest_forces
+    initial_state._rest_forces = lambda *args: None
+    try:
+        return consistent_initial_state(scene, time_scale=time_scale)
+    finally:
+        initial_state._rest_forces = keep
+
+
+def _same(a: list[float], b: list[float]) -> bool:
+    """Equal to 2 ulps of the larger value."""
+    return all(x == y or abs(x - y) <= 2.0 * math.ulp(max(abs(x), abs(y)))
+               for x, y in zip(a, b, strict=True))
+
+
+def _decade(lo: float, hi: float):
+    return st.floats(math.log10(lo), math.log10(hi)).map(lambda e: 10.0 ** e)
+
+
+def _law(draw, name: str, q0: float):
+    if name == "linear_spring":
+        return get_law(name).bind(k=draw(_decade(0.1, 1e4)))
+    if name == "string_spring":  # slack, or taut at exactly its length
+        L = max(q0, 0.0) + draw(st.sampled_from([0.0, 1e-3, 0.5]))
+        return get_law(name).bind(k=draw(_decade(0.1, 100.0)), L=L)
+    if name == "newtonian":
+        return get_law(name).bind(c=draw(_decade(0.01, 10.0)))
+    if name == "bingham":
+        return get_law(name).bind(gamma=draw(_decade(0.1, 10.0)), tau=draw(_decade(0.01, 10.0)))
+    if name == "coulomb":
+        return get_law(name).bind(tau=draw(_decade(0.01, 10.0)), r=draw(_decade(1.0, 100.0)))
+    return get_law(name).bind(gamma=draw(_decade(0.1, 10.0)), tau=draw(_decade(0.01, 10.0)),
+                              n=draw(st.sampled_from([0.5, 1.0, 2.0])))
+
+
+def _value(lo: float, hi: float):
+    """Floats in ``[lo, hi]``, zero or above ``1e-6`` in size: Newton stops within its
+    ``atol = 1e-12``, so forces far below it are Newton's only to that tolerance (loads of
+    ``1e-156`` came out a few ulps apart, the two forces of one chain differing from each
+    other; a load of ``1e-309`` underflows in the LU and stays on the acceleration), where
+    the shortcut gives the balance to round-off."""
+    return st.floats(lo, hi).filter(lambda f: f == 0.0 or abs(f) > 1e-6)
+
+
+@st.composite
+def mass_networks(draw):
+    """1 to 4 masses (mostly at rest) joined to ground and to each other by springs and
+    dashpots; a constant load on some masses."""
+    n = draw(st.integers(1, 4))
+    x0 = [draw(_value(-1.0, 1.0)) for _ in range(n)]
+    nodes = [Mass(f"m{i}", m=draw(_decade(0.1, 10.0)), x0=x0[i],
+                  v0=draw(st.sampled_from([0.0, 0.0, 0.0, 0.3]))) for i in range(n)]
+    names = ["ground"] + [nd.name for nd in nodes]
+    pos = {"ground": 0.0, **{nd.name: x0[i] for i, nd in enumerate(nodes)}}
+    pairs = [(names[draw(st.integers(0, i))], names[i + 1]) for i in range(n)]
+    for _ in range(draw(st.integers(0, 3))):
+        a, b = draw(st.permutations(names))[:2]
+        pairs.append((a, b))
+    elements = []
+    for e, (a, b) in enumerate(pairs):
+        name = draw(st.sampled_from(DASHPOTS + SPRINGS + DASHPOTS))
+        elements.append(Element(f"e{e}", _law(draw, name, pos[b] - pos[a]), a, b))
+    forces = {nd.name: draw(_value(-5.0, 5.0)) for nd in nodes if draw(st.booleans())}
+    return Scene(nodes, elements, forces)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(mass_networks())
+def test_shortcut_agrees_with_the_limit_system(scene):
+    try:
+        v1, F1, st1 = _with_newton(scene, 1.0)
+    except Exception as err:  # noqa: BLE001 - the shortcut must then refuse the same way
+        event("no initial state")
+        try:
+            consistent_initial_state(scene, time_scale=1.0)
+        except type(err):
+            return
+        raise AssertionError(f"the shortcut found a state where Newton raised {err!r}") from None
+    v2, F2, st2 = consistent_initial_state(scene, time_scale=1.0)
+    event("shortcut" if st2["newton_iterations"] == 0 else "newton")
+    assert v1 == v2
+    assert _same(F1, F2), (F1, F2)
+
+
+def test_shortcut_is_taken_at_rest():
+    """A mass at rest under a spring load its stuck dashpot holds (the paper's
+    release-0.005), and a chain of three stuck masses under loads: no Newton, the
+    forces of the limit system."""
+    bingham = get_law("bingham").bind(gamma=1.0, tau=1.0)
+    one = Scene([Mass("mass", m=1.0, x0=0.005)],
+                [Element("spring", get_law("linear_spring").bind(k=100.0), "ground", "mass"),
+                 Element("dashpot", bingham, "ground", "mass")])
+    chain = Scene([Mass(f"m{i}", m=1.0 + i, x0=0.01 * i) for i in range(3)],
+                  [Element("d0", bingham, "ground", "m0"), Element("d1", bingham, "m0", "m1"),
+                   Element("d2", bingham, "m1", "m2"),
+                   Element("s0", get_law("linear_spring").bind(k=7.0), "ground", "m2")],
+                  {"m0": 0.3, "m1": -0.2})
+    for scene in (one, chain):
+        v, F, stats = consistent_initial_state(scene, time_scale=2.0)
+        assert stats["newton_iterations"] == 0
+        v1, F1, stats1 = _with_newton(scene, 2.0)
+        assert stats1["newton_iterations"] > 0
+        assert v == v1
+        assert _same(F, F1), (F, F1)
+    assert consistent_initial_state(one)[1] == [0.5, -0.5]

@@ -1,0 +1,72 @@
+"""The compiled break-out root of a held interval (:mod:`lumped.solvers.stuck_jit`)
+against the Python reference (:meth:`lumped.solvers.stuck.StaticHold._root` with
+:func:`scipy.optimize.brentq`): the same root, bit for bit."""
+
+from __future__ import annotations
+
+import math
+import random
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from lumped import simulate
+from lumped.bench.network_scenes import bingham_chain
+from lumped.bench.scenes import OWN_SCENES, PAPER_SCENES, generic_scene
+from lumped.codegen.jit import numba_enabled
+from lumped.solvers import stuck
+from lumped.solvers.stuck_jit import brent, compiled_breakout_root
+
+
+def test_brent_takes_the_steps_of_scipy_brentq():
+    rng = random.Random(7)
+    compared = 0
+    for _ in range(8000):
+        A, w = rng.uniform(0.1, 10.0), rng.uniform(0.5, 30.0)
+        c, tau = rng.uniform(-0.9, 0.9) * A, rng.uniform(0.01, 2.0)
+
+        def f(t, A=A, w=w, c=c, tau=tau):
+            return tau - abs(A * math.sin(w * t) + c)
+
+        a = rng.uniform(0.0, 1.0)
+        b = a + rng.uniform(1e-6, 1.0)
+        if not f(a) > 0.0 > f(b):
+            continue
+        xtol = 4e-16 * max(1.0, b)
+        assert brent(f, a, b, xtol, 1e-15) == brentq(f, a, b, xtol=xtol, rtol=1e-15)
+        compared += 1
+    assert compared > 800
+
+
+@pytest.mark.skipif(not numba_enabled(), reason="needs numba")
+def test_compiled_breakout_root_agrees_with_the_reference():
+    calls = []
+    keep = stuck.StaticHold._root
+
+    def record(self, e, j, guard, a, b, modes=None, fast=None):
+        assert fast is not None
+        calls.append((self, e, j, guard, a, b, list(modes), fast))
+        return keep(self, e, j, guard, a, b, modes, fast)
+
+    scenes = {s.name: s for s in PAPER_SCENES + OWN_SCENES}
+    runs = [(generic_scene(scenes[name]), 5.0, rtol) for name in
+            ("stick-breakout", "forcing-F2", "high-yield-forced") for rtol in (1e-4, 1e-9)]
+    runs.append((bingham_chain(3), 5.0, 1e-6))
+    stuck.StaticHold._root = record
+    try:
+        for scene, t_end, rtol in runs:
+            sol = simulate(scene, method="radau5", t_end=t_end, rtol=rtol,
+                           atol=1e-2 * rtol, compiled=True)
+            assert sol.ok, sol.message
+    finally:
+        stuck.StaticHold._root = keep
+    assert len(calls) >= 20
+    root = compiled_breakout_root()
+    for hold, e, j, guard, a, b, modes, fast in calls:
+        ref = keep(hold, e, j, guard, a, b)
+        _, fkind, fpar, c, minv, _ = hold.arrays()
+        got = root(fast.guards.addr, e, modes[e], j, hold.q[e], hold.free.index(e), fkind,
+                   fpar, c, minv, a, b, np.zeros(64))
+        assert got == ref  # (not the fallback: nan)
+        assert a < ref <= b
