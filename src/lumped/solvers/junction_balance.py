@@ -175,7 +175,7 @@ def refuse_unbalanced_junctions(scene: Scene, pinned: Sequence[float | None],
             f"{_interval(bounds[j])})"
             for j, e in enumerate(free) if any(rr == r for rr, _ in coef[j])
         ]
-        parts.append(f"junction {nodes[i].name!r} needs a net force {b[r]!r} from the "
+        parts.append(f"junction {nodes[i].name!r} needs a net force {float(b[r])!r} from the "
                      f"elements whose force is not fixed: "
                      + (", ".join(carriers) if carriers else "none"))
     raise ValueError(
@@ -187,7 +187,7 @@ def refuse_unbalanced_junctions(scene: Scene, pinned: Sequence[float | None],
 
 
 def _interval(bound: tuple[float | None, float | None]) -> str:
-    lo, hi = bound
+    lo, hi = (None if x is None else float(x) for x in bound)  # plain floats in messages
     if lo is None and hi is None:
         return "any force"
     if lo is not None and hi is not None and -lo == hi:

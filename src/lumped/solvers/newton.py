@@ -305,6 +305,18 @@ def newton_solve(
                     return final_correction(du)
                 u = [ui - di for ui, di in zip(u, du, strict=True)]
                 return result(NewtonCode.SUCCESS)
+            # A Jacobian singular up to rounding (locked elements in parallel whose rows
+            # cancel only to an ulp: LU finds a pivot of 1e-14 instead of 0) turns the
+            # round-off of the residual into a long step along its null space -- the
+            # free split of the forces -- and Newton wanders there until its budget
+            # runs out. The minimum-norm correction leaves that split alone.
+            if min_norm:
+                d3 = min_norm_solver(J)(G)
+                if finite(d3) and (_update_ok(d3, u, rtol, atol)
+                                   or _update_ok_scaled(d3, u, J, S, rtol, atol)):
+                    met_singular = True
+                    u = [ui - di for ui, di in zip(u, d3, strict=True)]
+                    return result(NewtonCode.SUCCESS)
         if iters >= options.max_iters:
             return result(NewtonCode.MAX_ITERS)
         lam = 1.0
