@@ -5,6 +5,8 @@ carries more than its yield force."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from _convergence import assert_converges
@@ -381,3 +383,36 @@ def test_parallel_stuck_dashpots_singular_to_rounding(method):
     sol = _run_ok(scene, method, 0.003954147605741176, 0.5061308935348705)
     assert [ev.element for ev in sol.events][:1] == ["e0"]
     assert sol.x["m0"].max() <= 0.0011168679657767404 * (1 + 1e-12)
+
+
+
+def test_projection_gives_up_at_once_on_a_string_past_its_length(monkeypatch):
+    """The globalised step projects every force onto its own law at the iterate; a string
+    an ulp past its length admits no force there, and the root search doubled its bracket
+    some 2000 times (twice per doubling) before it gave up. A drawn scene (two strings
+    in a chain, five impacts in one step at ``t = 0.2``) spent 166 of its 169 s there,
+    and the counter's 60 s alarm stopped it. Three kernel calls now tell that there is
+    no root (a cost budget, counted, not timed)."""
+    import lumped.solvers.globalize as G
+
+    L = 0.06809540547434552
+    scene = Scene([Mass("m0", m=1.0, x0=math.nextafter(L, 1.0), v0=0.0)],
+                  [Element("e0", get_law("string_spring").bind(k=2.0, L=L), "ground", "m0")])
+    calls = []
+
+    def counted(fn):
+        def wrapper(kernel, q, F):
+            def k(qq, FF):
+                calls.append(qq)
+                return kernel(qq, FF)
+            return fn(k, q, F)
+        return wrapper
+
+    monkeypatch.setattr(G, "_scalar_root", counted(G._scalar_root))
+    if hasattr(G, "_no_force_at"):
+        monkeypatch.setattr(G, "_no_force_at", counted(G._no_force_at))
+    project = G.force_projector(scene, 1e-3, [scene.nodes[0].x0])
+    out = project([0.0, 0.137])
+    assert project.missing == [1]
+    assert out[1] == 0.137  # left as it was, for Newton
+    assert len(calls) <= 3

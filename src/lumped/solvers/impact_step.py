@@ -141,16 +141,19 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
         return x1, v1, F1, res
 
     ts, xs, vs, Fs, held = t0, list(x), list(v), list(F), set(locked0)
-    for _ in range(_MAX_IMPACTS):
+    for located in range(_MAX_IMPACTS + 1):
         rest = t0 + dt - ts
         end = sub(rest, xs, vs, Fs, t0 + dt)
         if end[3].code is not NewtonCode.SUCCESS:
             out.failure, out.failure_t = end[3], t0 + dt
             return out
         new = [e for e in locking_elements(scene, *end[:3]) if e not in held]
-        if not new or (ts > t0 and impulse_is_negligible(scene, vs, new)):
+        if (not new or located == _MAX_IMPACTS
+                or (ts > t0 and impulse_is_negligible(scene, vs, new))):
             # backward Euler locks nothing new in the rest of the step (or reaches a lock
-            # at rest: a branch switch)
+            # at rest: a branch switch); or the impacts located in this step reached
+            # _MAX_IMPACTS (an accumulation): Moreau's step to the end, the locks
+            # reached there stopped below
             x1, v1, F1 = end[:3]
             break
         located = _locate_impact(scene, ts, rest, dt, xs, vs, Fs, held, end, sub)
@@ -165,10 +168,6 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
             x1 = xh
             break
         xs, vs, Fs = xh, v_after, Fl
-    else:
-        # more impacts in one step than _MAX_IMPACTS (an accumulation): Moreau's step,
-        # the locks reached at the end stopped below, forces from a hair after
-        x1, v1, F1 = end[:3]
     # locked at the end: their rates are zero (a short remainder turns the rounding of
     # q = x_hat + h v on the lock into a spurious rate ulp / h; an element that locked
     # within the remainder at rest, or after _MAX_IMPACTS, gets Moreau's inelastic
