@@ -416,3 +416,38 @@ def test_projection_gives_up_at_once_on_a_string_past_its_length(monkeypatch):
     assert project.missing == [1]
     assert out[1] == 0.137  # left as it was, for Newton
     assert len(calls) <= 3
+
+
+def _mass_past_two_strings_in_one_step() -> Scene:
+    """Drawn by the suite (session 6, as drawn): ``m0`` runs at 1.84 towards two strings
+    to ground, ``e5`` (``L = 0.00543``) and ``e0`` (``L = 0.00826``); ``e0`` can never go
+    taut while ``e5`` holds."""
+    return Scene(
+        [Mass("m0", m=1.0, x0=-0.2781343649268274, v0=1.8405896494231841),
+         Mass("m1", m=1.0, x0=1.1125369292536007e-308, v0=0.39626525272028923),
+         Junction("j2", x0=0.9999999999999999)],
+        [Element("e0", get_law("string_spring").bind(k=1.0, L=0.008257068528921638),
+                 "ground", "m0"),
+         Element("e1", get_law("newtonian").bind(c=0.049308296734519516), "ground", "m1"),
+         Element("e2", get_law("coulomb").bind(tau=0.1198148442923615, r=1.333521432163324),
+                 "m0", "j2"),
+         Element("e3", get_law("linear_spring").bind(k=0.2403522501940105), "m1", "m0"),
+         Element("e4", get_law("newtonian").bind(c=1.0), "j2", "m0"),
+         Element("e5", get_law("string_spring").bind(k=1.0, L=0.005427392295844724),
+                 "ground", "m0")])
+
+
+@pytest.mark.parametrize("dt", [0.025, 0.0125])
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_step_past_two_strings_keeps_the_one_that_holds(method, dt):
+    """In the step of the impact (``t = 0.15``) the free motion passes both strings'
+    lengths; Newton put both on their locked branch, whose rows (``x = 0.00543`` and
+    ``x = 0.00826``) disagree, and every restart stalled the same way: the run stopped
+    with 'no motion satisfies all the laws' naming ``e0, e2, e5`` (also on older code).
+    The globalised solve now also restarts from that iterate with one lock kept at a
+    time (the others back on their spring branch)."""
+    scene = _mass_past_two_strings_in_one_step()
+    sol = _run_ok(scene, method, dt, 0.5)
+    assert [ev.element for ev in sol.events] == ["e5"]
+    assert sol.x["m0"].max() <= 0.005427392295844724 * (1 + 1e-12)
+    assert sol.x["m0"][-1] == pytest.approx(0.005427392295844724, rel=1e-12)

@@ -21,6 +21,7 @@ import math
 
 from ..scene import Junction, Scene
 from .branch_check import _known_monotone
+from .impacts import lock_state, lockable_elements
 from .initial_state import _scalar_root
 from .newton import NewtonCode, NewtonOptions, NewtonResult, _residual_ok, newton_solve
 
@@ -468,7 +469,30 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
                 yield split_free_forces(scene, evaluate, project, swept), True
         for guess in stuck_guesses(scene, v, F):
             yield guess, False
+        yield from ((g, False) for g in one_lock_at_a_time())
 
+    def one_lock_at_a_time():
+        """Where Newton ended with several position locks (a mass past two strings to
+        ground in one step), they may not all hold: their rows then disagree and the
+        minimum-norm steps stall. From that iterate, each lock in turn is kept and the
+        others get back their force at the step's start (the spring branch)."""
+        if first is None or not lockable:
+            return
+        N = len(scene.nodes)
+        u = first.u
+        x = [x_hat[i] + h * u[i] for i in range(N)]
+        q = scene.elongations(x, u[:N])
+        locked = [e for e in lockable if lock_state(scene.elements[e].law, q[e], u[N + e])]
+        if len(locked) < 2:
+            return
+        for keep in locked:
+            start = list(u)
+            for e in locked:
+                if e != keep:
+                    start[N + e] = F[e]
+            yield start
+
+    lockable = lockable_elements(scene) if sweeps else []
     for start, swept in starts():
         for proj in (None, project):
             res = newton_solve(evaluate, start, options, None, min_norm=True, project=proj,
