@@ -451,3 +451,22 @@ def test_step_past_two_strings_keeps_the_one_that_holds(method, dt):
     assert [ev.element for ev in sol.events] == ["e5"]
     assert sol.x["m0"].max() <= 0.005427392295844724 * (1 + 1e-12)
     assert sol.x["m0"][-1] == pytest.approx(0.005427392295844724, rel=1e-12)
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_minimum_norm_fallback_keeps_a_full_rank_matrix(method):
+    """The minimum-norm correction (taken when the residual holds and the LU correction
+    is not small) must not drop a direction that is small only by the matrix's scales:
+    on the paper's scene with ``k h = 1e8`` beside ``m / h = 1`` (``dt = 1``), an
+    unscaled pseudo-inverse cut it, and the first step stopped at ``v = -1e-8`` with the
+    dashpot at its yield force instead of sticking at rest with ``F_d = 2e-4`` (found by
+    ``test_generic_sweep``). The rows and columns are scaled first."""
+    scene = Scene([Mass("mass", 1.0, x0=0.0, v0=2e-4)],
+                  [Element("spring", get_law("linear_spring").bind(k=1e8), "ground", "mass"),
+                   Element("dashpot", get_law("bingham").bind(gamma=100.0, tau=1.0),
+                           "ground", "mass")])
+    sol = simulate(scene, method=method, dt=1.0, t_end=3.0)
+    assert sol.ok
+    assert np.all(sol.x["mass"] == 0.0)
+    assert np.all(sol.v["mass"][1:] == 0.0)
+    assert sol.F["dashpot"][1] == pytest.approx(2e-4, rel=1e-9)
