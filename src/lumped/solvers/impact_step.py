@@ -171,12 +171,14 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
     # locked at the end: their rates are zero (a short remainder turns the rounding of
     # q = x_hat + h v on the lock into a spurious rate ulp / h; an element that locked
     # within the remainder at rest, or after _MAX_IMPACTS, gets Moreau's inelastic
-    # velocity). Where that changes the velocities beyond round-off, the forces are
-    # those a hair after (the rate-dependent laws, e.g. a dashpot beside the lock,
-    # follow the new velocities)
+    # velocity). Where that changes a velocity beyond round-off -- a junction's too,
+    # which carries no kinetic energy -- the forces are those a hair after (the
+    # rate-dependent laws, e.g. a dashpot beside the lock, follow the new velocities)
     end_locked = locking_elements(scene, x1, v1, F1)
-    if end_locked and not impulse_is_negligible(scene, v1, end_locked):
-        v_stop = impact_velocities(scene, x1, v1, end_locked, 0.0, forces=F1)[0]
+    v_stop = impact_velocities(scene, x1, v1, end_locked, 0.0, forces=F1)[0] if end_locked \
+        else v1
+    v_scale = max(abs(vi) for vi in v1) if v1 else 0.0
+    if any(abs(a - b) > 1e-12 * v_scale for a, b in zip(v_stop, v1, strict=True)):
         _, v1, F1, res = sub(_LOCATE_RTOL * dt, x1, v_stop, F1, t0 + dt)
         if res.code is not NewtonCode.SUCCESS:
             out.failure, out.failure_t = res, t0 + dt
