@@ -20,6 +20,8 @@ from __future__ import annotations
 import math
 
 from ..scene import Junction, Scene
+from .branch_check import _known_monotone
+from .impacts import lock_state, lockable_elements
 from .initial_state import _scalar_root
 from .newton import NewtonCode, NewtonOptions, NewtonResult, _residual_ok, newton_solve
 
@@ -27,6 +29,21 @@ __all__ = [
     "balance_sweeps", "force_projector", "laws_hold", "solve_globalized", "split_free_forces",
     "stuck_guesses",
 ]
+
+
+def _no_force_at(kernel, q: float, F0: float) -> bool:
+    """True when a law monotone in ``F`` admits no force at ``q``: ``R`` has one sign at
+    ``F0`` and at ``+-1e300`` (a taut string's law past its length, ``q > L``). Three
+    kernel calls, where :func:`~lumped.solvers.initial_state._scalar_root` would double its
+    bracket some 2000 times before it gives up (most of the time of a globalised step
+    with a string an ulp past its length)."""
+    R0 = kernel(q, F0)[0]
+    if R0 == 0.0 or R0 != R0:
+        return False
+    lo, hi = kernel(q, -1e300)[0], kernel(q, 1e300)[0]
+    if R0 > 0.0:
+        return lo > 0.0 and hi > 0.0
+    return lo < 0.0 and hi < 0.0
 
 
 def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool = False):
@@ -40,6 +57,10 @@ def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool =
     N = len(scene.nodes)
     items = [(N + e, scene.elem_a[e], scene.elem_b[e], el.kind == "spring", el.law.kernel)
              for e, el in enumerate(scene.elements)]
+    # springs whose law may admit no force at some q (a string past its length), tested
+    # first by _no_force_at; only laws known to be monotone in F (no folds)
+    may_miss = {N + e for e, el in enumerate(scene.elements)
+                if el.kind == "spring" and _known_monotone(el.law)}
 
     def elongation(u: list[float], a: int, b: int, is_spring: bool) -> float:
         if is_spring:
@@ -56,6 +77,8 @@ def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool =
         for k, a, b, is_spring, kernel in items:
             q = elongation(u, a, b, is_spring)
             try:
+                if k in may_miss and _no_force_at(kernel, q, u[k]):
+                    raise ValueError  # a string past its length: no root to search for
                 F, fixed = _scalar_root(kernel, q, u[k])
             except ValueError:  # no force at this q: leave it to Newton
                 missing.append(k)
@@ -446,7 +469,30 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
                 yield split_free_forces(scene, evaluate, project, swept), True
         for guess in stuck_guesses(scene, v, F):
             yield guess, False
+        yield from ((g, False) for g in one_lock_at_a_time())
 
+    def one_lock_at_a_time():
+        """Where Newton ended with several position locks (a mass past two strings to
+        ground in one step), they may not all hold: their rows then disagree and the
+        minimum-norm steps stall. From that iterate, each lock in turn is kept and the
+        others get back their force at the step's start (the spring branch)."""
+        if first is None or not lockable:
+            return
+        N = len(scene.nodes)
+        u = first.u
+        x = [x_hat[i] + h * u[i] for i in range(N)]
+        q = scene.elongations(x, u[:N])
+        locked = [e for e in lockable if lock_state(scene.elements[e].law, q[e], u[N + e])]
+        if len(locked) < 2:
+            return
+        for keep in locked:
+            start = list(u)
+            for e in locked:
+                if e != keep:
+                    start[N + e] = F[e]
+            yield start
+
+    lockable = lockable_elements(scene) if sweeps else []
     for start, swept in starts():
         for proj in (None, project):
             res = newton_solve(evaluate, start, options, None, min_norm=True, project=proj,

@@ -19,7 +19,13 @@ the lock (the impulse that would stop them is not negligible). Then, from the st
    :class:`~lumped.solvers.status.Event` (``kind="impact"``), the energy split among them
    as ``P_e * rate_e`` (their shares of ``1/2 P^T B v``).
 3. **Finish.** One backward-Euler substep from ``t_n + s_hi`` to ``t_{n+1}`` with the new
-   velocities. The caller restarts the multistep history (BDF2 takes a BDF1 step next).
+   velocities. If it locks another element (not negligibly: a second string taut within
+   the step), steps 1-2 locate and apply that impact on the rest of the step, in turn
+   (at most :data:`_MAX_IMPACTS`; beyond, the step is Moreau's). Elements locked at the
+   end get rate zero; where that is more than round-off, the forces come from a
+   substep a hair long from the stopped velocities (a dashpot beside the lock follows
+   its new rate). The caller restarts the multistep history (BDF2 takes a BDF1 step
+   next).
 
 Every substep is a backward-Euler step, dissipative for passive laws, and the impulse
 only removes energy, so the energy ledger never gains. Backward Euler *across* the lock
@@ -44,6 +50,8 @@ __all__ = ["ImpactStep", "be_substep", "halved_steps", "impact_step", "impulse_i
 
 #: Bisection of the impact time stops when the bracket is below this fraction of dt.
 _LOCATE_RTOL = 1e-10
+#: Impacts located within one step at most; beyond, the step is Moreau's (an accumulation).
+_MAX_IMPACTS = 16
 
 
 @dataclass
@@ -123,7 +131,7 @@ def _branch_index(law, q: float, F: float) -> int:
 def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[float],
                 F: list[float], locked0: set[int], options: NewtonOptions,
                 restitution: float = 0.0) -> ImpactStep:
-    """The step ``[t0, t0 + dt]`` across an impact (see the module notes)."""
+    """The step ``[t0, t0 + dt]`` across one impact or several (see the module notes)."""
     out = ImpactStep(list(x), list(v), list(F))
 
     def sub(s: float, xs, vs, Fs, t_end):
@@ -132,35 +140,88 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
         out.solves += 1
         return x1, v1, F1, res
 
-    def new_locks(xs, vs, Fs) -> list[int]:
-        return [e for e in locking_elements(scene, xs, vs, Fs) if e not in locked0]
+    ts, xs, vs, Fs, held = t0, list(x), list(v), list(F), set(locked0)
+    for located in range(_MAX_IMPACTS + 1):
+        rest = t0 + dt - ts
+        end = sub(rest, xs, vs, Fs, t0 + dt)
+        if end[3].code is not NewtonCode.SUCCESS:
+            out.failure, out.failure_t = end[3], t0 + dt
+            return out
+        new = [e for e in locking_elements(scene, *end[:3]) if e not in held]
+        if (not new or located == _MAX_IMPACTS
+                or (ts > t0 and impulse_is_negligible(scene, vs, new))):
+            # backward Euler locks nothing new in the rest of the step (or reaches a lock
+            # at rest: a branch switch); or the impacts located in this step reached
+            # _MAX_IMPACTS (an accumulation): Moreau's step to the end, the locks
+            # reached there stopped below
+            x1, v1, F1 = end[:3]
+            break
+        located = _locate_impact(scene, ts, rest, dt, xs, vs, Fs, held, end, sub)
+        xh, v_after, Fl, s_hi, held = _apply_impact(scene, ts, located, held, restitution,
+                                                    out.events)
+        ts += s_hi
+        if t0 + dt - ts <= _LOCATE_RTOL * dt:  # the impact ends the step: forces from a hair after
+            x1, v1, F1, res = sub(_LOCATE_RTOL * dt, xh, v_after, Fl, t0 + dt)
+            if res.code is not NewtonCode.SUCCESS:
+                out.failure, out.failure_t = res, t0 + dt
+                return out
+            x1 = xh
+            break
+        xs, vs, Fs = xh, v_after, Fl
+    # locked at the end: their rates are zero (a short remainder turns the rounding of
+    # q = x_hat + h v on the lock into a spurious rate ulp / h; an element that locked
+    # within the remainder at rest, or after _MAX_IMPACTS, gets Moreau's inelastic
+    # velocity). Where that changes a velocity beyond round-off -- a junction's too,
+    # which carries no kinetic energy -- the forces are those a hair after (the
+    # rate-dependent laws, e.g. a dashpot beside the lock, follow the new velocities)
+    end_locked = locking_elements(scene, x1, v1, F1)
+    v_stop = impact_velocities(scene, x1, v1, end_locked, 0.0, forces=F1)[0] if end_locked \
+        else v1
+    v_scale = max(abs(vi) for vi in v1) if v1 else 0.0
+    if any(abs(a - b) > 1e-12 * v_scale for a, b in zip(v_stop, v1, strict=True)):
+        _, v1, F1, res = sub(_LOCATE_RTOL * dt, x1, v_stop, F1, t0 + dt)
+        if res.code is not NewtonCode.SUCCESS:
+            out.failure, out.failure_t = res, t0 + dt
+            return out
+        end_locked = locking_elements(scene, x1, v1, F1)
+    if end_locked:
+        v1 = impact_velocities(scene, x1, v1, end_locked, 0.0, forces=F1)[0]
+    out.x, out.v, out.F = x1, v1, F1
+    return out
 
-    lo, hi = 0.0, dt
+
+def _locate_impact(scene, ts, rest, dt, x, v, F, held, end, sub):
+    """Bisection of the first lock in ``[ts, ts + rest]`` (backward-Euler substeps from
+    ``(x, v, F)`` at ``ts``; ``end`` is the substep over all of it, which locks an element
+    not in ``held``). Returns ``(s_lo, lo_state, s_hi, hi_state)``."""
+    lo, hi = 0.0, rest
     lo_state = (list(x), list(v), list(F))
-    hi_state = sub(dt, x, v, F, t0 + dt)
-    if hi_state[3].code is not NewtonCode.SUCCESS:
-        out.failure, out.failure_t = hi_state[3], t0 + dt
-        return out
-    if not new_locks(*hi_state[:3]):  # backward Euler does not lock in this step
-        out.x, out.v, out.F = hi_state[:3]
-        return out
+    hi_state = end
     while hi - lo > _LOCATE_RTOL * dt:
         mid = 0.5 * (lo + hi)
-        trial = sub(mid, x, v, F, t0 + mid)
+        trial = sub(mid, x, v, F, ts + mid)
         if trial[3].code is not NewtonCode.SUCCESS:
             break  # keep the bracket found so far
-        if new_locks(*trial[:3]):
+        if any(e not in held for e in locking_elements(scene, *trial[:3])):
             hi, hi_state = mid, trial
         else:
             lo, lo_state = mid, trial[:3]
-    xl, vl, Fl = lo_state
+    return lo, lo_state, hi, hi_state
+
+
+def _apply_impact(scene, ts, located, held, restitution, events):
+    """The impact at ``ts + s_hi`` of a bracket from :func:`_locate_impact`: positions on
+    the locks, the velocities after, one event per newly locked element (appended to
+    ``events``). Returns ``(x, v_after, F_before, s_hi, locked)``."""
+    _, (xl, vl, Fl), hi, hi_state = located
     xh, vh, Fh = hi_state[:3]
     locked = locking_elements(scene, xh, vh, Fh)
     xh = onto_locks(scene, xh, Fh, locked)
-    new = [e for e in locked if e not in locked0]
-    # the impact at t0 + s_hi: positions on the lock (x_hi), velocities of the free
+    new = [e for e in locked if e not in held]
+    # the impact at ts + s_hi: positions on the lock (x_hi), velocities of the free
     # motion just before it (v_lo); the bracket is 1e-10 dt wide
-    v_after, impulses, lost = impact_velocities(scene, xh, vl, locked, restitution)
+    v_after, impulses, lost = impact_velocities(scene, xh, vl, locked, restitution,
+                                                   forces=Fh)
     rates = [(vl[scene.elem_b[e]] if scene.elem_b[e] >= 0 else 0.0)
              - (vl[scene.elem_a[e]] if scene.elem_a[e] >= 0 else 0.0) for e in locked]
     shares = {e: abs(p * r) for e, p, r in zip(locked, impulses, rates, strict=True)}
@@ -171,25 +232,10 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
         if e not in new:
             continue
         law = scene.elements[e].law
-        out.events.append(Event(
-            t=t0 + hi, element=scene.elements[e].name, kind="impact",
+        events.append(Event(
+            t=ts + hi, element=scene.elements[e].name, kind="impact",
             from_branch=_branch_index(law, ql[e], Fl[e]),
             to_branch=_branch_index(law, qh[e], Fh[e]),
             impulse=float(p), energy_lost=float(lost * shares[e] / total),
         ))
-    if dt - hi <= _LOCATE_RTOL * dt:  # the impact ends the step: forces from a hair after
-        x1, v1, F1, res = sub(_LOCATE_RTOL * dt, xh, v_after, Fl, t0 + dt)
-        x1 = xh
-    else:
-        x1, v1, F1, res = sub(dt - hi, xh, v_after, Fl, t0 + dt)
-    if res.code is not NewtonCode.SUCCESS:
-        out.failure, out.failure_t = res, t0 + dt
-        return out
-    # locked at the end: their rates are zero (a short remainder turns the rounding of
-    # q = x_hat + h v on the lock into a spurious rate ulp / h; an element that locked
-    # within the remainder gets Moreau's inelastic velocity)
-    end_locked = locking_elements(scene, x1, v1, F1)
-    if end_locked:
-        v1 = impact_velocities(scene, x1, v1, end_locked, 0.0)[0]
-    out.x, out.v, out.F = x1, v1, F1
-    return out
+    return xh, v_after, Fl, hi, set(locked)

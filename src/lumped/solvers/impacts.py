@@ -149,8 +149,18 @@ def _solve(scene, v: Sequence[float], elems: Sequence[int], restitution: float,
     return [float(v[i] + dv[i]) for i in range(N)], [float(p) for p in P], rates
 
 
+def _holding_direction(e: int, rate: float, v_scale: float,
+                       forces: Sequence[float] | None) -> float:
+    """The sign of the impulse with which element ``e`` can hold its lock: that of its
+    approach ``rate``, or of its force when the rate is round-off of ``v_scale``."""
+    if abs(rate) > 1e-12 * v_scale or forces is None:
+        return rate
+    return float(forces[e])
+
+
 def impact_velocities(scene, x: Sequence[float], v: Sequence[float], locked: Sequence[int],
-                      restitution: float = 0.0) -> tuple[list[float], list[float], float]:
+                      restitution: float = 0.0, forces: Sequence[float] | None = None,
+                      ) -> tuple[list[float], list[float], float]:
     r"""Velocities after an impact at the locked elements, their impulses, the energy lost.
 
     Solves ``M dv = -B^T P`` (junctions: ``0 = -B^T P``), ``B (v + dv) = -e B v`` for the
@@ -169,6 +179,11 @@ def impact_velocities(scene, x: Sequence[float], v: Sequence[float], locked: Seq
     restitution : float
         Newton's coefficient ``e`` in ``[0, 1]``; ``0`` (default) keeps the paper's
         inextensible string (perfectly inelastic).
+    forces : sequence of float, optional
+        Element forces (scene element order) on the locks. An element that sits on its
+        lock at rest (rate zero to round-off of the velocities) has no approach rate to
+        say which way it holds; its force does (a taut string: tension). Without
+        ``forces`` such an element holds either way.
 
     Returns
     -------
@@ -196,6 +211,7 @@ def impact_velocities(scene, x: Sequence[float], v: Sequence[float], locked: Seq
             raise ValueError(f"`locked` must hold element indices in [0, {E}), got {e!r}")
     if len(v) != len(scene.nodes) or not all(math.isfinite(float(vi)) for vi in v):
         raise ValueError(f"`v` must hold {len(scene.nodes)} finite velocities, got {list(v)!r}")
+    v_scale = max((abs(float(vi)) for vi in v), default=0.0)
     active = list(locked)
     impulses = dict.fromkeys(locked, 0.0)
     v_after = [float(vi) for vi in v]
@@ -203,9 +219,12 @@ def impact_velocities(scene, x: Sequence[float], v: Sequence[float], locked: Seq
         if not active:
             break
         v_after, P, rates = _solve(scene, v, active, restitution)
-        # a lock holds, it never pushes: the impulse opposes the approach rate
+        # a lock holds, it never pushes: the impulse opposes the approach rate; an
+        # element at rest on its lock (rate below the velocities' round-off, e.g. a
+        # string holding a mass that another lock stopped) holds the way its force acts
         wrong = [e for e, p, r in zip(active, P, rates, strict=True)
-                 if p * r < 0.0 and abs(p) > 1e-12 * (abs(p) + 1.0)]
+                 if p * _holding_direction(e, r, v_scale, forces) < 0.0
+                 and abs(p) > 1e-12 * (abs(p) + 1.0)]
         for e, p in zip(active, P, strict=True):
             impulses[e] = p
         if not wrong:

@@ -167,17 +167,8 @@ def refuse_unbalanced_junctions(scene: Scene, pinned: Sequence[float | None],
     bad = [r for r in range(m) if gap[r] > 1e-6]  # well above the LP's own tolerance
     if not bad:
         return
-    parts = []
-    for r in bad:
-        i = junctions[r]
-        carriers = [
-            f"{elements[e].name!r} ({elements[e].law_name!r}: "
-            f"{_interval(bounds[j])})"
-            for j, e in enumerate(free) if any(rr == r for rr, _ in coef[j])
-        ]
-        parts.append(f"junction {nodes[i].name!r} needs a net force {b[r]!r} from the "
-                     f"elements whose force is not fixed: "
-                     + (", ".join(carriers) if carriers else "none"))
+    parts = [_describe_group(group, b, free, bounds, coef, nodes, elements, junctions)
+             for group in _groups(m, coef) if any(r in group for r in bad)]
     raise ValueError(
         "inconsistent initial state: no forces within the laws' ranges balance the "
         "massless junctions (e.g. a spring stretched beyond what the friction elements at "
@@ -186,8 +177,56 @@ def refuse_unbalanced_junctions(scene: Scene, pinned: Sequence[float | None],
     )
 
 
+def _groups(m: int, coef: list[list[tuple[int, float]]]) -> list[list[int]]:
+    """The junction rows ``0..m-1`` joined by free elements (both ends junctions), as
+    groups: their free forces move load between them, so only a group can be refused."""
+    parent = list(range(m))
+
+    def root(r: int) -> int:
+        while parent[r] != r:
+            parent[r] = parent[parent[r]]
+            r = parent[r]
+        return r
+
+    for ends in coef:
+        if len(ends) == 2:
+            parent[root(ends[0][0])] = root(ends[1][0])
+    groups: dict[int, list[int]] = {}
+    for r in range(m):
+        groups.setdefault(root(r), []).append(r)
+    return list(groups.values())
+
+
+def _describe_group(group, b, free, bounds, coef, nodes, elements, junctions) -> str:
+    """One junction, or a group of junctions joined by elements whose force is not fixed:
+    the net force it needs (the fixed forces and loads on it) and the free elements that
+    can carry it, those to the rest of the scene and those within the group."""
+    members = set(group)
+    each = [f"junction {nodes[junctions[r]].name!r}" for r in group]
+    names = each[0] if len(each) == 1 else ", ".join(each[:-1]) + " and " + each[-1]
+    net = float(sum(float(b[r]) for r in group))
+
+    def carrier(j: int, e: int) -> str:
+        return f"{elements[e].name!r} ({elements[e].law_name!r}: {_interval(bounds[j])})"
+
+    out, inner = [], []
+    for j, e in enumerate(free):
+        rows = [r for r, _ in coef[j]]
+        if not any(r in members for r in rows):
+            continue
+        (inner if len(rows) == 2 else out).append(carrier(j, e))
+    if len(group) == 1:
+        return (f"{names} needs a net force {net!r} from the elements whose force "
+                "is not fixed: " + (", ".join(out + inner) if out or inner else "none"))
+    needs = ", ".join(repr(float(b[r])) for r in group)
+    return (f"{names}, joined by elements whose force is not fixed "
+            f"({', '.join(inner)}), need the net forces {needs} (in total {net!r}) from "
+            "those and from the elements that join them to the rest of the scene: "
+            + (", ".join(out) if out else "none"))
+
+
 def _interval(bound: tuple[float | None, float | None]) -> str:
-    lo, hi = bound
+    lo, hi = (None if x is None else float(x) for x in bound)  # plain floats in messages
     if lo is None and hi is None:
         return "any force"
     if lo is not None and hi is not None and -lo == hi:

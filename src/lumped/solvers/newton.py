@@ -305,6 +305,18 @@ def newton_solve(
                     return final_correction(du)
                 u = [ui - di for ui, di in zip(u, du, strict=True)]
                 return result(NewtonCode.SUCCESS)
+            # A Jacobian singular up to rounding (locked elements in parallel whose rows
+            # cancel only to an ulp: LU finds a pivot of 1e-14 instead of 0) turns the
+            # round-off of the residual into a long step along its null space -- the
+            # free split of the forces -- and Newton wanders there until its budget
+            # runs out. The minimum-norm correction leaves that split alone.
+            if min_norm:
+                d3 = _equilibrated_min_norm(J, G)
+                if finite(d3) and (_update_ok(d3, u, rtol, atol)
+                                   or _update_ok_scaled(d3, u, J, S, rtol, atol)):
+                    met_singular = True
+                    u = [ui - di for ui, di in zip(u, d3, strict=True)]
+                    return result(NewtonCode.SUCCESS)
         if iters >= options.max_iters:
             return result(NewtonCode.MAX_ITERS)
         lam = 1.0
@@ -365,6 +377,24 @@ def min_norm_solver(J: Sequence[Sequence[float]]):
         return (pinv @ np.asarray(b, dtype=float)).tolist()
 
     return solve
+
+
+def _equilibrated_min_norm(J: Sequence[Sequence[float]], G: Sequence[float]) -> list[float]:
+    """The minimum-norm solution of ``J d = G`` with rows and columns scaled to unit
+    largest entries first: a matrix singular only in its scales (``k h = 1e8`` beside
+    ``m / h = 1``) keeps its full rank (the plain LU solution), one with rows that are
+    proportional up to rounding (locks in parallel) loses their null space."""
+    import numpy as np
+
+    A = np.array(J, dtype=float)
+    r = np.abs(A).max(axis=1)
+    r[r == 0.0] = 1.0
+    A /= r[:, None]
+    c = np.abs(A).max(axis=0)
+    c[c == 0.0] = 1.0
+    A /= c[None, :]
+    pinv = np.linalg.pinv(A, rcond=len(A) * 2.220446049250313e-16)
+    return ((pinv @ (np.asarray(G, dtype=float) / r)) / c).tolist()
 
 
 def _hair(u: float, d: float) -> float:

@@ -213,7 +213,8 @@ def _where(scene: Scene, row: int) -> str:
 
 def _newton_failure(scene: Scene, res: NewtonResult, t: float, step: int) -> SolverError:
     where = _where(scene, res.worst_row)
-    r = res.residual[res.worst_row] if res.residual else math.nan
+    r = float(res.residual[res.worst_row]) if res.residual else math.nan
+    t = float(t)  # plain numbers in the message, never numpy's np.float64(...)
     msg = (
         f"Newton failed ({res.code.value}) at t = {t!r} (step {step}) after "
         f"{res.iterations} iterations: largest residual {r!r} in the {where}"
