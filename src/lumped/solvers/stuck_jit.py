@@ -46,7 +46,7 @@ def _guard(guards, e, mode, j, q, r, fkind, fpar, c, minv, t, gbuf) -> float:
 
 def breakout_root(guards_addr, e, mode, j, q, r, fkind, fpar, c, minv, a, b, gbuf) -> float:
     """The break-out time of guard ``j`` of element ``e`` (held on branch ``mode`` at
-    ``q``; its force the static balance's row ``r``: ``minv[r] . (f(t) + c)``) in
+    ``q``; its force the static balance's row ``r``: ``minv[r] @ (f(t) + c)``) in
     ``[a, b]``, as :meth:`lumped.solvers.stuck.StaticHold._root` finds it; ``nan`` when
     a guard is not finite or Brent's method does not converge."""
     guards = _guards_at(guards_addr)
