@@ -110,7 +110,7 @@ class ModeState:
         sel = self._choose(t, h_probe, cause, x, v, F)
         if isinstance(sel, str):
             return sel
-        new = sel[0][0]
+        new = sel[0]
         if held and v != v_free and not any(lbs[e].info[new[e]].locks for e in held) \
                 and any(new[e] != modes[e] for e in range(self.E) if e not in held):
             # the snap's premise failed (no element it held stays locked) and another
@@ -124,7 +124,7 @@ class ModeState:
                 v[:] = v_snapped
             else:
                 sel = again
-        new, v_p, F_p = sel[0]
+        new, v_p, F_p = sel
         scale_v = atol + rtol * max(abs(vi) for vi in v)
         hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"])
         if isinstance(hit, str):
@@ -163,10 +163,10 @@ class ModeState:
 
     def _choose(self, t: float, h_probe: float, cause: str, x: list[float], v: list[float],
                 F: list[float]):
-        """The full laws' mode after ``t`` from ``(x, v, F)``: ``((modes, v_p, F_p),
-        h_probe)`` of the probe that decided (a guessed mode first, then the full search,
-        longer probes when one fails or keeps the mode at a guard), the elements held at
-        rate 0 put on their locks; or the failure message."""
+        """The full laws' mode after ``t`` from ``(x, v, F)``: ``(modes, v_p, F_p)`` of the
+        probe that decided (a guessed mode first, then the full search, longer probes when
+        one fails or keeps the mode at a guard), the elements held at rate 0 put on their
+        locks; or the failure message."""
         scene, lbs, modes = self.scene, self.lbs, self.modes
         guess = self._guesses(cause, x, v, F)
         sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
@@ -185,7 +185,7 @@ class ModeState:
         # forces' round-off (sqrt(eps) of the largest) does over the probe step
         rate_tol = 1.4901161193847656e-08 * h_probe * max(abs(f) for f in F_p) / self.m_min
         new = lock_parallel_rates(scene, lbs, new, v_p, F_p, rate_tol)
-        return (new, v_p, F_p), h_probe
+        return new, v_p, F_p
 
     def _guesses(self, cause: str, x: list[float], v: list[float], F: list[float]
                  ) -> list[list[int]]:
