@@ -358,11 +358,13 @@ class StageSystem:
                     j = k * self.n + self.N + e
                     if j in held:
                         continue
-                    # (an end held a hair inside, where the branch's guards are > 0)
+                    # (an end held 1e-6 of the half-width inside, where the branch's
+                    # guards are > 0)
+                    inside = 1e-6 * w
                     if U[j] > hi + 1e-9 * w:
-                        out[j] = hi - 0.5e-6 * (hi - max(lo, hi - 2.0 * w))
+                        out[j] = hi - inside
                     elif U[j] < lo - 1e-9 * w:
-                        out[j] = lo + 0.5e-6 * (min(hi, lo + 2.0 * w) - lo)
+                        out[j] = lo + inside
             if not out:
                 return got, its, nfac
             held.update(out)
