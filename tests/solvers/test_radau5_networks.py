@@ -554,3 +554,36 @@ def test_a_string_just_taut_between_stuck_dashpots_is_not_split_below_its_length
     rest = sol.t > 0.25
     assert np.all(sol.v["m2"][rest] == 0.0)
     assert np.all(sol.F["e3"][rest] >= k * L * (1.0 - 1e-9))
+
+
+def test_a_stage_starting_where_its_rate_is_flat_in_the_force_is_solved():
+    # Herschel-Bulkley n = 2 starts to slip from its yield force, where dq/dF = 0: the
+    # force grows like sqrt(h), the simplified Newton's first step overshoots it by
+    # 1/sqrt(h) and came back only by halving, too slowly in 10 iterations at every step
+    # size; the step fell to its floor at t = 0 (STEP_TOO_SMALL). The line-search
+    # fallback takes it
+    law = get_law
+    scene = Scene(
+        [Junction("j0", x0=0.9),
+         Mass("m1", m=0.10057971409681582, x0=1.1735975617425728e-175,
+              v0=-2.542539799550922e-73),
+         Mass("m2", m=5.608393931852598, x0=-0.6800189801179419, v0=6.170399803260037e-303)],
+        [Element("e0", law("newtonian").bind(c=2.345390353618615), "ground", "j0"),
+         Element("e1", _hb(5.756283365239645, 0.05206462042092644, 2.0), "ground", "m1"),
+         Element("e2", law("coulomb").bind(tau=0.1, r=17.571424417971507), "ground", "m2"),
+         Element("e3", law("string_spring").bind(k=1.5821117520096681,
+                                                 L=0.012041409793899567), "ground", "m2"),
+         Element("e4", law("newtonian").bind(c=0.7736229169825102), "m2", "j0"),
+         Element("e5", law("linear_spring").bind(k=7.808772793792817), "m2", "m1")])
+    dt = 0.006449457271942364
+    ends = []
+    for k in range(3):
+        h = dt / 2**k
+        sol = simulate(scene, method="radau5", dt=h, t_end=40 * dt, rtol=h**2, atol=h**3)
+        assert sol.ok, (k, sol.message)
+        assert np.all(np.isfinite(sol.data))
+        # the dashpot slips backwards from the start: its force beyond its yield force
+        assert sol.F["e1"][1] < -0.05206462042092644
+        ends.append(sol.data[-1])
+    assert np.allclose(ends[1], ends[2], rtol=1e-3, atol=1e-3)
+

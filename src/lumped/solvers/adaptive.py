@@ -224,10 +224,13 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         return first_root_py([system.element_nodes(U, h, x, v, F_0, e) for e in watched],
                              fns)
 
-    def attempt(h: float, iters: int) -> tuple[list[float] | None, int, int]:
+    def attempt(h: float, iters: int, damped: bool = False
+                ) -> tuple[list[float] | None, int, int]:
         """The stage solve of a step of size ``h`` from ``(t, x, v, F)`` in Python (the
-        compiled stage Newton when ``compiled=True``): ``(U or None, iterations,
-        factorisations)``; sets ``U``, ``Fref`` and ``F_seen`` for the error estimate."""
+        compiled stage Newton when ``compiled=True``; with ``damped``, the line-search
+        fallback :meth:`~lumped.solvers.radau.StageSystem.solve_damped`): ``(U or None,
+        iterations, factorisations)``; sets ``U``, ``Fref`` and ``F_seen`` for the error
+        estimate."""
         nonlocal U, Fref, F_seen, stage_solve
         fk = [scene.external_forces(t + C[k] * h) for k in range(3)]
         U = (list(v) + list(F)) * 3
@@ -238,6 +241,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         Fref = max(F_seen, m_min * (max(abs(vi) for vi in v) + atol / rtol) / h)
         scale = ([atol + rtol * abs(vi) for vi in v]
                  + [rtol * max(abs(Fe), Fref) for Fe in F]) * 3
+        if damped:
+            return system.solve_damped(U, h, x, v, fk, kernels, scale, max_iters=iters)
         if stage_solve is None and opts["compiled"] is True:
             stage_solve = compiled_stage_solver(scene, modes)  # modes: the live list
         if stage_solve is None or cones:  # (locks in parallel: the cone split)
@@ -365,6 +370,12 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             # take; the bracket closed early, 1e-5 s before the stop, again and again
             # down to the step floor. Once more, with a longer budget
             sol, its_more, nfac_more = attempt(h, 6 * max_newton)
+            its, nfac, got = its + its_more, nfac + nfac_more, None
+        elif sol is None and not cones and stalled >= 8:
+            # an eighth failure in a row: a stage that starts where its branch's rate is
+            # flat in the force (Herschel-Bulkley n > 1 at its yield force), which the
+            # simplified Newton misses at every step size; the line-search fallback
+            sol, its_more, nfac_more = attempt(h, max_newton, damped=True)
             its, nfac, got = its + its_more, nfac + nfac_more, None
         stats["newton_iterations"] += its
         stats["factorizations"] += nfac

@@ -406,6 +406,55 @@ class StageSystem:
             prev = worst
         return None, max_iters, nfac
 
+    def solve_damped(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
+                     f: list[list[float]], kernels: Sequence[Callable], scale: list[float],
+                     tol: float = 1e-3, max_iters: int = 10
+                     ) -> tuple[list[float] | None, int, int]:
+        r"""Full Newton with a backtracking line search from ``U`` (modified in place),
+        then :meth:`solve` from where it ends: the fallback for a stage that the
+        simplified Newton of :meth:`solve` misses at every step size.
+
+        Such a stage starts at a branch's end where the rate is flat in the force,
+        ``dR/dF = 0`` (Herschel-Bulkley with ``n > 1`` at its yield force, ``q = gamma
+        (F - tau)^n``): the force then grows like ``(q / gamma)^{1/n}``, ``sqrt(h)`` for
+        ``n = 2``, and the full Newton step from the end overshoots it by ``h^{-1/2}``,
+        after which the iterates come back only by halving, more slowly the shorter the
+        step. Each iteration here takes ``U - lam dU`` with ``lam = 1, 1/2, ...`` until
+        the merit ``phi = max_i |G_i| / S_i``, ``S_i = sum_j |J_ij| scale_j`` (the rows'
+        change per tolerance of the unknowns, fixed within one line search), falls by at
+        least ``1e-4 lam``; it stops when the correction is within the convergence test,
+        and :meth:`solve` then converges from there by its own test (the stage this
+        returns is one :meth:`solve` accepts). Returns ``(U or None, iterations,
+        factorisations)``.
+        """
+        its = 0
+        for _ in range(4 * max_iters):
+            G, J = self.evaluate(U, h, x_n, v_n, f, kernels)
+            S = [sum(abs(a) * sc for a, sc in zip(row, scale, strict=True)) + 1e-300
+                 for row in J]
+            phi = max(abs(g) / s for g, s in zip(G, S, strict=True))
+            if not math.isfinite(phi):
+                return None, its, its
+            its += 1
+            du = _solver(J)([-g for g in G])
+            if max(abs(d) / sc for d, sc in zip(du, scale, strict=True)) <= tol:
+                break
+            lam = 1.0
+            while lam > 1e-12:
+                trial = [u + lam * d for u, d in zip(U, du, strict=True)]
+                G_t = self.evaluate(trial, h, x_n, v_n, f, kernels)[0]
+                phi_t = max(abs(g) / s for g, s in zip(G_t, S, strict=True))
+                if phi_t <= (1.0 - 1e-4 * lam) * phi:
+                    U[:] = trial
+                    break
+                lam *= 0.5
+            else:
+                return None, its, its
+        else:
+            return None, its, its
+        got, k_its, k_fac = self.solve(U, h, x_n, v_n, f, kernels, scale, tol, max_iters)
+        return got, its + k_its, its + k_fac
+
     def _solver(self, J: list[list[float]], U: list[float],
                 cones: dict[int, tuple[float, ...]] | None, held: dict[int, float]):
         # locks in parallel make J singular, but only to round-off once the stage rows
