@@ -587,3 +587,28 @@ def test_a_stage_starting_where_its_rate_is_flat_in_the_force_is_solved():
         ends.append(sol.data[-1])
     assert np.allclose(ends[1], ends[2], rtol=1e-3, atol=1e-3)
 
+
+def test_a_reversal_just_past_a_steep_yield_force_is_probed_in_the_inverse_form():
+    # a mass slowing down against Herschel-Bulkley n = 0.3 and Bingham dashpots reverses:
+    # the probe step puts the HB force within 1e-18 of -tau, below ulp(tau), where the
+    # forward law q = gamma (|F| - tau)^n has no floating-point root; its Newton
+    # diverged and the run stopped ("no motion continues", t = 4e-6). The probe now
+    # takes the steep branch in its inverse form F = -tau - (|q| / gamma)^(1/n)
+    law = get_law
+    tau = 0.024436903731745376
+    scene = Scene(
+        [Mass("m0", m=1.0, x0=0.7854653496488941, v0=1e-05)],
+        [Element("e0", _hb(1.3052221195245506, tau, 0.3), "ground", "m0"),
+         Element("e1", law("bingham").bind(gamma=0.25693260025658476,
+                                           tau=0.9999999999999994), "ground", "m0"),
+         Element("e2", law("newtonian").bind(c=1.4872767982400794), "ground", "m0"),
+         Element("e3", law("implicit_spring").bind(k=4.384841179490898,
+                                                   L0=0.222987454404345, F0=1.0),
+                 "ground", "m0")])
+    for k in (1, 2):
+        h = 0.025 / 2**k
+        sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3)
+        assert sol.ok, (k, sol.message)
+        # it reverses at once and slides back: both dashpots on their slip- branch
+        assert sol.v["m0"][-1] < 0.0
+        assert sol.F["e0"][-1] < -tau and sol.F["e1"][-1] < -0.9999999999999994

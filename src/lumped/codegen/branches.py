@@ -44,6 +44,7 @@ Examples
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
@@ -214,6 +215,38 @@ class LawBranches:
             # the q a locking branch holds (q = L): radau5 holds it on the velocity level
             hit.lock_value = info.lock_value if info.locks else None  # type: ignore[attr-defined]
             self._kernels[(i, guard, stage)] = hit
+        return hit
+
+    def stage_law_for(self, law_kernel: Callable) -> Callable | None:
+        """The whole law in the form a step solve takes it: ``kernel(q, F)`` that picks
+        the branch as the law does (:attr:`branch`) and evaluates it by
+        :meth:`stage_kernel_for`, so each steep branch with an inverse form in that form
+        and every other branch by ``law_kernel`` (the law's own kernel). The same zeros as
+        the law; ``None`` when no branch has an inverse form (the law's kernel is the
+        answer). Herschel-Bulkley ``n = 0.3`` just past its yield force: the forward form
+        ``q = gamma (|F| - tau)^n`` has its root between two floating-point forces once
+        ``|F| - tau`` is below ``ulp(tau)`` (rates below ``gamma ulp(tau)^n``, ``1e-5``
+        here), so no Newton iterate meets its residual test; the inverse form gives the
+        force to its rounding. Has ``.magnitude`` like the kernels."""
+        hit = self._kernels.get(("law", law_kernel))
+        if hit is None and all(info.stage is None for info in self.info):
+            return None
+        if hit is None:
+            forms = tuple(self.stage_kernel_for(i) if info.stage is not None else law_kernel
+                          for i, info in enumerate(self.info))
+            branch = self.branch
+            law_mag = getattr(law_kernel, "magnitude", None)
+
+            def kernel(q: float, F: float) -> tuple[float, float, float]:
+                return forms[branch(q, F)](q, F)
+
+            def magnitude(q: float, F: float) -> float:
+                form = forms[branch(q, F)]
+                mag = law_mag if form is law_kernel else form.magnitude
+                return math.inf if mag is None else mag(q, F)
+
+            kernel.magnitude = magnitude  # type: ignore[attr-defined]
+            hit = self._kernels[("law", law_kernel)] = kernel
         return hit
 
     def _check(self, i: object) -> int:

@@ -140,8 +140,11 @@ def select_modes(
     x_hat = list(x)
     E = len(scene.elements)
     qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
+    # steep branches in their inverse form: the same zeros, a root Newton can reach
+    kernels = [branches[e].stage_law_for(el.law.kernel) or el.law.kernel
+               for e, el in enumerate(scene.elements)]
     evaluate = _make_evaluate(scene, h_probe, cm, [0.0] * N, [1.0] * N, uref, x_hat, f,
-                              qs, rq, rf, roundoff=True)
+                              qs, rq, rf, roundoff=True, kernels=kernels)
     probe_opts = _probe_options(options)
     # as the fixed-step methods: locks in parallel (a singular step) by the minimum-norm
     # correction, hard points of a law (Herschel-Bulkley n < 1 at its yield force) by the

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from ..scene import Mass, Scene
 from .newton import (
@@ -25,7 +25,7 @@ from .status import SolverError, Status
 def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[float],
                    vscale: Sequence[float], uref: list[float], x_hat: list[float],
                    f: list[float], qs: list[float], rq: list[float], rf: list[float],
-                   roundoff: bool = False):
+                   roundoff: bool = False, kernels: Sequence[Callable] | None = None):
     """Build ``evaluate(u) -> (G, J, S)`` for one step size.
 
     The scale of a law row is ``|dR/dq q| + |dR/dF F|``; with ``roundoff`` it is
@@ -33,12 +33,14 @@ def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[
 
     ``uref, x_hat, f`` are read at call time (the step loop updates them in place);
     ``qs, rq, rf`` receive each element's ``q, dR/dq, dR/dF`` at the last evaluated point.
-    This loop version is the readable reference of the step system; the step loop runs its
+    ``kernels`` replaces the laws' own kernels (e.g. by their stage forms,
+    :meth:`lumped.codegen.branches.LawBranches.stage_law_for`). This loop version is the readable reference of the step system; the step loop runs its
     generated twin :func:`_generate_evaluate` (tested equal)."""
     N = len(scene.nodes)
     E = len(scene.elements)
     n = N + E
-    kernels = tuple(el.law.kernel for el in scene.elements)
+    if kernels is None:
+        kernels = tuple(el.law.kernel for el in scene.elements)
     spring = tuple(el.kind == "spring" for el in scene.elements)
     ea, eb = scene.elem_a, scene.elem_b
     cm = tuple(cm)
