@@ -34,8 +34,9 @@ def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[
     ``uref, x_hat, f`` are read at call time (the step loop updates them in place);
     ``qs, rq, rf`` receive each element's ``q, dR/dq, dR/dF`` at the last evaluated point.
     ``kernels`` replaces the laws' own kernels (e.g. by their stage forms,
-    :meth:`lumped.codegen.branches.LawBranches.stage_law_for`). This loop version is the readable reference of the step system; the step loop runs its
-    generated twin :func:`_generate_evaluate` (tested equal)."""
+    :meth:`lumped.codegen.branches.LawBranches.stage_law_for`). This loop version is the
+    readable reference of the step system; the step loop runs its generated twin
+    :func:`_generate_evaluate` (tested equal)."""
     N = len(scene.nodes)
     E = len(scene.elements)
     n = N + E
