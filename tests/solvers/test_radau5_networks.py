@@ -612,3 +612,31 @@ def test_a_reversal_just_past_a_steep_yield_force_is_probed_in_the_inverse_form(
         # it reverses at once and slides back: both dashpots on their slip- branch
         assert sol.v["m0"][-1] < 0.0
         assert sol.F["e0"][-1] < -tau and sol.F["e1"][-1] < -0.9999999999999994
+
+
+def test_a_steep_dashpot_starting_to_slip_is_read_on_its_slip_branch():
+    # m0 stops at t = 0.1587 and the spring (10.6) drives it back against a
+    # Herschel-Bulkley n = 0.3 dashpot (tau = 1): at the probe's rate its force is
+    # tau + 1e-19, which rounds to tau, where the law reads its stuck branch. Before the
+    # probe took steep branches in their inverse form it diverged ("no motion
+    # continues"); with it, the stuck branch was read and left again at once, an event
+    # every 1.6e-6 s without end
+    law = get_law
+    scene = Scene(
+        [Mass("m0", m=1.000002302587744, x0=1.401298464324817e-45, v0=-1.3511985577622374),
+         Mass("m1", m=9.268419968124627, x0=0.0, v0=-6.103515625e-05),
+         Junction("j2", x0=0.40883949505060824)],
+        [Element("e0", law("linear_spring").bind(k=83.1659746386992), "ground", "m0"),
+         Element("e1", law("newtonian").bind(c=2.728098452827661), "ground", "m1"),
+         Element("e2", law("bingham").bind(gamma=0.24791963652898172,
+                                           tau=0.017266810527640744), "m0", "j2"),
+         Element("e3", law("newtonian").bind(c=1.0), "ground", "j2"),
+         Element("e4", _hb(4.510350262853477, 1.0, 0.3), "ground", "m0")])
+    h = 0.02193096061326592 / 4
+    sol = simulate(scene, method="radau5", dt=h, t_end=23 * 4 * h, rtol=h**2, atol=h**3)
+    assert sol.ok, sol.message
+    assert len(sol.events) < 20, len(sol.events)
+    back = [ev for ev in sol.events if ev.element == "e4" and 0.158 < ev.t < 0.159]
+    assert back and back[-1].to_branch == 0  # e4 slips forward again
+    # it then slides forward until its next reversal, at t = 0.5035
+    assert sol.v["m0"][(sol.t > 0.159) & (sol.t < 0.5)].min() > 0.0

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 from collections.abc import Callable, Sequence
 
 from scipy.optimize import brentq
@@ -37,6 +38,7 @@ __all__ = ["SAMPLES", "first_crossing", "first_crossing_on", "select_modes", "ho
 
 #: Points ``s`` in ``(0, 1]`` of a step where the guards are sampled (in order).
 SAMPLES = tuple(k / 8.0 for k in range(1, 9))
+_EPS = sys.float_info.epsilon
 
 
 def first_crossing(
@@ -167,8 +169,32 @@ def select_modes(
     F_p = res.u[N:]
     x_p = [x[i] + h_probe * v_p[i] for i in range(N)]
     q = scene.elongations(x_p, v_p)
-    modes = [branches[e].branch(q[e], F_p[e]) for e in range(E)]
+    modes = [_branch_read(branches[e], q[e], F_p[e], kernels[e] is not
+                          scene.elements[e].law.kernel) for e in range(E)]
     return modes, v_p, F_p
+
+
+def _branch_read(lb, q: float, F: float, steep: bool) -> int:
+    """The branch of a law at ``(q, F)``: :attr:`LawBranches.branch`, except where a
+    steep branch solved in its inverse form holds there and the branch read does not.
+
+    Herschel-Bulkley ``n = 0.3`` starting to slip (``tau = 1``): at the probe's rate
+    ``2e-6`` its force is ``tau + 1.3e-19``, which rounds to ``tau``, where the law
+    reads its stuck branch (``q = 0``, violated by ``2e-6``); the held stuck mode was then
+    left again at once, an event every ``1e-6`` s. The branch whose residual holds to
+    round-off of its terms is the one the probe solved."""
+    i = lb.branch(q, F)
+    if not steep:
+        return i
+    R = lb.stage_kernel_for(i)(q, F)[0]
+    if abs(R) <= 8.0 * _EPS * lb.stage_kernel_for(i).magnitude(q, F):
+        return i
+    for j, info in enumerate(lb.info):
+        if info.stage is not None:
+            k = lb.stage_kernel_for(j)
+            if abs(k(q, F)[0]) <= 8.0 * _EPS * k.magnitude(q, F):
+                return j
+    return i
 
 
 def _accept_at_roundoff(res: NewtonResult, evaluate, options: NewtonOptions) -> NewtonResult:
