@@ -5,6 +5,7 @@ or crash, written out, with the property it broke checked directly."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from lumped import simulate
 from lumped.laws import get_law
@@ -640,3 +641,31 @@ def test_a_steep_dashpot_starting_to_slip_is_read_on_its_slip_branch():
     assert back and back[-1].to_branch == 0  # e4 slips forward again
     # it then slides forward until its next reversal, at t = 0.5035
     assert sol.v["m0"][(sol.t > 0.159) & (sol.t < 0.5)].min() > 0.0
+
+
+
+def test_a_string_taut_at_rest_holds_in_tension_through_an_impact():
+    # m0 rests on a taut string to ground (e0) when the string e1 from m0 to the moving
+    # m1 goes taut: an impact through both strings, which must stop m1. In a drawn
+    # network e0's rate was -1.8e-40 (round-off), read as separating: e0 was released,
+    # m0 and m1 left together at 0.89, the probe then held m0 with a force of 8e7 and
+    # the step fell to its floor. A lock at rest holds the way its force acts (tension)
+    from lumped.codegen.branches import law_branches
+    from lumped.solvers.events import apply_impacts
+
+    string = get_law("string_spring")
+    scene = Scene([Mass("m0", m=0.3701008718306298, x0=0.07322297122476906, v0=0.0),
+                   Mass("m1", m=1.0, x0=1.2834241416162204, v0=1.2232837324267816)],
+                  [Element("e0", string.bind(k=1.0, L=0.07322297122476906), "ground", "m0"),
+                   Element("e1", string.bind(k=0.3701008718306298, L=1.210201170391451),
+                           "m0", "m1")])
+    lbs = [law_branches(el.law) for el in scene.elements]
+    taut = [next(i for i, b in enumerate(lb.info) if b.locks) for lb in lbs]
+    slack = [next(i for i, b in enumerate(lb.info) if not b.locks) for lb in lbs]
+    x = [0.07322297122476906, 1.2834241416162204]
+    v = [-1.8367099231598242e-40, 1.2232837324267816]
+    hits, lost = apply_impacts(scene, lbs, [taut[0], slack[1]], taut, x, v, 1e-9,
+                               forces=[0.768498, 0.447897])
+    assert [e for e, _ in hits] == [1]
+    assert abs(v[0]) < 1e-15 and abs(v[1]) < 1e-15  # both strings hold: m1 stops
+    assert lost == pytest.approx(0.5 * 1.2232837324267816**2)

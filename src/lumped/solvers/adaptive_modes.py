@@ -126,7 +126,8 @@ class ModeState:
                 sel = again
         new, v_p, F_p = sel
         scale_v = atol + rtol * max(abs(vi) for vi in v)
-        hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"])
+        hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"],
+                            F)
         if isinstance(hit, str):
             return f"impact at t = {t!r}: {hit}"
         if hit[0]:

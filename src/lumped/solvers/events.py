@@ -370,14 +370,18 @@ def lock_cones(branches: Sequence, modes: Sequence[int], F: Sequence[float],
 
 def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Sequence[int],
                   x: list[float], v: list[float], threshold: float,
-                  restitution: float = 0.0) -> tuple[list[tuple[int, float]], float] | str:
+                  restitution: float = 0.0, forces: Sequence[float] | None = None,
+                  ) -> tuple[list[tuple[int, float]], float] | str:
     """Apply the impulse of every spring that enters a position lock while its ends approach.
 
     A spring whose new branch locks ``q`` (:attr:`BranchInfo.locks`) with ``|q'| >
     threshold`` is an impact: the velocities jump to those of
     :func:`lumped.solvers.impacts.impact_velocities` over all the locked springs (``v`` is
     updated in place), and a lock with a known value between a mass and ground gets its
-    position set exactly (``x`` in place).
+    position set exactly (``x`` in place). ``forces`` (the element forces before the
+    event) say which way a lock at rest holds
+    (:func:`~lumped.solvers.impacts.impact_velocities`): a string taut at rest holds in
+    tension, whatever the sign of its rate's round-off.
 
     Returns
     -------
@@ -404,7 +408,7 @@ def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Seq
         el = scene.elements[hits[0]]
         return (f"element {el.name!r} (law {el.law_name!r}) locks its elongation while its "
                 "ends approach: an impact, and lumped.solvers.impacts is not available")
-    v_after, impulses, lost = impact_velocities(scene, x, v, locked, restitution)
+    v_after, impulses, lost = impact_velocities(scene, x, v, locked, restitution, forces)
     v[:] = v_after
     inner, gaps = [], []
     for e in hits:

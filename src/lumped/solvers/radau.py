@@ -452,7 +452,8 @@ class StageSystem:
                 return None, its, its
         else:
             return None, its, its
-        got, k_its, k_fac = self.solve(U, h, x_n, v_n, f, kernels, scale, tol, max_iters)
+        got, k_its, k_fac = self.solve(U, h, x_n, v_n, f, kernels, scale, tol=tol,
+                                       max_iters=max_iters)
         return got, its + k_its, its + k_fac
 
     def _solver(self, J: list[list[float]], U: list[float],
