@@ -86,6 +86,10 @@ class ModeState:
             if lbs[e].count > 1:
                 self.watched.append(e)
         self.cones.clear()
+        # (a cone needs two locks on cycles: with fewer, none is read)
+        if sum(1 for e in self.cyclic if lbs[e].info[new[e]].locks
+               and lbs[e].info[new[e]].lock_value is not None) < 2:
+            return
         locked = lock_cones(lbs, new, F, self.cyclic)
         # only locks in parallel with each other leave their split free (a stuck link in
         # series with another keeps its exact LU solve, and so its exact zero rate)
