@@ -136,7 +136,7 @@ class StaticHold:
         """The scan's times in ``(t0, t1]``: the forcing's extrema, the points half-way
         between them, and ``t1``."""
         crit: set[float] = set()
-        for kind, (_, w, t_off) in zip(self.fkind, self.fpar, strict=True):
+        for kind, _, w, t_off in self._kinds:  # (fkind, fpar as Python numbers)
             if kind != 2 or w == 0.0 or t0 >= t_off:
                 continue
             hi = min(t1, t_off)
