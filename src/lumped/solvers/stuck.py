@@ -161,10 +161,20 @@ class StaticHold:
         (shifted by its round-off tolerance, as a step's crossing test), refined to a root
         of the guard; ``(None, samples)`` if none. ``samples`` are the scan's times before
         it (for the output rows). With ``fast`` (the run's compiled loop) the root is
-        found compiled (:mod:`lumped.solvers.stuck_jit`, the same numbers)."""
+        found compiled (:mod:`lumped.solvers.stuck_jit`, the same numbers), and so is the
+        scan of the samples under a sine burst when there are more than two of them."""
         done: list[float] = []
         prev = t0
-        for s in self.samples(t0, t1):
+        samples = self.samples(t0, t1)
+        if fast is not None and self.varying and len(samples) > 2:
+            # the samples' forces and guards in one compiled pass (the same numbers): the
+            # loop below starts at the first sample where a guard fails, or ends the scan
+            k = self._scan(samples, fast, modes)
+            if k < 0:
+                return None, samples[:-1]
+            if k > 0:
+                done, prev, samples = samples[:k], samples[k - 1], samples[k:]
+        for s in samples:
             F = self.forces(s)
             roots = []
             for e in self.free:
@@ -178,6 +188,21 @@ class StaticHold:
             done.append(s)
             prev = s
         return None, done[:-1]
+
+    def _scan(self, samples: list[float], fast, modes: Sequence[int]) -> int:
+        """:func:`lumped.solvers.stuck_jit.breakout_scan` on the samples: the index of the
+        first one where a guard fails, or ``-1``; the forces of the samples it passed (and
+        of the one where it stopped) are kept for :meth:`forces`."""
+        y0, fkind, fpar, c, minv, free = self.arrays()
+        ts = np.array(samples, dtype=float)
+        out = np.empty((len(samples), len(self.F0)))
+        k = _breakout_scan()(fast.guards.addr, free, np.array(modes, dtype=np.int64),
+                             np.array(self.q, dtype=float), fkind, fpar, c, minv,
+                             y0[len(y0) - len(self.F0):], ts, out, np.zeros(64))
+        rows = out[:len(samples) if k < 0 else k + 1].tolist()
+        for s, row in zip(samples, rows, strict=False):  # (rows: up to the stop)
+            self._seen[s] = row
+        return k
 
     def _root(self, e: int, j: int, guard, a: float, b: float,
               modes: Sequence[int] | None = None, fast=None) -> float:
@@ -204,6 +229,12 @@ class StaticHold:
         while g(r) >= 0.0 and r + step < b:
             r, step = r + step, 2.0 * step
         return r
+
+
+def _breakout_scan():
+    from .stuck_jit import compiled_breakout_scan
+
+    return compiled_breakout_scan()
 
 
 def _breakout_root():
