@@ -498,3 +498,18 @@ def test_fast_path_is_newton_exactly(formula, which, monkeypatch):
     for key in ("steps", "newton_iterations", "residual_evals", "jacobian_evals",
                 "factorizations", "max_newton_iterations"):
         assert fast.stats[key] == slow.stats[key], key
+
+
+@pytest.mark.parametrize("value, error", [
+    (math.inf, ValueError), (-math.inf, ValueError), (math.nan, ValueError),
+    (True, TypeError), ("1", TypeError), (-2.0, ValueError)])
+def test_a_bad_float_argument_is_named(value, error):
+    # (a float takes a shortcut past the abstract-class check: it must refuse the same)
+    with pytest.raises(error, match="t_end"):
+        simulate(paper_scene(), method="bdf1", dt=1e-3, t_end=value)
+
+
+@pytest.mark.parametrize("value", [0.01, np.float64(0.01), 1, np.int64(1)])
+def test_any_real_argument_is_taken_as_a_float(value):
+    sol = simulate(paper_scene(), method="closed-bdf1", dt=1e-3, t_end=value)
+    assert sol.t[-1] == pytest.approx(float(value))

@@ -14,6 +14,10 @@ __all__ = ["as_finite", "as_positive", "as_nonnegative", "as_int_at_least"]
 
 def as_finite(name: str, value: object) -> float:
     """Return ``value`` as a Python float, refusing non-numbers, NaN and infinities."""
+    if type(value) is float:  # the common case, without the abstract-class check
+        if not math.isfinite(value):
+            raise ValueError(f"`{name}` must be finite, got {value!r}")
+        return value
     if isinstance(value, bool) or not isinstance(value, Real):
         try:
             import numpy as np  # local: only reached on the slow path

@@ -105,3 +105,24 @@ def test_hostile_forcing_strings_are_refused(text):
 def test_forcing_string_is_compiled_safely():
     sc = Scene([Mass("mass", 1.0)], [spring()], {"mass": "2*sin(3*t) + Abs(t - 1)"})
     assert sc.forcing[0](0.5) == pytest.approx(2 * math.sin(1.5) + 0.5, rel=1e-15)
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, float("-inf"), "0.5", None])
+def test_a_forcing_that_returns_no_finite_number_is_refused(value):
+    # (a finite float takes a shortcut past the abstract-class check: the rest must not)
+    scene = Scene([Mass("m", m=1.0)], [Element("s", law("linear_spring", k=1.0),
+                                               "ground", "m")],
+                  {"m": lambda t: value})
+    with pytest.raises(ValueError, match="force on node 'm' returned"):
+        scene.external_forces(0.5)
+
+
+def test_a_forcing_may_return_any_real_number():
+    import numpy as np
+
+    for value in (0.25, np.float64(0.25), 1, np.int32(1), True):
+        scene = Scene([Mass("m", m=1.0)], [Element("s", law("linear_spring", k=1.0),
+                                                   "ground", "m")],
+                      {"m": lambda t, value=value: value})
+        got = scene.external_forces(0.5)
+        assert got == [float(value)] and type(got[0]) is float

@@ -178,3 +178,41 @@ def test_the_output_keeps_its_steps_in_order_as_it_grows():
     assert np.array_equal(rows.array(), np.concatenate(want_rows))
     rows.set_first([9.0] * (1 + ny))
     assert rows.first() == [9.0] * (1 + ny)
+
+
+@pytest.mark.skipif(not numba_enabled(), reason="the compiled evaluation needs numba")
+@pytest.mark.parametrize("forcing", [None, "F1", "const"])
+def test_a_run_held_from_the_start_has_an_exact_dense_output(monkeypatch, forcing):
+    """A scene stuck from t = 0 to the end takes no step: its dense output is its held
+    segments only (the compiled evaluation skips the steps' table then). Positions are
+    frozen at x0, velocities exactly 0, the dashpot carries the load less the spring, bit
+    for bit, at every time and at the segments' ends (a time event at t_off = 1), and the
+    numpy evaluation gives the same numbers, in order and shuffled."""
+    import lumped.solvers.adaptive_output as out
+    from lumped import Element, Mass, Scene
+    from lumped.scene.forcing import paper_F1
+
+    spec = {None: None, "F1": paper_F1, "const": 0.25}[forcing]
+    scene = Scene([Mass("mass", m=1.0, x0=0.004)],
+                  [Element("spring", get_law("linear_spring").bind(k=100.0), "ground", "mass"),
+                   Element("dashpot", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground",
+                           "mass")],
+                  {} if spec is None else {"mass": spec})
+    sol = simulate(scene, method="radau5", t_end=5.0, rtol=1e-7, atol=1e-9, compiled=True)
+    assert sol.stats["steps"] == 0 and sol.dense._count == 0
+    assert len(sol.dense._static) == (2 if forcing == "F1" else 1)
+    ends = [s for s0, s1, _ in sol.dense._static for s in (s0, s1)]
+    t = np.clip(np.concatenate([np.linspace(0.0, 5.0, 5001), ends, np.nextafter(ends, 0.0),
+                                np.nextafter(ends, 9.0)]), 0.0, 5.0)
+    t = np.sort(t)
+    rows = sol.sol(t)
+    assert np.array_equal(rows[:, 0], t)
+    assert np.all(rows[:, 1] == 0.004) and np.all(rows[:, 2] == 0.0)
+    F_s = sol.data[0, 3]
+    assert np.all(rows[:, 3] == F_s)
+    f = np.array([scene.external_forces(ti)[0] for ti in t])
+    assert np.array_equal(rows[:, 4], f - F_s)  # the balance, m v' = f - F_s - F_d = 0
+    shuffled = np.random.default_rng(1).permutation(t)
+    assert np.array_equal(sol.sol(shuffled), sol.sol(t)[np.argsort(np.argsort(shuffled))])
+    monkeypatch.setattr(out, "numba_enabled", lambda: False)
+    assert np.array_equal(sol.sol(t), rows)

@@ -140,3 +140,76 @@ def test_the_first_crossing_on_a_step_polynomial():
     assert got is not None and got[1] == (0, 1) and abs(got[0] - 0.5) <= 1e-15
     assert first_root_py(nodes, [lambda q, F: (q + 2.0,)]) is None
     assert math.isfinite(got[0])
+
+
+def test_the_parts_of_a_mode_kept_per_plan_are_those_made_anew():
+    """:meth:`ModeState.set_modes` takes a mode's kernels, guards, watched elements and
+    lock count from the scene plan after its first use: for every mode of a scene with
+    two dashpots in parallel (their locks share the load: a cone split) and one in
+    series, the held parts, first made and then cached, are those the laws give, and the
+    cones are there exactly when two locks sit in parallel."""
+    import itertools
+    from types import MappingProxyType
+
+    from lumped import Element, Mass, Scene
+    from lumped.laws import get_law
+    from lumped.solvers.adaptive_setup import read_options, scene_plan
+    from lumped.solvers.events import lock_cones
+    from lumped.solvers.registry import RunSettings
+
+    bingham = get_law("bingham")
+    scene = Scene([Mass("m1", m=1.0), Mass("m2", m=2.0)],
+                  [Element("s1", get_law("linear_spring").bind(k=100.0), "ground", "m1"),
+                   Element("d1", bingham.bind(gamma=1.0, tau=1.0), "ground", "m1"),
+                   Element("d2", bingham.bind(gamma=2.0, tau=0.5), "ground", "m1"),
+                   Element("d3", bingham.bind(gamma=1.0, tau=0.3), "m1", "m2")])
+    plan = scene_plan(scene)
+    settings_ = RunSettings(t_end=1.0, dt=None, rtol=1e-6, atol=1e-9, throw=True,
+                            options=None, extra=MappingProxyType({}))
+    ms = adaptive_modes.ModeState(scene, plan, settings_, read_options(settings_), 1e-6,
+                                  1e-9, {}, 1e-6)
+    lbs = plan.branches
+    F = [0.1, 0.2, -0.1, 0.05]
+    kinds = set()
+    for _ in range(2):  # made, then from the cache
+        for mode in itertools.product(*(range(lb.count) for lb in lbs)):
+            ms.set_modes(list(mode), F)
+            assert ms.modes == list(mode)
+            assert ms.kernels == [lbs[e].stage_kernel_for(b) for e, b in enumerate(mode)]
+            assert ms.guards == [lbs[e].stage_guards_for(b) for e, b in enumerate(mode)]
+            assert ms.watched == [e for e in range(4) if lbs[e].count > 1]
+            locked = lock_cones(lbs, list(mode), F, plan.cyclic)
+            both = 1 in locked and 2 in locked  # d1 and d2 locked, in parallel
+            assert sorted(ms.cones) == ([1, 2] if both else [])
+            if both:
+                assert ms.cones == {e: locked[e] for e in (1, 2)}
+            kinds.add(both)
+    assert kinds == {True, False}
+    assert len(plan.mode_parts) == math.prod(lb.count for lb in lbs)
+
+
+def test_held_forces_follow_each_scene_s_own_forcing():
+    """The forcing's kinds are kept per forcing (:class:`lumped.solvers.stuck.StaticHold`):
+    scenes of one structure, even of the same element objects, under other forcings (two
+    sine bursts, a constant, none), run in turn, each carry their own load in the held
+    dashpot, bit for bit, in the rows and the dense output."""
+    from lumped import Element, Mass, Scene
+    from lumped.laws import get_law
+
+    elements = [Element("spring", get_law("linear_spring").bind(k=100.0), "ground", "mass"),
+                Element("dashpot", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground",
+                        "mass")]
+    loads = [SineBurst(0.5, 5.0 * math.pi, 1.0), SineBurst(0.3, 2.0, 2.5), 0.2, None]
+    scenes = [Scene([Mass("mass", m=1.0, x0=0.003)], elements,
+                    {} if f is None else {"mass": f}) for f in loads]
+    t = np.linspace(0.0, 4.0, 801)
+    for _ in range(2):
+        for sc in scenes:
+            sol = simulate(sc, method="radau5", t_end=4.0, rtol=1e-6, compiled=True)
+            assert sol.stats["steps"] == 0
+            F_s = sol.data[0, 3]
+            f_rows = np.array([sc.external_forces(ti)[0] for ti in sol.t])
+            assert np.array_equal(sol.F["dashpot"], f_rows - F_s)
+            f = np.array([sc.external_forces(ti)[0] for ti in t])
+            assert np.array_equal(sol.sol(t)[:, 4], f - F_s)
+            assert np.all(sol.sol(t)[:, 1] == 0.003) and np.all(sol.sol(t)[:, 2] == 0.0)

@@ -1,6 +1,7 @@
-"""The compiled break-out root of a held interval (:mod:`lumped.solvers.stuck_jit`)
+"""The compiled break-out root and scan of a held interval (:mod:`lumped.solvers.stuck_jit`)
 against the Python reference (:meth:`lumped.solvers.stuck.StaticHold._root` with
-:func:`scipy.optimize.brentq`): the same root, bit for bit."""
+:func:`scipy.optimize.brentq`, :meth:`~lumped.solvers.stuck.StaticHold.breakout` without
+the compiled loop): the same root and samples, bit for bit."""
 
 from __future__ import annotations
 
@@ -70,3 +71,53 @@ def test_compiled_breakout_root_agrees_with_the_reference():
                    fpar, c, minv, a, b, np.zeros(64))
         assert got == ref  # (not the fallback: nan)
         assert a < ref <= b
+
+
+@pytest.mark.skipif(not numba_enabled(), reason="needs numba")
+def test_compiled_breakout_scan_agrees_with_the_reference():
+    """The scan of a held interval's samples compiled (:func:`lumped.solvers.stuck_jit.
+    breakout_scan`, taken with a sine-burst forcing and more than two samples) and in
+    Python (``fast=None``): the same break-out time and the same samples passed before it,
+    and the same forces at each of them, bit for bit, on every held interval of runs that
+    stick and break out again and again (one mass, a 3-mass chain) and of runs that never
+    break out (a scan that passes every sample)."""
+    calls = []
+    keep = stuck.StaticHold.breakout
+
+    def record(self, t0, t1, guards, modes, fast=None):
+        calls.append((self, t0, t1, list(guards), list(modes), fast))
+        return keep(self, t0, t1, guards, modes, fast)
+
+    scenes = {s.name: s for s in PAPER_SCENES + OWN_SCENES}
+    runs = [(generic_scene(scenes[name]), 5.0, rtol) for name in
+            ("stick-breakout", "forcing-F1", "forcing-F2", "high-yield-forced")
+            for rtol in (1e-4, 1e-9)]
+    runs.append((bingham_chain(3), 5.0, 1e-6))
+    stuck.StaticHold.breakout = record
+    try:
+        for scene, t_end, rtol in runs:
+            sol = simulate(scene, method="radau5", t_end=t_end, rtol=rtol,
+                           atol=1e-2 * rtol, compiled=True)
+            assert sol.ok, sol.message
+    finally:
+        stuck.StaticHold.breakout = keep
+    scanned = broke = 0
+    for hold, t0, t1, guards, modes, fast in calls:
+        assert fast is not None
+        N = len(hold.c)
+
+        def again(hold=hold, N=N):
+            return stuck.StaticHold(hold.scene, hold.y0[:N], hold.y0[N:2 * N], hold.F0,
+                                    hold.free, hold.minv, hold.c, hold.fkind, hold.fpar)
+
+        fresh, compiled = again(), again()
+        ref = keep(fresh, t0, t1, guards, modes, None)
+        got = keep(compiled, t0, t1, guards, modes, fast)
+        assert got == ref
+        samples = compiled.samples(t0, t1)
+        if compiled.varying and len(samples) > 2:
+            scanned += 1
+            broke += got[0] is not None
+            for s in got[1]:
+                assert compiled.forces(s) == fresh.forces(s)
+    assert scanned >= 10 and 0 < broke < scanned

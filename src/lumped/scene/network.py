@@ -352,6 +352,9 @@ class Scene:
                 out.append(0.0)
                 continue
             val = f(t)
+            if type(val) is float and math.isfinite(val):  # the common case, no ABC check
+                out.append(val)
+                continue
             if not (isinstance(val, numbers.Real) and math.isfinite(val)):
                 raise ValueError(
                     f"force on node {self.nodes[i].name!r} returned {val!r} at t = {t!r}"

@@ -71,6 +71,25 @@ def _admitted(guard, q0: float, F0: float, q1: float, F1: float) -> float:
     return F0 + hi * (F1 - F0)
 
 
+def _structure(scene: Scene, plan) -> tuple[list[bool], tuple[float, ...], list[bool],
+                                             list[bool], float]:
+    """``(is_mass, masses, spring, massless, m_min)`` of the scene's nodes and elements,
+    made once per plan (the scene's structure; the lists are only read): which nodes are
+    masses, ``m_i`` (``0.0`` at a junction), which elements are springs, which are
+    dashpots between junctions and ground only (a lock there has its force from a
+    junction's balance), and the lightest mass."""
+    got = plan.__dict__.get("radau5_structure")
+    if got is None:
+        is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+        masses = scene.masses
+        massless = [not any(p >= 0 and is_mass[p] for p in (scene.elem_a[e], scene.elem_b[e]))
+                    and el.kind == "dashpot" for e, el in enumerate(scene.elements)]
+        got = plan.__dict__["radau5_structure"] = (
+            is_mass, masses, [el.kind == "spring" for el in scene.elements], massless,
+            min(mi for mi in masses if mi > 0.0))
+    return got
+
+
 def run_radau5(scene: Scene, settings) -> RawRun:
     """The ``radau5`` runner: ``(scene, RunSettings) -> RawRun`` (see the module notes).
 
@@ -91,10 +110,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                                                     steps_for(dt, settings.t_end) * dt)
     N, E = len(scene.nodes), len(scene.elements)
     n = N + E
-    is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
-    masses = scene.masses
-    system = StageSystem(masses, scene.elem_a, scene.elem_b,
-                         [el.kind == "spring" for el in scene.elements])
+    is_mass, masses, spring, massless, m_min = _structure(scene, plan)
+    system = StageSystem(masses, scene.elem_a, scene.elem_b, spring)
     checked = plan.checked
     x = [float(nd.x0) for nd in scene.nodes]
     v, F, ic = consistent_initial_state(scene, time_scale=t_final, options=settings.options)
@@ -115,10 +132,6 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         ms.cones
     events, recent = ms.events, ms.recent
     lbs = plan.branches
-    # elements between junctions and ground only (a lock there has its force from a
-    # junction's balance)
-    massless = [not any(p >= 0 and is_mass[p] for p in (scene.elem_a[e], scene.elem_b[e]))
-                and scene.elements[e].kind == "dashpot" for e in range(E)]
 
     # the compiled stage Newton (compiled=True), built on first need: with the compiled
     # loop the attempts need it only after a singular Jacobian (building it costs ~0.7 ms)
@@ -140,7 +153,6 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     h_good = h
     h_acc = err_acc = None
     F_seen = 0.0
-    m_min = min(mi for mi in masses if mi > 0.0)
     if fast is not None:
         fast.setup(t_final, rtol, atol, m_min)
     dF_n: list[float] | None = None  # force slopes at t (None at the start, after events)

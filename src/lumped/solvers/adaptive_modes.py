@@ -74,18 +74,26 @@ class ModeState:
         self.guessing = not plan.checked
         self.hint: int | None = None
         self.forces_from_probe = False  # the forces at t are an event probe's
+        # mode -> (kernels, guards, watched, locks on cycles), kept per scene plan
+        self._mode_parts: dict[tuple[int, ...], tuple] = plan.__dict__.setdefault(
+            "mode_parts", {})
 
     def set_modes(self, new: list[int], F: list[float]) -> None:
         """Hold every element on branch ``new[e]`` (the list ``modes`` is kept)."""
-        lbs, E = self.lbs, self.E
+        lbs = self.lbs
         self.modes[:] = new
-        self.watched.clear()
-        for e in range(E):
-            self.kernels[e] = lbs[e].stage_kernel_for(new[e])
-            self.guards[e] = lbs[e].stage_guards_for(new[e])
-            if lbs[e].count > 1:
-                self.watched.append(e)
+        key = tuple(new)
+        parts = self._mode_parts.get(key)
+        if parts is None:
+            parts = _mode_parts(lbs, key, self.cyclic)
+            if len(self._mode_parts) >= 4096:  # (a network with very many modes)
+                self._mode_parts.clear()
+            self._mode_parts[key] = parts
+        # (in place: the driver holds these lists)
+        self.kernels[:], self.guards[:], self.watched[:] = parts[0], parts[1], parts[2]
         self.cones.clear()
+        if parts[3] < 2:  # a cone needs two locks on cycles: with fewer, none is read
+            return
         locked = lock_cones(lbs, new, F, self.cyclic)
         # only locks in parallel with each other leave their split free (a stuck link in
         # series with another keeps its exact LU solve, and so its exact zero rate)
@@ -253,3 +261,17 @@ def _laws_hold(lbs: list, modes: list[int], q: list[float], F: list[float]) -> b
         if not abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe)):
             return False
     return True
+
+
+def _mode_parts(lbs: list, modes: tuple[int, ...], cyclic: tuple[int, ...]
+                ) -> tuple[list, list, list[int], int]:
+    """What :meth:`ModeState.set_modes` holds for ``modes``, which depends only on the
+    scene's laws: the branch kernels and guards in the stage solve's form, the elements
+    with more than one branch (their guards are watched), and how many elements on
+    cycles are held on a lock with a known value (:func:`lock_cones` takes them)."""
+    E = len(lbs)
+    return ([lbs[e].stage_kernel_for(modes[e]) for e in range(E)],
+            [lbs[e].stage_guards_for(modes[e]) for e in range(E)],
+            [e for e in range(E) if lbs[e].count > 1],
+            sum(1 for e in cyclic if lbs[e].info[modes[e]].locks
+                and lbs[e].info[modes[e]].lock_value is not None))

@@ -159,9 +159,11 @@ class DenseOutput:
         if bad >= 0:
             raise ValueError(f"`t` = {ts[bad]!r} is outside the solved interval "
                              f"[{t_lo!r}, {t_hi!r}]")
-        S0, S1, closed = self._static_table(t_hi)
         if self._count:
+            S0, S1, closed = self._static_table(t_hi)
             _evaluate(*self._arrays(), ts, self.N, out, S0, S1, closed, ordered)
+        else:  # held segments only: each is closed at the end of the solved interval
+            closed = [s1 == t_hi for _, s1, _ in self._static]
         for k, (s0, s1, hold) in enumerate(self._static):
             if ordered:  # the rows this interval can own: [s0, s1] in sorted times
                 lo, hi = int(np.searchsorted(ts, s0, "left")), int(np.searchsorted(ts, s1,

@@ -44,6 +44,9 @@ from .rest_balance import rest_inverse
 
 __all__ = ["StaticHold", "static_hold", "forcing_kinds"]
 
+#: ``id(fpar) -> (fpar, varying, kinds)`` (see :class:`StaticHold`).
+_KINDS: dict[int, tuple[np.ndarray, bool, list[tuple[int, float, float, float]]]] = {}
+
 
 class StaticHold:
     """The static balance of a stuck scene (see the module notes): forces as functions
@@ -54,8 +57,11 @@ class StaticHold:
 
     def __init__(self, scene: Scene, x: list[float], v: list[float], F: list[float],
                  free: list[int], minv: list[list[float]], c: list[float],
-                 fkind: np.ndarray, fpar: np.ndarray) -> None:
+                 fkind: np.ndarray, fpar: np.ndarray,
+                 arrays: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         self.scene, self.free, self.minv, self.c = scene, free, minv, c
+        # ``(minv, free)`` as arrays, made once per structure (:func:`static_hold`)
+        self._structure_arrays = arrays
         self.fkind, self.fpar = fkind, fpar
         self.y0 = list(x) + list(v) + list(F)
         self.F0 = list(F)
@@ -65,9 +71,16 @@ class StaticHold:
         # scan's samples are asked for twice (the scan, the output rows)
         self._steady: list[float] | None = None
         self._seen: dict[float, list[float]] = {}
-        self.varying = bool((fkind == 2).any())
-        self._kinds = [(int(k), float(p[0]), float(p[1]), float(p[2]))
-                       for k, p in zip(fkind, fpar, strict=True)]
+        # the forcing's kinds as Python floats, made once per forcing (``fkind`` and
+        # ``fpar`` are the plan's arrays, :func:`forcing_kinds`, which nothing changes)
+        got = _KINDS.get(id(fpar))
+        if got is None or got[0] is not fpar:
+            if len(_KINDS) > 256:
+                _KINDS.clear()
+            got = _KINDS[id(fpar)] = (fpar, bool((fkind == 2).any()), [
+                (int(k), float(p[0]), float(p[1]), float(p[2]))
+                for k, p in zip(fkind, fpar, strict=True)])
+        self.varying, self._kinds = got[1], got[2]
 
     def forces(self, t: float) -> list[float]:
         """Every element's force at ``t`` (the forcing's own values)."""
@@ -98,10 +111,9 @@ class StaticHold:
     def arrays(self) -> tuple:
         """``(y0, fkind, fpar, c, minv, free)`` as arrays, for the compiled dense output."""
         if self._arrays is None:
+            minv, free = self._structure_arrays or _structure_arrays(self.minv, self.free)
             self._arrays = (np.array(self.y0, dtype=float), self.fkind, self.fpar,
-                            np.array(self.c, dtype=float),
-                            np.array(self.minv, dtype=float).reshape(len(self.free), -1),
-                            np.array(self.free, dtype=np.int64))
+                            np.array(self.c, dtype=float), minv, free)
         return self._arrays
 
     def forces_many(self, ts: np.ndarray) -> np.ndarray:
@@ -124,7 +136,7 @@ class StaticHold:
         """The scan's times in ``(t0, t1]``: the forcing's extrema, the points half-way
         between them, and ``t1``."""
         crit: set[float] = set()
-        for kind, (_, w, t_off) in zip(self.fkind, self.fpar, strict=True):
+        for kind, _, w, t_off in self._kinds:  # (fkind, fpar as Python numbers)
             if kind != 2 or w == 0.0 or t0 >= t_off:
                 continue
             hi = min(t1, t_off)
@@ -149,10 +161,20 @@ class StaticHold:
         (shifted by its round-off tolerance, as a step's crossing test), refined to a root
         of the guard; ``(None, samples)`` if none. ``samples`` are the scan's times before
         it (for the output rows). With ``fast`` (the run's compiled loop) the root is
-        found compiled (:mod:`lumped.solvers.stuck_jit`, the same numbers)."""
+        found compiled (:mod:`lumped.solvers.stuck_jit`, the same numbers), and so is the
+        scan of the samples under a sine burst when there are more than two of them."""
         done: list[float] = []
         prev = t0
-        for s in self.samples(t0, t1):
+        samples = self.samples(t0, t1)
+        if fast is not None and self.varying and len(samples) > 2:
+            # the samples' forces and guards in one compiled pass (the same numbers): the
+            # loop below starts at the first sample where a guard fails, or ends the scan
+            k = self._scan(samples, fast, modes)
+            if k < 0:
+                return None, samples[:-1]
+            if k > 0:
+                done, prev, samples = samples[:k], samples[k - 1], samples[k:]
+        for s in samples:
             F = self.forces(s)
             roots = []
             for e in self.free:
@@ -166,6 +188,21 @@ class StaticHold:
             done.append(s)
             prev = s
         return None, done[:-1]
+
+    def _scan(self, samples: list[float], fast, modes: Sequence[int]) -> int:
+        """:func:`lumped.solvers.stuck_jit.breakout_scan` on the samples: the index of the
+        first one where a guard fails, or ``-1``; the forces of the samples it passed (and
+        of the one where it stopped) are kept for :meth:`forces`."""
+        y0, fkind, fpar, c, minv, free = self.arrays()
+        ts = np.array(samples, dtype=float)
+        out = np.empty((len(samples), len(self.F0)))
+        k = _breakout_scan()(fast.guards.addr, free, np.array(modes, dtype=np.int64),
+                             np.array(self.q, dtype=float), fkind, fpar, c, minv,
+                             y0[len(y0) - len(self.F0):], ts, out, np.zeros(64))
+        rows = out[:len(samples) if k < 0 else k + 1].tolist()
+        for s, row in zip(samples, rows, strict=False):  # (rows: up to the stop)
+            self._seen[s] = row
+        return k
 
     def _root(self, e: int, j: int, guard, a: float, b: float,
               modes: Sequence[int] | None = None, fast=None) -> float:
@@ -192,6 +229,12 @@ class StaticHold:
         while g(r) >= 0.0 and r + step < b:
             r, step = r + step, 2.0 * step
         return r
+
+
+def _breakout_scan():
+    from .stuck_jit import compiled_breakout_scan
+
+    return compiled_breakout_scan()
 
 
 def _breakout_root():
@@ -233,14 +276,21 @@ def static_hold(scene: Scene, plan, modes: Sequence[int], x: list[float],
         got = cache[key] = _structure(scene, plan.branches, modes)
     if got is None:
         return None
-    free, minv, K, fixed = got
+    free, minv, K, fixed, arrays = got
     c = [sum(K[i][e] * F[e] for e in fixed) for i in range(len(v))]
-    return StaticHold(scene, x, v, F, free, minv, c, fkind, fpar)
+    return StaticHold(scene, x, v, F, free, minv, c, fkind, fpar, arrays)
+
+
+def _structure_arrays(minv: list[list[float]], free: list[int]
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """``(minv, free)`` as the arrays of the compiled dense output."""
+    return (np.array(minv, dtype=float).reshape(len(free), -1),
+            np.array(free, dtype=np.int64))
 
 
 def _structure(scene: Scene, branches: Sequence, modes: Sequence[int]):
-    """``(free, -K_free^-1, K, fixed)`` of a mode, or ``None`` when it does not lock every
-    node."""
+    """``(free, -K_free^-1, K, fixed, (-K_free^-1, free) as arrays)`` of a mode, or
+    ``None`` when it does not lock every node."""
     N = len(scene.nodes)
     free = []
     for e, el in enumerate(scene.elements):
@@ -255,7 +305,7 @@ def _structure(scene: Scene, branches: Sequence, modes: Sequence[int]):
     if got is None:
         return None
     minv, K, fixed = got
-    return free, minv, K, fixed
+    return free, minv, K, fixed, _structure_arrays(minv, free)
 
 
 def hold_interval(scene: Scene, plan, ms, t: float, t_stop: float, x: list[float],
@@ -277,10 +327,9 @@ def hold_interval(scene: Scene, plan, ms, t: float, t_stop: float, x: list[float
         return None
     t1 = t_stop if t_b is None else t_b
     dense.add_static(t, t1, hold)
-    for s in samples:
-        if s < t1:
-            rows.append(row_of(s, x, v, hold.forces(s)))
     F1 = hold.forces(t1)
-    rows.append(row_of(t1, x, v, F1))
+    # the rows at the samples and at t1, in one block
+    rows.extend(np.array([row_of(s, x, v, hold.forces(s)) for s in samples if s < t1]
+                         + [row_of(t1, x, v, F1)], dtype=float))
     ms.mark_free(t, t1, x, v, F1)  # elements on cycles whose forces are not unique
     return t1, F1, t_b is not None

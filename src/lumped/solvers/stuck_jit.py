@@ -22,7 +22,8 @@ import numpy as np
 
 from ..codegen.jit import njit, numba_enabled
 
-__all__ = ["breakout_root", "brent", "compiled_breakout_root"]
+__all__ = ["breakout_root", "breakout_scan", "brent", "compiled_breakout_root",
+           "compiled_breakout_scan"]
 
 _MAX_ITER = 100  # scipy's default
 
@@ -109,6 +110,51 @@ def breakout_root(guards_addr, e, mode, j, q, r, fkind, fpar, c, minv, a, b, gbu
     return root
 
 
+def breakout_scan(guards_addr, free, modes, q, fkind, fpar, c, minv, F0, ts, out, gbuf
+                  ) -> int:
+    """The scan of :meth:`lumped.solvers.stuck.StaticHold.breakout` over the sample times
+    ``ts``, with the same numbers: at each sample the forces of the static balance (``F0``
+    but the ``free`` elements', row ``r`` of those ``minv[r] @ (f(t) + c)``, the forcing
+    by the scalar formulas of its kinds) written to ``out[r]``, then every guard of every
+    free element (held on branch ``modes[e]`` at ``q[e]``) against its round-off
+    tolerance (:func:`lumped.solvers.events.guard_tolerance`). Returns the index of the
+    first sample where a guard is below its tolerance (the rows up to it written), or
+    ``-1`` when none is (all rows written)."""
+    guards = _guards_at(guards_addr)
+    N = fkind.shape[0]
+    E = F0.shape[0]
+    g = np.empty(N)
+    for r in range(ts.shape[0]):
+        t = ts[r]
+        for i in range(N):
+            k = fkind[i]
+            f = 0.0
+            if k == 1:
+                f = fpar[i, 0]
+            elif k == 2:
+                f = 0.0 if t > fpar[i, 2] else fpar[i, 0] * math.sin(fpar[i, 1] * t)
+            g[i] = f + c[i]
+        for e in range(E):
+            out[r, e] = F0[e]
+        for k in range(free.shape[0]):
+            s_ = 0.0
+            for i in range(N):
+                s_ += minv[k, i] * g[i]
+            out[r, free[k]] = s_
+        failed = False
+        for k in range(free.shape[0]):
+            e = free[k]
+            Fe = out[r, e]
+            n = guards(e, modes[e], q[e], Fe, gbuf)
+            tol = 64.0 * 2.220446049250313e-16 * (1.0 + abs(q[e]) + abs(Fe))
+            for j in range(n):
+                if gbuf[j] + tol < 0.0:
+                    failed = True
+        if failed:
+            return r
+    return -1
+
+
 def brent(f, xa: float, xb: float, xtol: float, rtol: float, maxiter: int = _MAX_ITER
           ) -> float:
     """The iteration of :func:`breakout_root` in Python on any ``f`` with ``f(xa)``,
@@ -160,6 +206,7 @@ if numba_enabled():
     _guards_at = _function_at(guards_type())
 
 _COMPILED: list = []
+_SCAN: list = []
 
 
 def compiled_breakout_root():
@@ -175,3 +222,18 @@ def compiled_breakout_root():
                  f8[::1])
         _COMPILED.append(njit(sig, cache=True)(breakout_root))
     return _COMPILED[0]
+
+
+def compiled_breakout_scan():
+    """:func:`breakout_scan` compiled once for every scene (numba's disk cache after the
+    first time on a machine), or ``None`` without numba."""
+    if not numba_enabled():
+        return None
+    if not _SCAN:
+        from numba import types as T_
+
+        f8, i8 = T_.float64, T_.int64
+        sig = i8(i8, i8[::1], i8[::1], f8[::1], i8[::1], f8[:, ::1], f8[::1], f8[:, ::1],
+                 f8[::1], f8[::1], f8[:, ::1], f8[::1])
+        _SCAN.append(njit(sig, cache=True)(breakout_scan))
+    return _SCAN[0]
