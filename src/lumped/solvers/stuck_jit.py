@@ -209,31 +209,29 @@ _COMPILED: list = []
 _SCAN: list = []
 
 
+def _compiled_once(store: list, fn, signature):
+    """``fn`` compiled with the signature ``signature(f8, i8)`` once per process (kept in
+    ``store``; numba's disk cache after the first time on a machine), or ``None``
+    without numba."""
+    if not numba_enabled():
+        return None
+    if not store:
+        from numba import types as T_
+
+        store.append(njit(signature(T_.float64, T_.int64), cache=True)(fn))
+    return store[0]
+
+
 def compiled_breakout_root():
     """:func:`breakout_root` compiled once for every scene (numba's disk cache after the
     first time on a machine), or ``None`` without numba."""
-    if not numba_enabled():
-        return None
-    if not _COMPILED:
-        from numba import types as T_
-
-        f8, i8 = T_.float64, T_.int64
-        sig = f8(i8, i8, i8, i8, f8, i8, i8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8, f8,
-                 f8[::1])
-        _COMPILED.append(njit(sig, cache=True)(breakout_root))
-    return _COMPILED[0]
+    return _compiled_once(_COMPILED, breakout_root, lambda f8, i8: f8(
+        i8, i8, i8, i8, f8, i8, i8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8, f8, f8[::1]))
 
 
 def compiled_breakout_scan():
     """:func:`breakout_scan` compiled once for every scene (numba's disk cache after the
     first time on a machine), or ``None`` without numba."""
-    if not numba_enabled():
-        return None
-    if not _SCAN:
-        from numba import types as T_
-
-        f8, i8 = T_.float64, T_.int64
-        sig = i8(i8, i8[::1], i8[::1], f8[::1], i8[::1], f8[:, ::1], f8[::1], f8[:, ::1],
-                 f8[::1], f8[::1], f8[:, ::1], f8[::1])
-        _SCAN.append(njit(sig, cache=True)(breakout_scan))
-    return _SCAN[0]
+    return _compiled_once(_SCAN, breakout_scan, lambda f8, i8: i8(
+        i8, i8[::1], i8[::1], f8[::1], i8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[::1],
+        f8[::1], f8[:, ::1], f8[::1]))
