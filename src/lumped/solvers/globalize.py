@@ -46,11 +46,29 @@ def _no_force_at(kernel, q: float, F0: float) -> bool:
     return lo < 0.0 and hi < 0.0
 
 
+#: A dashpot's rate within this many ulps of its ends' velocities is rest to
+#: :func:`force_projector` (with ``admit=True``) where its law admits the force at rest.
+_REST_ULPS = 4.0
+
+
+def _at_rest(kernel, u: list[float], a: int, b: int, q: float, F: float) -> bool:
+    """True when the rate ``q = u_b - u_a`` of a dashpot is below the rounding of its
+    ends' velocities (:data:`_REST_ULPS` ulps of the larger) and its law admits ``F`` at
+    rest on a piece flat in ``F`` (``R(0, F) = 0``, ``dR/dF = 0``: stuck)."""
+    ends = max(abs(u[a]) if a >= 0 else 0.0, abs(u[b]) if b >= 0 else 0.0)
+    if not abs(q) <= _REST_ULPS * math.ulp(ends):
+        return False
+    R, _, RF = kernel(0.0, F)
+    return R == 0.0 and RF == 0.0
+
+
 def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool = False):
     """``u -> u'``: every element's force replaced by the root of its own law at the
     elongation (rate) that ``u``'s velocities give, where the law fixes the force there
     (a stuck dashpot's force is left as is; with ``admit=True`` only if its law admits
-    it, else moved to a force it admits). See ``project`` of
+    it, else moved to a force it admits; a dashpot whose rate is below the rounding of
+    its ends' velocities reads as stuck where its law admits its force at rest,
+    :func:`_at_rest`). See ``project`` of
     :func:`~lumped.solvers.newton.newton_solve`. After each call ``project.missing``
     lists the rows of the elements whose law admits no force at their ``q`` (their
     force is left as it was)."""
@@ -76,6 +94,14 @@ def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool =
         missing = project.missing = []
         for k, a, b, is_spring, kernel in items:
             q = elongation(u, a, b, is_spring)
+            if admit and not is_spring and q != 0.0 and _at_rest(kernel, u, a, b, q, u[k]):
+                # a rate below the rounding of its ends' velocities (a junction moving
+                # with a stuck neighbour, solved an ulp or two off it), at a force the
+                # law admits at rest: stuck, its force left to Newton. Read as slipping
+                # it would jump to its yield force, and its node's balance with it
+                if free is not None:
+                    free.append((k, 0.0))
+                continue
             try:
                 if k in may_miss and _no_force_at(kernel, q, u[k]):
                     raise ValueError  # a string past its length: no root to search for

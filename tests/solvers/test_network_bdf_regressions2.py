@@ -1,0 +1,90 @@
+"""Regressions of ``bdf1`` / ``bdf2`` found by the random-network property suite (issue 11,
+session 7), each scene written out as drawn. As in ``test_network_bdf_regressions``,
+every run is checked against the laws: it completes, every value is finite and no stuck
+dashpot carries more than its yield force."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from _yield_check import check_yield
+
+from lumped import simulate
+from lumped.laws import get_law
+from lumped.scene import Element, Junction, Mass, Scene
+from lumped.solvers.impact_step import be_substep
+from lumped.solvers.newton import NewtonCode, NewtonOptions
+
+
+def _run_ok(scene: Scene, method: str, dt: float, t_end: float):
+    sol = simulate(scene, method=method, dt=dt, t_end=t_end)
+    assert sol.ok, sol.message
+    assert np.all(np.isfinite(sol.data))
+    check_yield(scene, sol)
+    return sol
+
+
+def _junction_stuck_to_a_mass_on_a_string() -> Scene:
+    """Drawn by the suite (session 6, as drawn): ``m0`` runs down and pulls ``m1`` by the
+    string ``e1`` (``L = 0.0377``); junction ``j2`` hangs on ``m1`` by a Bingham dashpot
+    ``e2`` (yield force 1, stuck) and on ``m0`` by a Herschel-Bulkley dashpot ``e4``
+    (``n = 0.3``) with a soft string ``e3`` beside it."""
+    return Scene(
+        [Mass("m0", m=0.9227538421826473, x0=-2.086289839414613e-220, v0=-1.264090566528024),
+         Mass("m1", m=0.2644046075244924, x0=-1.7041178526680463e-189,
+              v0=3.2146334072091546e-15),
+         Junction("j2", x0=1.4746358831165997e-110)],
+        [Element("e0", get_law("implicit_spring").bind(k=1.0, L0=0.9227538421826473,
+                                                       F0=9.176852061319995), "ground", "m0"),
+         Element("e1", get_law("string_spring").bind(k=2.235793320878419,
+                                                     L=0.0376977285700998), "m0", "m1"),
+         Element("e2", get_law("bingham").bind(gamma=0.974936211160075, tau=1.0), "m1", "j2"),
+         Element("e3", get_law("string_spring").bind(k=0.2644046075244924, L=1.0), "m0", "j2"),
+         Element("e4", get_law("herschel_bulkley").bind(gamma=1.9909712398533543,
+                                                        tau=0.5288589781931184, n=0.3),
+                 "m0", "j2")])
+
+
+#: The state of :func:`_junction_stuck_to_a_mass_on_a_string` at ``t = 0.03125`` (bdf2,
+#: ``dt = 0.00625``), the start of the step in which ``e1`` goes taut.
+_X5 = [-0.039068076425362655, -0.0014901253546072296, -0.0014901253546072296]
+_V5 = [-1.2375066273136315, -0.09054628515523376, -0.09054628515523376]
+_F5 = [-0.03549860057997392, 0.084016532016291, -0.6978732238129373, 0.009935783404437667,
+       0.6879374404084996]
+
+
+@pytest.mark.parametrize("dt", [0.025, 0.0125, 0.00625])
+def test_impact_beside_a_junction_stuck_to_a_mass(dt):
+    """At ``dt = 0.00625`` the run stopped with 'Newton failed (diverged)' at
+    ``t = 0.0375`` in the step where ``e1`` goes taut (it passed before session 6's
+    impact step: its first substep took ``h = t0 + dt - t0``, two ulps below ``dt``, and the
+    substep's solve fails with that ``h``, see the next test)."""
+    scene = _junction_stuck_to_a_mass_on_a_string()
+    sol = _run_ok(scene, "bdf2", dt, 0.5)
+    assert [ev.element for ev in sol.events][:1] == ["e1"]
+    assert 0.03 < sol.events[0].t < 0.035
+    q1 = sol.x["m1"] - sol.x["m0"]
+    assert q1.max() <= 0.0376977285700998 * (1 + 1e-12)
+
+
+def test_substep_reads_a_rate_below_rounding_as_rest():
+    """The backward-Euler substep across ``e1``'s lock with ``h`` two ulps below
+    ``0.00625``: plain Newton diverges (the loop ``e1``, ``e2``, ``e4``), and in the
+    globalised solve an iterate left ``j2`` one ulp off ``m1``; the projection onto the
+    laws read the stuck Bingham dashpot ``e2`` as slipping at ``1e-16`` and gave it its
+    yield force ``1.0`` instead of ``-0.54``, ``j2``'s balance failed by ``1.5`` and
+    every restart stalled ('Newton failed (diverged)'; with ``h = 0.00625`` exactly the
+    iterate fell on ``m1``'s velocity and it converged). A dashpot's rate below the
+    rounding of its ends' velocities now reads as rest where its law admits the force
+    there."""
+    scene = _junction_stuck_to_a_mass_on_a_string()
+    t0, dt = 0.031250000000000007, 0.00625
+    h = (t0 + dt) - t0
+    assert dt - h == 2 * np.spacing(h)  # two ulps below dt
+    for step in (dt, h):
+        _, v, F, res = be_substep(scene, t0 + dt, step, _X5, _V5, _F5, NewtonOptions())
+        assert res.code is NewtonCode.SUCCESS, step
+        assert v[2] == v[1]  # j2 moves with m1: e2 stuck
+        assert F[2] == pytest.approx(-0.5388266210348774, rel=1e-9)
+        assert F[1] == pytest.approx(36.53688495319027, rel=1e-9)  # e1 taut
+
