@@ -12,7 +12,7 @@ from _yield_check import check_yield
 from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.solvers.impact_step import be_substep
+from lumped.solvers.impact_step import be_substep, impact_step
 from lumped.solvers.newton import NewtonCode, NewtonOptions
 
 
@@ -88,3 +88,19 @@ def test_substep_reads_a_rate_below_rounding_as_rest():
         assert F[2] == pytest.approx(-0.5388266210348774, rel=1e-9)
         assert F[1] == pytest.approx(36.53688495319027, rel=1e-9)  # e1 taut
 
+
+def test_impact_step_starts_with_the_step_itself():
+    """The impact step's first backward-Euler substep is the whole step, ``h = dt`` (it
+    took ``t0 + dt - t0``, which may round off ``dt``: a step without a lock then differed
+    from the backward-Euler step, and the solve of the step where ``e1`` goes taut with
+    it)."""
+    scene = _junction_stuck_to_a_mass_on_a_string()
+    t0, dt = 0.031250000000000007, 0.00625 / 128  # e1 is taut from t = 0.03135 only
+    assert (t0 + dt) - t0 != dt
+    opts = NewtonOptions()
+    # a step without a lock: the same numbers
+    x1, v1, F1, res = be_substep(scene, t0 + dt, dt, _X5, _V5, _F5, opts)
+    assert res.code is NewtonCode.SUCCESS
+    done = impact_step(scene, t0, dt, _X5, _V5, _F5, set(), opts)
+    assert done.failure is None and not done.events
+    assert (done.x, done.v, done.F) == (x1, v1, F1)

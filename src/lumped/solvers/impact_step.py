@@ -140,27 +140,30 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
         out.solves += 1
         return x1, v1, F1, res
 
-    ts, xs, vs, Fs, held = t0, list(x), list(v), list(F), set(locked0)
+    # s: the time into the step reached so far, so that the first substep is the step
+    # itself (``dt``, not ``t0 + dt - t0``, which may round an ulp off it: the same
+    # system with another ``h``)
+    s, xs, vs, Fs, held = 0.0, list(x), list(v), list(F), set(locked0)
     for located in range(_MAX_IMPACTS + 1):
-        rest = t0 + dt - ts
+        rest = dt - s
         end = sub(rest, xs, vs, Fs, t0 + dt)
         if end[3].code is not NewtonCode.SUCCESS:
             out.failure, out.failure_t = end[3], t0 + dt
             return out
         new = [e for e in locking_elements(scene, *end[:3]) if e not in held]
         if (not new or located == _MAX_IMPACTS
-                or (ts > t0 and impulse_is_negligible(scene, vs, new))):
+                or (s > 0.0 and impulse_is_negligible(scene, vs, new))):
             # backward Euler locks nothing new in the rest of the step (or reaches a lock
             # at rest: a branch switch); or the impacts located in this step reached
             # _MAX_IMPACTS (an accumulation): Moreau's step to the end, the locks
             # reached there stopped below
             x1, v1, F1 = end[:3]
             break
-        located = _locate_impact(scene, ts, rest, dt, xs, vs, Fs, held, end, sub)
-        xh, v_after, Fl, s_hi, held = _apply_impact(scene, ts, located, held, restitution,
-                                                    out.events)
-        ts += s_hi
-        if t0 + dt - ts <= _LOCATE_RTOL * dt:  # the impact ends the step: forces from a hair after
+        located = _locate_impact(scene, t0 + s, rest, dt, xs, vs, Fs, held, end, sub)
+        xh, v_after, Fl, s_hi, held = _apply_impact(scene, t0 + s, located, held,
+                                                    restitution, out.events)
+        s += s_hi
+        if dt - s <= _LOCATE_RTOL * dt:  # the impact ends the step: forces from a hair after
             x1, v1, F1, res = sub(_LOCATE_RTOL * dt, xh, v_after, Fl, t0 + dt)
             if res.code is not NewtonCode.SUCCESS:
                 out.failure, out.failure_t = res, t0 + dt
