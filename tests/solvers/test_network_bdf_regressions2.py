@@ -104,3 +104,46 @@ def test_impact_step_starts_with_the_step_itself():
     done = impact_step(scene, t0, dt, _X5, _V5, _F5, set(), opts)
     assert done.failure is None and not done.events
     assert (done.x, done.v, done.F) == (x1, v1, F1)
+
+
+def _stuck_pair_in_series_beside_a_taut_string() -> Scene:
+    """Drawn by the suite (session 6, as drawn): junction ``j3`` joins a Bingham dashpot
+    ``e3`` (from ``m2``) and a Herschel-Bulkley dashpot ``e4`` (``n = 2``, to ``m0``) in
+    series, beside the string ``e2`` from ``m0`` to ``m2`` (``L = 0.0015``)."""
+    return Scene(
+        [Mass("m0", m=7.943282347242816, x0=0.5939868712819689, v0=1.6219267418760683),
+         Mass("m1", m=3.1570220713598056, x0=0.6527328550035731, v0=-0.9379809988815795),
+         Mass("m2", m=1.0441675846923544, x0=1.1948735567399157e-36, v0=1.338424618122632),
+         Junction("j3", x0=0.9673212042920198)],
+        [Element("e0", get_law("string_spring").bind(k=26.5493640501496,
+                                                     L=0.6045701633159638), "ground", "m0"),
+         Element("e1", get_law("bingham").bind(gamma=1.0, tau=0.1), "ground", "m1"),
+         Element("e2", get_law("string_spring").bind(k=30.066410226307074,
+                                                     L=0.0015109845551111612), "m0", "m2"),
+         Element("e3", get_law("bingham").bind(gamma=0.3791541014319603,
+                                               tau=0.25501528082602126), "m2", "j3"),
+         Element("e4", get_law("herschel_bulkley").bind(gamma=0.21560031682544745,
+                                                        tau=0.1573080193367457, n=2.0),
+                 "j3", "m0"),
+         Element("e5", get_law("implicit_spring").bind(k=0.21359788343041639,
+                                                       L0=0.012948296700961339, F0=1.0),
+                 "m2", "ground"),
+         Element("e6", get_law("newtonian").bind(c=0.026260127817332262), "m1", "m0")])
+
+
+@pytest.mark.parametrize("dt", [0.025, 0.0125])
+def test_stuck_pair_in_series_beside_a_taut_string(dt):
+    """``e2`` goes taut at ``t = 0.22``; after it ``j3`` moves with ``m0`` and ``m2``, both
+    dashpots stuck: their common force and the string's split the load freely (any
+    ``|F| <= 0.1573``). Newton ended at ``e4``'s yield force, where the ``n = 2`` law is
+    flat (``dR/dF -> 0``): the step matrix is nearly, not exactly, singular, every
+    correction walked ``1e-7`` along the free split and the substep after the impact
+    ran out of iterations with every residual below ``4e-15`` ('Newton failed
+    (max_iters)' at ``t = 0.225``). An iterate that passes the residual test and whose
+    correction moves no velocity (the motion determined, the forces not) is now kept."""
+    scene = _stuck_pair_in_series_beside_a_taut_string()
+    sol = _run_ok(scene, "bdf1", dt, 0.5)
+    assert "e2" in [ev.element for ev in sol.events]
+    after = sol.t > 0.23
+    assert np.all(np.abs(sol.v["j3"][after] - sol.v["m0"][after]) <= 1e-12)
+    assert np.all(np.abs(sol.F["e4"][after]) <= 0.1573080193367457 * (1 + 1e-5))

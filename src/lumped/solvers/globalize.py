@@ -460,6 +460,23 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float],
     return u
 
 
+def _motion_determined(evaluate, u: list[float], N: int, options: NewtonOptions) -> bool:
+    """True when ``u`` (velocities, then forces) passes the residual test and the
+    (minimum-norm) Newton correction there moves no velocity beyond the update test:
+    the motion is determined to tolerance, only forces are not. Newton then runs out of
+    iterations walking along a direction of forces that the residual does not see --
+    locks in parallel whose free split of the forces is pinned only by a law flat at its
+    yield force (Herschel-Bulkley ``n > 1``: ``dR/dF -> 0`` there, so the step matrix is
+    nearly, not exactly, singular and no minimum-norm step leaves the split alone)."""
+    from .newton import _equilibrated_min_norm, _update_ok
+
+    G, J, S = evaluate(u)
+    if not (math.isfinite(sum(G)) and _residual_ok(G, S, options.rtol, options.atol)):
+        return False
+    du = _equilibrated_min_norm(J, G)
+    return math.isfinite(sum(du)) and _update_ok(du[:N], u[:N], options.rtol, options.atol)
+
+
 def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: list[float],
                      F: list[float], options: NewtonOptions, *,
                      sweeps: bool = False) -> NewtonResult:
@@ -471,7 +488,9 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
 
     ``sweeps=True`` (the fixed-step methods) adds the :func:`balance_sweeps` start, keeps
     a Newton success only where the residual test holds after its last correction, and
-    accepts the swept point itself when Newton cannot polish it. The default leaves the
+    accepts the swept point itself when Newton cannot polish it; when every start runs
+    out of iterations, it keeps one whose motion is determined (:func:`_motion_determined`,
+    the forces split freely). The default leaves the
     solve as ``radau5``'s event probes were tuned with (their step control reads the
     probe's success; see the report of branch s2-netbdf)."""
     project = force_projector(scene, h, x_hat, admit=sweeps)
@@ -519,6 +538,7 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
             yield start
 
     lockable = lockable_elements(scene) if sweeps else []
+    stalled: list[NewtonResult] = []  # out of iterations (see _motion_determined)
     for start, swept in starts():
         for proj in (None, project):
             res = newton_solve(evaluate, start, options, None, min_norm=True, project=proj,
@@ -554,8 +574,17 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
                 res = NewtonResult(list(start), NewtonCode.SUCCESS, 0, 0, 0, 0, G, 0, J)
         if res.code is NewtonCode.SUCCESS:
             break
+        if res.code is NewtonCode.MAX_ITERS:
+            stalled.append(res)
     else:
         res = first
+        if sweeps:
+            for cand in stalled:
+                if _motion_determined(evaluate, cand.u, len(scene.nodes), options):
+                    res_ev += 1
+                    res = NewtonResult(list(cand.u), NewtonCode.SUCCESS, 0, 0, 0, 0,
+                                       cand.residual, 0, cand.jacobian, True)
+                    break
     res.iterations, res.residual_evals = its, res_ev
     res.jacobian_evals, res.factorizations = jac, facts
     return res
