@@ -46,11 +46,29 @@ def _no_force_at(kernel, q: float, F0: float) -> bool:
     return lo < 0.0 and hi < 0.0
 
 
+#: A dashpot's rate within this many ulps of its ends' velocities is rest to
+#: :func:`force_projector` (with ``admit=True``) where its law admits the force at rest.
+_REST_ULPS = 4.0
+
+
+def _at_rest(kernel, u: list[float], a: int, b: int, q: float, F: float) -> bool:
+    """True when the rate ``q = u_b - u_a`` of a dashpot is below the rounding of its
+    ends' velocities (:data:`_REST_ULPS` ulps of the larger) and its law admits ``F`` at
+    rest on a piece flat in ``F`` (``R(0, F) = 0``, ``dR/dF = 0``: stuck)."""
+    ends = max(abs(u[a]) if a >= 0 else 0.0, abs(u[b]) if b >= 0 else 0.0)
+    if not abs(q) <= _REST_ULPS * math.ulp(ends):
+        return False
+    R, _, RF = kernel(0.0, F)
+    return R == 0.0 and RF == 0.0
+
+
 def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool = False):
     """``u -> u'``: every element's force replaced by the root of its own law at the
     elongation (rate) that ``u``'s velocities give, where the law fixes the force there
     (a stuck dashpot's force is left as is; with ``admit=True`` only if its law admits
-    it, else moved to a force it admits). See ``project`` of
+    it, else moved to a force it admits; a dashpot whose rate is below the rounding of
+    its ends' velocities reads as stuck where its law admits its force at rest,
+    :func:`_at_rest`). See ``project`` of
     :func:`~lumped.solvers.newton.newton_solve`. After each call ``project.missing``
     lists the rows of the elements whose law admits no force at their ``q`` (their
     force is left as it was)."""
@@ -76,6 +94,14 @@ def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool =
         missing = project.missing = []
         for k, a, b, is_spring, kernel in items:
             q = elongation(u, a, b, is_spring)
+            if admit and not is_spring and q != 0.0 and _at_rest(kernel, u, a, b, q, u[k]):
+                # a rate below the rounding of its ends' velocities (a junction moving
+                # with a stuck neighbour, solved an ulp or two off it), at a force the
+                # law admits at rest: stuck, its force left to Newton. Read as slipping
+                # it would jump to its yield force, and its node's balance with it
+                if free is not None:
+                    free.append((k, 0.0))
+                continue
             try:
                 if k in may_miss and _no_force_at(kernel, q, u[k]):
                     raise ValueError  # a string past its length: no root to search for
@@ -434,6 +460,23 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float],
     return u
 
 
+def _motion_determined(evaluate, u: list[float], N: int, options: NewtonOptions) -> bool:
+    """True when ``u`` (velocities, then forces) passes the residual test and the
+    (minimum-norm) Newton correction there moves no velocity beyond the update test:
+    the motion is determined to tolerance, only forces are not. Newton then runs out of
+    iterations walking along a direction of forces that the residual does not see --
+    locks in parallel whose free split of the forces is pinned only by a law flat at its
+    yield force (Herschel-Bulkley ``n > 1``: ``dR/dF -> 0`` there, so the step matrix is
+    nearly, not exactly, singular and no minimum-norm step leaves the split alone)."""
+    from .newton import _equilibrated_min_norm, _update_ok
+
+    G, J, S = evaluate(u)
+    if not (math.isfinite(sum(G)) and _residual_ok(G, S, options.rtol, options.atol)):
+        return False
+    du = _equilibrated_min_norm(J, G)
+    return math.isfinite(sum(du)) and _update_ok(du[:N], u[:N], options.rtol, options.atol)
+
+
 def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: list[float],
                      F: list[float], options: NewtonOptions, *,
                      sweeps: bool = False) -> NewtonResult:
@@ -445,7 +488,9 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
 
     ``sweeps=True`` (the fixed-step methods) adds the :func:`balance_sweeps` start, keeps
     a Newton success only where the residual test holds after its last correction, and
-    accepts the swept point itself when Newton cannot polish it. The default leaves the
+    accepts the swept point itself when Newton cannot polish it; when every start runs
+    out of iterations, it keeps one whose motion is determined (:func:`_motion_determined`,
+    the forces split freely). The default leaves the
     solve as ``radau5``'s event probes were tuned with (their step control reads the
     probe's success; see the report of branch s2-netbdf)."""
     project = force_projector(scene, h, x_hat, admit=sweeps)
@@ -493,6 +538,7 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
             yield start
 
     lockable = lockable_elements(scene) if sweeps else []
+    stalled: list[NewtonResult] = []  # out of iterations (see _motion_determined)
     for start, swept in starts():
         for proj in (None, project):
             res = newton_solve(evaluate, start, options, None, min_norm=True, project=proj,
@@ -528,8 +574,17 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
                 res = NewtonResult(list(start), NewtonCode.SUCCESS, 0, 0, 0, 0, G, 0, J)
         if res.code is NewtonCode.SUCCESS:
             break
+        if res.code is NewtonCode.MAX_ITERS:
+            stalled.append(res)
     else:
         res = first
+        if sweeps:
+            for cand in stalled:
+                if _motion_determined(evaluate, cand.u, len(scene.nodes), options):
+                    res_ev += 1
+                    res = NewtonResult(list(cand.u), NewtonCode.SUCCESS, 0, 0, 0, 0,
+                                       cand.residual, 0, cand.jacobian, True)
+                    break
     res.iterations, res.residual_evals = its, res_ev
     res.jacobian_evals, res.factorizations = jac, facts
     return res

@@ -19,13 +19,13 @@ the lock (the impulse that would stop them is not negligible). Then, from the st
    :class:`~lumped.solvers.status.Event` (``kind="impact"``), the energy split among them
    as ``P_e * rate_e`` (their shares of ``1/2 P^T B v``).
 3. **Finish.** One backward-Euler substep from ``t_n + s_hi`` to ``t_{n+1}`` with the new
-   velocities. If it locks another element (not negligibly: a second string taut within
-   the step), steps 1-2 locate and apply that impact on the rest of the step, in turn
-   (at most :data:`_MAX_IMPACTS`; beyond, the step is Moreau's). Elements locked at the
-   end get rate zero; where that is more than round-off, the forces come from a
-   substep a hair long from the stopped velocities (a dashpot beside the lock follows
-   its new rate). The caller restarts the multistep history (BDF2 takes a BDF1 step
-   next).
+   velocities (where its Newton fails, 2 to 16 of them: :func:`halved_steps`). If it
+   locks another element (not negligibly: a second string taut within the step), steps
+   1-2 locate and apply that impact on the rest of the step, in turn (at most
+   :data:`_MAX_IMPACTS`; beyond, the step is Moreau's). Elements locked at the end get
+   rate zero; where that is more than round-off, the forces come from a substep a hair
+   long from the stopped velocities (a dashpot beside the lock follows its new rate). The
+   caller restarts the multistep history (BDF2 takes a BDF1 step next).
 
 Every substep is a backward-Euler step, dissipative for passive laws, and the impulse
 only removes energy, so the energy ledger never gains. Backward Euler *across* the lock
@@ -140,27 +140,46 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
         out.solves += 1
         return x1, v1, F1, res
 
-    ts, xs, vs, Fs, held = t0, list(x), list(v), list(F), set(locked0)
+    def to_end(s: float, xs, vs, Fs):
+        # the substep over the rest of the step; where its Newton fails, the rest as
+        # 2 to 16 backward-Euler substeps (halved_steps: closer starts, as the caller's
+        # last resort for a whole step; a lock reached inside them is Moreau's, stopped
+        # at the end below)
+        end = sub(dt - s, xs, vs, Fs, t0 + dt)
+        if end[3].code is NewtonCode.SUCCESS:
+            return end
+        halved = halved_steps(scene, t0 + s, dt - s, xs, vs, Fs, options)
+        if halved is None:
+            return end
+        out.newton_iterations += halved[3]
+        res = NewtonResult(list(halved[1]) + list(halved[2]), NewtonCode.SUCCESS,
+                           halved[3], 0, 0, 0, [], 0, [])
+        return halved[0], halved[1], halved[2], res
+
+    # s: the time into the step reached so far, so that the first substep is the step
+    # itself (``dt``, not ``t0 + dt - t0``, which may round an ulp off it: the same
+    # system with another ``h``)
+    s, xs, vs, Fs, held = 0.0, list(x), list(v), list(F), set(locked0)
     for located in range(_MAX_IMPACTS + 1):
-        rest = t0 + dt - ts
-        end = sub(rest, xs, vs, Fs, t0 + dt)
+        rest = dt - s
+        end = to_end(s, xs, vs, Fs)
         if end[3].code is not NewtonCode.SUCCESS:
             out.failure, out.failure_t = end[3], t0 + dt
             return out
         new = [e for e in locking_elements(scene, *end[:3]) if e not in held]
         if (not new or located == _MAX_IMPACTS
-                or (ts > t0 and impulse_is_negligible(scene, vs, new))):
+                or (s > 0.0 and impulse_is_negligible(scene, vs, new))):
             # backward Euler locks nothing new in the rest of the step (or reaches a lock
             # at rest: a branch switch); or the impacts located in this step reached
             # _MAX_IMPACTS (an accumulation): Moreau's step to the end, the locks
             # reached there stopped below
             x1, v1, F1 = end[:3]
             break
-        located = _locate_impact(scene, ts, rest, dt, xs, vs, Fs, held, end, sub)
-        xh, v_after, Fl, s_hi, held = _apply_impact(scene, ts, located, held, restitution,
-                                                    out.events)
-        ts += s_hi
-        if t0 + dt - ts <= _LOCATE_RTOL * dt:  # the impact ends the step: forces from a hair after
+        located = _locate_impact(scene, t0 + s, rest, dt, xs, vs, Fs, held, end, sub)
+        xh, v_after, Fl, s_hi, held = _apply_impact(scene, t0 + s, located, held,
+                                                    restitution, out.events)
+        s += s_hi
+        if dt - s <= _LOCATE_RTOL * dt:  # the impact ends the step: forces from a hair after
             x1, v1, F1, res = sub(_LOCATE_RTOL * dt, xh, v_after, Fl, t0 + dt)
             if res.code is not NewtonCode.SUCCESS:
                 out.failure, out.failure_t = res, t0 + dt
