@@ -669,3 +669,28 @@ def test_a_string_taut_at_rest_holds_in_tension_through_an_impact():
     assert [e for e, _ in hits] == [1]
     assert abs(v[0]) < 1e-15 and abs(v[1]) < 1e-15  # both strings hold: m1 stops
     assert lost == pytest.approx(0.5 * 1.2232837324267816**2)
+
+
+def test_a_guard_that_crosses_and_returns_inside_a_landing_step_is_landed_on():
+    # a stuck Coulomb element whose balance force (a spring to an oscillating mass)
+    # leaves its yield force at t = 0.0207 and comes back at 0.087, both inside one long
+    # step: the landing bracket read each trial step by its end, where the guard was back
+    # above 0, so the bracket closed on the long step and the break-out was lost (the
+    # force stayed beyond tau by 1.4e-3, with the mass stuck). At rtol 1e-4 and 1e-5 the
+    # break-out was found; at 3.9e-5 it was not
+    coulomb = get_law("coulomb").bind(tau=1.0, r=1.0)
+    scene = Scene(
+        [Mass("m0", m=1.0, x0=-1.124538260045208e-135, v0=-1.733521124011725e-08),
+         Mass("m1", m=1.0, x0=-0.38404183255501934, v0=-1.762036780909611),
+         Mass("m2", m=0.17402353454232555, x0=-0.9961246114212505, v0=-0.24647424248462668)],
+        [Element("e0", coulomb, "ground", "m0"), Element("e1", coulomb, "ground", "m1"),
+         Element("e2", get_law("linear_spring").bind(k=1.0), "m0", "m2")])
+    dt = 0.025
+    for k in range(3):
+        h = dt / 2**k
+        sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3)
+        assert sol.ok, sol.message
+        slips = [ev.t for ev in sol.events if ev.element == "e0" and ev.from_branch == 2]
+        assert len(slips) == 1 and abs(slips[0] - 0.0207122880) < 1e-7, (k, sol.events)
+        scale = np.abs(sol.forces).max(axis=1)
+        assert np.all(np.abs(sol.F["e0"]) <= 1.0 + h**2 * scale), k

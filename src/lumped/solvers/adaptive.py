@@ -471,7 +471,10 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             width = 8.0 * _EPS * max(1.0, abs(t))
             if not (abs(g_end) <= tol or h_hi - h_lo <= width or count >= 40):
                 target[5] += 1
-                if g_end < 0.0:
+                # the guard also crosses inside this step while its end is back above 0
+                # (a stuck dashpot's balance force leaving its cone and returning within
+                # the step): the step is too long, as when its end has crossed
+                if g_end < 0.0 or (hit is not None and hit[1] == which and hit[0] < 1.0):
                     target[3], target[4] = h, g_end
                     target[6] = -1
                     h = (hit[0] * h if hit is not None and hit[1] == which and 0.0 < hit[0] < 1.0
