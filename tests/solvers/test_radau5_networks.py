@@ -694,3 +694,28 @@ def test_a_guard_that_crosses_and_returns_inside_a_landing_step_is_landed_on():
         assert len(slips) == 1 and abs(slips[0] - 0.0207122880) < 1e-7, (k, sol.events)
         scale = np.abs(sol.forces).max(axis=1)
         assert np.all(np.abs(sol.F["e0"]) <= 1.0 + h**2 * scale), k
+
+
+def test_a_slow_mass_whose_string_goes_taut_a_hair_late_is_snapped_onto_it():
+    # a heavy mass almost at rest (6.4e-5) reaches its string's length; the event was
+    # located with the string 1.2e-7 past L, within the step's position tolerance but
+    # outside the snap's sqrt(eps): the mass kept its rate against the taut string, the
+    # probe held it with a force of 1.3e11 and every step failed down to the step floor
+    law = get_law
+    scene = Scene(
+        [Mass("m0", m=10.0, x0=1e-12, v0=1.314209804400602),
+         Mass("m1", m=0.16470968188876567, x0=3.917196422275486e-250, v0=-0.06928624975491404)],
+        [Element("e0", law("string_spring").bind(k=0.18966718114616846, L=0.10000000000100001),
+                 "ground", "m0"),
+         Element("e1", law("newtonian").bind(c=0.5025570804986731), "ground", "m1"),
+         Element("e2", law("newtonian").bind(c=0.021807326977119457), "m0", "ground"),
+         Element("e3", law("string_spring").bind(k=3.499626895447252, L=0.005346361724370207),
+                 "m1", "m0")])
+    h = 0.025
+    sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3)
+    assert sol.ok, sol.message
+    taut = [ev.t for ev in sol.events if ev.element == "e0" and ev.to_branch == 1]
+    assert abs(taut[-1] - 0.10527) < 1e-4, sol.events
+    after = sol.t > taut[-1]
+    assert np.all(np.abs(sol.v["m0"][after]) < 1e-12)  # held by the string
+    assert np.all(np.abs(sol.x["m0"][after] - 0.10000000000100001) < h**3)

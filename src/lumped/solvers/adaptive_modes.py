@@ -113,7 +113,8 @@ class ModeState:
         h0 = h_probe
         v_free, held = list(v), []
         if cause == "guard":  # rates within the tolerance of a lock: exactly on it
-            held = snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v))
+            held = snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v),
+                                 atol + rtol * max(abs(xi) for xi in x))
         hint = self.hint
         sel = self._choose(t, h_probe, cause, x, v, F)
         if isinstance(sel, str):

@@ -258,14 +258,18 @@ def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
 
 
 def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[float],
-                  F: list[float], tol: float) -> list[int]:
+                  F: list[float], tol: float, tol_x: float = 0.0) -> list[int]:
     r"""Put every element that sits on a lock, up to the step's tolerance, exactly on it.
 
     An element is *on a lock* at an event when one of its law's locking branches with a
     known value ``L`` (:attr:`BranchInfo.locks`, ``lock_value``; a stuck dashpot,
     ``q' = 0``, or a taut string, ``q = L``) admits its force (every guard of that branch
     at ``(L, F_e)`` above ``-sqrt(eps) (1 + |F_e|)``) and its rate is within ``tol`` of the
-    lock's rate (``|q - L| <= tol`` for a dashpot, ``|q'| <= tol`` for a spring).
+    lock's rate (``|q - L| <= tol`` for a dashpot, ``|q'| <= tol`` for a spring, whose
+    elongation must also be within ``max(sqrt(eps) (1 + |L|), tol_x)`` of ``L``: a slow
+    mass whose string's length was located ``1.2e-7`` late, within the step's position
+    tolerance ``tol_x``, kept its rate of ``6e-5`` against the taut string, and every
+    step from there failed down to the step floor).
 
     The velocities ``v`` are moved, in place, to the nearest ones in the kinetic-energy norm
     that hold all those rates exactly (:func:`lumped.solvers.impacts` with targets: momentum
@@ -295,7 +299,8 @@ def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[floa
                 continue
             dashpot = el.kind == "dashpot"
             off = rate - L if dashpot else rate
-            if abs(off) > tol or (not dashpot and abs(q_x[e] - L) > slack * (1.0 + abs(L))):
+            if abs(off) > tol or (not dashpot and abs(q_x[e] - L) > max(
+                    slack * (1.0 + abs(L)), tol_x)):
                 continue
             gs = lb.guards_for(info.index)(L if dashpot else q_x[e], F[e])
             if all(g >= -slack * (1.0 + abs(F[e])) for g in gs):
