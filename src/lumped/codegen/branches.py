@@ -143,7 +143,7 @@ class LawBranches:
         self.count = len(infos)
         self.branch: Callable[[float, float], int] = _build_selector(
             _decision_tree(residual), number)
-        self._kernels: dict[tuple[int, bool, bool], Callable] = {}
+        self._kernels: dict[tuple, Callable | None] = {}
         self._guards: dict[int, Callable] = {}
 
     def kernel_for(self, i: int) -> Callable[[float, float], tuple[float, float, float]]:
@@ -228,10 +228,11 @@ class LawBranches:
         ``|F| - tau`` is below ``ulp(tau)`` (rates below ``gamma ulp(tau)^n``, ``1e-5``
         here), so no Newton iterate meets its residual test; the inverse form gives the
         force to its rounding. Has ``.magnitude`` like the kernels."""
-        hit = self._kernels.get(("law", law_kernel))
-        if hit is None and all(info.stage is None for info in self.info):
-            return None
-        if hit is None:
+        key = ("law", law_kernel)
+        if key in self._kernels:
+            return self._kernels[key]
+        hit = None
+        if any(info.stage is not None for info in self.info):
             forms = tuple(self.stage_kernel_for(i) if info.stage is not None else law_kernel
                           for i, info in enumerate(self.info))
             branch = self.branch
@@ -246,7 +247,8 @@ class LawBranches:
                 return math.inf if mag is None else mag(q, F)
 
             kernel.magnitude = magnitude  # type: ignore[attr-defined]
-            hit = self._kernels[("law", law_kernel)] = kernel
+            hit = kernel
+        self._kernels[key] = hit
         return hit
 
     def _check(self, i: object) -> int:

@@ -474,11 +474,11 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 # the guard also crosses inside this step while its end is back above 0
                 # (a stuck dashpot's balance force leaving its cone and returning within
                 # the step): the step is too long, as when its end has crossed
-                if g_end < 0.0 or (hit is not None and hit[1] == which and hit[0] < 1.0):
+                inside = hit is not None and hit[1] == which and hit[0] < 1.0
+                if g_end < 0.0 or inside:
                     target[3], target[4] = h, g_end
                     target[6] = -1
-                    h = (hit[0] * h if hit is not None and hit[1] == which and 0.0 < hit[0] < 1.0
-                         else 0.5 * (h_lo + h))
+                    h = hit[0] * h if inside and hit[0] > 0.0 else 0.5 * (h_lo + h)
                     if h - h_lo <= 1e-2 * (target[3] - h_lo):
                         # the step's polynomial puts the root a hair past the end that
                         # held, again and again where the guard is flat at its root (a

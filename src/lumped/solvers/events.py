@@ -184,17 +184,15 @@ def _branch_read(lb, q: float, F: float, steep: bool) -> int:
     left again at once, an event every ``1e-6`` s. The branch whose residual holds to
     round-off of its terms is the one the probe solved."""
     i = lb.branch(q, F)
-    if not steep:
+
+    def holds(j: int) -> bool:
+        k = lb.stage_kernel_for(j)
+        return abs(k(q, F)[0]) <= 8.0 * _EPS * k.magnitude(q, F)
+
+    if not steep or holds(i):
         return i
-    R = lb.stage_kernel_for(i)(q, F)[0]
-    if abs(R) <= 8.0 * _EPS * lb.stage_kernel_for(i).magnitude(q, F):
-        return i
-    for j, info in enumerate(lb.info):
-        if info.stage is not None:
-            k = lb.stage_kernel_for(j)
-            if abs(k(q, F)[0]) <= 8.0 * _EPS * k.magnitude(q, F):
-                return j
-    return i
+    return next((j for j, info in enumerate(lb.info) if info.stage is not None and holds(j)),
+                i)
 
 
 def _accept_at_roundoff(res: NewtonResult, evaluate, options: NewtonOptions) -> NewtonResult:
@@ -286,7 +284,7 @@ def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[floa
     """
     from .impacts import _solve
 
-    slack = math.sqrt(2.220446049250313e-16)
+    slack = math.sqrt(_EPS)
     held, target = [], []
     q_x = scene.elongations(x, [0.0] * len(x))
     for e, el in enumerate(scene.elements):

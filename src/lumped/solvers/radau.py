@@ -69,13 +69,18 @@ def _solver(J: list[list[float]]) -> Callable[[list[float]], list[float]]:
     return min_norm_solver(J)
 
 
+def _row_scale(row: list[float], scale: list[float]) -> float:
+    """``sum_j |J_ij| scale_j``: how much row ``i`` of the stage system changes when every
+    unknown moves by its tolerance ``scale_j``."""
+    return sum(abs(a) * sc for a, sc in zip(row, scale, strict=True))
+
+
 def _solves(G: list[float], J: list[list[float]], scale: list[float], tol: float) -> bool:
     """Whether the residual ``G`` is one a Newton correction within the convergence test
     removes: ``|G_i| <= 10 tol sum_j |J_ij| scale_j`` on every row (a row that no
     unknown enters must be zero to round-off)."""
     for g, row in zip(G, J, strict=True):
-        bound = 10.0 * tol * sum(abs(a) * sc for a, sc in zip(row, scale, strict=True))
-        if not abs(g) <= bound + 1e-300:
+        if not abs(g) <= 10.0 * tol * _row_scale(row, scale) + 1e-300:
             return False
     return True
 
@@ -419,10 +424,11 @@ class StageSystem:
         (F - tau)^n``): the force then grows like ``(q / gamma)^{1/n}``, ``sqrt(h)`` for
         ``n = 2``, and the full Newton step from the end overshoots it by ``h^{-1/2}``,
         after which the iterates come back only by halving, more slowly the shorter the
-        step. Each iteration here takes ``U - lam dU`` with ``lam = 1, 1/2, ...`` until
-        the merit ``phi = max_i |G_i| / S_i``, ``S_i = sum_j |J_ij| scale_j`` (the rows'
-        change per tolerance of the unknowns, fixed within one line search), falls by at
-        least ``1e-4 lam``; it stops when the correction is within the convergence test,
+        step. Each iteration solves ``J dU = -G`` and takes ``U + lam dU`` with ``lam = 1,
+        1/2, ...`` until the merit ``phi = max_i |G_i| / S_i``, ``S_i = sum_j |J_ij|
+        scale_j`` (the rows' change per tolerance of the unknowns, fixed within one line
+        search), falls by at least ``1e-4 lam``; it stops when the correction is within the
+        convergence test,
         and :meth:`solve` then converges from there by its own test (the stage this
         returns is one :meth:`solve` accepts). Returns ``(U or None, iterations,
         factorisations)``.
@@ -430,8 +436,7 @@ class StageSystem:
         its = 0
         for _ in range(4 * max_iters):
             G, J = self.evaluate(U, h, x_n, v_n, f, kernels)
-            S = [sum(abs(a) * sc for a, sc in zip(row, scale, strict=True)) + 1e-300
-                 for row in J]
+            S = [_row_scale(row, scale) + 1e-300 for row in J]
             phi = max(abs(g) / s for g, s in zip(G, S, strict=True))
             if not math.isfinite(phi):
                 return None, its, its
