@@ -77,3 +77,16 @@ def check_yield(scene: Scene, sol, force_tol: float = 0.0, rate_tol: float = 0.0
             S = _law_scale(el.law.kernel, float(q_signed[i]), Fi, R, Rq, RF)
             stuck_above[i] = abs(R) > 2.0 * (1e-10 * S + 1e-12)
         assert not stuck_above.any(), f"{el.name} stuck above its yield force"
+
+
+def run_checked(scene: Scene, method: str, dt: float, t_end: float):
+    """``simulate(scene, method=method, dt=dt, t_end=t_end)``, checked against the laws:
+    it completes, every value is finite and no stuck dashpot carries more than its yield
+    force (:func:`check_yield`, strict). Returns the solution."""
+    from lumped import simulate
+
+    sol = simulate(scene, method=method, dt=dt, t_end=t_end)
+    assert sol.ok, sol.message
+    assert np.all(np.isfinite(sol.data))
+    check_yield(scene, sol)
+    return sol

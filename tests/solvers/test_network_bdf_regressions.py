@@ -10,19 +10,11 @@ import math
 import numpy as np
 import pytest
 from _convergence import assert_converges
-from _yield_check import check_yield
+from _yield_check import run_checked as _run_ok
 
 from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-
-
-def _run_ok(scene: Scene, method: str, dt: float, t_end: float):
-    sol = simulate(scene, method=method, dt=dt, t_end=t_end)
-    assert sol.ok, sol.message
-    assert np.all(np.isfinite(sol.data))
-    check_yield(scene, sol)
-    return sol
 
 
 def _regularised_friction_at_its_kink() -> Scene:

@@ -7,21 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _yield_check import check_yield
+from _yield_check import run_checked as _run_ok
 
-from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
 from lumped.solvers.impact_step import be_substep, impact_step
 from lumped.solvers.newton import NewtonCode, NewtonOptions
-
-
-def _run_ok(scene: Scene, method: str, dt: float, t_end: float):
-    sol = simulate(scene, method=method, dt=dt, t_end=t_end)
-    assert sol.ok, sol.message
-    assert np.all(np.isfinite(sol.data))
-    check_yield(scene, sol)
-    return sol
 
 
 def _junction_stuck_to_a_mass_on_a_string() -> Scene:
