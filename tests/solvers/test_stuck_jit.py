@@ -40,6 +40,24 @@ def test_brent_takes_the_steps_of_scipy_brentq():
     assert compared > 800
 
 
+def _runs_through(method: str, record, names: tuple[str, ...]) -> None:
+    """Run ``radau5`` (compiled) on the bench scenes ``names`` at rtol 1e-4 and 1e-9 and
+    on a 3-mass chain, with :class:`~lumped.solvers.stuck.StaticHold`'s ``method``
+    replaced by ``record`` for the runs; every run must succeed."""
+    scenes = {s.name: s for s in PAPER_SCENES + OWN_SCENES}
+    runs = [(generic_scene(scenes[name]), rtol) for name in names for rtol in (1e-4, 1e-9)]
+    runs.append((bingham_chain(3), 1e-6))
+    keep = getattr(stuck.StaticHold, method)
+    setattr(stuck.StaticHold, method, record)
+    try:
+        for scene, rtol in runs:
+            sol = simulate(scene, method="radau5", t_end=5.0, rtol=rtol, atol=1e-2 * rtol,
+                           compiled=True)
+            assert sol.ok, sol.message
+    finally:
+        setattr(stuck.StaticHold, method, keep)
+
+
 @pytest.mark.skipif(not numba_enabled(), reason="needs numba")
 def test_compiled_breakout_root_agrees_with_the_reference():
     calls = []
@@ -50,18 +68,7 @@ def test_compiled_breakout_root_agrees_with_the_reference():
         calls.append((self, e, j, guard, a, b, list(modes), fast))
         return keep(self, e, j, guard, a, b, modes, fast)
 
-    scenes = {s.name: s for s in PAPER_SCENES + OWN_SCENES}
-    runs = [(generic_scene(scenes[name]), 5.0, rtol) for name in
-            ("stick-breakout", "forcing-F2", "high-yield-forced") for rtol in (1e-4, 1e-9)]
-    runs.append((bingham_chain(3), 5.0, 1e-6))
-    stuck.StaticHold._root = record
-    try:
-        for scene, t_end, rtol in runs:
-            sol = simulate(scene, method="radau5", t_end=t_end, rtol=rtol,
-                           atol=1e-2 * rtol, compiled=True)
-            assert sol.ok, sol.message
-    finally:
-        stuck.StaticHold._root = keep
+    _runs_through("_root", record, ("stick-breakout", "forcing-F2", "high-yield-forced"))
     assert len(calls) >= 20
     root = compiled_breakout_root()
     for hold, e, j, guard, a, b, modes, fast in calls:
@@ -88,19 +95,8 @@ def test_compiled_breakout_scan_agrees_with_the_reference():
         calls.append((self, t0, t1, list(guards), list(modes), fast))
         return keep(self, t0, t1, guards, modes, fast)
 
-    scenes = {s.name: s for s in PAPER_SCENES + OWN_SCENES}
-    runs = [(generic_scene(scenes[name]), 5.0, rtol) for name in
-            ("stick-breakout", "forcing-F1", "forcing-F2", "high-yield-forced")
-            for rtol in (1e-4, 1e-9)]
-    runs.append((bingham_chain(3), 5.0, 1e-6))
-    stuck.StaticHold.breakout = record
-    try:
-        for scene, t_end, rtol in runs:
-            sol = simulate(scene, method="radau5", t_end=t_end, rtol=rtol,
-                           atol=1e-2 * rtol, compiled=True)
-            assert sol.ok, sol.message
-    finally:
-        stuck.StaticHold.breakout = keep
+    _runs_through("breakout", record,
+                  ("stick-breakout", "forcing-F1", "forcing-F2", "high-yield-forced"))
     scanned = broke = 0
     for hold, t0, t1, guards, modes, fast in calls:
         assert fast is not None
