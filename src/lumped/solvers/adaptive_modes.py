@@ -182,13 +182,27 @@ class ModeState:
         sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
                          modes if cause == "guard" else None, 3, self.fast)
                if guess else None) or ""
+        if sel:
+            sel = self._locked(sel, h_probe)
+            if cause == "guard" and sel[0] == modes:  # the locks undid the guess: undecided
+                sel = ""
         for _ in range(0 if sel else 3):
             sel = select_modes(scene, lbs, t, x, v, F, h_probe, self.settings.options)
-            if not isinstance(sel, str) and (sel[0] != modes or cause != "guard"):
-                break
+            if not isinstance(sel, str):
+                # (a mode the locks below turn back into the old one is undecided too: a
+                # slow break-out of locks in parallel under a load just past their joint
+                # yield force moves the probe by less than its round-off, issue 11)
+                sel = self._locked(sel, h_probe)
+                if sel[0] != modes or cause != "guard":
+                    break
             h_probe *= 1000.0  # a failed or undecided probe: a longer one
-        if isinstance(sel, str):
-            return sel
+        return sel
+
+    def _locked(self, sel: tuple, h_probe: float) -> tuple[list[int], list[float], list[float]]:
+        """The probe's ``(modes, v_p, F_p)`` with the dashpots that sit on a lock put on it
+        (:func:`~lumped.solvers.locks.prefer_locks`,
+        :func:`~lumped.solvers.locks.lock_parallel_rates`; ``h_probe`` the probe's size)."""
+        scene, lbs = self.scene, self.lbs
         new, v_p, F_p = sel
         new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked
         # held at rate 0 by locks: locked, unless the probe moved it by more than the
