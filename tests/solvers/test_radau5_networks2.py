@@ -53,3 +53,73 @@ def test_two_stuck_dashpots_in_parallel_break_out_when_the_load_passes_their_yie
     assert np.all(np.abs(sol.F["e2"][stuck]) <= tau2 * (1 + 1e-9))
     assert np.all(np.abs(sol.F["e4"][stuck]) <= tau4 * (1 + 1e-9))
 
+
+def test_a_junction_on_a_flat_inverse_law_beside_stuck_coulombs_in_parallel_keeps_its_rate():
+    # j1 hangs between m0 (Herschel-Bulkley n = 0.3, inverse form F = tau + |q|^(10/3),
+    # dF/dq ~ 1e-7 at the break-out) and a spring to ground; j2 holds two stuck Coulomb
+    # elements in parallel (the cone split's SVD). The SVD cut the junction's direction
+    # off as round-off beside the momentum rows' m / h: the first step after e1 broke
+    # out accepted a junction rate of the wrong sign (+6e-4 on the branch q < 0) and
+    # every later step crept on at 3.6e-7 s (max_steps; the counter's 60 s alarm)
+    tau = 0.010614095485446463
+    scene = Scene([
+        Mass("m0", m=1.0001405485169472, x0=-0.17328328611832133, v0=1.0774640836450446),
+        Junction("j1", x0=-0.1804960787915475),
+        Junction("j2", x0=0.0),
+    ], [
+        Element("e0", get_law("linear_spring").bind(k=1.0000000000000004), "ground", "m0"),
+        Element("e1", _hb(1.0, tau, 0.3), "m0", "j1"),
+        Element("e2", get_law("coulomb").bind(tau=1.0, r=1.0000002744895709), "ground", "j2"),
+        Element("e3", get_law("coulomb").bind(tau=0.9138644183592107, r=1.0), "ground", "j2"),
+        Element("e4", get_law("implicit_spring").bind(k=0.7439900506230841,
+                                                      L0=0.9999999999999982, F0=1.0),
+                "ground", "j1"),
+    ])
+    h = 0.00625
+    sol = simulate(scene, method="radau5", t_end=0.5, rtol=h**2, atol=h**3, compiled=False,
+                   max_steps=3000)
+    assert sol.ok, sol.message
+    assert [(ev.element, ev.to_branch) for ev in sol.events] == [("e1", 2), ("e1", 1)]
+    assert sol.stats["steps"] < 300
+    # after the break-out (F1 < -tau) the junction's rate is the law's, -(-F1 - tau)^0.3
+    after = sol.t > sol.events[-1].t
+    q = sol.v["j1"][after] - sol.v["m0"][after]
+    F = sol.F["e1"][after]
+    assert np.all(F < -tau)
+    assert np.abs(q + (-F - tau) ** 0.3).max() < 1e-3
+
+
+def _junction_cluster(tau1: float, gamma3: float) -> Scene:
+    """m0 -- Herschel-Bulkley n = 0.3 -- j1; j1 -- Bingham -- m2; j1 == (Bingham,
+    Coulomb in parallel) == m3: a steep law at a junction whose other elements lock."""
+    return Scene([
+        Mass("m0", m=0.4774341883400247, x0=3.371716589233411e-260, v0=0.12539427799118164),
+        Junction("j1", x0=-0.8361908079312412),
+        Mass("m2", m=0.20592644056911513, x0=-0.8307460714136052, v0=-0.287918863922783),
+        Mass("m3", m=0.1801361680294782, x0=0.3708016747638967, v0=1.1025852121268356),
+    ], [
+        Element("e0", get_law("bingham").bind(gamma=2.765689799139861,
+                                              tau=0.041610545358690236), "ground", "m0"),
+        Element("e1", _hb(1.4729829508888326, tau1, 0.3), "m0", "j1"),
+        Element("e2", get_law("bingham").bind(gamma=0.785672402217626, tau=1.0), "j1", "m2"),
+        Element("e3", get_law("bingham").bind(gamma=gamma3, tau=0.9999999999976974),
+                "j1", "m3"),
+        Element("e4", get_law("coulomb").bind(tau=0.3224563340216885, r=76.22061067912826),
+                "m3", "j1"),
+    ])
+
+
+def test_a_junction_cluster_on_a_steep_law_does_not_chatter():
+    # e3 and e4 stuck in parallel between j1 and m3 (the cone split), j1 driven through
+    # Herschel-Bulkley n = 0.3: the cone split's SVD cut off the junction's direction as
+    # round-off (see above), and e1 and e4 switched back and forth, 50 events within
+    # 0 s at t = 0.1848 (TOO_MANY_EVENTS)
+    scene = _junction_cluster(0.3224563340216885, 0.1801361680294782)
+    dt = 0.005013723136470163
+    for k in range(3):
+        h = dt / 2**k
+        sol = simulate(scene, method="radau5", dt=h, t_end=40 * dt, rtol=h**2, atol=h**3,
+                       compiled=False)
+        assert sol.ok, (k, sol.message)
+        assert len(sol.events) < 10, (k, sol.events)
+
