@@ -123,3 +123,18 @@ def test_a_junction_cluster_on_a_steep_law_does_not_chatter():
         assert sol.ok, (k, sol.message)
         assert len(sol.events) < 10, (k, sol.events)
 
+
+def test_a_probe_that_diverges_at_every_longer_size_is_tried_shorter():
+    # at t = 0.1006 e2 sticks, locking j1, m2 and m3 together beside the junction's
+    # Herschel-Bulkley n = 0.3 dashpot; the mode probe's semismooth Newton diverged at
+    # 4.3e-9 s and at the 1000 and 10^6 times longer retries ("no motion continues"),
+    # and converges at 1e-10 s
+    scene = _junction_cluster(0.060882384620514485, 8.343152218504505)
+    dt = 0.020537380016798674
+    for k in range(3):
+        h = dt / 2**k
+        sol = simulate(scene, method="radau5", dt=h, t_end=25 * dt, rtol=h**2, atol=h**3,
+                       compiled=False)
+        assert sol.ok, (k, sol.message)
+        stick = [ev.t for ev in sol.events if ev.element == "e2" and ev.to_branch == 2]
+        assert stick and abs(stick[0] - 0.10056) < 1e-4, (k, sol.events)

@@ -178,6 +178,7 @@ class ModeState:
         one fails or keeps the mode at a guard), the elements held at rate 0 put on their
         locks; or the failure message."""
         scene, lbs, modes = self.scene, self.lbs, self.modes
+        h0 = h_probe
         guess = self._guesses(cause, x, v, F)
         sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
                          modes if cause == "guard" else None, 3, self.fast)
@@ -196,6 +197,16 @@ class ModeState:
                 if sel[0] != modes or cause != "guard":
                     break
             h_probe *= 1000.0  # a failed or undecided probe: a longer one
+        if isinstance(sel, str):
+            # every probe failed: shorter ones, nearer the start (the semismooth Newton
+            # diverged at 4e-9 s and longer where a stuck Bingham dashpot joined a
+            # junction's Herschel-Bulkley n = 0.3 dashpot and locks in parallel, and
+            # converged at 1e-10 s; issue 11)
+            for k in (1, 2):
+                h_short = max(h0 * 1e-2**k, 1e2 * _EPS * max(1.0, abs(t)))
+                got = select_modes(scene, lbs, t, x, v, F, h_short, self.settings.options)
+                if not isinstance(got, str):
+                    return self._locked(got, h_short)
         return sel
 
     def _locked(self, sel: tuple, h_probe: float) -> tuple[list[int], list[float], list[float]]:
