@@ -138,3 +138,47 @@ def test_a_probe_that_diverges_at_every_longer_size_is_tried_shorter():
         assert sol.ok, (k, sol.message)
         stick = [ev.t for ev in sol.events if ev.element == "e2" and ev.to_branch == 2]
         assert stick and abs(stick[0] - 0.10056) < 1e-4, (k, sol.events)
+
+
+def _coulomb_junction_scene() -> Scene:
+    """m0 held to ground by Herschel-Bulkley n = 0.3 and n = 1.5 dashpots, and by a
+    Coulomb element to a junction j1 hung on a spring to ground, whose force holds the
+    Coulomb element at exactly its yield force; m2 on a string and a spring to m0."""
+    return Scene([
+        Mass("m0", m=1.0000000000000004, x0=3.0395564710427906e-189, v0=-0.6398156272192412),
+        Junction("j1", x0=1e-09),
+        Mass("m2", m=0.10248721512599111, x0=-0.7702210107050198, v0=1.2070921889977546),
+        Mass("m3", m=1.0, x0=2.786620668004576e-145, v0=1e-05),
+    ], [
+        Element("e0", _hb(1.0023052380778996, 0.44220166379350745, 0.3), "ground", "m0"),
+        Element("e1", get_law("coulomb").bind(tau=0.058289963858950064, r=72.36076066978926),
+                "m0", "j1"),
+        Element("e2", get_law("string_spring").bind(k=1.0000000000000004,
+                                                    L=0.9999997255105045), "m0", "m2"),
+        Element("e3", _hb(1.0002302850208247, 0.03741120449579023, 0.3), "ground", "m3"),
+        Element("e4", get_law("implicit_spring").bind(k=2.4954547485353524,
+                                                      L0=0.12895098606833424,
+                                                      F0=19.11489450920864), "ground", "j1"),
+        Element("e5", get_law("linear_spring").bind(k=0.1), "m2", "m0"),
+        Element("e6", _hb(0.18834417813157586, 0.052494910207759225, 1.5), "ground", "m0"),
+    ])
+
+
+def test_a_tangency_kept_at_an_event_does_not_hide_a_later_crossing_in_the_step():
+    # m0 sticks at t = 0.4188 with e1 (Coulomb) at exactly its yield force: its guard
+    # reads crossed at t, the full laws keep the mode (a tangency), and the step's first
+    # crossing, at t, was ignored; e0's and e6's break-out at t = 0.4713 inside the same
+    # step was hidden behind it, and the step went on to t = 0.4755 with both forces
+    # beyond their yield forces (e0 by 0.009, 2 %) while m0 stayed stuck; from there the
+    # probes read e1 stuck and slipping in turn, 50 events at t = 0.4793 (TOO_MANY_EVENTS)
+    tau0, tau6 = 0.44220166379350745, 0.052494910207759225
+    dt = 0.025
+    sol = simulate(_coulomb_junction_scene(), method="radau5", dt=dt, t_end=0.5,
+                   rtol=dt**2, atol=dt**3, compiled=False)
+    assert sol.ok, sol.message
+    breaks = [ev.t for ev in sol.events if ev.element == "e0" and ev.from_branch == 2]
+    assert breaks and abs(breaks[0] - 0.47131) < 1e-4, sol.events
+    stuck = sol.v["m0"] == 0.0
+    assert stuck.sum() >= 2
+    assert np.all(np.abs(sol.F["e0"][stuck]) <= tau0 * (1 + 1e-9))
+    assert np.all(np.abs(sol.F["e6"][stuck]) <= tau6 * (1 + 1e-9))
