@@ -207,6 +207,16 @@ class ModeState:
                 got = select_modes(scene, lbs, t, x, v, F, h_short, self.settings.options)
                 if not isinstance(got, str):
                     return self._locked(got, h_short)
+        if isinstance(sel, str) and cause == "guard" and self.cones:
+            # ... and the guessed modes, locks in parallel by the minimum-norm correction
+            # (a junction's Herschel-Bulkley n = 0.3 dashpot stopping exactly at its
+            # kink beside a Bingham and a Coulomb element stuck in parallel: the full
+            # laws' semismooth Newton diverged at every probe size from 1e-12 to 1e-6 s)
+            guess = self._guesses(cause, x, v, F, cones=True)
+            got = try_modes(scene, lbs, guess, t, x, v, F, h0, modes, 3, None,
+                            min_norm=True) if guess else None
+            if got is not None:
+                return self._locked(got, h0)
         return sel
 
     def _locked(self, sel: tuple, h_probe: float) -> tuple[list[int], list[float], list[float]]:
@@ -222,13 +232,14 @@ class ModeState:
         new = lock_parallel_rates(scene, lbs, new, v_p, F_p, rate_tol)
         return new, v_p, F_p
 
-    def _guesses(self, cause: str, x: list[float], v: list[float], F: list[float]
-                 ) -> list[list[int]]:
+    def _guesses(self, cause: str, x: list[float], v: list[float], F: list[float],
+                 cones: bool = False) -> list[list[int]]:
         """The modes to try before the full search: at the start the branches the laws
         read at the initial state; after a guard crossing, the landed element on each of
         its other branches (every watched element when the driver gave no hint and there
-        are at most 3); at a time event the mode kept first."""
-        if not self.guessing or self.cones:
+        are at most 3); at a time event the mode kept first. None with locks in parallel
+        (their probe is singular), unless ``cones`` (the minimum-norm fallback)."""
+        if not self.guessing or (self.cones and not cones):
             return []
         if cause == "start":  # (then each element with branches on its others: a force
             q = self.scene.elongations(x, v)  # at a yield limit reads as the lock)
