@@ -16,6 +16,19 @@ def _hb(gamma: float, tau: float, n: float):
     return get_law("herschel_bulkley").bind(gamma=gamma, tau=tau, n=n)
 
 
+def _ladder(scene: Scene, dt: float, steps: int) -> list:
+    """The property suite's three runs (``h = dt, dt/2, dt/4``, ``rtol = h^2``, ``atol =
+    h^3``, the Python loop, ``steps * dt`` long), each checked to complete."""
+    sols = []
+    for k in range(3):
+        h = dt / 2**k
+        sol = simulate(scene, method="radau5", dt=h, t_end=steps * dt, rtol=h**2,
+                       atol=h**3, compiled=False)
+        assert sol.ok, (k, sol.message)
+        sols.append(sol)
+    return sols
+
+
 def test_two_stuck_dashpots_in_parallel_break_out_when_the_load_passes_their_yield_forces():
     # e2 (HB n = 0.5) and e4 (HB n = 1.5) hold m2 to ground together; the load reaches
     # tau2 + tau4 at t = 0.0173 and keeps growing. The probe read e4 as slipping at a rate
@@ -118,13 +131,8 @@ def test_a_junction_cluster_on_a_steep_law_does_not_chatter():
     # exactly its kink at t = 0.1764, where the full laws' probe diverged at every size
     # ("no motion continues" at h = dt / 4): the guessed mode by a minimum-norm probe
     scene = _junction_cluster(0.3224563340216885, 0.1801361680294782)
-    dt = 0.005013723136470163
-    for k in range(3):
-        h = dt / 2**k
-        sol = simulate(scene, method="radau5", dt=h, t_end=40 * dt, rtol=h**2, atol=h**3,
-                       compiled=False)
-        assert sol.ok, (k, sol.message)
-        assert len(sol.events) < 10, (k, sol.events)
+    for sol in _ladder(scene, 0.005013723136470163, 40):
+        assert len(sol.events) < 10, sol.events
 
 
 def test_a_probe_that_diverges_at_every_longer_size_is_tried_shorter():
@@ -133,14 +141,9 @@ def test_a_probe_that_diverges_at_every_longer_size_is_tried_shorter():
     # 4.3e-9 s and at the 1000 and 10^6 times longer retries ("no motion continues"),
     # and converges at 1e-10 s
     scene = _junction_cluster(0.060882384620514485, 8.343152218504505)
-    dt = 0.020537380016798674
-    for k in range(3):
-        h = dt / 2**k
-        sol = simulate(scene, method="radau5", dt=h, t_end=25 * dt, rtol=h**2, atol=h**3,
-                       compiled=False)
-        assert sol.ok, (k, sol.message)
+    for sol in _ladder(scene, 0.020537380016798674, 25):
         stick = [ev.t for ev in sol.events if ev.element == "e2" and ev.to_branch == 2]
-        assert stick and abs(stick[0] - 0.10056) < 1e-4, (k, sol.events)
+        assert stick and abs(stick[0] - 0.10056) < 1e-4, sol.events
 
 
 def _coulomb_junction_scene() -> Scene:
@@ -201,12 +204,7 @@ def test_a_slow_mass_on_a_steep_dashpot_stops_where_its_rate_crosses_zero():
     assert law_branches(law).stage_guards_for(0).codes == ("0.8178269553179839*q",)
     scene = Scene([Mass("m0", m=m, x0=0.9922823802372558, v0=1e-05)],
                   [Element("e0", law, "ground", "m0")])
-    dt = 0.025
-    for k in range(3):
-        h = dt / 2**k
-        sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
-                       compiled=False)
-        assert sol.ok, sol.message
+    for sol in _ladder(scene, 0.025, 20):
         assert [(ev.element, ev.to_branch) for ev in sol.events] == [("e0", 2)], sol.events
         assert abs(sol.events[0].t - m * 1e-5 / tau) < 1e-8
         assert np.abs(sol.v["m0"]).max() <= 1e-5
