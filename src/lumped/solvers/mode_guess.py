@@ -29,6 +29,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numpy as np
+
 from ..scene import Mass, Scene
 from .mode_guess_jit import REFUSED
 
@@ -129,7 +131,6 @@ def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float
             J[N + e][N + e] = RF
         du = _solve([row[:] for row in J], G[:]) if min_norm else _solve(J, G)
         if du is None and min_norm:
-            import numpy as np
             du = np.linalg.lstsq(np.array(J), np.array(G), rcond=None)[0].tolist()
             if not all(math.isfinite(d) for d in du):
                 return None
