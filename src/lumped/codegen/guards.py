@@ -76,6 +76,15 @@ def _root_guard(code: str, base: sp.Expr, w: sp.Expr, printer: _Printer) -> str:
     ratio = sp.simplify(g / base)
     if ratio.is_number and ratio.is_positive:
         return printer.doprint(w)
+    # the guard's numbers are read back from its code (17 digits), the base's are the
+    # law's floats: the same numbers at two precisions, whose ratio sympy keeps symbolic
+    # (a yield force 0.024694132280711368 was not replaced: issue 11)
+    c = sp.diff(g, _F) / sp.diff(base, _F)
+    if c.is_number and c.is_positive:
+        rest = sp.expand(g - c * base)
+        d = base.subs(_F, 0)
+        if rest.is_number and d.is_number and abs(float(rest)) <= 1e-12 * (1.0 + abs(float(d))):
+            return printer.doprint(w)
     return code
 
 

@@ -71,6 +71,14 @@ def _admitted(guard, q0: float, F0: float, q1: float, F1: float) -> float:
     return F0 + hi * (F1 - F0)
 
 
+def _skipping(guard, skip: tuple[int, ...]):
+    """``guard`` with its guards ``skip`` read as held (``+inf``): a tangency at ``t``
+    that the full laws kept (see :func:`run_radau5`)."""
+    def held(q: float, F: float) -> list[float]:
+        return [math.inf if j in skip else g for j, g in enumerate(guard(q, F))]
+    return held
+
+
 def _structure(scene: Scene, plan) -> tuple[list[bool], tuple[float, ...], list[bool],
                                              list[bool], float]:
     """``(is_mass, masses, spring, massless, m_min)`` of the scene's nodes and elements,
@@ -163,6 +171,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     Fref = 0.0
     infeasible_modes: list[int] = []  # ... and the mode the full laws kept there
     kept = False  # an event at t kept the mode (since the last step)
+    tangent: set[tuple[int, int]] = set()  # ... and the guards read crossed at t then
     t = 0.0
     bi = 0
     max_newton = 10
@@ -229,6 +238,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         if not watched:
             return None
         fns = [guards[e] for e in watched]
+        if tangent:
+            fns = [_skipping(fn, tuple(j for w2, j in tangent if w2 == w))
+                   if any(w2 == w for w2, _ in tangent) else fn for w, fn in enumerate(fns)]
         hit = first_root_py([system.element_nodes(U, h, x, v, F, e) for e in watched], fns)
         if hit is None or not ms.forces_from_probe or hit[0] == 0.0:
             return hit  # (a guard already off at t: an event at t itself, as before)
@@ -434,6 +446,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                     status, message = stop
                     break
                 kept, h = modes == old, h_good
+                tangent.clear()
             continue
         if got is None:
             t_n0 = math.nextafter(t, math.inf) if (bi > 0 and t == breaks[bi - 1]) else t
@@ -457,7 +470,15 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             continue
         # (the compiled attempt has found the crossing by the same algorithm; after an
         # event it saw the probe's forces: test here from the stage forces)
-        hit = crossing(sol, h) if got is None or ms.forces_from_probe else hit_c
+        hit = crossing(sol, h) if got is None or ms.forces_from_probe or tangent else hit_c
+        while kept and hit is not None and hit[0] * h <= 16 * _EPS * max(1.0, abs(t)):
+            # the full laws kept the mode at t: a guard read crossed at t is a tangency
+            # (round-off), but another guard that crosses later in the step is still an
+            # event (a Coulomb element stuck at exactly its yield force beside two
+            # stuck dashpots hid their break-out, and the step went on to 2 % beyond
+            # their yield forces)
+            tangent.add(hit[1])
+            hit = crossing(sol, h)
         if target is not None:  # a landing step: bracket the event by end-of-step values
             if hit is not None and hit[1] != target[0] and hit[0] < 1.0:
                 # another guard crosses first; at t itself: no landing, the event is at t
@@ -509,6 +530,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 # the full laws keep the mode at t (a tangency, round-off): the retried
                 # step is accepted unless a guard fails later in it
                 kept = modes == old
+                tangent.clear()
                 continue
             # (which, h_lo, g_lo, h_hi, g_hi, count, side, the step that found it)
             target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0, h]
@@ -557,6 +579,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h_new = h / max(quot, facgus)
         h_acc, err_acc = h, max(1e-2, err_norm)
         h_good, floor_tried, kept, stalled = h, False, False, 0
+        tangent.clear()
         # after a landing the step goes on from the size that found the event (the
         # landing step can be ulps long when the event sits at the step's start)
         h = max(h_new, h_found)

@@ -29,6 +29,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numpy as np
+
 from ..scene import Mass, Scene
 from .mode_guess_jit import REFUSED
 
@@ -39,7 +41,8 @@ _MAX_ITERS = 30
 
 def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[int]],
               t: float, x: list[float], v: list[float], F: list[float], h_p: float,
-              current: Sequence[int] | None = None, longer: int = 1, fast=None
+              current: Sequence[int] | None = None, longer: int = 1, fast=None,
+              min_norm: bool = False
               ) -> tuple[list[int], list[float], list[float]] | None:
     """The first of ``candidates`` (modes) that the full laws confirm after the probe step
     of size ``h_p`` from ``t`` (see the module notes): ``(modes, v_p, F_p)``, or ``None``.
@@ -52,7 +55,9 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
     With ``fast`` (the run's :class:`~lumped.solvers.adaptive_fast.CompiledLoop`) the
     probes and the branch reads run compiled
     (:func:`lumped.solvers.mode_guess_jit.probe_modes`, the same numbers); the loop below
-    is the reference."""
+    is the reference. With ``min_norm`` (Python only) a singular step matrix (locks in
+    parallel, whose split is free) is solved by the minimum-norm correction instead of
+    refusing the candidate."""
     for _ in range(longer):
         f = scene.external_forces(t + h_p)
         if fast is not None:
@@ -66,7 +71,7 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
             continue
         undecided = False
         for modes in candidates:
-            got = _probe(scene, branches, modes, f, x, v, F, h_p)
+            got = _probe(scene, branches, modes, f, x, v, F, h_p, min_norm)
             if got is None:
                 continue
             v_p, F_p, q = got
@@ -81,8 +86,10 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
 
 
 def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float],
-           x: list[float], v: list[float], F: list[float], h_p: float):
-    """The held-mode probe step by Newton's method: ``(v_p, F_p, q)`` or ``None``."""
+           x: list[float], v: list[float], F: list[float], h_p: float,
+           min_norm: bool = False):
+    """The held-mode probe step by Newton's method: ``(v_p, F_p, q)`` or ``None``
+    (``min_norm``: a singular matrix by the minimum-norm correction)."""
     N, E = len(scene.nodes), len(scene.elements)
     n = N + E
     ea, eb = scene.elem_a, scene.elem_b
@@ -122,7 +129,11 @@ def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float
             if a >= 0:
                 J[N + e][a] -= Rq * dq
             J[N + e][N + e] = RF
-        du = _solve(J, G)
+        du = _solve([row[:] for row in J], G[:]) if min_norm else _solve(J, G)
+        if du is None and min_norm:
+            du = np.linalg.lstsq(np.array(J), np.array(G), rcond=None)[0].tolist()
+            if not all(math.isfinite(d) for d in du):
+                return None
         if du is None:
             return None
         done = True

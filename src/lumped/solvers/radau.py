@@ -111,7 +111,12 @@ def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[fl
     D = np.ones(size)
     for j, (_, w) in cols.items():
         D[j] = math.sqrt(w * 1e-12 if j in held else w)
-    pinv = np.linalg.pinv(A * D, rcond=size * 2.220446049250313e-16)
+    # rows equilibrated (the same solutions; a junction's row through a flat law, dq/dF
+    # ~ 1e-7, is not cut off as round-off beside the momentum rows' m / h)
+    AD = A * D
+    r = np.abs(AD).max(axis=1)
+    r[r == 0.0] = 1.0
+    pinv = np.linalg.pinv(AD / r[:, None], rcond=size * 2.220446049250313e-16) / r
     # a row with one nonzero (a stuck dashpot to ground: ``V = 0``) fixes its unknown by
     # one division, exactly, as the LU's singleton pivots do
     single = [(i, int(nz[0]), float(A[i, nz[0]])) for i in range(size)
