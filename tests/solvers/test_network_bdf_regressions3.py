@@ -11,6 +11,8 @@ from _yield_check import run_checked as _run_ok
 
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
+from lumped.solvers.initial_state import consistent_initial_state
+from lumped.solvers.newton import NewtonOptions
 
 
 def _string_taut_beside_a_stuck_parallel_pair() -> Scene:
@@ -55,3 +57,41 @@ def test_string_taut_beside_a_stuck_parallel_pair(method, dt):
     total = sol.F["e2"] + sol.F["e3"] + sol.F["e5"]
     assert np.abs(total).max() <= 1e-9
 
+
+def _coulomb_chain_from_a_moving_mass() -> Scene:
+    """Drawn by the suite (session 8, as drawn): junctions ``j0`` and ``j1`` hang in a
+    chain of Coulomb elements from ground (``e0``, ``tau = 0.29``) through ``e1`` to the
+    moving mass ``m2`` (``e3``), and a spring ``e2`` (force ``0.32``) pulls ``j0`` towards
+    ``m2``."""
+    return Scene(
+        [Junction("j0", x0=-0.403854085521261),
+         Junction("j1", x0=0.9565950581006502),
+         Mass("m2", m=0.5897700987435932, x0=0.7975242779713154, v0=1.7842051501075806)],
+        [Element("e0", get_law("coulomb").bind(tau=0.29226228629904866, r=1.0), "ground", "j0"),
+         Element("e1", get_law("coulomb").bind(tau=1.0, r=1.0), "j0", "j1"),
+         Element("e2", get_law("linear_spring").bind(k=0.2658057176104353), "j0", "m2"),
+         Element("e3", get_law("coulomb").bind(tau=1.0, r=2.250457835392165), "j1", "m2")])
+
+
+def test_initial_state_of_a_coulomb_chain_from_a_moving_mass():
+    """The start stopped with 'no consistent initial state: Newton failed (diverged)',
+    though one exists: ``j1`` and ``j0`` stuck to ``m2`` (``e1``, ``e3`` carry
+    ``0.29 - 0.32 = -0.027``, within their yield force 1) and ``e0`` slipping at ``tau``.
+    Every start (the balances swept one junction at a time, each junction moving with
+    one neighbour in turn) left ``j0`` at rest; the restarts now also follow those
+    guesses along the chain, so ``j0`` moves with ``j1``, which moves with ``m2``."""
+    scene = _coulomb_chain_from_a_moving_mass()
+    v, F, _ = consistent_initial_state(scene, time_scale=0.025, options=NewtonOptions())
+    assert v == [1.7842051501075806] * 3
+    assert F[0] == 0.29226228629904866  # e0 slips at its yield force
+    assert F[2] == pytest.approx(0.2658057176104353 * (0.7975242779713154 + 0.403854085521261),
+                                 rel=1e-12)
+    assert F[1] == F[3] == pytest.approx(F[0] - F[2], rel=1e-9)
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_coulomb_chain_from_a_moving_mass_runs(method):
+    """The runs of the suite's three levels complete and keep every law."""
+    scene = _coulomb_chain_from_a_moving_mass()
+    for dt in (0.025, 0.0125, 0.00625):
+        _run_ok(scene, method, dt, 0.5)
