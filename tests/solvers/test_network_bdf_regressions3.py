@@ -11,6 +11,7 @@ from _yield_check import run_checked as _run_ok
 
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
+from lumped.solvers.impact_step import impulse_is_negligible
 from lumped.solvers.initial_state import consistent_initial_state
 from lumped.solvers.newton import NewtonOptions
 
@@ -95,3 +96,35 @@ def test_coulomb_chain_from_a_moving_mass_runs(method):
     scene = _coulomb_chain_from_a_moving_mass()
     for dt in (0.025, 0.0125, 0.00625):
         _run_ok(scene, method, dt, 0.5)
+
+
+def test_an_impulse_below_the_momentum_round_off_is_no_impact():
+    """The state of ``test_second_impact_within_the_step_is_located``
+    (``tests/solvers/test_network_bdf_regressions.py``, ``dt = 0.02255``) at
+    ``t = 0.1128``: both masses rest on their strings with velocities of round-off (they
+    come out so or as exact zeros depending on the last bits of LAPACK's minimum-norm
+    solve), and the string ``e3`` between them is read locked anew. Stopping it costs all
+    of their kinetic energy (``1.6e-37``), so the relative test called it an impact, and
+    the run recorded four more impacts of ``1e-21``; an impulse below the round-off of
+    the step's momentum change is none."""
+    scene = Scene(
+        [Mass("m0", m=4.830543029274959, x0=0.1474191018521529, v0=1.772995387291422),
+         Mass("m1", m=1.0, x0=-0.07879501088661, v0=0.9759256919748283)],
+        [Element("e0", get_law("herschel_bulkley").bind(gamma=0.36123619139126,
+                                                        tau=0.05033160533669336, n=0.5),
+                 "ground", "m0"),
+         Element("e1", get_law("string_spring").bind(k=1.010966804136899,
+                                                     L=0.04194877103520564), "ground", "m1"),
+         Element("e2", get_law("string_spring").bind(k=2.2034416293088865, L=1.0), "m0", "m1"),
+         Element("e3", get_law("string_spring").bind(k=1.0, L=0.23621411273876292),
+                 "m1", "m0"),
+         Element("e4", get_law("bingham").bind(gamma=0.11275906247594833, tau=1.0),
+                 "m1", "m0")])
+    v = [-3.1785747367369654e-22, 6.249848031473503e-19]
+    F = [-0.050059090135453004, 0.05005909013545299, -0.5204840094388528,
+         0.23621411273834048, -0.7066390320417403]
+    floor = 4.0 * np.finfo(float).eps * 0.022551812495189668 * max(map(abs, F))
+    assert not impulse_is_negligible(scene, v, [3])  # all the kinetic energy
+    assert impulse_is_negligible(scene, v, [3], floor)
+    assert not impulse_is_negligible(scene, [0.0, 1e-9], [3], floor)  # a real impact
+
