@@ -11,7 +11,7 @@ from _yield_check import run_checked as _run_ok
 
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.solvers.impact_step import impulse_is_negligible
+from lumped.solvers.impact_step import impact_step, impulse_is_negligible
 from lumped.solvers.initial_state import consistent_initial_state
 from lumped.solvers.newton import NewtonOptions
 
@@ -128,3 +128,37 @@ def test_an_impulse_below_the_momentum_round_off_is_no_impact():
     assert impulse_is_negligible(scene, v, [3], floor)
     assert not impulse_is_negligible(scene, [0.0, 1e-9], [3], floor)  # a real impact
 
+
+def test_impact_located_where_a_bisection_substep_needs_halving():
+    """The state of ``test_substep_after_an_impact_beside_a_creeping_dashpot``
+    (``tests/solvers/test_network_bdf_regressions2.py``) at ``t = 0.3395``: ``m0`` and
+    ``m1`` move together (the string ``e2`` taut, the Herschel-Bulkley ``n = 0.5``
+    dashpot ``e1`` stuck beside it) and ``m1`` reaches the stiff string ``e3`` within the
+    step. The bisection's first trial substep (half the step) ran out of Newton
+    iterations (the taut ``e2`` fixes the rate to ``ulp(x) / h``, where ``e1``'s law is
+    steep), the bracket stayed the whole step, the impact was put at its end, and the
+    substep a hair long after it failed too: 'no motion satisfies all the laws' at
+    ``t = 0.3443``. A failing trial substep is now taken as 2 to 16 substeps, as the rest
+    of the step is, and the impact is located inside the step."""
+    scene = Scene(
+        [Mass("m0", m=2.945419949336432, x0=8.866785507495781e-141, v0=0.7210209576693374),
+         Mass("m1", m=0.9715625632515835, x0=-0.025553999064556132, v0=-0.9267147053332196)],
+        [Element("e0", get_law("newtonian").bind(c=0.026329964176047806), "ground", "m0"),
+         Element("e1", get_law("herschel_bulkley").bind(gamma=0.15585846863008437,
+                                                        tau=0.011042871848402393, n=0.5),
+                 "m0", "m1"),
+         Element("e2", get_law("string_spring").bind(k=5.117433925866938,
+                                                     L=0.026777554952301115), "m1", "m0"),
+         Element("e3", get_law("string_spring").bind(k=98.15927843579738,
+                                                     L=0.06113590223120681), "ground", "m1")])
+    t0, dt = 0.33947064700989427, 0.019398322686279675 / 4
+    x = [0.08773879725496071, 0.06096124230265961]
+    v = [0.08234632193033797, 0.08234632193033797]
+    F = [0.0021681757064550985, -0.0021837589362244903, 4.496949413093089,
+         5.983911556978875]
+    done = impact_step(scene, t0, dt, x, v, F, {2}, NewtonOptions())
+    assert done.failure is None
+    assert [ev.element for ev in done.events] == ["e3"]
+    assert t0 + 0.4 * dt < done.events[0].t < t0 + 0.6 * dt
+    assert done.x[1] <= 0.06113590223120681  # m1 within e3's length
+    assert abs(done.F[1]) <= 0.011042871848402393  # e1 within its yield force

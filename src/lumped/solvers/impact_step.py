@@ -182,7 +182,8 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
             # reached there stopped below
             x1, v1, F1 = end[:3]
             break
-        located = _locate_impact(scene, t0 + s, rest, dt, xs, vs, Fs, held, end, sub)
+        located = _locate_impact(scene, t0 + s, rest, dt, xs, vs, Fs, held, end, sub,
+                                 options, out)
         xh, v_after, Fl, s_hi, held = _apply_impact(scene, t0 + s, located, held,
                                                     restitution, out.events)
         s += s_hi
@@ -216,10 +217,12 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
     return out
 
 
-def _locate_impact(scene, ts, rest, dt, x, v, F, held, end, sub):
+def _locate_impact(scene, ts, rest, dt, x, v, F, held, end, sub, options, out):
     """Bisection of the first lock in ``[ts, ts + rest]`` (backward-Euler substeps from
     ``(x, v, F)`` at ``ts``; ``end`` is the substep over all of it, which locks an element
-    not in ``held``). Returns ``(s_lo, lo_state, s_hi, hi_state)``."""
+    not in ``held``). A trial substep whose Newton fails is taken as 2 to 16 substeps
+    (:func:`halved_steps`, their iterations added to ``out``), as the rest of the step
+    is. Returns ``(s_lo, lo_state, s_hi, hi_state)``."""
     lo, hi = 0.0, rest
     lo_state = (list(x), list(v), list(F))
     hi_state = end
@@ -227,7 +230,13 @@ def _locate_impact(scene, ts, rest, dt, x, v, F, held, end, sub):
         mid = 0.5 * (lo + hi)
         trial = sub(mid, x, v, F, ts + mid)
         if trial[3].code is not NewtonCode.SUCCESS:
-            break  # keep the bracket found so far
+            # closer starts (a string just taut beside a stuck Herschel-Bulkley n < 1
+            # dashpot fixes the rate only to ulp(x) / h, where that law is steep)
+            halved = halved_steps(scene, ts, mid, x, v, F, options)
+            if halved is None:
+                break  # keep the bracket found so far
+            out.newton_iterations += halved[3]
+            trial = (*halved[:3], trial[3])
         if any(e not in held for e in locking_elements(scene, *trial[:3])):
             hi, hi_state = mid, trial
         else:
