@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _bdf_scenes import creeping_pair_on_a_string, second_string_taut_within_the_step
 from _yield_check import run_checked as _run_ok
 
 from lumped.laws import get_law
@@ -100,26 +101,14 @@ def test_coulomb_chain_from_a_moving_mass_runs(method):
 
 def test_an_impulse_below_the_momentum_round_off_is_no_impact():
     """The state of ``test_second_impact_within_the_step_is_located``
-    (``tests/solvers/test_network_bdf_regressions.py``, ``dt = 0.02255``) at
+    (``dt = 0.02255``) at
     ``t = 0.1128``: both masses rest on their strings with velocities of round-off (they
     come out so or as exact zeros depending on the last bits of LAPACK's minimum-norm
     solve), and the string ``e3`` between them is read locked anew. Stopping it costs all
     of their kinetic energy (``1.6e-37``), so the relative test called it an impact, and
     the run recorded four more impacts of ``1e-21``; an impulse below the round-off of
     the step's momentum change is none."""
-    scene = Scene(
-        [Mass("m0", m=4.830543029274959, x0=0.1474191018521529, v0=1.772995387291422),
-         Mass("m1", m=1.0, x0=-0.07879501088661, v0=0.9759256919748283)],
-        [Element("e0", get_law("herschel_bulkley").bind(gamma=0.36123619139126,
-                                                        tau=0.05033160533669336, n=0.5),
-                 "ground", "m0"),
-         Element("e1", get_law("string_spring").bind(k=1.010966804136899,
-                                                     L=0.04194877103520564), "ground", "m1"),
-         Element("e2", get_law("string_spring").bind(k=2.2034416293088865, L=1.0), "m0", "m1"),
-         Element("e3", get_law("string_spring").bind(k=1.0, L=0.23621411273876292),
-                 "m1", "m0"),
-         Element("e4", get_law("bingham").bind(gamma=0.11275906247594833, tau=1.0),
-                 "m1", "m0")])
+    scene = second_string_taut_within_the_step()
     v = [-3.1785747367369654e-22, 6.249848031473503e-19]
     F = [-0.050059090135453004, 0.05005909013545299, -0.5204840094388528,
          0.23621411273834048, -0.7066390320417403]
@@ -131,7 +120,7 @@ def test_an_impulse_below_the_momentum_round_off_is_no_impact():
 
 def test_impact_located_where_a_bisection_substep_needs_halving():
     """The state of ``test_substep_after_an_impact_beside_a_creeping_dashpot``
-    (``tests/solvers/test_network_bdf_regressions2.py``) at ``t = 0.3395``: ``m0`` and
+    at ``t = 0.3395``: ``m0`` and
     ``m1`` move together (the string ``e2`` taut, the Herschel-Bulkley ``n = 0.5``
     dashpot ``e1`` stuck beside it) and ``m1`` reaches the stiff string ``e3`` within the
     step. The bisection's first trial substep (half the step) ran out of Newton
@@ -140,17 +129,7 @@ def test_impact_located_where_a_bisection_substep_needs_halving():
     substep a hair long after it failed too: 'no motion satisfies all the laws' at
     ``t = 0.3443``. A failing trial substep is now taken as 2 to 16 substeps, as the rest
     of the step is, and the impact is located inside the step."""
-    scene = Scene(
-        [Mass("m0", m=2.945419949336432, x0=8.866785507495781e-141, v0=0.7210209576693374),
-         Mass("m1", m=0.9715625632515835, x0=-0.025553999064556132, v0=-0.9267147053332196)],
-        [Element("e0", get_law("newtonian").bind(c=0.026329964176047806), "ground", "m0"),
-         Element("e1", get_law("herschel_bulkley").bind(gamma=0.15585846863008437,
-                                                        tau=0.011042871848402393, n=0.5),
-                 "m0", "m1"),
-         Element("e2", get_law("string_spring").bind(k=5.117433925866938,
-                                                     L=0.026777554952301115), "m1", "m0"),
-         Element("e3", get_law("string_spring").bind(k=98.15927843579738,
-                                                     L=0.06113590223120681), "ground", "m1")])
+    scene = creeping_pair_on_a_string()
     t0, dt = 0.33947064700989427, 0.019398322686279675 / 4
     x = [0.08773879725496071, 0.06096124230265961]
     v = [0.08234632193033797, 0.08234632193033797]
