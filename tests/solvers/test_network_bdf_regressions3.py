@@ -100,14 +100,13 @@ def test_coulomb_chain_from_a_moving_mass_runs(method):
 
 
 def test_an_impulse_below_the_momentum_round_off_is_no_impact():
-    """The state of ``test_second_impact_within_the_step_is_located``
-    (``dt = 0.02255``) at
-    ``t = 0.1128``: both masses rest on their strings with velocities of round-off (they
-    come out so or as exact zeros depending on the last bits of LAPACK's minimum-norm
-    solve), and the string ``e3`` between them is read locked anew. Stopping it costs all
-    of their kinetic energy (``1.6e-37``), so the relative test called it an impact, and
-    the run recorded four more impacts of ``1e-21``; an impulse below the round-off of
-    the step's momentum change is none."""
+    """The state of ``test_second_impact_within_the_step_is_located`` (``dt = 0.02255``)
+    at ``t = 0.1128``: both masses rest on their strings with velocities of round-off (they come
+    out so or as exact zeros depending on the last bits of LAPACK's minimum-norm solve), and
+    the string ``e3`` between them is read locked anew. Stopping it costs all of their
+    kinetic energy (``1.6e-37``), so the relative test called it an impact, and the run
+    recorded four more impacts of ``1e-21``; an impulse below the round-off of the step's
+    momentum change is none."""
     scene = second_string_taut_within_the_step()
     v = [-3.1785747367369654e-22, 6.249848031473503e-19]
     F = [-0.050059090135453004, 0.05005909013545299, -0.5204840094388528,
@@ -119,16 +118,15 @@ def test_an_impulse_below_the_momentum_round_off_is_no_impact():
 
 
 def test_impact_located_where_a_bisection_substep_needs_halving():
-    """The state of ``test_substep_after_an_impact_beside_a_creeping_dashpot``
-    at ``t = 0.3395``: ``m0`` and
-    ``m1`` move together (the string ``e2`` taut, the Herschel-Bulkley ``n = 0.5``
-    dashpot ``e1`` stuck beside it) and ``m1`` reaches the stiff string ``e3`` within the
-    step. The bisection's first trial substep (half the step) ran out of Newton
+    """The state of ``test_substep_after_an_impact_beside_a_creeping_dashpot`` at
+    ``t = 0.3395``: ``m0`` and ``m1`` move together (the string ``e2`` taut, the Herschel-Bulkley
+    ``n = 0.5`` dashpot ``e1`` stuck beside it) and ``m1`` reaches the stiff string ``e3``
+    within the step. The bisection's first trial substep (half the step) ran out of Newton
     iterations (the taut ``e2`` fixes the rate to ``ulp(x) / h``, where ``e1``'s law is
     steep), the bracket stayed the whole step, the impact was put at its end, and the
-    substep a hair long after it failed too: 'no motion satisfies all the laws' at
-    ``t = 0.3443``. A failing trial substep is now taken as 2 to 16 substeps, as the rest
-    of the step is, and the impact is located inside the step."""
+    substep a hair long after it failed too: 'no motion satisfies all the laws' at ``t =
+    0.3443``. A failing trial substep is now taken as 2 to 16 substeps, as the rest of the
+    step is, and the impact is located inside the step."""
     scene = creeping_pair_on_a_string()
     t0, dt = 0.33947064700989427, 0.019398322686279675 / 4
     x = [0.08773879725496071, 0.06096124230265961]
