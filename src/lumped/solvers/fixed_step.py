@@ -251,8 +251,8 @@ def run_bdf(
             now = set(locking_elements(scene, x_new, v_new, F_new, lockable))
             new = [e for e in sorted(now) if e not in locked]
             # an impulse below the round-off of the step's momentum change is none
-            floor = 4.0 * _EPS * dt * max(map(abs, F_new + f), default=0.0)
-            if new and not impulse_is_negligible(scene, v, new, floor):
+            if new and not impulse_is_negligible(
+                    scene, v, new, 4.0 * _EPS * dt * max(map(abs, F_new + f), default=0.0)):
                 done = impact_step(scene, t - dt, dt, x, v, F, locked, options, restitution)
                 total_it += done.newton_iterations
                 res_ev += done.solves
