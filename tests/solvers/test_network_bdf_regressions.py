@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from _bdf_scenes import second_string_taut_within_the_step
 from _convergence import assert_converges
 from _yield_check import run_checked as _run_ok
 
@@ -297,25 +298,6 @@ def test_a_subnormal_junction_position_is_refused_by_name_not_by_an_svd(method):
                         "initial positions or the parameters")
 
 
-def _second_string_taut_within_the_step() -> Scene:
-    """Drawn by the suite (session 5, as drawn): ``m1`` is tied to ground by string ``e1``
-    and to ``m0`` by string ``e3`` with a Bingham dashpot ``e4`` (yield force 1) beside
-    it; both masses move up."""
-    return Scene(
-        [Mass("m0", m=4.830543029274959, x0=0.1474191018521529, v0=1.772995387291422),
-         Mass("m1", m=1.0, x0=-0.07879501088661, v0=0.9759256919748283)],
-        [Element("e0", get_law("herschel_bulkley").bind(gamma=0.36123619139126,
-                                                        tau=0.05033160533669336, n=0.5),
-                 "ground", "m0"),
-         Element("e1", get_law("string_spring").bind(k=1.010966804136899,
-                                                     L=0.04194877103520564), "ground", "m1"),
-         Element("e2", get_law("string_spring").bind(k=2.2034416293088865, L=1.0), "m0", "m1"),
-         Element("e3", get_law("string_spring").bind(k=1.0, L=0.23621411273876292),
-                 "m1", "m0"),
-         Element("e4", get_law("bingham").bind(gamma=0.11275906247594833, tau=1.0),
-                 "m1", "m0")])
-
-
 @pytest.mark.parametrize("dt", [0.022551812495189668, 0.011275906247594834])
 def test_second_impact_within_the_step_is_located(dt):
     """String ``e1`` stops ``m1`` at ``t = 0.083``; ``m0`` runs on and pulls ``e3`` taut
@@ -326,7 +308,7 @@ def test_second_impact_within_the_step_is_located(dt):
     at rate zero, ten times its yield force. Every impact in the step is now located in
     turn. A string at rest on its lock (``e1``, rate ``-3e-16``) holds the way its force
     acts: it had been released from the second impact as if it were pushing."""
-    scene = _second_string_taut_within_the_step()
+    scene = second_string_taut_within_the_step()
     sol = _run_ok(scene, "bdf1", dt, 0.5186916873893623)
     assert [ev.element for ev in sol.events] == ["e3", "e1", "e3"]
     assert 0.0875 < sol.events[2].t < 0.0886

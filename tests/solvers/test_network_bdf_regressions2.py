@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _bdf_scenes import creeping_pair_on_a_string
 from _yield_check import run_checked as _run_ok
 
 from lumped.laws import get_law
@@ -140,23 +141,6 @@ def test_stuck_pair_in_series_beside_a_taut_string(dt):
     assert np.all(np.abs(sol.F["e4"][after]) <= 0.1573080193367457 * (1 + 1e-5))
 
 
-def _creeping_pair_on_a_string() -> Scene:
-    """Drawn by the suite (session 6, as drawn): ``m0`` and ``m1`` joined by a
-    Herschel-Bulkley dashpot ``e1`` (``n = 0.5``, yield force 0.011) and a string ``e2``
-    (``L = 0.0268``) in parallel; ``m1`` hangs on a stiff string ``e3`` to ground."""
-    return Scene(
-        [Mass("m0", m=2.945419949336432, x0=8.866785507495781e-141, v0=0.7210209576693374),
-         Mass("m1", m=0.9715625632515835, x0=-0.025553999064556132, v0=-0.9267147053332196)],
-        [Element("e0", get_law("newtonian").bind(c=0.026329964176047806), "ground", "m0"),
-         Element("e1", get_law("herschel_bulkley").bind(gamma=0.15585846863008437,
-                                                        tau=0.011042871848402393, n=0.5),
-                 "m0", "m1"),
-         Element("e2", get_law("string_spring").bind(k=5.117433925866938,
-                                                     L=0.026777554952301115), "m1", "m0"),
-         Element("e3", get_law("string_spring").bind(k=98.15927843579738,
-                                                     L=0.06113590223120681), "ground", "m1")])
-
-
 @pytest.mark.parametrize("dt", [0.019398322686279675 / 4])
 def test_substep_after_an_impact_beside_a_creeping_dashpot(dt):
     """``e2`` goes taut again at ``t = 0.2083``, and the two masses move on together with
@@ -167,7 +151,7 @@ def test_substep_after_an_impact_beside_a_creeping_dashpot(dt):
     its sign flips with the rounding. The same rest as two substeps converges; the rest
     of an impact step is now split as the whole step is (``halved_steps``) when its
     Newton fails."""
-    scene = _creeping_pair_on_a_string()
+    scene = creeping_pair_on_a_string()
     sol = _run_ok(scene, "bdf1", dt, 0.5043563898432716)
     assert [ev.element for ev in sol.events].count("e2") >= 2
     q2 = sol.x["m0"] - sol.x["m1"]

@@ -60,6 +60,7 @@ from .newton import (
 )
 from .status import BranchError, Event, Status
 from .step_system import (
+    _EPS,
     _generate_evaluate,
     _newton_failure,
 )
@@ -249,7 +250,9 @@ def run_bdf(
         if lockable:
             now = set(locking_elements(scene, x_new, v_new, F_new, lockable))
             new = [e for e in sorted(now) if e not in locked]
-            if new and not impulse_is_negligible(scene, v, new):
+            # an impulse below the round-off of the step's momentum change is none
+            if new and not impulse_is_negligible(
+                    scene, v, new, 4.0 * _EPS * dt * max(map(abs, F_new + f), default=0.0)):
                 done = impact_step(scene, t - dt, dt, x, v, F, locked, options, restitution)
                 total_it += done.newton_iterations
                 res_ev += done.solves

@@ -103,6 +103,30 @@ def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
     return best, True
 
 
+def _chained_guesses(scene: Scene, v0: list[float], F: list[float]) -> list[list[float]]:
+    """The velocity guesses of :func:`lumped.solvers.globalize.stuck_guesses` (the
+    ``k``-th: every junction moving with its ``k``-th dashpot neighbour) followed along
+    chains of junctions to a fixed point: there a junction takes its neighbour's velocity
+    as it is in the guess, not as it was, so that a chain of stuck elements from a
+    moving mass (mass, Coulomb, junction, Coulomb, junction) moves as one. Only the
+    guesses that differ from the plain ones; velocities only (``N`` entries)."""
+    from .globalize import stuck_guesses
+
+    N = len(scene.nodes)
+    plain = stuck_guesses(scene, v0, F)
+    out = []
+    for k in range(len(plain) // 2):  # the second half repeats them with zero forces
+        w = plain[k][:N]
+        for _ in range(N):
+            nxt = stuck_guesses(scene, w, F)[k][:N]
+            if nxt == w:
+                break
+            w = nxt
+        if w != plain[k][:N] and w not in out:
+            out.append(w)
+    return out
+
+
 _MONOTONE: dict[int, tuple[object, bool]] = {}
 
 
@@ -414,6 +438,13 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
             starts.insert(1, balanced)
             settled = settle(balanced)
             starts.insert(2, settled)
+        # last: the stuck guesses followed along chains of junctions (a junction stuck to
+        # a junction stuck to a moving mass moves with the mass), each settled as above
+        for g in _chained_guesses(scene, v0, u0[N:]):
+            start = [0.0 if is_mass[i] else g[i] for i in range(N)] + u0[N:]
+            if start not in starts:
+                starts.append(start)
+                starts.append(settle(project(list(start))))
         for start in starts:
             for proj in (None, project):
                 if start is u0 and proj is None:

@@ -277,6 +277,11 @@ def newton_solve(
         du = solve(G)  # J du = G; the step is -du
         if not finite(du):
             return result(NewtonCode.NON_FINITE)
+        if min_norm:
+            d3 = _null_step_removed(J, G, du, u)
+            if d3 is not None:
+                met_singular = True
+                du = d3
         if res_ok:
             if _update_ok(du, u, rtol, atol):
                 return final_correction(du)
@@ -395,6 +400,42 @@ def _equilibrated_min_norm(J: Sequence[Sequence[float]], G: Sequence[float]) -> 
     A /= c[None, :]
     pinv = np.linalg.pinv(A, rcond=len(A) * 2.220446049250313e-16)
     return ((pinv @ (np.asarray(G, dtype=float) / r)) / c).tolist()
+
+
+#: A Newton correction longer than this times ``1 + max |u|`` is checked for a step
+#: along a null space that only rounding hides (:func:`_null_step_removed`).
+_NULL_STEP_RATIO = 1e6
+
+
+def _null_step_removed(J: Sequence[Sequence[float]], G: Sequence[float], du: list[float],
+                       u: Sequence[float]) -> list[float] | None:
+    """The minimum-norm correction in place of the LU correction ``du`` (``J du = G``)
+    where ``du`` is a long step along a null space that only rounding hides; else None.
+
+    Locked elements in a cycle (two stuck dashpots in parallel, a string taut beside a
+    stuck dashpot) make the step matrix singular, their rows proportional; but LU, when
+    the ratio of those rows is not a power of two, eliminates one of them to a pivot of
+    an ulp instead of zero, and while the residual is not yet small (another law still
+    converging) the correction moves the free split of the forces by ``residual / ulp``
+    (``1e13``), from where Newton crawls back by halving and runs out of iterations.
+    Checked only when ``du`` exceeds :data:`_NULL_STEP_RATIO` times ``1 + max |u|``:
+    the minimum-norm solution of the equilibrated matrix
+    (:func:`_equilibrated_min_norm`) replaces it when it is a thousand times shorter and
+    solves ``J d = G`` (residual below ``1e-8`` of the terms). On a regular matrix the two
+    agree to rounding, so ``du`` stays."""
+    big = max(abs(d) for d in du)
+    if not big > _NULL_STEP_RATIO * (1.0 + max(abs(x) for x in u)):
+        return None
+    d3 = _equilibrated_min_norm(J, G)
+    short = max(abs(d) for d in d3)
+    if not (math.isfinite(short) and 1e3 * short < big):
+        return None
+    terms = max(max(abs(g) for g in G), max(abs(Jij) * short for row in J for Jij in row))
+    for row, g in zip(J, G, strict=True):
+        r = sum(Jij * dj for Jij, dj in zip(row, d3, strict=True)) - g
+        if not abs(r) <= 1e-8 * terms:
+            return None
+    return d3
 
 
 def _hair(u: float, d: float) -> float:
