@@ -208,3 +208,32 @@ def test_a_slow_mass_on_a_steep_dashpot_stops_where_its_rate_crosses_zero():
         assert [(ev.element, ev.to_branch) for ev in sol.events] == [("e0", 2)], sol.events
         assert abs(sol.events[0].t - m * 1e-5 / tau) < 1e-8
         assert np.abs(sol.v["m0"]).max() <= 1e-5
+
+
+def test_a_stage_split_beyond_a_cone_after_a_kept_event_is_not_landed_on_again_and_again():
+    # j2 hangs between m0 (Herschel-Bulkley n = 0.3 and a Coulomb element e4 in
+    # parallel) and a spring to ground; e2 stops at t = 0.0314 and the full laws keep the
+    # mode. Its guard, read crossed at t, was left out of the search, which then found
+    # e4's guard crossed at the first stage (the cone split a hair beyond e4's yield
+    # force): landed on, kept, found again, the run crept on by 1e-15 s (max_steps)
+    scene = Scene([
+        Mass("m0", m=1.3251647806258695, x0=0.3469126670835083, v0=1.5656100464838891),
+        Junction("j1", x0=-0.03467702895033775),
+        Junction("j2", x0=-0.2569150543465749),
+        Mass("m3", m=0.16574824422057044, x0=-0.04013614547361777, v0=5.960464477539063e-08),
+    ], [
+        Element("e0", get_law("coulomb").bind(tau=0.8121404521641203, r=5.342929663196053),
+                "ground", "m0"),
+        Element("e1", _hb(2.370804579400464, 0.06227807332761246, 1.5), "m0", "j1"),
+        Element("e2", _hb(2.379883917562513, 0.013343108762073843, 0.3), "m0", "j2"),
+        Element("e3", get_law("newtonian").bind(c=7.496626526429825), "ground", "m3"),
+        Element("e4", get_law("coulomb").bind(tau=0.1662791448126841, r=9.331205044616656),
+                "j2", "m0"),
+        Element("e5", get_law("implicit_spring").bind(k=1.0, L0=0.6749179735514763,
+                                                      F0=45.53335233842377), "ground", "j2"),
+    ])
+    dt = 0.004421942153212906
+    h = dt / 4
+    sol = simulate(scene, method="radau5", dt=h, t_end=40 * dt, rtol=h**2, atol=h**3,
+                   compiled=False, max_steps=3000, throw=False)
+    assert sol.ok, sol.message

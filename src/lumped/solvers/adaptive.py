@@ -471,12 +471,16 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         # (the compiled attempt has found the crossing by the same algorithm; after an
         # event it saw the probe's forces: test here from the stage forces)
         hit = crossing(sol, h) if got is None or ms.forces_from_probe or tangent else hit_c
-        while kept and hit is not None and hit[0] * h <= 16 * _EPS * max(1.0, abs(t)):
+        while kept and hit is not None and (hit[0] * h <= 16 * _EPS * max(1.0, abs(t)) or (
+                tangent and hit[0] <= 1.001 * C[0])):
             # the full laws kept the mode at t: a guard read crossed at t is a tangency
             # (round-off), but another guard that crosses later in the step is still an
             # event (a Coulomb element stuck at exactly its yield force beside two
             # stuck dashpots hid their break-out, and the step went on to 2 % beyond
-            # their yield forces)
+            # their yield forces). One crossed by the first stage already is the state
+            # at t too (a stuck Coulomb element whose stage split sits a hair beyond its
+            # yield force, beside a junction's Herschel-Bulkley dashpot stopping: landed
+            # on again and again, the run crept on by 1e-15 s)
             tangent.add(hit[1])
             hit = crossing(sol, h)
         if target is not None:  # a landing step: bracket the event by end-of-step values
