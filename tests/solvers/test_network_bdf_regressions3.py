@@ -99,6 +99,43 @@ def test_coulomb_chain_from_a_moving_mass_runs(method):
         _run_ok(scene, method, dt, 0.5)
 
 
+
+def _stuck_chain_to_ground_from_a_moving_mass() -> Scene:
+    """Drawn by the suite (session 8, as drawn): ``m0`` moves down on a soft implicit
+    spring ``e0``; junction ``j2`` hangs on it by a Coulomb element ``e2`` (yield force
+    0.076), ``j1`` on ``j2`` by a Herschel-Bulkley dashpot ``e3`` (``n = 0.8``, yield
+    force 0.116) and on ground by a Coulomb element ``e1`` (yield force 0.023)."""
+    return Scene(
+        [Mass("m0", m=1.0, x0=0.02174238759000713, v0=-0.6216909096624927),
+         Junction("j1", x0=-0.9534830883625265),
+         Junction("j2", x0=0.01039541614992635)],
+        [Element("e0", get_law("implicit_spring").bind(k=1.8413783425232708,
+                                                       L0=0.5511035225882043, F0=100.0),
+                 "ground", "m0"),
+         Element("e1", get_law("coulomb").bind(tau=0.022710766146197766, r=11.89758273125704),
+                 "ground", "j1"),
+         Element("e2", get_law("coulomb").bind(tau=0.07560428289654172, r=1.0), "m0", "j2"),
+         Element("e3", get_law("herschel_bulkley").bind(gamma=1.023292992280754,
+                                                        tau=0.11577390066003547, n=0.8),
+                 "j1", "j2")])
+
+
+def test_initial_state_of_a_stuck_chain_to_ground_from_a_moving_mass():
+    """The start stopped with 'no consistent initial state: Newton failed (diverged)'.
+    The balances give ``F1 = F3 = -F2``, so ``|F2|, |F3| <= 0.023`` below their yield
+    forces: ``e2`` and ``e3`` are stuck, ``j2`` and ``j1`` move with ``m0``, and ``e1``
+    slips at its yield force. No start had both junctions at ``m0``'s velocity (moving
+    each junction with one neighbour, ``j1`` takes ``j2``'s velocity as it was, rest);
+    every cluster of junctions now also moves as one with a neighbour outside it."""
+    scene = _stuck_chain_to_ground_from_a_moving_mass()
+    v, F, _ = consistent_initial_state(scene, time_scale=0.025, options=NewtonOptions())
+    assert v == [-0.6216909096624927] * 3
+    assert F[1] == -0.022710766146197766  # e1 slips at its yield force
+    assert F[3] == pytest.approx(F[1], rel=1e-12)
+    assert F[2] == pytest.approx(-F[1], rel=1e-12)
+    for dt in (0.025, 0.0125, 0.00625):
+        _run_ok(scene, "bdf1", dt, 0.5)
+
 def test_an_impulse_below_the_momentum_round_off_is_no_impact():
     """The state of ``test_second_impact_within_the_step_is_located`` (``dt = 0.02255``)
     at ``t = 0.1128``: both masses rest on their strings with velocities of round-off (they come

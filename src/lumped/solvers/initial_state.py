@@ -103,27 +103,59 @@ def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
     return best, True
 
 
-def _chained_guesses(scene: Scene, v0: list[float], F: list[float]) -> list[list[float]]:
-    """The velocity guesses of :func:`lumped.solvers.globalize.stuck_guesses` (the
-    ``k``-th: every junction moving with its ``k``-th dashpot neighbour) followed along
-    chains of junctions to a fixed point: there a junction takes its neighbour's velocity
-    as it is in the guess, not as it was, so that a chain of stuck elements from a
-    moving mass (mass, Coulomb, junction, Coulomb, junction) moves as one. Only the
-    guesses that differ from the plain ones; velocities only (``N`` entries)."""
-    from .globalize import stuck_guesses
+#: At most this many cluster guesses (:func:`_cluster_guesses`) per initial state.
+_MAX_CLUSTER_GUESSES = 64
+
+
+def _cluster_guesses(scene: Scene, v0: list[float]) -> list[list[float]]:
+    """Velocity guesses (``N`` entries) with every cluster of junctions (joined to each
+    other by dashpots) moving as one with one of its dashpot neighbours outside it (a
+    mass's ``v0``, or ground's rest), each combination of the clusters' choices (at most
+    :data:`_MAX_CLUSTER_GUESSES`). A chain of stuck elements from a moving mass (mass,
+    Coulomb, junction, Herschel-Bulkley, junction) moves so; the guesses of
+    :func:`lumped.solvers.globalize.stuck_guesses` move each junction with its own
+    neighbour only, as it was, and swept one junction at a time such a chain stays at
+    rest (each junction's balance holds on its own with the next element slipping)."""
+    import itertools
 
     N = len(scene.nodes)
-    plain = stuck_guesses(scene, v0, F)
+    junction = [isinstance(nd, Junction) for nd in scene.nodes]
+    links = [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
+             if el.kind == "dashpot"]
+    parent = list(range(N))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b in links:
+        if a >= 0 and b >= 0 and junction[a] and junction[b]:
+            parent[find(a)] = find(b)
+    clusters: dict[int, list[int]] = {}
+    for i in range(N):
+        if junction[i]:
+            clusters.setdefault(find(i), []).append(i)
+    members, anchors = [], []
+    for group in clusters.values():
+        outside = []
+        for a, b in links:
+            for end, other in ((a, b), (b, a)):
+                if end in group and (other < 0 or not junction[other]):
+                    vel = 0.0 if other < 0 else v0[other]
+                    if vel not in outside:
+                        outside.append(vel)
+        if outside:
+            members.append(group)
+            anchors.append(outside)
     out = []
-    for k in range(len(plain) // 2):  # the second half repeats them with zero forces
-        w = plain[k][:N]
-        for _ in range(N):
-            nxt = stuck_guesses(scene, w, F)[k][:N]
-            if nxt == w:
-                break
-            w = nxt
-        if w != plain[k][:N] and w not in out:
-            out.append(w)
+    for choice in itertools.islice(itertools.product(*anchors), _MAX_CLUSTER_GUESSES):
+        w = list(v0[:N])
+        for group, vel in zip(members, choice, strict=True):
+            for i in group:
+                w[i] = vel
+        out.append(w)
     return out
 
 
@@ -438,9 +470,9 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
             starts.insert(1, balanced)
             settled = settle(balanced)
             starts.insert(2, settled)
-        # last: the stuck guesses followed along chains of junctions (a junction stuck to
-        # a junction stuck to a moving mass moves with the mass), each settled as above
-        for g in _chained_guesses(scene, v0, u0[N:]):
+        # last: every cluster of junctions moving as one with a neighbour outside it (a
+        # chain of stuck elements from a moving mass), each also settled as above
+        for g in _cluster_guesses(scene, v0):
             start = [0.0 if is_mass[i] else g[i] for i in range(N)] + u0[N:]
             if start not in starts:
                 starts.append(start)
