@@ -237,3 +237,32 @@ def test_a_stage_split_beyond_a_cone_after_a_kept_event_is_not_landed_on_again_a
     sol = simulate(scene, method="radau5", dt=h, t_end=40 * dt, rtol=h**2, atol=h**3,
                    compiled=False, max_steps=3000, throw=False)
     assert sol.ok, sol.message
+
+
+def test_a_run_that_creeps_at_a_landing_stops_with_a_clear_status():
+    # a junction on a Coulomb element, a Herschel-Bulkley n = 0.3 dashpot and an implicit
+    # spring in parallel, hung on m0 by a string: after the stick at t = 0.158 the
+    # Coulomb element's stage force sits a hair beyond its cone, every landing step on
+    # its guard is a few ulps long and the full laws keep the mode; t moved by 1e-12 in
+    # 2000 steps, so the default max_steps = 1e6 would have taken hours (a hang). The run
+    # must end within a few hundred steps, at the end or with a status that says it
+    # creeps (not solved here: issue 11, still open for this scene)
+    scene = Scene([
+        Mass("m0", m=2.0861208986631077, x0=-0.23137757149583504, v0=1.1942754438805432),
+        Junction("j1", x0=0.0),
+    ], [
+        Element("e0", get_law("string_spring").bind(k=26.926404095860132,
+                                                    L=0.00172633840477731), "ground", "m0"),
+        Element("e1", get_law("coulomb").bind(tau=0.04428641309096424, r=52.84510195449372),
+                "m0", "j1"),
+        Element("e2", _hb(1.0, 0.44557693606331017, 0.3), "j1", "m0"),
+        Element("e3", get_law("implicit_spring").bind(k=100.0, L0=1.0, F0=3.109035080236091),
+                "j1", "m0"),
+    ])
+    sol = simulate(scene, method="radau5", dt=0.025, t_end=0.5, rtol=0.025**2,
+                   atol=0.025**3, compiled=False, max_steps=1000, throw=False)
+    assert sol.stats["steps"] < 500, (sol.status, sol.message)
+    assert np.all(np.isfinite(sol.data))
+    if not sol.ok:
+        assert sol.status.value == "step_too_small", sol.message
+        assert "creeps" in sol.message and "'e1'" in sol.message, sol.message

@@ -53,6 +53,9 @@ __all__ = ["run_radau5", "DEFAULT_RTOL", "DEFAULT_ATOL", "EXTRA_OPTIONS"]
 DEFAULT_RTOL = 1e-6
 DEFAULT_ATOL = 1e-9
 _EPS = 2.220446049250313e-16
+#: Accepted steps in a row shorter than the step floor after which a run that creeps
+#: (landing again and again on a guard, ``t`` moving by ulps) stops.
+_CREEP_STEPS = 200
 
 
 def _admitted(guard, q0: float, F0: float, q1: float, F1: float) -> float:
@@ -292,6 +295,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
 
     A_ = _A
     stalled = 0  # loop passes since the last accepted step (a guard against any cycle)
+    creeping = 0  # accepted steps in a row below the step floor (landings; see below)
     hold_check = True
     while t < t_final:
         if hold_check and target is None and not kept:
@@ -336,7 +340,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             F_seen, h_acc, err_acc, h_good = st["F_seen"], st["h_acc"], st["err_acc"], st["h_good"]
             stalled = st["stalled"]
             if stats["steps"] > before:
-                floor_tried = False
+                floor_tried, creeping = False, 0
             if why == "stopped":  # it took the step to the stop: a time event, or the end
                 if bi < len(breaks) and t == breaks[bi]:
                     bi += 1
@@ -574,6 +578,19 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         F = Y[2][2 * N:]
         stats["steps"] += 1
         rows.append(row_of(t, x, v, F))
+        # a landing step is exempt from the step floor; landings of ulps, one after the
+        # other, with the full laws keeping the mode each time, move t by nothing (a
+        # junction on a Coulomb element, a Herschel-Bulkley n = 0.3 dashpot and a spring
+        # in parallel: 2000 steps moved t by 1e-12, and max_steps = 1e6 would take hours)
+        creeping = creeping + 1 if t - t_prev < h_min else 0
+        if creeping >= _CREEP_STEPS:
+            el = scene.elements[ms.hint] if ms.hint is not None else None
+            status, message = Status.STEP_TOO_SMALL, (
+                f"radau5 stopped at t = {t!r}: {creeping} accepted steps in a row below the "
+                f"step floor {h_min!r} (the run creeps"
+                + (f", landing again and again on a guard of element {el.name!r} (law "
+                   f"{el.law_name!r})" if el is not None else "") + ")")
+            break
         ms.mark_free(t_prev, t, x, v, F)  # locks on cycles: forces not unique
         # the step size for the next step (Gustafsson's predictive controller)
         h_new = h / quot
