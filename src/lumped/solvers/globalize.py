@@ -21,6 +21,7 @@ import math
 
 from ..scene import Junction, Scene
 from .branch_check import _known_monotone
+from .groups import connected_groups
 from .impacts import lock_state, lockable_elements
 from .initial_state import _scalar_root
 from .newton import NewtonCode, NewtonOptions, NewtonResult, _residual_ok, newton_solve
@@ -372,21 +373,9 @@ def balance_sweeps(evaluate, project, start: list[float], nodes: list[int], anch
 def _stuck_clusters(u: list[float], nodes: list[int],
                     links: list[tuple[int, int]]) -> list[list[int]]:
     """Groups of two or more of ``nodes`` joined by links of rate exactly zero."""
-    parent = {i: i for i in nodes}
-
-    def find(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for a, b in links:
-        if a in parent and b in parent and u[a] == u[b]:
-            parent[find(a)] = find(b)
-    groups: dict[int, list[int]] = {}
-    for i in nodes:
-        groups.setdefault(find(i), []).append(i)
-    return [g for g in groups.values() if len(g) > 1]
+    groups = connected_groups(nodes, [(a, b) for a, b in links
+                                      if a >= 0 and b >= 0 and u[a] == u[b]])
+    return [g for g in groups if len(g) > 1]
 
 
 def split_free_forces(scene: Scene, evaluate, project, u: list[float],

@@ -16,6 +16,7 @@ from functools import lru_cache
 
 from ..scene import Junction, Mass, Scene
 from .branch_check import _known_monotone
+from .groups import connected_groups
 from .junction_balance import refuse_unbalanced_junctions
 from .newton import (
     NewtonCode,
@@ -122,23 +123,9 @@ def _cluster_guesses(scene: Scene, v0: list[float]) -> list[list[float]]:
     junction = [isinstance(nd, Junction) for nd in scene.nodes]
     links = [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
              if el.kind == "dashpot"]
-    parent = list(range(N))
-
-    def find(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for a, b in links:
-        if a >= 0 and b >= 0 and junction[a] and junction[b]:
-            parent[find(a)] = find(b)
-    clusters: dict[int, list[int]] = {}
-    for i in range(N):
-        if junction[i]:
-            clusters.setdefault(find(i), []).append(i)
+    clusters = connected_groups([i for i in range(N) if junction[i]], links)
     members, anchors = [], []
-    for group in clusters.values():
+    for group in clusters:
         outside = []
         for a, b in links:
             for end, other in ((a, b), (b, a)):
