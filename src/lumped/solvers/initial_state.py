@@ -11,6 +11,7 @@ and junction velocities follow from the laws.
 
 from __future__ import annotations
 
+import itertools
 import math
 from functools import lru_cache
 
@@ -117,8 +118,6 @@ def _cluster_guesses(scene: Scene, v0: list[float]) -> list[list[float]]:
     :func:`lumped.solvers.globalize.stuck_guesses` move each junction with its own
     neighbour only, as it was, and swept one junction at a time such a chain stays at
     rest (each junction's balance holds on its own with the next element slipping)."""
-    import itertools
-
     N = len(scene.nodes)
     junction = [isinstance(nd, Junction) for nd in scene.nodes]
     links = [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
@@ -457,14 +456,19 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
             starts.insert(1, balanced)
             settled = settle(balanced)
             starts.insert(2, settled)
-        # last: every cluster of junctions moving as one with a neighbour outside it (a
-        # chain of stuck elements from a moving mass), each also settled as above
-        for g in _cluster_guesses(scene, v0):
-            start = [0.0 if is_mass[i] else g[i] for i in range(N)] + u0[N:]
-            if start not in starts:
-                starts.append(start)
-                starts.append(settle(project(list(start))))
-        for start in starts:
+        def cluster_starts():
+            # last: every cluster of junctions moving as one with a neighbour outside it
+            # (a chain of stuck elements from a moving mass), each also settled as
+            # above; made only once every start before has failed
+            for g in _cluster_guesses(scene, v0):
+                start = [0.0 if is_mass[i] else g[i] for i in range(N)] + u0[N:]
+                if start not in starts:  # (starts, as before: the ones tried so far)
+                    starts.append(start)
+                    yield start
+                    starts.append(settle(project(list(start))))
+                    yield starts[-1]
+
+        for start in itertools.chain(starts, cluster_starts()):
             for proj in (None, project):
                 if start is u0 and proj is None:
                     continue  # done above
