@@ -251,12 +251,33 @@ def test_a_forcing_with_a_jump_is_a_time_event():
 def test_event_accumulation_ends_with_a_clear_status():
     scene = scenario_scene("forcing-F2")
     sol = simulate(scene, method="radau5", t_end=5.0, throw=False, zeno_events=3,
-                   zeno_window=1.0)
+                   zeno_window=1.0, bridge=False)
     assert sol.status is Status.TOO_MANY_EVENTS
     assert "accumulation" in sol.message and "dashpot" in sol.message
     assert sol.t[-1] < 1.0
     with pytest.raises(SolverError, match="max_events = 2"):
         simulate(scene, method="radau5", t_end=5.0, max_events=2)
+    with pytest.raises(SolverError, match="max_events = 2"):  # never bridged
+        simulate(scene, method="radau5", t_end=5.0, max_events=2, bridge=True)
+
+
+def test_an_accumulation_is_bridged_by_backward_euler():
+    # the same "accumulation" (3 events within 1 s, by the keywords): by default backward
+    # Euler bridges it from the last accepted state and radau5 goes on to t_end, each
+    # bridge named in the message; the motion stays the exact one to the bridges'
+    # first-order error (3 bridges of steps sqrt(rtol) h_max: 2.4e-11, 3.5e-12 without)
+    scene = scenario_scene("forcing-F2")
+    sol = simulate(scene, method="radau5", t_end=5.0, zeno_events=3, zeno_window=1.0,
+                   rtol=1e-8, atol=1e-10)
+    assert sol.ok and sol.t[-1] == 5.0
+    assert sol.stats["bridges"] >= 1 and sol.stats["bridged_steps"] >= 32
+    assert sol.message.count("over: radau5 stopped at") == sol.stats["bridges"]
+    assert "accumulation" in sol.message
+    ref = simulate(scene, method="exact", dt=1e-3, t_end=5.0)
+    t = np.linspace(0.0, 5.0, 501)
+    assert np.abs(sol.sol(t)[:, 1] - ref.sol(t)[:, 1]).max() <= 1e-9
+    with pytest.raises(TypeError, match="`bridge` must be True or False, got 1"):
+        simulate(scene, method="radau5", t_end=5.0, bridge=1)
 
 
 def test_dense_output_on_a_grid_and_auto():

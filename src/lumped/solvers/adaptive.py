@@ -40,10 +40,12 @@ from .adaptive_setup import (
     read_options,
     scene_plan,
 )
+from .bridge import MAX_BRIDGES, bridge_steps, linear_stages, run_bridge
 from .crossing_root import first_root_py
+from .dense_defect import dense_defect
 from .events import fold_crossed, guard_tolerance
 from .initial_state import consistent_initial_state
-from .radau import START_WEIGHTS, C, StageSystem
+from .radau import STALL_PASSES, START_WEIGHTS, C, StageSystem
 from .radau import A as _A
 from .status import BranchError, RawRun, SolverError, Status
 from .stuck import hold_interval
@@ -56,6 +58,10 @@ _EPS = 2.220446049250313e-16
 #: Accepted steps in a row shorter than the step floor after which a run that creeps
 #: (landing again and again on a guard, ``t`` moving by ulps) stops.
 _CREEP_STEPS = 200
+#: The stops that backward Euler bridges (:mod:`lumped.solvers.bridge`, the keyword
+#: ``bridge``); a fold of a law (``BRANCH_LOST``), ``max_steps`` and ``max_events`` end
+#: the run.
+_BRIDGED = frozenset({Status.STEP_TOO_SMALL, Status.TOO_MANY_EVENTS, Status.INCONSISTENT})
 
 
 def _admitted(guard, q0: float, F0: float, q1: float, F1: float) -> float:
@@ -155,13 +161,17 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         raise SolverError(f"radau5: no consistent initial mode: {msg}",
                           status=Status.INCONSISTENT, t=0.0, where="", residual=math.nan)
     rows.set_first(row_of(0.0, x, v, F))
+    # the last state a step (or a held interval) ended on, before any event there changed
+    # it: a bridge starts from it (an event probe's forces on a position lock are
+    # m ulp(x) / h_probe^2, 1e11, no start for a Newton iteration)
+    committed = (0.0, list(x), list(v), list(F))
 
     def net_at(t: float) -> list[float]:
         return scene.net_forces(t, F)
 
     acc0 = [net_at(0.0)[i] / masses[i] if is_mass[i] else 0.0 for i in range(N)]
     h = opts["first_step"] or initial_step(x, v, acc0, is_mass, rtol, atol, t_final)
-    h_good = h
+    h_good = h_big = h  # (the longest accepted step: the scale of a bridge's steps)
     h_acc = err_acc = None
     F_seen = 0.0
     if fast is not None:
@@ -280,6 +290,15 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         U = got[0] if got[0] is not None else U
         return got
 
+    def defect(U: list[float], h: float) -> float:
+        """The largest scaled defect of the step's dense output against the held laws
+        (:func:`lumped.solvers.dense_defect.dense_defect`)."""
+        F0 = dense_start_forces(U, h)
+        v_scale = max([abs(vi) for vi in v] + [abs(U[2 * n + i]) for i in range(N)])
+        x_scale = max(abs(xi) for xi in x) + h * v_scale
+        return dense_defect([system.element_nodes(U, h, x, v, F0, e) for e in range(E)],
+                            kernels, spring, rtol, atol, v_scale, x_scale, F_seen)[0]
+
     def end_guard(U: list[float], h: float, which) -> tuple[float, float]:
         e = watched[which[0]]
         q, Fe = system.element_nodes(U, h, x, v, F, e)
@@ -293,11 +312,68 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 "prev_break": breaks[bi - 1] if bi > 0 else math.nan, "rtol": rtol,
                 "atol": atol, "m_min": m_min, "max_steps": opts["max_steps"]}
 
+    bridges: list[str] = []  # the stops bridged by backward Euler, and where
+
+    def bridge_over() -> bool:
+        """Backward Euler over the stop (``status``, ``message``) from the last accepted
+        state (:mod:`lumped.solvers.bridge`), its steps in the output; then the mode the
+        full laws choose at its end. Whether the run goes on."""
+        nonlocal t, x, v, F, h, h_acc, dF_n, target, kept, stalled, creeping, \
+            floor_tried, hold_check, status, message, committed
+        if len(bridges) >= MAX_BRIDGES:
+            message += f" (after {len(bridges)} bridges by backward Euler, the most a run takes)"
+            return False
+        if committed[0] == t:
+            x, v, F = list(committed[1]), list(committed[2]), list(committed[3])
+        delta, n_b, to_end = bridge_steps(rtol, h_big, t_final - t, len(bridges))
+        run = run_bridge(scene, t, x, v, F, delta, n_b, settings.options,
+                         opts["restitution"])
+        if isinstance(run, str):
+            message += f"; {run}"
+            return False
+        t0 = t
+        y = x + v + F
+        for k in range(1, n_b + 1):
+            xk = run.xs[k * N:(k + 1) * N]
+            vk = run.vs[k * N:(k + 1) * N]
+            Fk = run.Fs[k * E:(k + 1) * E]
+            tk = t_final if (to_end and k == n_b) else t0 + k * delta
+            y_next = xk + vk + Fk
+            dense.add(t0 + (k - 1) * delta, delta, y, linear_stages(y, y_next, C))
+            rows.append(row_of(tk, xk, vk, Fk))
+            y = y_next
+        t, x, v, F = tk, xk, vk, Fk
+        committed = (t, list(x), list(v), list(F))
+        events.extend(run.events)
+        ms.log.add_closed(run.indeterminate)
+        stats["bridged_steps"] = stats.get("bridged_steps", 0) + n_b
+        bridges.append(f"[{t0!r}, {t!r}] over: {message}")
+        stats["bridges"] = len(bridges)
+        status, message = Status.SUCCESS, ""
+        target, dF_n, h_acc = None, None, None
+        kept, floor_tried, hold_check = False, False, True
+        stalled = creeping = 0
+        tangent.clear()
+        h = max(h_good, delta)
+        ms.recent.clear()
+        if not to_end:
+            stop = at_event(t, h, "start")
+            if stop:
+                status, message = stop
+        return True
+
     A_ = _A
     stalled = 0  # loop passes since the last accepted step (a guard against any cycle)
     creeping = 0  # accepted steps in a row below the step floor (landings; see below)
     hold_check = True
     while t < t_final:
+        if status is not Status.SUCCESS:
+            # a stop mid-run: backward Euler bridges it (lumped.solvers.bridge), or the
+            # run ends here
+            if not (opts["bridge"] and status in _BRIDGED and "max_events" not in message
+                    and bridge_over()):
+                break
+            continue
         if hold_check and target is None and not kept:
             # at rest in a mode that locks every node: the static balance up to the
             # break-out or the stop, no steps (the same in both loops)
@@ -306,6 +382,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                                 else t_final, x, v, F, dense, rows)
             if seg is not None:
                 t, F, broke = seg[0], list(seg[1]), seg[2]
+                committed = (t, list(x), list(v), list(F))
                 stats["held_intervals"] += 1
                 dF_n = h_acc = None
                 stop = None
@@ -321,7 +398,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                     stop = at_event(t, h, "time")
                 if stop:
                     status, message = stop
-                    break
+                    continue
                 continue
         if fast is None and stats["steps"] >= adaptive_fast.COMPILE_AFTER and stats[
                 "loop"].startswith(
@@ -337,6 +414,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             before = stats["steps"]
             why = fast.run(st, modes, watched, stats, dense, rows)
             t, h, x, v, F, dF_n = st["t"], st["h"], st["x"], st["v"], st["F"], st["dF_n"]
+            committed = (t, list(x), list(v), list(F))
             F_seen, h_acc, err_acc, h_good = st["F_seen"], st["h_acc"], st["err_acc"], st["h_good"]
             stalled = st["stalled"]
             if stats["steps"] > before:
@@ -349,18 +427,18 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                     stop = at_event(t, h, "time")
                     if stop:
                         status, message = stop
-                        break
+                        continue
                 continue
         stalled += 1
-        if stalled > 10_000:
+        if stalled > STALL_PASSES:
             status, message = Status.STEP_TOO_SMALL, (
-                f"radau5 stopped at t = {t!r}: 10000 attempts without an accepted step "
+                f"radau5 stopped at t = {t!r}: {STALL_PASSES} attempts without an accepted step "
                 f"(step size {h!r})")
-            break
+            continue
         if stats["steps"] >= opts["max_steps"]:
             status, message = Status.MAX_ITERS, (f"radau5 stopped at t = {t!r}: "
                                                  f"max_steps = {opts['max_steps']} reached")
-            break
+            continue
         t_stop = breaks[bi] if bi < len(breaks) else t_final
         room = t_stop - t
         to_stop = False
@@ -375,14 +453,14 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h_acc = None
             changed = choose_again(h_good)
             if changed is None:
-                break
+                continue
             if changed:
                 h = h_good
                 continue
         if h < h_min and target is None:
             status, message = Status.STEP_TOO_SMALL, (
                 f"radau5: step size {h!r} below its floor {h_min!r} at t = {t!r}")
-            break
+            continue
         # this attempt compiled (the same numbers), unless a Jacobian is singular
         got = None if fast is None else fast.attempt(
             t, h, x, v, F, dF_n, F_seen, breaks[bi - 1] if bi > 0 else math.nan, modes,
@@ -421,7 +499,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 # (probes on the scale of the step that failed: the lock breaks within it)
                 changed = choose_again(h)
                 if changed is None:
-                    break
+                    continue
                 if changed:
                     h = h_good
                     continue
@@ -448,7 +526,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 stop = at_event(t, h_good, "guard")
                 if stop:
                     status, message = stop
-                    break
+                    continue
                 kept, h = modes == old, h_good
                 tangent.clear()
             continue
@@ -534,7 +612,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 stop = at_event(t, h, "guard")
                 if stop:
                     status, message = stop
-                    break
+                    continue
                 # the full laws keep the mode at t (a tangency, round-off): the retried
                 # step is accepted unless a guard fails later in it
                 kept = modes == old
@@ -544,6 +622,18 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0, h]
             h = s_hit * h
             continue
+        if ms.forces_from_probe and target is None:
+            # the first step after an event, no guard crossed in it: its dense output
+            # against the held laws between the nodes (a junction's Herschel-Bulkley
+            # n < 1 dashpot breaking out starts as (t - t*)^n, which the error estimate
+            # does not see)
+            d = defect(sol, h)
+            if d > 1.0:
+                stats["rejected"] += 1
+                stats["defect_rejected"] = stats.get("defect_rejected", 0) + 1
+                h *= max(0.1, min(0.5, 0.8 / d))
+                h_acc = None
+                continue
         F_0 = start_forces(sol) if checked else F
         folded = [e for e in checked
                   if fold_crossed(kernels[e], *system.element_nodes(sol, h, x, v, F_0, e))]
@@ -553,7 +643,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 f"element {el.name!r} (law {el.law_name!r}) reaches a fold of its law "
                 f"between t = {t!r} and {t + h!r}: dR/dq or dR/dF changes sign, there is no "
                 "solution continuous with the past beyond it")
-            break
+            continue
         # accept
         Y = []
         for k in range(3):
@@ -576,6 +666,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         x = Y[2][:N]
         v = Y[2][N:2 * N]
         F = Y[2][2 * N:]
+        committed = (t, list(x), list(v), list(F))
         stats["steps"] += 1
         rows.append(row_of(t, x, v, F))
         # a landing step is exempt from the step floor; landings of ulps, one after the
@@ -590,7 +681,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 f"step floor {h_min!r} (the run creeps"
                 + (f", landing again and again on a guard of element {el.name!r} (law "
                    f"{el.law_name!r})" if el is not None else "") + ")")
-            break
+            continue
         ms.mark_free(t_prev, t, x, v, F)  # locks on cycles: forces not unique
         # the step size for the next step (Gustafsson's predictive controller)
         h_new = h / quot
@@ -600,6 +691,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h_new = h / max(quot, facgus)
         h_acc, err_acc = h, max(1e-2, err_norm)
         h_good, floor_tried, kept, stalled = h, False, False, 0
+        h_big = max(h_big, h)
         tangent.clear()
         # after a landing the step goes on from the size that found the event (the
         # landing step can be ulps long when the event sits at the step's start)
@@ -613,8 +705,11 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             stop = at_event(t, h, "guard" if event_here else "time")
             if stop:
                 status, message = stop
-                break
+                continue
     stats["events"] = len(events)
+    if bridges:
+        message = (message + " " if message else "") + (
+            f"radau5 bridged {len(bridges)} stop(s) by backward Euler: " + "; ".join(bridges))
     if status is not Status.SUCCESS and settings.throw:
         error = BranchError if status is Status.BRANCH_LOST else SolverError
         raise error(message, status=status, t=t, where="", residual=math.nan)

@@ -21,7 +21,7 @@ __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "compiled_stage_solve
 #: Method-specific keywords of ``radau5`` and their defaults.
 EXTRA_OPTIONS = {"max_events": 10_000, "zeno_events": 50, "zeno_window": None,
                  "max_steps": 1_000_000, "first_step": None, "restitution": 0.0,
-                 "compiled": None}
+                 "compiled": None, "bridge": True}
 
 
 def read_options(settings) -> dict:
@@ -47,6 +47,8 @@ def read_options(settings) -> dict:
     e = out["restitution"]
     if out["compiled"] is not None and not isinstance(out["compiled"], bool):
         raise TypeError(f"`compiled` must be True, False or None, got {out['compiled']!r}")
+    if not isinstance(out["bridge"], bool):
+        raise TypeError(f"`bridge` must be True or False, got {out['bridge']!r}")
     if isinstance(e, bool) or not isinstance(e, (int, float)) or not 0.0 <= e <= 1.0:
         raise ValueError(f"`restitution` must be a number in [0, 1], got {e!r}")
     for key in ("zeno_window", "first_step"):

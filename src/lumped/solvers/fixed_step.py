@@ -116,8 +116,13 @@ def run_bdf(
     options: NewtonOptions | None = None,
     throw: bool = True,
     restitution: float = 0.0,
+    start: tuple[float, list[float], list[float], list[float]] | None = None,
 ) -> RunResult:
     """Advance ``scene`` by ``n_steps`` fixed steps of BDF1 or BDF2 (first step BDF1).
+
+    From the consistent initial state at ``t = 0``, or from ``start = (t0, x, v, F)``, a
+    state of the scene at ``t0`` (the samples are then at ``t0 + n dt``; ``radau5``
+    bridges a stop with it, :mod:`lumped.solvers.bridge`).
 
     Returns the samples (see :class:`RunResult`; ``as_array()`` gives the columns ``t``,
     ``x_i, v_i`` per node, ``F_e`` per element), the counters, the impacts (``events``)
@@ -139,8 +144,13 @@ def run_bdf(
         raise ValueError(f"`restitution` must be in [0, 1], got {restitution!r}")
     options = options or NewtonOptions()
     N, E = len(scene.nodes), len(scene.elements)
-    v, F, ic_stats = consistent_initial_state(scene, time_scale=dt, options=options)
-    x = [n.x0 for n in scene.nodes]
+    if start is None:
+        t0 = 0.0
+        v, F, ic_stats = consistent_initial_state(scene, time_scale=dt, options=options)
+        x = [n.x0 for n in scene.nodes]
+    else:
+        t0, x, v, F = start[0], list(start[1]), list(start[2]), list(start[3])
+        ic_stats = {"newton_iterations": 0}
     forcing = [(i, fn) for i, fn in enumerate(scene.forcing) if fn is not None]
     isfinite = math.isfinite
 
@@ -178,7 +188,7 @@ def run_bdf(
     log = IntervalLog()
     cyclic = cyclic_elements(scene)
     for step in range(1, n_steps + 1):
-        t = step * dt
+        t = t0 + step * dt
         for i, fn in forcing:
             val = fn(t)
             if not isfinite(val):
@@ -298,10 +308,10 @@ def run_bdf(
             # force-free elements: dR/dF = 0 on the diagonal of the step's Jacobian
             if J_acc is not None and sum(J_acc[N + e][N + e] == 0.0 for e in cyclic) < 2:
                 if log.open:
-                    log.mark((step - 1) * dt, t, ())
+                    log.mark(t0 + (step - 1) * dt, t, ())
             else:
                 q_acc = scene.elongations(x_new, v_new)
-                log.mark((step - 1) * dt, t, [scene.elements[e].name for e in
+                log.mark(t0 + (step - 1) * dt, t, [scene.elements[e].name for e in
                                               indeterminate_elements(scene, q_acc, F, cyclic)])
         x_prev, v_prev, x, v = x, v, x_new, v_new
         xs += x

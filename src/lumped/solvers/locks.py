@@ -112,6 +112,16 @@ class IntervalLog:
                     self._done.setdefault(name, []).append((span[0], span[1]))
                 self._open[name] = [t, t]
 
+    def add_closed(self, intervals: dict[str, list[tuple[float, float]]]) -> None:
+        """Close every open interval, then add ``intervals`` (``{name: [(t0, t1), ...]}``,
+        later than every mark so far: a backward-Euler bridge's, :mod:`lumped.solvers.
+        bridge`)."""
+        for name, (t0, t1) in self._open.items():
+            self._done.setdefault(name, []).append((t0, t1))
+        self._open.clear()
+        for name, spans in intervals.items():
+            self._done.setdefault(name, []).extend(spans)
+
     def result(self) -> dict[str, list[tuple[float, float]]]:
         out = {k: list(v) for k, v in self._done.items()}
         for name, (t0, t1) in self._open.items():

@@ -185,6 +185,10 @@ def dense_slopes(s: float) -> tuple[float, float, float]:
     return out[0], out[1], out[2]
 
 
+#: Passes of the ``radau5`` loop without an accepted step after which it stops (a guard
+#: against any cycle; backward Euler then bridges the point, :mod:`lumped.solvers.bridge`).
+STALL_PASSES = 1_000
+
 #: How much looser the forces of guarded elements are held than ``x`` and ``v``.
 FORCE_TOL_FACTOR = 100.0
 

@@ -49,7 +49,7 @@ import numpy as np
 
 from ..codegen.jit import njit, numba_enabled
 from .crossing_root import first_root
-from .radau import END_SLOPES, C
+from .radau import END_SLOPES, STALL_PASSES, C
 from .radau_jit import stage_solve
 from .radau_step_jit import crossed, finite, folded, forces, step_error
 
@@ -114,7 +114,7 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
         to_stop = False
         if single:
             pass
-        elif ist[STALLED] + 1 > 10_000 or ist[STEPS] >= ist[MAX_STEPS]:
+        elif ist[STALLED] + 1 > STALL_PASSES or ist[STEPS] >= ist[MAX_STEPS]:
             reason = LIMIT
         elif ist[N_OUT] >= cap:
             reason = FULL

@@ -1,0 +1,144 @@
+"""radau5: the dense output's defect after an event, and backward Euler over a stop
+(issue 11; :mod:`lumped.solvers.dense_defect`, :mod:`lumped.solvers.bridge`).
+
+The scenes are draws of the random-network suite (tests/solvers/test_random_networks.py),
+written out; each test failed before its fix."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from _yield_check import check_yield
+
+from lumped import simulate
+from lumped.laws import get_law
+from lumped.scene import Element, Junction, Mass, Scene
+from lumped.solvers.bridge import BRIDGE_STEPS, MAX_STEPS, bridge_steps, linear_stages
+from lumped.solvers.dense_defect import dense_defect
+from lumped.solvers.radau import C
+
+
+def _breakout_scene(e3) -> Scene:
+    # a massless junction j1 hangs between a Herschel-Bulkley n = 0.5 dashpot (to the
+    # junction j0, held by stuck dashpots to ground) and a slack string spring pulled by
+    # the mass m2: the dashpot breaks out at t = 0.147, its rate ~ sqrt(t - t*)
+    return Scene([Junction("j0", x0=-0.14527229287216747), Junction("j1", x0=1e-20),
+                  Mass("m2", m=1.0, x0=0.0, v0=1.5)],
+                 [Element("e0", get_law("coulomb").bind(tau=1.0, r=1.0), "ground", "j0"),
+                  Element("e1", get_law("herschel_bulkley").bind(
+                      gamma=8.900493576648275, tau=0.21976660754420735, n=0.5), "j0", "j1"),
+                  Element("e2", get_law("string_spring").bind(k=1.0, L=1.0), "j1", "m2"),
+                  Element("e3", e3, "ground", "j0")])
+
+
+@pytest.mark.parametrize("e3", [
+    get_law("herschel_bulkley").bind(gamma=0.3528632610879084, tau=1.0, n=0.8),
+    get_law("string_spring").bind(k=1.0, L=0.21976660754420735)])
+def test_a_junction_breaking_out_on_a_steep_law_is_not_stepped_over(e3):
+    # the first step after the break-out went to t_end (0.353 s) at rtol 6.25e-4: its
+    # dense output had j1's rate 0.09 at t = 0.15 where the law gives 0.51 for the force
+    # beside it (e1 "stuck above its yield force"). The error estimate measures x of
+    # every node and v of the masses at the step's end; the dense-output defect rejects it
+    scene = _breakout_scene(e3)
+    h = 0.025
+    sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                   compiled=False)
+    assert sol.ok, sol.message
+    check_yield(scene, sol, min(1e-3, 100.0 * h**2), h**3 + h**2 * 1.5, h**2)
+    assert sol.stats["defect_rejected"] >= 1
+    fine = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=1e-9, atol=1e-12)
+    assert fine.ok, fine.message
+    # the junction's rate on the output grid: within 5 % of its range (was 0.42 of 1.44)
+    assert np.abs(sol.v["j1"] - fine.v["j1"]).max() <= 0.05 * np.abs(fine.v["j1"]).max()
+
+
+def test_a_step_floor_at_a_junction_is_bridged():
+    # a Herschel-Bulkley n = 0.3 dashpot to ground and two Coulomb elements meet at
+    # junctions beside an implicit spring: at rtol 3.9e-5 the steps fell below their
+    # floor at t = 0.0327 ("step size 1.09e-16 below its floor"). Backward Euler bridges
+    # the point and radau5 goes on; the run converges with the tolerance
+    scene = Scene([Junction("j0", x0=-0.9999999999999999),
+                   Mass("m1", m=0.535894354301168, x0=0.17500680539852875, v0=2.0),
+                   Junction("j2", x0=-0.8865281730212411),
+                   Junction("j3", x0=0.3920411168005613)],
+                  [Element("e0", get_law("herschel_bulkley").bind(
+                      gamma=0.19624400935818115, tau=0.06691965286991632, n=0.3),
+                      "ground", "j0"),
+                   Element("e1", get_law("coulomb").bind(tau=1.0, r=1.000002331308587),
+                           "j0", "m1"),
+                   Element("e2", get_law("newtonian").bind(c=1.023292992280754), "j0", "j2"),
+                   Element("e3", get_law("coulomb").bind(tau=0.025283474158479237,
+                                                         r=88.95990742607677),
+                           "ground", "j3"),
+                   Element("e4", get_law("implicit_spring").bind(
+                       k=0.6168771729544832, L0=1.0, F0=15.316527015815849), "j0", "ground"),
+                   Element("e5", get_law("linear_spring").bind(k=5.112724278215523),
+                           "j3", "ground"),
+                   Element("e6", get_law("newtonian").bind(c=1.0122972989679941), "j0",
+                           "j3")])
+    h = 0.025 / 4
+    off = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                   compiled=False, throw=False, bridge=False)
+    assert not off.ok and "below its floor" in off.message
+    sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                   compiled=False)
+    assert sol.ok and sol.t[-1] == 0.5 and np.all(np.isfinite(sol.data))
+    assert sol.stats["bridges"] >= 1
+    assert "bridged" in sol.message and "below its floor" in sol.message
+    check_yield(scene, sol, min(1e-3, 100.0 * h**2), h**3 + h**2 * 2.0, h**2)
+    # against backward Euler at a step 64 times finer than the output grid
+    ref = simulate(scene, method="bdf1", dt=h / 64, t_end=0.5)
+    assert np.abs(sol.x["m1"] - ref.x["m1"][::64]).max() <= 2e-3
+    assert np.abs(sol.x["j0"] - ref.x["j0"][::64]).max() <= 2e-3
+    # the compiled loop hands the stop to the same Python driver: the same numbers
+    both = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                    compiled=True)
+    assert np.array_equal(both.data, sol.data)
+
+
+def test_bridge_steps_shrink_with_the_tolerance_and_end_at_the_run_end():
+    d1, n1, end1 = bridge_steps(1e-4, 0.1, 10.0, 0)
+    assert (d1, n1, end1) == (pytest.approx(1e-3), BRIDGE_STEPS, False)
+    d2, n2, _ = bridge_steps(1e-8, 0.1, 10.0, 0)
+    assert d2 == pytest.approx(1e-5)
+    assert bridge_steps(1e-4, 0.1, 10.0, 3)[1] == 8 * BRIDGE_STEPS  # doubled per bridge
+    assert bridge_steps(1e-4, 0.1, 1e9, 40)[1] == MAX_STEPS
+    d, n, end = bridge_steps(1e-4, 0.1, 0.0105, 0)  # less room than 32 steps
+    assert end and n == 11 and d * n == pytest.approx(0.0105) and d <= 1e-3
+
+
+def test_linear_stages_are_the_straight_line():
+    y0, y1 = [0.0, 1.0, -2.0], [1.0, 3.0, -2.0]
+    got = linear_stages(y0, y1, C)
+    for c, row in zip(C, got, strict=True):
+        assert row == pytest.approx([a + c * (b - a) for a, b in zip(y0, y1, strict=True)])
+
+
+def test_the_defect_of_a_linear_law_is_round_off_and_of_a_curved_one_its_interpolation():
+    # a Bingham slip branch R = q - gamma (F - tau) is linear: interpolated nodes stay on
+    # it. q = sqrt(s) on [0, 1] (a Herschel-Bulkley n = 0.5 start): the cubic through the
+    # nodes is off by 0.076 of the range at s = 0.03
+    def bingham(q, F):
+        return q - 2.0 * (F - 1.0), 1.0, -2.0
+
+    F_nodes = (1.0, 1.1, 1.3, 1.5)
+    q_nodes = tuple(2.0 * (F - 1.0) for F in F_nodes)
+    d, e = dense_defect([(q_nodes, F_nodes)], [bingham], [False], 1e-6, 1e-9, 1.0, 1.0,
+                        1.5)
+    assert d <= 1e-6 and e == 0
+
+    def hb_half(q, F):  # q = (F - 1)^0.5, in the inverse form F = 1 + q^2
+        return F - 1.0 - q * q, -2.0 * q, 1.0
+
+    s = (0.0, *C)
+    q_nodes = tuple(math.sqrt(c) for c in s)
+    F_nodes = tuple(1.0 + c for c in s)
+    d, e = dense_defect([(q_nodes, F_nodes)], [hb_half], [False], 1e-6, 1e-9, 1.0, 1.0,
+                        2.0)
+    # off the curve by 0.02 to 0.09 in force against a force tolerance of 2e-4
+    assert e == 0 and d > 100.0
+    d_loose, _ = dense_defect([(q_nodes, F_nodes)], [hb_half], [False], 1e-3, 1e-3, 1.0,
+                              1.0, 2.0)
+    assert d_loose < d
