@@ -40,7 +40,7 @@ from .adaptive_setup import (
     read_options,
     scene_plan,
 )
-from .bridge import MAX_BRIDGES, bridge_steps, linear_stages, run_bridge
+from .bridge import MAX_BRIDGES, take_bridge
 from .crossing_root import first_root_py
 from .dense_defect import dense_defect
 from .events import fold_crossed, guard_tolerance
@@ -323,30 +323,15 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         if len(bridges) >= MAX_BRIDGES:
             message += f" (after {len(bridges)} bridges by backward Euler, the most a run takes)"
             return False
-        if committed[0] == t:
-            x, v, F = list(committed[1]), list(committed[2]), list(committed[3])
-        delta, n_b, to_end = bridge_steps(rtol, h_big, t_final - t, len(bridges))
-        run = run_bridge(scene, t, x, v, F, delta, n_b, settings.options,
-                         opts["restitution"])
-        if isinstance(run, str):
-            message += f"; {run}"
+        start = committed if committed[0] == t else (t, x, v, F)
+        got = take_bridge(scene, start, len(bridges), rtol, h_big, t_final, settings.options,
+                          opts["restitution"], dense, rows, events, ms.log, stats)
+        if isinstance(got, str):
+            message += f"; {got}"
             return False
         t0 = t
-        y = x + v + F
-        for k in range(1, n_b + 1):
-            xk = run.xs[k * N:(k + 1) * N]
-            vk = run.vs[k * N:(k + 1) * N]
-            Fk = run.Fs[k * E:(k + 1) * E]
-            tk = t_final if (to_end and k == n_b) else t0 + k * delta
-            y_next = xk + vk + Fk
-            dense.add(t0 + (k - 1) * delta, delta, y, linear_stages(y, y_next, C))
-            rows.append(row_of(tk, xk, vk, Fk))
-            y = y_next
-        t, x, v, F = tk, xk, vk, Fk
+        t, x, v, F, to_end, delta = got
         committed = (t, list(x), list(v), list(F))
-        events.extend(run.events)
-        ms.log.add_closed(run.indeterminate)
-        stats["bridged_steps"] = stats.get("bridged_steps", 0) + n_b
         bridges.append(f"[{t0!r}, {t!r}] over: {message}")
         stats["bridges"] = len(bridges)
         status, message = Status.SUCCESS, ""

@@ -33,11 +33,13 @@ from __future__ import annotations
 
 import math
 
+from .adaptive_output import row_of
 from .fixed_step import RunResult, run_bdf
+from .radau import C
 from .status import SolverError
 
 __all__ = ["BRIDGE_STEPS", "MAX_BRIDGES", "MAX_STEPS", "bridge_steps", "run_bridge",
-           "linear_stages"]
+           "linear_stages", "take_bridge"]
 
 #: Backward-Euler steps of the first bridge of a run (doubled for each further one).
 BRIDGE_STEPS = 32
@@ -83,3 +85,35 @@ def linear_stages(y0: list[float], y1: list[float], nodes: tuple[float, ...]
     ``y1`` (``s = 1``): stage values whose collocation polynomial is that line, the dense
     output of a backward-Euler step."""
     return [[a + c * (b - a) for a, b in zip(y0, y1, strict=True)] for c in nodes]
+
+
+def take_bridge(scene, start: tuple, k: int, rtol: float, h_max: float, t_final: float,
+                options, restitution: float, dense, rows, events: list, log, stats: dict
+                ) -> tuple[float, list[float], list[float], list[float], bool, float] | str:
+    """The ``k``-th bridge of a ``radau5`` run (``k = 0`` first) from ``start = (t, x, v,
+    F)``: its steps written to the dense output ``dense`` and the rows ``rows``, its
+    impacts to ``events``, its intervals of forces that are not unique to ``log``
+    (:class:`~lumped.solvers.locks.IntervalLog`), its steps counted in
+    ``stats["bridged_steps"]``. Returns ``(t, x, v, F, to_end, delta)`` at its end
+    (``to_end`` when that is ``t_final``; ``delta`` its step), or why backward Euler
+    failed too."""
+    t0, x, v, F = start
+    delta, n, to_end = bridge_steps(rtol, h_max, t_final - t0, k)
+    run = run_bridge(scene, t0, list(x), list(v), list(F), delta, n, options, restitution)
+    if isinstance(run, str):
+        return run
+    N, E = len(x), len(F)
+    y = list(x) + list(v) + list(F)
+    for i in range(1, n + 1):
+        x = run.xs[i * N:(i + 1) * N]
+        v = run.vs[i * N:(i + 1) * N]
+        F = run.Fs[i * E:(i + 1) * E]
+        t = t_final if (to_end and i == n) else t0 + i * delta
+        y_next = x + v + F
+        dense.add(t0 + (i - 1) * delta, delta, y, linear_stages(y, y_next, C))
+        rows.append(row_of(t, x, v, F))
+        y = y_next
+    events.extend(run.events)
+    log.add_closed(run.indeterminate)
+    stats["bridged_steps"] = stats.get("bridged_steps", 0) + n
+    return t, x, v, F, to_end, delta
