@@ -205,7 +205,10 @@ def check_network(scene: Scene, method: str, **extra) -> list:
             rise = np.diff(E)
             assert rise.max() <= tol, f"bdf1 created energy {rise.max()!r}"
     else:
-        err = np.abs(energies[1][::2] - energies[2][::4]).max()
+        # the error of the middle run measured where its rise is measured, on its own grid
+        # (on every other point only, an undamped oscillator's dense-output energy error
+        # between them, 1.8e-3 of 51.5 at rtol 1e-4, was read as energy created)
+        err = np.abs(energies[1] - energies[2][::2]).max()
         assert energies[1].max() - E0 <= 4 * err + tol, "energy created beyond the error"
     # convergence of the displacements (continuous; velocities jump at impacts and
     # forces carry impulses): the distance to the finest run shrinks as dt halves
