@@ -355,8 +355,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         if status is not Status.SUCCESS:
             # a stop mid-run: backward Euler bridges it (lumped.solvers.bridge), or the
             # run ends here
-            if not (opts["bridge"] and status in _BRIDGED and "max_events" not in message
-                    and bridge_over()):
+            if not (opts["bridge"] and status in _BRIDGED
+                    and len(events) <= opts["max_events"] and bridge_over()):
                 break
             continue
         if hold_check and target is None and not kept:

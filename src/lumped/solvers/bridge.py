@@ -99,7 +99,7 @@ def take_bridge(scene, start: tuple, k: int, rtol: float, h_max: float, t_final:
     failed too."""
     t0, x, v, F = start
     delta, n, to_end = bridge_steps(rtol, h_max, t_final - t0, k)
-    run = run_bridge(scene, t0, list(x), list(v), list(F), delta, n, options, restitution)
+    run = run_bridge(scene, t0, x, v, F, delta, n, options, restitution)  # (run_bdf copies)
     if isinstance(run, str):
         return run
     N, E = len(x), len(F)
