@@ -40,6 +40,11 @@ __all__ = ["force_range", "refuse_unbalanced_junctions"]
 #: finite residuals on both sides wins.
 _PROBES = (1e100, 1e30, 1e12, 1e6)
 
+#: Relative imbalance of a junction row beyond which the state is refused: ten times the
+#: initial solve's Newton tolerance (``NewtonOptions.rtol``), which no Newton iterate can
+#: meet then. Only consulted after that solve failed.
+_GAP = 1e-9
+
 
 def _admitted_at_some_rate(kernel, F: float) -> bool:
     """``R(q, F) = 0`` for some ``q``: ``R`` changes sign (or vanishes) between ``-Q`` and
@@ -158,13 +163,20 @@ def refuse_unbalanced_junctions(scene: Scene, pinned: Sequence[float | None],
     c = np.concatenate([np.zeros(n), np.ones(2 * m)])
     try:
         res = linprog(c, A_eq=A * w[:, None], b_eq=b * w,
-                      bounds=bounds + [(0.0, None)] * (2 * m), method="highs")
+                      bounds=bounds + [(0.0, None)] * (2 * m), method="highs",
+                      options={"primal_feasibility_tolerance": 1e-10,
+                               "dual_feasibility_tolerance": 1e-10})
     except ValueError:  # non-finite data (a law gave no finite range): no verdict
         return
     if res.status != 0:
         return  # no verdict: leave the failure to Newton's report
-    gap = res.x[n:n + m] + res.x[n + m:]
-    bad = [r for r in range(m) if gap[r] > 1e-6]  # well above the LP's own tolerance
+    # the imbalance of the LP's forces put back inside their ranges (the LP may leave a
+    # bound by its feasibility tolerance), in the rows' own units
+    lo = np.array([-np.inf if x is None else x for x, _ in bounds])
+    hi = np.array([np.inf if x is None else x for _, x in bounds])
+    F = np.clip(res.x[:n], lo, hi)
+    gap = np.abs(b - A[:, :n] @ F) * w
+    bad = [r for r in range(m) if gap[r] > _GAP]
     if not bad:
         return
     parts = [_describe_group(group, b, free, bounds, coef, nodes, elements, junctions)
