@@ -47,6 +47,7 @@ from .events import fold_crossed, guard_tolerance
 from .initial_state import consistent_initial_state
 from .radau import STALL_PASSES, START_WEIGHTS, C, StageSystem
 from .radau import A as _A
+from .split_kink import split_kink
 from .status import BranchError, RawRun, SolverError, Status
 from .stuck import hold_interval
 
@@ -299,6 +300,17 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         return dense_defect([system.element_nodes(U, h, x, v, F0, e) for e in range(E)],
                             kernels, spring, rtol, atol, v_scale, x_scale, F_seen)[0]
 
+    def kink(U: list[float], h: float) -> float | None:
+        """Where a step whose force split among locks in parallel kinks should end
+        (:func:`lumped.solvers.split_kink.split_kink`), or None."""
+        free = system.free_split
+        if free is None or not cones:
+            return None
+        nodes = {e: (system.element_nodes(U, h, x, v, F, e)[1],
+                     system.element_nodes(free, h, x, v, F, e)[1]) for e in cones}
+        scale = max(max(abs(Fe) for Fe in F), max(abs(f) for e in cones for f in nodes[e][0]))
+        return split_kink(nodes, cones, 0.5 * rtol * scale)
+
     def end_guard(U: list[float], h: float, which) -> tuple[float, float]:
         e = watched[which[0]]
         q, Fe = system.element_nodes(U, h, x, v, F, e)
@@ -533,6 +545,14 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         if err_norm > 1.0 and target is None:
             stats["rejected"] += 1
             h = h / quot
+            h_acc = None
+            continue
+        s_kink = kink(sol, h) if target is None else None
+        if s_kink is not None:
+            # the split among locks in parallel kinks inside the step, and the force's
+            # cubic overshoots its lock's interval: end the step at the kink
+            stats["split_rejected"] = stats.get("split_rejected", 0) + 1
+            h *= s_kink
             h_acc = None
             continue
         # (the compiled attempt has found the crossing by the same algorithm; after an

@@ -218,6 +218,9 @@ class StageSystem:
         #: load together (a least-squares point, not a root): a lock must break
         self.infeasible = False
         self._least_squares = False
+        #: after :meth:`solve` held a force of ``cones`` at its bound: the stage values of
+        #: the split before any was held (:mod:`lumped.solvers.split_kink`), else None
+        self.free_split: list[float] | None = None
         self.m = [float(mi) for mi in masses]
         self.ea = list(elem_a)
         self.eb = list(elem_b)
@@ -342,6 +345,7 @@ class StageSystem:
         """
         self.infeasible = False
         self._least_squares = least_squares
+        self.free_split = None
         if not cones:
             return self._newton(U, h, x_n, v_n, f, kernels, scale, tol, max_iters, None, {})
         # locks in series and in parallel: the split of least weighted norm can leave a
@@ -380,6 +384,8 @@ class StageSystem:
                     elif U[j] < lo - 1e-9 * w:
                         out[j] = lo + inside
             if not out:
+                if held:  # (the first pass: the split before any force was held)
+                    self.free_split = first
                 return got, its, nfac
             held.update(out)
         U[:] = first
