@@ -25,8 +25,9 @@ order, so the error a bridge adds is ``O(delta)`` and falls with the tolerance (
 ``sqrt(rtol)``). Inside a bridge the dense output is linear between its steps, impacts
 are recorded as events, switches are not located (the driver records the change of mode
 across the bridge at its end), and the intervals of forces that are not unique are
-kept. A run bridges at most :data:`MAX_BRIDGES` stops; the run's message names each
-bridge, its interval and the stop it bridged.
+kept. A bridge whose backward Euler fails is tried again over the same span with other
+step sizes (:data:`RETRY_SCALES`). A run bridges at most :data:`MAX_BRIDGES` stops; the
+run's message names each bridge, its interval and the stop it bridged.
 """
 
 from __future__ import annotations
@@ -38,8 +39,8 @@ from .fixed_step import RunResult, run_bdf
 from .radau import C
 from .status import SolverError
 
-__all__ = ["BRIDGE_STEPS", "MAX_BRIDGES", "MAX_STEPS", "bridge_steps", "run_bridge",
-           "linear_stages", "take_bridge"]
+__all__ = ["BRIDGE_STEPS", "MAX_BRIDGES", "MAX_STEPS", "RETRY_SCALES", "bridge_steps",
+           "run_bridge", "linear_stages", "take_bridge"]
 
 #: Backward-Euler steps of the first bridge of a run (doubled for each further one).
 BRIDGE_STEPS = 32
@@ -47,6 +48,9 @@ BRIDGE_STEPS = 32
 MAX_STEPS = 20_000
 #: Bridges of one run at the most.
 MAX_BRIDGES = 12
+#: Step sizes a bridge tries in turn, as multiples of its own (the same span), when
+#: backward Euler fails at the one before.
+RETRY_SCALES = (1.0, 0.1, 4.0)
 
 
 def bridge_steps(rtol: float, h_max: float, room: float, k: int
@@ -99,8 +103,19 @@ def take_bridge(scene, start: tuple, k: int, rtol: float, h_max: float, t_final:
     failed too."""
     t0, x, v, F = start
     delta, n, to_end = bridge_steps(rtol, h_max, t_final - t0, k)
-    run = run_bridge(scene, t0, x, v, F, delta, n, options, restitution)  # (run_bdf copies)
-    if isinstance(run, str):
+    span = n * delta
+    for scale in RETRY_SCALES:
+        # the same span, with steps ``scale`` times as long: backward Euler's Newton can
+        # miss a step at one size and not at others, where several dashpots sit at their
+        # yield forces at once (a junction's Herschel-Bulkley n = 0.3 dashpot and a
+        # Bingham one beside a taut string: steps of 0.1 and 27 times the size went
+        # through, 1 and 10 times did not)
+        n_s = min(MAX_STEPS, max(1, round(n / scale)))
+        run = run_bridge(scene, t0, x, v, F, span / n_s, n_s, options, restitution)
+        if not isinstance(run, str):  # (run_bdf copies the start lists)
+            delta, n = span / n_s, n_s
+            break
+    else:
         return run
     N, E = len(x), len(F)
     y = list(x) + list(v) + list(F)
