@@ -33,7 +33,7 @@ import numpy as np
 import pytest
 from _convergence import assert_converges
 from _yield_check import check_yield
-from hypothesis import HealthCheck, assume, event, given, settings
+from hypothesis import HealthCheck, assume, event, example, given, settings
 from hypothesis import strategies as st
 
 from lumped import simulate
@@ -208,8 +208,16 @@ def check_network(scene: Scene, method: str, **extra) -> list:
         # the error of the middle run measured where its rise is measured, on its own grid
         # (on every other point only, an undamped oscillator's dense-output energy error
         # between them, 1.8e-3 of 51.5 at rtol 1e-4, was read as energy created)
-        err = np.abs(energies[1] - energies[2][::2]).max()
-        assert energies[1].max() - E0 <= 4 * err + tol, "energy created beyond the error"
+        err = 4.0 * np.abs(energies[1] - energies[2][::2]).max()
+        if method not in FIXED_STEP_METHODS:
+            # ... or the tolerance itself: velocities held to atol + rtol |v| (_solve) give
+            # the energy 2 rtol E + atol sum(m) |v|. The error need not fall 4 times as
+            # rtol does (a lone undamped oscillator took 6 steps at both finer levels: its
+            # dense-output energy error 3.6e-5 and 2.8e-5 of 1.127, rtol 1.6e-4 and
+            # 3.9e-5, above 4 times the difference, 8.6e-6)
+            h = dt / 2
+            err = max(err, 2.0 * h**2 * E0 + h**3 * sum(scene.masses) * vmax)
+        assert energies[1].max() - E0 <= err + tol, "energy created beyond the error"
     # convergence of the displacements (continuous; velocities jump at impacts and
     # forces carry impulses): the distance to the finest run shrinks as dt halves
     assert_converges(sols, len(scene.nodes), dt, vmax, scale,
@@ -249,9 +257,22 @@ def test_random_passive_network_compiled(method: str, scene: Scene) -> None:
     check_network(scene, method)
 
 
+#: A draw of the ``LUMPED_LARGE`` radau5 run, run on every budget: an undamped
+#: oscillator beside a mass that sticks on a Bingham dashpot at once (its dense-output
+#: energy error did not fall 4 times between the finer levels; see
+#: :func:`check_network`).
+_UNDAMPED_BESIDE_STUCK = Scene(
+    [Mass("m0", m=1.0, x0=-0.0625, v0=1.5), Junction("j1", x0=1.0),
+     Mass("m2", m=1.0, x0=1.0, v0=0.001)],
+    [Element("e0", get_law("linear_spring").bind(k=1.0), "ground", "m0"),
+     Element("e1", get_law("newtonian").bind(c=1.0), "ground", "j1"),
+     Element("e2", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground", "m2")])
+
+
 @pytest.mark.parametrize("method", LOOPED)
 @_SETTINGS
 @given(scene=passive_networks())
+@example(scene=_UNDAMPED_BESIDE_STUCK)
 def test_random_passive_network_python_loop(method: str, scene: Scene) -> None:
     check_network(scene, method, compiled=False)
 
