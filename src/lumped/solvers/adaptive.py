@@ -45,6 +45,7 @@ from .crossing_root import first_root_py
 from .dense_defect import dense_defect
 from .events import fold_crossed, guard_tolerance
 from .initial_state import consistent_initial_state
+from .landing import Landing
 from .radau import STALL_PASSES, START_WEIGHTS, C, StageSystem
 from .radau import A as _A
 from .split_kink import split_kink
@@ -178,7 +179,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     if fast is not None:
         fast.setup(t_final, rtol, atol, m_min)
     dF_n: list[float] | None = None  # force slopes at t (None at the start, after events)
-    target: list | None = None  # the guard being landed on and its bracket
+    target: Landing | None = None  # the guard being landed on and its bracket
     floor_tried = False  # a mode change was tried at the step floor since the last step
     infeasible_at = math.nan  # the last t where an infeasible stage had the mode chosen
     U: list[float] = []  # the Python attempt's stage values, force scale (``attempt``)
@@ -505,16 +506,11 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 # accepted step
                 infeasible_modes = list(modes)
                 continue
-            if target is not None and target[1] > 0.0:
-                # a landing step that Newton cannot take: no solution that far, the
-                # bracket ends there (halving alone went below the step that held, to 0)
-                target[3], target[5] = h, target[5] + 1
-                if h - target[1] <= 8.0 * _EPS * max(1.0, abs(t)):
-                    # the bracket is closed (a guard that jumps, the laws' solution ending
-                    # inside it): land on its lower end, which held
-                    target[3] = h = target[1]
-                else:
-                    h = 0.5 * (target[1] + h)
+            # a landing step that Newton cannot take: no solution that far, the bracket
+            # ends there (halving alone went below the step that held, to 0)
+            h_next = None if target is None else target.failed_stage(h, t)
+            if h_next is not None:
+                h = h_next
                 continue
             h *= 0.5
             if target is not None and h < h_min:  # no landing step holds: the event is
@@ -571,41 +567,17 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             tangent.add(hit[1])
             hit = crossing(sol, h)
         if target is not None:  # a landing step: bracket the event by end-of-step values
-            if hit is not None and hit[1] != target[0] and hit[0] < 1.0:
+            if hit is not None and hit[1] != target.which and hit[0] < 1.0:
                 # another guard crosses first; at t itself: no landing, the event is at t
                 at_t = hit[0] * h <= 16 * _EPS * max(1.0, abs(t))
-                target = None if at_t else [hit[1], 0.0, math.inf, h,
-                                            end_guard(sol, h, hit[1])[0], 0, 0, target[7]]
+                target = None if at_t else Landing(hit[1], h, end_guard(sol, h, hit[1])[0],
+                                                   target.h_found)
                 h = h if at_t else hit[0] * h
                 continue
-            g_end, tol = end_guard(sol, h, target[0])
-            which, h_lo, g_lo, h_hi, g_hi, count = target[:6]
-            width = 8.0 * _EPS * max(1.0, abs(t))
-            if not (abs(g_end) <= tol or h_hi - h_lo <= width or count >= 40):
-                target[5] += 1
-                # the guard also crosses inside this step while its end is back above 0
-                # (a stuck dashpot's balance force leaving its cone and returning within
-                # the step): the step is too long, as when its end has crossed
-                inside = hit is not None and hit[1] == which and hit[0] < 1.0
-                if g_end < 0.0 or inside:
-                    target[3], target[4] = h, g_end
-                    target[6] = -1
-                    h = hit[0] * h if inside and hit[0] > 0.0 else 0.5 * (h_lo + h)
-                    if h - h_lo <= 1e-2 * (target[3] - h_lo):
-                        # the step's polynomial puts the root a hair past the end that
-                        # held, again and again where the guard is flat at its root (a
-                        # junction's Herschel-Bulkley n < 1 dashpot stopping, g ~ (t* -
-                        # t)^2): the bracket did not shrink in 40 passes. Bisect.
-                        h = 0.5 * (h_lo + target[3])
-                else:
-                    if target[6] == 1:  # Illinois: the far end stayed twice, halve its value
-                        target[4] *= 0.5
-                    target[1], target[2], target[6] = h, g_end, 1
-                    h_lo, g_lo, g_hi = h, g_end, target[4]
-                    h = (h_lo + (h_hi - h_lo) * g_lo / (g_lo - g_hi) if g_hi < 0.0
-                         else 0.5 * (h_lo + h_hi))
-                if not target[1] < h < target[3]:
-                    h = 0.5 * (target[1] + target[3])
+            g_end, tol = end_guard(sol, h, target.which)
+            if not target.landed(g_end, tol, t):
+                h = target.next_size(h, g_end, hit[0] if hit is not None and hit[1]
+                                     == target.which and hit[0] < 1.0 else None)
                 continue
         elif hit is not None and hit[0] < 1.0 and not (
                 kept and hit[0] * h <= 16 * _EPS * max(1.0, abs(t))):
@@ -623,8 +595,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
                 kept = modes == old
                 tangent.clear()
                 continue
-            # (which, h_lo, g_lo, h_hi, g_hi, count, side, the step that found it)
-            target = [hit[1], 0.0, math.inf, h, end_guard(sol, h, hit[1])[0], 0, 0, h]
+            target = Landing(hit[1], h, end_guard(sol, h, hit[1])[0], h)
             h = s_hit * h
             continue
         if ms.forces_from_probe and target is None:
@@ -664,8 +635,8 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         dense.add(t, h, x + v + F0, Y)
         dF_n = system.end_slope(sol, h, F)
         event_here = target is not None
-        h_found = target[7] if event_here else 0.0
-        ms.hint = watched[target[0][0]] if event_here else None
+        h_found = target.h_found if event_here else 0.0
+        ms.hint = watched[target.which[0]] if event_here else None
         target = None
         t_prev, t = t, (t_stop if to_stop else t + h)
         x = Y[2][:N]

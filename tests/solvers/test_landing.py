@@ -1,0 +1,49 @@
+"""The bracket of a radau5 landing on a guard's root (:mod:`lumped.solvers.landing`)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from lumped.solvers.landing import MAX_PASSES, Landing
+
+
+def _land(g, h_found: float, s_hit: float, tol: float = 1e-14) -> tuple[float, int]:
+    """Drive a landing as the driver does: steps of the sizes it asks for, ``g(h)`` the
+    guard at each step's end; the size it lands on and the passes taken."""
+    landing = Landing((0, 0), h_found, g(h_found), h_found)
+    h = s_hit * h_found
+    while True:
+        if landing.landed(g(h), tol, t=1.0):
+            return h, landing.count
+        h = landing.next_size(h, g(h), None)
+
+
+@pytest.mark.parametrize("g", [lambda h: 0.3 - h, lambda h: math.cos(h) - math.cos(0.3),
+                               lambda h: (0.3 - h) ** 3])
+def test_a_landing_ends_on_the_root(g):
+    h, count = _land(g, 1.0, 0.25)
+    assert abs(g(h)) <= 1e-14 or h == pytest.approx(0.3, abs=1e-13)
+    assert count < MAX_PASSES
+
+
+def test_a_crossing_inside_the_step_moves_the_high_end_there():
+    landing = Landing((0, 0), 1.0, -1.0, 1.0)
+    landing.h_lo, landing.g_lo = 0.2, 0.5
+    # the guard crossed at s = 0.5 of a step of 0.8 whose end is back above 0
+    h = landing.next_size(0.8, 0.1, 0.5)
+    assert (landing.h_hi, landing.side) == (0.8, -1) and h == pytest.approx(0.4)
+    # a crossing put a hair past the end that held: bisect the bracket
+    h = landing.next_size(0.4, 0.1, 0.5000001)
+    assert h == pytest.approx(0.5 * (0.2 + 0.4))
+
+
+def test_a_failed_landing_step_closes_the_bracket():
+    landing = Landing((0, 0), 1.0, -1.0, 1.0)
+    assert landing.failed_stage(0.5, 1.0) is None  # no step held yet: the driver halves
+    landing.h_lo = 0.25
+    assert landing.failed_stage(0.5, 1.0) == pytest.approx(0.375)
+    assert landing.h_hi == 0.5 and landing.count == 1
+    assert landing.failed_stage(0.25 + 1e-16, 1.0) == 0.25  # closed: land on h_lo
+    assert landing.h_hi == landing.h_lo
