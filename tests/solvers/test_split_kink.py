@@ -100,3 +100,32 @@ def test_no_kink_when_a_stage_is_beyond_its_interval():
     free = _nodes(lambda s: 0.4 + s)
     held = (0.4, 0.5, 0.9, 1.2)
     assert split_kink({0: (held, free)}, {0: (0.0, 1.0, -1.0, 1.0)}, 1e-8) is None
+
+
+def test_the_start_after_an_impact_is_no_kink():
+    """A mass hits the end of a string (to ground) beside three dashpots, and all four
+    lock in parallel. The first step after the impact starts from the stage forces'
+    quadratic, not from the event probe's forces (the string's read 0.50 there, its
+    stages 0.077): read from the probe's, the cubic dipped below the string's ``k L`` and
+    every step was cut to 0.12 of itself (20 000 steps moved ``t`` by 6e-12). Found by a
+    counter of the random-network suite (seed 905)."""
+    hb = get_law("herschel_bulkley")
+    scene = Scene(
+        [Mass("m0", m=1.333521432163324, x0=0.0, v0=-0.9695256114652275)],
+        [Element("e0", hb.bind(gamma=1.0, tau=0.9998594712341624, n=2.0), "ground", "m0"),
+         Element("e1", hb.bind(gamma=0.13487363131863606, tau=0.9998594712341624, n=0.8),
+                 "ground", "m0"),
+         Element("e2", get_law("bingham").bind(gamma=1.0001405485169472, tau=0.01), "m0",
+                 "ground"),
+         Element("e3", get_law("string_spring").bind(k=41.36766877814132,
+                                                     L=0.0018130293922991414),
+                 "m0", "ground")])
+    h = 0.025
+    sol = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                   compiled=False, max_steps=2000)
+    assert sol.ok and sol.stats["steps"] < 50
+    assert [ev.kind for ev in sol.events][0] == "impact"
+    # at rest on the taut string from the impact on
+    after = sol.t > sol.events[0].t
+    assert np.all(sol.v["m0"][after] == 0.0)
+    assert sol.x["m0"][after] == pytest.approx(-0.0018130293922991414, rel=1e-9)

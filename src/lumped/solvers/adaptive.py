@@ -60,6 +60,9 @@ _EPS = 2.220446049250313e-16
 #: Accepted steps in a row shorter than the step floor after which a run that creeps
 #: (landing again and again on a guard, ``t`` moving by ulps) stops.
 _CREEP_STEPS = 200
+#: Cuts of one step at kinks of the force split (:mod:`lumped.solvers.split_kink`) before
+#: the step is taken as it is.
+_KINK_CUTS = 8
 #: The stops that backward Euler bridges (:mod:`lumped.solvers.bridge`, the keyword
 #: ``bridge``); a fold of a law (``BRANCH_LOST``), ``max_steps`` and ``max_events`` end
 #: the run.
@@ -307,9 +310,10 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         free = system.free_split
         if free is None or not cones:
             return None
-        nodes = {e: (system.element_nodes(U, h, x, v, F, e)[1],
-                     system.element_nodes(free, h, x, v, F, e)[1]) for e in cones}
-        scale = max(max(abs(Fe) for Fe in F), max(abs(f) for e in cones for f in nodes[e][0]))
+        F0 = dense_start_forces(U, h)  # (where the dense output starts, after an event)
+        nodes = {e: (system.element_nodes(U, h, x, v, F0, e)[1],
+                     system.element_nodes(free, h, x, v, F0, e)[1]) for e in cones}
+        scale = max(max(abs(Fe) for Fe in F0), max(abs(f) for e in cones for f in nodes[e][0]))
         return split_kink(nodes, cones, 0.5 * rtol * scale)
 
     def end_guard(U: list[float], h: float, which) -> tuple[float, float]:
@@ -332,7 +336,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         state (:mod:`lumped.solvers.bridge`), its steps in the output; then the mode the
         full laws choose at its end. Whether the run goes on."""
         nonlocal t, x, v, F, h, h_acc, dF_n, target, kept, stalled, creeping, \
-            floor_tried, hold_check, status, message, committed
+            floor_tried, hold_check, status, message, committed, kink_cuts
         if len(bridges) >= MAX_BRIDGES:
             message += f" (after {len(bridges)} bridges by backward Euler, the most a run takes)"
             return False
@@ -350,7 +354,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         status, message = Status.SUCCESS, ""
         target, dF_n, h_acc = None, None, None
         kept, floor_tried, hold_check = False, False, True
-        stalled = creeping = 0
+        stalled = creeping = kink_cuts = 0
         tangent.clear()
         h = max(h_good, delta)
         ms.recent.clear()
@@ -363,6 +367,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     A_ = _A
     stalled = 0  # loop passes since the last accepted step (a guard against any cycle)
     creeping = 0  # accepted steps in a row below the step floor (landings; see below)
+    kink_cuts = 0  # steps cut at a kink of the split since the last accepted step
     hold_check = True
     while t < t_final:
         if status is not Status.SUCCESS:
@@ -543,8 +548,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             h = h / quot
             h_acc = None
             continue
-        s_kink = kink(sol, h) if target is None else None
+        s_kink = kink(sol, h) if target is None and kink_cuts < _KINK_CUTS else None
         if s_kink is not None:
+            kink_cuts += 1
             # the split among locks in parallel kinks inside the step, and the force's
             # cubic overshoots its lock's interval: end the step at the kink
             stats["split_rejected"] = stats.get("split_rejected", 0) + 1
@@ -644,6 +650,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         F = Y[2][2 * N:]
         committed = (t, list(x), list(v), list(F))
         stats["steps"] += 1
+        kink_cuts = 0
         rows.append(row_of(t, x, v, F))
         # a landing step is exempt from the step floor; landings of ulps, one after the
         # other, with the full laws keeping the mode each time, move t by nothing (a
