@@ -17,7 +17,8 @@ collocation derivative ``V_k' ~ (1/h) sum_l w_kl (V_l - v_n)``, ``W = A^{-1}``::
 
 with ``q_e = X_b - X_a`` (springs) or ``V_b - V_a`` (dashpots), ground at 0. The step's
 result is stage 3 (``c_3 = 1``: stiffly accurate), and the stage values with ``y_n`` are
-the nodes of the collocation polynomial (the dense output, :func:`dense_weights`).
+the nodes of the collocation polynomial (the dense output, :func:`dense_weights`; the
+method's coefficients are in :mod:`lumped.solvers.radau_tableau`).
 
 Everything here runs on flat lists of Python floats with scalar loops (numba-friendly).
 The unknowns are laid out stage by stage: ``U[k*n + i]`` is ``V_k,i`` for a node ``i < N``
@@ -31,31 +32,20 @@ from collections.abc import Callable, Sequence
 
 from .linalg import lu_factor, lu_solve
 from .newton import min_norm_solver
+from .radau_tableau import (
+    E_ERR,
+    END_SLOPES,
+    MU_REAL,
+    START_WEIGHTS,
+    A,
+    C,
+    W,
+    dense_slopes,
+    dense_weights,
+)
 
 __all__ = ["C", "A", "W", "E_ERR", "MU_REAL", "START_WEIGHTS", "StageSystem", "dense_weights",
            "dense_slopes"]
-
-_S6 = math.sqrt(6.0)
-#: Collocation nodes of Radau IIA (3 stages).
-C = ((4.0 - _S6) / 10.0, (4.0 + _S6) / 10.0, 1.0)
-#: The Butcher matrix ``A``.
-A = (
-    ((88.0 - 7.0 * _S6) / 360.0, (296.0 - 169.0 * _S6) / 1800.0, (-2.0 + 3.0 * _S6) / 225.0),
-    ((296.0 + 169.0 * _S6) / 1800.0, (88.0 + 7.0 * _S6) / 360.0, (-2.0 - 3.0 * _S6) / 225.0),
-    ((16.0 - _S6) / 36.0, (16.0 + _S6) / 36.0, 1.0 / 9.0),
-)
-#: ``L_k(0)``: the value at the step's start of the quadratic through the three stage values
-#: (Lagrange weights on the nodes ``C``).  An algebraic variable (a force) that satisfies a
-#: linear relation at every stage satisfies it on that quadratic too.
-START_WEIGHTS = tuple(
-    math.prod(-C[j] for j in range(3) if j != k)
-    / math.prod(C[k] - C[j] for j in range(3) if j != k)
-    for k in range(3)
-)
-#: Weights of the embedded error estimate (Hairer & Wanner, RADAU5).
-E_ERR = ((-13.0 - 7.0 * _S6) / 3.0, (-13.0 + 7.0 * _S6) / 3.0, -1.0 / 3.0)
-#: The real eigenvalue of ``A^{-1}``: ``3 + 3^(2/3) - 3^(1/3)``.
-MU_REAL = 3.0 + 3.0 ** (2.0 / 3.0) - 3.0 ** (1.0 / 3.0)
 
 
 def _solver(J: list[list[float]]) -> Callable[[list[float]], list[float]]:
@@ -135,66 +125,12 @@ def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[fl
     return solve
 
 
-def _inverse3(M: Sequence[Sequence[float]]) -> tuple[tuple[float, ...], ...]:
-    (a, b, c), (d, e, f), (g, h, i) = M
-    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
-    return (
-        ((e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det),
-        ((f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det),
-        ((d * h - e * g) / det, (b * g - a * h) / det, (a * e - b * d) / det),
-    )
-
-
-#: ``W = A^{-1}``: the collocation derivative at the stages.
-W = _inverse3(A)
-
-
-def dense_weights(s: float) -> tuple[float, float, float]:
-    r"""Lagrange weights ``l_k(s)``, ``k = 1..3``, of the collocation polynomial.
-
-    ``y(t_n + s h) = y_n + sum_k l_k(s) (Y_k - y_n)``, ``l_k`` the Lagrange polynomial of
-    the nodes ``0, c_1, c_2, c_3`` that is 1 at ``c_k`` (the weight of the node ``0``
-    multiplies ``y_n - y_n = 0``; this form keeps a held value exactly).
-    """
-    c1, c2, c3 = C
-    return (
-        s * (s - c2) * (s - c3) / (c1 * (c1 - c2) * (c1 - c3)),
-        s * (s - c1) * (s - c3) / (c2 * (c2 - c1) * (c2 - c3)),
-        s * (s - c1) * (s - c2) / (c3 * (c3 - c1) * (c3 - c2)),
-    )
-
-
-def dense_slopes(s: float) -> tuple[float, float, float]:
-    """Derivatives ``l_k'(s)`` of the weights of :func:`dense_weights` (per unit ``s``)."""
-    nodes = (0.0, *C)
-    out = []
-    for k in (1, 2, 3):
-        ck = nodes[k]
-        others = [nodes[j] for j in range(4) if j != k]
-        denom = 1.0
-        for cj in others:
-            denom *= ck - cj
-        total = 0.0
-        for skip in range(3):
-            prod = 1.0
-            for j, cj in enumerate(others):
-                if j != skip:
-                    prod *= s - cj
-            total += prod
-        out.append(total / denom)
-    return out[0], out[1], out[2]
-
-
 #: Passes of the ``radau5`` loop without an accepted step after which it stops (a guard
 #: against any cycle; backward Euler then bridges the point, :mod:`lumped.solvers.bridge`).
 STALL_PASSES = 1_000
 
 #: How much looser the forces of guarded elements are held than ``x`` and ``v``.
 FORCE_TOL_FACTOR = 100.0
-
-#: ``l_k'(1)``: the slope of the collocation polynomial at the end of a step.
-END_SLOPES = dense_slopes(1.0)
-
 
 class StageSystem:
     """The Radau IIA stage equations of one scene, for the branch kernels of one mode.
