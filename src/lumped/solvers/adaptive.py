@@ -553,6 +553,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             kink_cuts += 1
             # the split among locks in parallel kinks inside the step, and the force's
             # cubic overshoots its lock's interval: end the step at the kink
+            stats["rejected"] += 1
             stats["split_rejected"] = stats.get("split_rejected", 0) + 1
             h *= s_kink
             h_acc = None
