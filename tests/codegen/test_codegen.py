@@ -197,10 +197,13 @@ def test_kink_value_and_derivative_are_one_sided_limits_of_the_chosen_branch(c, 
 
 
 def test_integral_parameter_values_are_exact_integers_in_the_code():
-    # n = 1 must give x**1 = x (no math.pow(x, 1.0)); n = 2 gives x**2
+    # n = 1 must give x**1 = x (no math.pow(x, 1.0)); n = 2 gives x*x and n = 0.5
+    # math.sqrt(x), as numba compiles them (tests/codegen/test_jit.py); n = 3 x**3
     assert "pow" not in kernel_of("q - F**n", n=1.0).__source__
-    assert "F**2" in kernel_of("q - F**n", n=2.0).__source__
-    assert "pow" in kernel_of("q - F**n", n=0.5).__source__
+    assert "(F*F)" in kernel_of("q - F**n", n=2.0).__source__
+    assert "math.sqrt(F)" in kernel_of("q - F**n", n=0.5).__source__
+    assert "F**3" in kernel_of("q - F**n", n=3.0).__source__
+    assert "pow" in kernel_of("q - F**n", n=0.3).__source__
 
 
 # ---------------------------------------------------------------------------------------

@@ -127,6 +127,16 @@ class _Printer(PythonCodePrinter):
 
     def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:  # noqa: N802
         base, exponent = expr.as_base_exp()
+        # squares and square roots as a product and math.sqrt, whatever the exponent's
+        # type (2, 2.0, 1/2 or 0.5: a law bound with n = 0.5): numba's LLVM turns
+        # pow(x, 2.0) into x*x and pow(x, 0.5) into sqrt(x), correctly rounded, where
+        # CPython calls the C library's pow, which is off by an ulp for about 1 argument
+        # in 1000; written out, the compiled kernels give the Python kernels' numbers
+        if exponent.is_Number and float(exponent) in (2.0, -2.0):
+            op = self._operand(base)
+            return f"({op}*{op})" if float(exponent) > 0.0 else f"1.0/({op}*{op})"
+        if exponent.is_Number and float(exponent) == 0.5:
+            return f"math.sqrt({self._print(base)})"
         if isinstance(exponent, sp.Integer):
             n = int(exponent)
             if n == 0:
@@ -136,8 +146,6 @@ class _Printer(PythonCodePrinter):
             if n == -1:
                 return f"1.0/{self._operand(base)}"
             return f"1.0/{self._operand(base)}**{-n}"
-        if exponent == sp.S.Half:
-            return f"math.sqrt({self._print(base)})"
         if exponent == -sp.S.Half:
             return f"1.0/math.sqrt({self._print(base)})"
         # math.pow raises ValueError on a negative base (x**y would give a complex number)
