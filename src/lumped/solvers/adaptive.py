@@ -46,7 +46,7 @@ from .dense_defect import dense_defect
 from .events import fold_crossed, guard_tolerance
 from .initial_state import consistent_initial_state
 from .landing import Landing
-from .radau import STALL_PASSES, START_WEIGHTS, C, StageSystem
+from .radau import DAMPED_AFTER, STALL_PASSES, START_WEIGHTS, C, StageSystem
 from .radau import A as _A
 from .split_kink import split_kink
 from .status import BranchError, RawRun, SolverError, Status
@@ -480,7 +480,7 @@ def run_radau5(scene: Scene, settings) -> RawRun:
             # down to the step floor. Once more, with a longer budget
             sol, its_more, nfac_more = attempt(h, 6 * max_newton)
             its, nfac, got = its + its_more, nfac + nfac_more, None
-        elif sol is None and not cones and stalled >= 8:
+        elif sol is None and not cones and stalled >= DAMPED_AFTER:
             # an eighth failure in a row: a stage that starts where its branch's rate is
             # flat in the force (Herschel-Bulkley n > 1 at its yield force), which the
             # simplified Newton misses at every step size; the line-search fallback

@@ -129,6 +129,10 @@ def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[fl
 #: against any cycle; backward Euler then bridges the point, :mod:`lumped.solvers.bridge`).
 STALL_PASSES = 1_000
 
+#: Newton failures in a row after which a ``radau5`` step tries the line-search fallback
+#: (:meth:`StageSystem.solve_damped`); the compiled loop hands that pass to Python.
+DAMPED_AFTER = 8
+
 #: How much looser the forces of guarded elements are held than ``x`` and ``v``.
 FORCE_TOL_FACTOR = 100.0
 

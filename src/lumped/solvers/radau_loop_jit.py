@@ -27,7 +27,9 @@ loop takes the step to the stop, with ``h`` the room left, and returns after it:
 known monotone one crosses a fold of its graph (:data:`FOLD`: Python redoes the step and
 stops with its message), a Jacobian is singular but finite (:data:`SINGULAR`: Python's
 minimum-norm solve), the step size is below its floor (:data:`FLOOR`), the output arrays
-are full (:data:`FULL`), ``max_steps`` or the stall limit (:data:`LIMIT`). With
+are full (:data:`FULL`), ``max_steps`` or the stall limit (:data:`LIMIT`), or the eighth
+Newton failure in a row (:data:`DAMPED`: Python redoes that pass with its line-search
+fallback). With
 ``ist[SINGLE] = 1`` it makes one attempt of size ``h`` for the Python loop and returns
 (:data:`ATTEMPT`) its outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular),
 ``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]``, ``ist[A_HIT]`` (1 when a guard is
@@ -49,12 +51,12 @@ import numpy as np
 
 from ..codegen.jit import njit, numba_enabled
 from .crossing_root import first_root
-from .radau import END_SLOPES, STALL_PASSES, C
+from .radau import DAMPED_AFTER, END_SLOPES, STALL_PASSES, C
 from .radau_jit import stage_solve
 from .radau_step_jit import crossed, finite, folded, forces, step_error
 
 __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", "SINGULAR",
-           "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "REASONS", "law_type",
+           "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "DAMPED", "REASONS", "law_type",
            "guards_type"]
 
 # fst: float state
@@ -64,10 +66,10 @@ __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", 
 (HAVE_ACC, HAVE_DF, STALLED, STEPS, REJECTED, NEWTON_ITERATIONS, FACTORIZATIONS, NFEV, NJEV,
  MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK,
  A_HIT, A_W, A_J) = range(20)
-STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD, STOPPED = range(1, 10)
+STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD, STOPPED, DAMPED = range(1, 11)
 REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "floor",
            FULL: "full", LIMIT: "limit", ATTEMPT: "attempt", STOPPED: "stopped",
-           FOLD: "fold"}
+           FOLD: "fold", DAMPED: "damped"}
 
 _EPS = 2.220446049250313e-16
 _MAX_NEWTON = 10
@@ -194,6 +196,16 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
         ist[NFEV] += its + 1
         ist[NJEV] += nfac
         ist[MAX_NEWTON_ITERATIONS] = max(ist[MAX_NEWTON_ITERATIONS], its)
+        if not ok and ist[STALLED] >= DAMPED_AFTER:
+            # the eighth failure in a row: Python redoes this pass with its line-search
+            # fallback (the loops stay the same)
+            ist[STALLED] -= 1
+            ist[NEWTON_ITERATIONS] -= its
+            ist[FACTORIZATIONS] -= nfac
+            ist[NFEV] -= its + 1
+            ist[NJEV] -= nfac
+            reason = DAMPED
+            break
         if not ok:
             ist[REJECTED] += 1
             h *= 0.5
