@@ -182,3 +182,31 @@ def test_the_defect_of_a_linear_law_is_round_off_and_of_a_curved_one_its_interpo
     d_loose, _ = dense_defect([(q_nodes, F_nodes)], [hb_half], [False], 1e-3, 1e-3, 1.0,
                               1.0, 2.0)
     assert d_loose < d
+
+
+def test_a_creep_above_the_step_floor_is_bridged():
+    """A junction that hangs on a mass by one Coulomb element (its force is 0, it moves
+    with the mass) beside a string to a second mass: radau5 lands again and again on the
+    Coulomb element's guard with steps of 3e-14 s, 40 times the step floor, so the creep
+    was not seen: 5000 steps took 77 s, and the LUMPED_LARGE run hung on the draw. Steps
+    below 1e-12 of the run count as creeping too; the point is bridged."""
+    scene = Scene(
+        [Mass("m0", m=0.11926677478103379, x0=0.8139395355548813, v0=-2.8256135157766822e-12),
+         Mass("m1", m=1.0, x0=1e-15, v0=-1.6098666530272876), Junction("j2", x0=0.0),
+         Mass("m3", m=0.2358817545857119, x0=0.0, v0=-1.0778570473869944)],
+        [Element("e0", get_law("newtonian").bind(c=0.5549271358954316), "ground", "m0"),
+         Element("e1", get_law("newtonian").bind(c=0.17563230410155967), "ground", "m1"),
+         Element("e2", get_law("coulomb").bind(tau=0.015375307145203049, r=4.775859268945485),
+                 "m0", "j2"),
+         Element("e3", get_law("string_spring").bind(k=1.0, L=0.001000000000000001),
+                 "m1", "m3"),
+         Element("e4", get_law("linear_spring").bind(k=0.8657160926584776), "m3", "m0"),
+         Element("e5", get_law("coulomb").bind(tau=0.1, r=14.19248334546979), "ground", "m1"),
+         Element("e6", get_law("linear_spring").bind(k=14.704417605088656), "ground", "m0")])
+    h = 0.016967846511721136
+    sol = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=h**2, atol=h**3,
+                   compiled=False, max_steps=5000)
+    assert sol.ok and sol.stats["steps"] < 1000
+    assert sol.stats["bridges"] == 1 and "creep floor" in sol.message and "'e2'" in sol.message
+    # the string's impacts, before and after the bridge
+    assert [ev.element for ev in sol.events if ev.kind == "impact"] == ["e3", "e3"]

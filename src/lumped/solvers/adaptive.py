@@ -60,6 +60,8 @@ _EPS = 2.220446049250313e-16
 #: Accepted steps in a row shorter than the step floor after which a run that creeps
 #: (landing again and again on a guard, ``t`` moving by ulps) stops.
 _CREEP_STEPS = 200
+#: ... steps shorter than the step floor or than this fraction of the run.
+_CREEP_FRACTION = 1e-12
 #: Cuts of one step at kinks of the force split (:mod:`lumped.solvers.split_kink`) before
 #: the step is taken as it is.
 _KINK_CUTS = 8
@@ -657,12 +659,15 @@ def run_radau5(scene: Scene, settings) -> RawRun:
         # other, with the full laws keeping the mode each time, move t by nothing (a
         # junction on a Coulomb element, a Herschel-Bulkley n = 0.3 dashpot and a spring
         # in parallel: 2000 steps moved t by 1e-12, and max_steps = 1e6 would take hours)
-        creeping = creeping + 1 if t - t_prev < h_min else 0
+        # (or 1e-12 of the run: a junction on one Coulomb element beside a mass landed
+        # 5000 times on its guard with steps of 3e-14 s, 40 times the floor, 77 s a run)
+        creep_floor = max(h_min, _CREEP_FRACTION * t_final)
+        creeping = creeping + 1 if t - t_prev < creep_floor else 0
         if creeping >= _CREEP_STEPS:
             el = scene.elements[ms.hint] if ms.hint is not None else None
             status, message = Status.STEP_TOO_SMALL, (
                 f"radau5 stopped at t = {t!r}: {creeping} accepted steps in a row below the "
-                f"step floor {h_min!r} (the run creeps"
+                f"creep floor {creep_floor!r} (the run creeps"
                 + (f", landing again and again on a guard of element {el.name!r} (law "
                    f"{el.law_name!r})" if el is not None else "") + ")")
             continue
