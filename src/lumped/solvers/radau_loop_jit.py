@@ -190,22 +190,18 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
                 ist[STALLED] -= 1
                 reason = SINGULAR
                 break
+        if not ok and ist[STALLED] >= DAMPED_AFTER:
+            # the eighth failure in a row: Python redoes this pass with its line-search
+            # fallback (the loops stay the same)
+            ist[STALLED] -= 1
+            reason = DAMPED
+            break
         F_seen = F_new
         ist[NEWTON_ITERATIONS] += its
         ist[FACTORIZATIONS] += nfac
         ist[NFEV] += its + 1
         ist[NJEV] += nfac
         ist[MAX_NEWTON_ITERATIONS] = max(ist[MAX_NEWTON_ITERATIONS], its)
-        if not ok and ist[STALLED] >= DAMPED_AFTER:
-            # the eighth failure in a row: Python redoes this pass with its line-search
-            # fallback (the loops stay the same)
-            ist[STALLED] -= 1
-            ist[NEWTON_ITERATIONS] -= its
-            ist[FACTORIZATIONS] -= nfac
-            ist[NFEV] -= its + 1
-            ist[NJEV] -= nfac
-            reason = DAMPED
-            break
         if not ok:
             ist[REJECTED] += 1
             h *= 0.5
