@@ -30,7 +30,7 @@ def test_a_landing_ends_on_the_root(g):
 
 def test_a_crossing_inside_the_step_moves_the_high_end_there():
     landing = Landing((0, 0), 1.0, -1.0, 1.0)
-    landing.h_lo, landing.g_lo = 0.2, 0.5
+    landing.h_lo = 0.2
     # the guard crossed at s = 0.5 of a step of 0.8 whose end is back above 0
     h = landing.next_size(0.8, 0.1, 0.5)
     assert (landing.h_hi, landing.side) == (0.8, -1) and h == pytest.approx(0.4)

@@ -6,7 +6,7 @@ size that puts the step's end on the root, and brackets that size by the guard's
 the end of each retried step:
 
 - ``h_lo``: the longest step whose end still held the guard (``g_end >= 0``, no crossing
-  of that guard inside), with ``g_lo``;
+  of that guard inside);
 - ``h_hi``: the shortest step whose end had crossed (or that crossed inside, or that
   Newton could not take), with ``g_hi``.
 
@@ -21,7 +21,6 @@ tolerance, the bracket is a few ulps of ``t`` wide, or after :data:`MAX_PASSES` 
 from __future__ import annotations
 
 import dataclasses
-import math
 import sys
 
 __all__ = ["MAX_PASSES", "Landing"]
@@ -42,7 +41,6 @@ class Landing:
     g_hi: float
     h_found: float
     h_lo: float = 0.0
-    g_lo: float = math.inf
     count: int = 0
     side: int = 0  # +1: the low end moved last, -1: the high end
 
@@ -72,10 +70,9 @@ class Landing:
         else:
             if self.side == 1:  # Illinois: the far end stayed twice, halve its value
                 self.g_hi *= 0.5
-            self.h_lo, self.g_lo, self.side = h, g_end, 1
-            h_lo, g_lo, g_hi, h_hi = h, g_end, self.g_hi, self.h_hi
-            h = (h_lo + (h_hi - h_lo) * g_lo / (g_lo - g_hi) if g_hi < 0.0
-                 else 0.5 * (h_lo + h_hi))
+            self.h_lo, self.side = h, 1
+            g_hi, h_hi = self.g_hi, self.h_hi
+            h = (h + (h_hi - h) * g_end / (g_end - g_hi) if g_hi < 0.0 else 0.5 * (h + h_hi))
         if not self.h_lo < h < self.h_hi:
             h = 0.5 * (self.h_lo + self.h_hi)
         return h
