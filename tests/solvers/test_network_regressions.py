@@ -219,6 +219,49 @@ def test_a_hair_beyond_the_friction_is_refused_by_name(method):
     _assert_consistent(scene, v, F)
 
 
+def _slow_mass_on_a_steep_yield() -> Scene:
+    # found by the LUMPED_LARGE bdf1 run: m2 moves at 2^-23 through a Herschel-Bulkley
+    # n = 0.3 link to j0, which another n = 0.3 dashpot ties to ground
+    return Scene(
+        [Junction("j0", x0=0.0), Junction("j1", x0=0.0),
+         Mass("m2", m=1.0, x0=0.0, v0=1.192092896e-07), Mass("m3", m=1.0, x0=0.0, v0=0.0)],
+        [Element("e0", get_law("newtonian").bind(c=1.0), "ground", "j0"),
+         Element("e1", get_law("bingham").bind(gamma=1.0, tau=1.0), "j0", "j1"),
+         Element("e2", get_law("linear_spring").bind(k=1.0), "ground", "m2"),
+         Element("e3", get_law("linear_spring").bind(k=1.0), "ground", "m3"),
+         Element("e4", get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=0.3),
+                 "j0", "m2"),
+         Element("e5", get_law("herschel_bulkley").bind(gamma=1.0, tau=0.11302494859750127,
+                                                        n=0.3), "ground", "j0"),
+         Element("e6", get_law("linear_spring").bind(k=1.0), "ground", "j0")])
+
+
+def test_a_yield_force_between_two_floats_at_a_moving_junction():
+    """``j0`` must move with ``m2`` (``e4`` stuck, carrying what ``j0``'s dashpots to
+    ground need): ``e5`` then slips at ``1.2e-7``, which an ``n = 0.3`` law allows at
+    ``tau + (q / gamma)^(1/n) = tau + 1e-23``, between ``tau`` and the next float. No
+    float has a smaller residual than ``q`` itself, so Newton read ``e5`` as stuck and
+    settled ``j0`` at half ``m2``'s speed (both links' rates ``6e-8``): 'no consistent
+    initial state'. The settled start of the cluster guess (``j0``, ``j1`` with ``m2``) is
+    now kept when every law holds there to its round-off."""
+    scene = _slow_mass_on_a_steep_yield()
+    v, F, _ = consistent_initial_state(scene, time_scale=0.5)
+    v_m2 = 1.192092896e-07
+    assert v[:3] == [v_m2, v_m2, v_m2]
+    tau5 = 0.11302494859750127
+    # e5's root lies between its force and the next float up
+    kernel = scene.elements[5].law.kernel
+    assert F[5] == tau5 and kernel(v_m2, F[5])[0] * kernel(v_m2, np.nextafter(F[5], 1))[0] < 0
+    assert F[0] == v_m2  # the Newtonian dashpot at j0's speed
+    assert abs(F[4] - 0.113025) <= 1e-6  # e4 carries j0's load, within its yield force
+    assert abs(F[1]) <= 1e-12 and F[2] == F[3] == F[6] == 0.0
+    net = scene.net_forces(0.0, F)
+    assert abs(net[0]) <= 1e-12 and abs(net[1]) <= 1e-12  # the junctions balance
+    for method in ("bdf1", "bdf2"):
+        sol = simulate(scene, method=method, dt=1e-3, t_end=0.05)
+        assert sol.ok and np.all(np.isfinite(sol.x["m2"]))
+
+
 # ---------------------------------------------------------------------------------------
 # steps (the globalised solve: balance sweeps, free forces split, checked last correction)
 

@@ -451,22 +451,26 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
             return [v0[i] if is_mass[i] else u[i] for i in range(N)]
 
         balanced = balance_sweeps(evaluate, project, list(u0), junctions, anchors)
-        settled = None
+        settled_points = []
         if balanced is not None:  # the junctions' monotone balances solved one by one
             starts.insert(1, balanced)
-            settled = settle(balanced)
-            starts.insert(2, settled)
+            settled_points.append(settle(balanced))
+            starts.insert(2, settled_points[-1])
         def cluster_starts():
             # last: every cluster of junctions moving as one with a neighbour outside it
             # (a chain of stuck elements from a moving mass), each also settled as
-            # above; made only once every start before has failed
+            # above (also when the guess itself was among the stuck guesses); made only
+            # once every start before has failed
             for g in _cluster_guesses(scene, v0):
                 start = [0.0 if is_mass[i] else g[i] for i in range(N)] + u0[N:]
                 if start not in starts:  # (starts, as before: the ones tried so far)
                     starts.append(start)
                     yield start
-                    starts.append(settle(project(list(start))))
-                    yield starts[-1]
+                settled_start = settle(project(list(start)))
+                if settled_start not in starts:
+                    settled_points.append(settled_start)
+                    starts.append(settled_start)
+                    yield settled_start
 
         for start in itertools.chain(starts, cluster_starts()):
             for proj in (None, project):
@@ -479,9 +483,14 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
                     break
             if res.code is NewtonCode.SUCCESS:
                 break
-        if res.code is not NewtonCode.SUCCESS and settled is not None and ulp_floor_ok(settled):
-            # no Newton polishes the settled point (a root between two floats), but every
-            # law holds there to its round-off and every node balances: keep it
+        settled = None
+        if res.code is not NewtonCode.SUCCESS:
+            settled = next((p for p in settled_points if ulp_floor_ok(p)), None)
+        if settled is not None:
+            # no Newton polishes a settled point (a root between two floats: Newton
+            # reads the law there as flat, stuck, and moves the velocities off), but
+            # every law holds there to its round-off and every node balances: keep the
+            # first such point
             res = NewtonResult(settled, NewtonCode.SUCCESS, res.iterations, res.residual_evals,
                                res.jacobian_evals, res.factorizations, [], 0, [])
     if res.code is not NewtonCode.SUCCESS:
