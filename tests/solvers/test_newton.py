@@ -74,6 +74,21 @@ def test_large_system_goes_through_numpy():
     np.testing.assert_allclose(res.u, np.linalg.solve(A, b), rtol=1e-12)
 
 
+def test_large_singular_system_is_reported_without_a_warning():
+    """A singular Jacobian above :data:`DENSE_PYTHON_MAX` (a stuck dashpot's row with a
+    zero pivot) is Newton's business, reported as ``SINGULAR``: scipy's ``lu_factor``
+    used to emit a ``LinAlgWarning`` for it on every such step."""
+    import warnings
+
+    n = DENSE_PYTHON_MAX + 3
+    A = np.eye(n)
+    A[4, :] = 0.0  # a row the law leaves empty
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = newton_solve(_linear(A.tolist(), [1.0] * n), [0.0] * n)
+    assert res.code is NewtonCode.SINGULAR
+
+
 def test_nonlinear_quadratic_convergence():
     def evaluate(u):
         return [u[0] ** 3 - 8.0], [[3 * u[0] ** 2]], [abs(u[0]) ** 3 + 8.0]

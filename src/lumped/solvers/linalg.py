@@ -96,8 +96,11 @@ class _NumpyLU:
         M = np.array(A, dtype=float)
         if not np.all(np.isfinite(M)):
             raise ZeroDivisionError
-        lu, piv = scipy.linalg.lu_factor(M, check_finite=False)
-        if np.any(np.diag(lu) == 0.0):
+        # LAPACK's getrf directly: scipy.linalg.lu_factor warns (LinAlgWarning) on an
+        # exactly singular matrix, which Newton expects and handles (min-norm steps)
+        (getrf,) = scipy.linalg.get_lapack_funcs(("getrf",), (M,))
+        lu, piv, info = getrf(M, overwrite_a=True)
+        if info != 0 or np.any(np.diag(lu) == 0.0):
             raise ZeroDivisionError
         self._f = (lu, piv)
 
