@@ -1,9 +1,10 @@
 r"""The mode of the ``radau5`` driver: which branch of its law every element is held on,
 and what happens at an event (a guard crossing, a time event, the start).
 
-:class:`ModeState` is the small state object of :func:`lumped.solvers.adaptive.run_radau5`
-that owns the held branches (``modes``), their kernels and guards, the elements whose
-guards are watched, the force-split cones of locks in parallel, and the event record.
+:class:`ModeState` is the small state object of a ``radau5`` run
+(:class:`lumped.solvers.adaptive_run.Radau5Run`) that owns the held branches
+(``modes``), their kernels and guards, the elements whose guards are watched, the
+force-split cones of locks in parallel, and the event record.
 :meth:`ModeState.at_event` chooses the mode after an event by a vanishing implicit step of
 the full laws (:func:`lumped.solvers.events.select_modes`), applies impacts, records the
 switches and tests for an accumulation of events.

@@ -1,8 +1,8 @@
 r"""``radau5``'s bridge over a stop: backward Euler from the state where the adaptive
 method could not go on.
 
-The event-driven driver of ``radau5`` (:mod:`lumped.solvers.adaptive`) stops when it finds
-no way on: its step falls below the floor, events accumulate at one time (numerical
+The event-driven driver of ``radau5`` (:mod:`lumped.solvers.adaptive_run`) stops when it
+finds no way on: its step falls below the floor, events accumulate at one time (numerical
 chatter, a Zeno-like point), or no mode of the full laws continues the motion. Backward
 Euler across the same laws (``bdf1``, :func:`lumped.solvers.fixed_step.run_bdf`) is
 Moreau's time-stepping with restitution 0: it needs no events, takes impacts, locks and

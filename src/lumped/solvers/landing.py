@@ -1,9 +1,9 @@
 r"""The landing of a ``radau5`` step on a guard's root: the bracket of step sizes.
 
 When a guard turns negative inside an accepted step (:mod:`lumped.solvers.crossing_root`),
-the driver (:mod:`lumped.solvers.adaptive`) retries the step from the same state with the
-size that puts the step's end on the root, and brackets that size by the guard's value at
-the end of each retried step:
+the driver (:mod:`lumped.solvers.adaptive_step`) retries the step from the same state with
+the size that puts the step's end on the root, and brackets that size by the guard's value
+at the end of each retried step:
 
 - ``h_lo``: the longest step whose end still held the guard (``g_end >= 0``, no crossing
   of that guard inside);

@@ -2,7 +2,7 @@ r"""The inner loop of ``radau5`` compiled with numba: consecutive steps with the
 
 :func:`advance` takes Radau IIA steps from ``t`` towards the next stop (a forcing
 breakpoint or ``t_end``) with every element held on its mode's branch, exactly as the
-reference loop of :func:`lumped.solvers.adaptive.run_radau5` takes them, operation for
+reference loop of :class:`lumped.solvers.adaptive_run.Radau5Run` takes them, operation for
 operation (the numbers agree bit for bit):
 
 1. the stage Newton (:func:`lumped.solvers.radau_jit.stage_solve`) with the scales
