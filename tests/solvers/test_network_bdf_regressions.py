@@ -265,6 +265,7 @@ def test_sweep_starts_from_a_string_past_its_length(method, dt):
     assert sol.v["m"][-1] == pytest.approx(-1.75 + 0.033 * 0.3, abs=1e-3)
 
 
+@pytest.mark.filterwarnings("error")  # (numpy's overflow warning leaked to the user)
 @pytest.mark.parametrize("method", ["bdf2", "radau5"])
 def test_a_subnormal_junction_position_is_refused_by_name_not_by_an_svd(method):
     # a slack string pulls a junction held by friction elements that carry far less

@@ -421,8 +421,9 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float],
                                     default=0.0) for j, k in enumerate(ks)) for i in rows]
     w = np.array([1.0 / (S[i] if S[i] > 0.0 else max(r, 1e-300))
                   for i, r in zip(rows, reach, strict=True)])
-    A = np.array([[J[i][k] for k in ks] for i in rows]) * w[:, None]
-    rhs = -np.array([G[i] for i in rows]) * w
+    with np.errstate(invalid="ignore", over="ignore"):  # (overflow: tested below)
+        A = np.array([[J[i][k] for k in ks] for i in rows]) * w[:, None]
+        rhs = -np.array([G[i] for i in rows]) * w
     if not all(lo_k <= 0.0 <= hi_k for lo_k, hi_k in zip(lo, hi, strict=True)):
         return u
     # a law that admits a single force there (lo = hi: e.g. a regularised friction law
