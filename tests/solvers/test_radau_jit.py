@@ -17,7 +17,17 @@ from lumped.codegen.jit import jit_scene
 from lumped.laws import get_law
 
 radau = pytest.importorskip("lumped.solvers.radau")
-from lumped.solvers.radau_jit import compiled_stage_solve, stage_evaluate, workspace  # noqa: E402
+from lumped.codegen.jit import njit, numba_enabled  # noqa: E402
+from lumped.solvers.radau_jit import compiled_stage_solve, workspace  # noqa: E402
+from lumped.solvers.radau_jit import stage_evaluate as _cached_stage_evaluate  # noqa: E402
+
+#: :func:`~lumped.solvers.radau_jit.stage_evaluate` compiled here without numba's disk
+#: cache. The tests pass the scene's kernels as a dispatcher, whose numba type is new in
+#: every process; a cached entry keyed on it cannot be pickled again once its dispatcher
+#: is gone, and the suite's second run on a machine failed with numba's "ReferenceError:
+#: underlying object has vanished". (The solver passes a function type, one entry.)
+stage_evaluate = (njit(_cached_stage_evaluate.py_func) if numba_enabled()
+                  else _cached_stage_evaluate)
 
 
 @pytest.fixture(scope="module")
