@@ -28,8 +28,10 @@ _EPS = 2.220446049250313e-16
 #: Newton iterations of a stage solve (six times as many for a landing step's retry).
 _MAX_NEWTON = 10
 #: Accepted steps in a row shorter than the step floor after which a run that creeps
-#: (landing again and again on a guard, ``t`` moving by ulps) stops.
-_CREEP_STEPS = 200
+#: (landing again and again on a guard, ``t`` moving by ulps) stops (and is bridged). At
+#: most 1 in a row in 5400 runs of random networks that did not creep (1800 draws, 3
+#: levels); 200 before, at 20-40 loop passes a creeping step (10 s a run).
+_CREEP_STEPS = 20
 #: ... steps shorter than the step floor or than this fraction of the run.
 _CREEP_FRACTION = 1e-12
 #: Cuts of one step at kinks of the force split (:mod:`lumped.solvers.split_kink`) before
