@@ -47,7 +47,15 @@ def _skipping(guard, skip: tuple[int, ...]):
 
 class StepChecks:
     """The checks of a solved step ``U`` (the stage values, ``3 (N + E)``) of size ``h``
-    from the run's state at ``t`` (see the module notes)."""
+    from the run's state at ``t`` (see the module notes).
+
+    Reads, from the run: ``x, v, F`` (the state at ``t``), ``N, E, n`` (nodes, elements,
+    ``N + E``), ``system`` (the :class:`~lumped.solvers.radau.StageSystem`), ``ms`` (the
+    :class:`~lumped.solvers.adaptive_modes.ModeState`) and its lists ``modes``,
+    ``kernels``, ``guards``, ``watched``, ``cones``, the plan's branches ``lbs``, the
+    scene's ``spring`` and ``massless`` flags, ``tangent``, ``rtol``, ``atol`` and
+    ``F_seen``.
+    """
 
     def start_forces(self, U: list[float]) -> list[float]:
         """The forces at ``t`` the step's polynomial starts from: after an event the

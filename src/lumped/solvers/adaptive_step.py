@@ -40,7 +40,14 @@ _KINK_CUTS = 8
 
 
 class StepPass:
-    """The Python loop's pass over one step (see the module notes)."""
+    """The Python loop's pass over one step (see the module notes).
+
+    Reads and updates the run's state (:class:`~lumped.solvers.adaptive_run.Radau5Run`):
+    ``t, x, v, F``, the step size ``h`` and the controller's ``h_acc``, ``err_acc``,
+    ``h_good``, ``h_big``, the landing bracket ``target``, the flags ``kept``,
+    ``floor_tried``, ``tangent``, the counters ``stalled``, ``creeping``, ``kink_cuts``
+    and ``stats``, and ``status``/``message`` on a stop; its output ``dense`` and ``rows``.
+    """
 
     def _step(self) -> None:
         """One pass of the Python loop: a step from ``t`` solved, checked and accepted,
