@@ -176,3 +176,32 @@ def test_impact_located_where_a_bisection_substep_needs_halving():
     assert t0 + 0.4 * dt < done.events[0].t < t0 + 0.6 * dt
     assert done.x[1] <= 0.06113590223120681  # m1 within e3's length
     assert abs(done.F[1]) <= 0.011042871848402393  # e1 within its yield force
+
+
+def _two_strings_in_parallel_on_a_string() -> Scene:
+    """Drawn by the ``LUMPED_LARGE`` suite (session 11, ``jit-bdf1``, which runs such a
+    scene on ``bdf1``): ``m1`` runs away from ``m0`` at 1 m/s; the short string ``e1``
+    goes taut and drags ``m0`` until ``m0``'s own string ``e0`` to ground goes taut too."""
+    return Scene([Mass("m0", m=1.0, x0=0.0, v0=0.0), Mass("m1", m=1.0, x0=0.0, v0=1.0)],
+                 [Element("e0", get_law("string_spring").bind(k=1.0, L=0.1), "ground", "m0"),
+                  Element("e1", get_law("string_spring").bind(k=0.1, L=0.1), "m0", "m1"),
+                  Element("e2", get_law("string_spring").bind(k=0.1, L=1.0), "m0", "m1")])
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_forces_a_hair_after_an_impact_on_a_lock_that_rounds_off_its_length(method):
+    """At ``t = 0.306`` (``dt = 0.00625``) the impact on ``e0`` ends the step; the
+    forces there come from a substep a hair long (``1e-10 dt = 6e-13`` s) after it. The
+    taut ``e1``'s elongation rounds 2 ulps off its length there, and Newton was asked for
+    the force that removes them, ``m ulp(x) / h^2 = 1e7``: 'Newton failed (max_iters)'
+    with a largest residual of ``3e-17``. Where that substep fails, a longer one (1e3,
+    then 1e6 times) gives the forces."""
+    scene = _two_strings_in_parallel_on_a_string()
+    sol = _run_ok(scene, method, 0.00625, 0.5)
+    assert [(ev.element, ev.kind) for ev in sol.events][:2] == [("e1", "impact"),
+                                                                 ("e0", "impact")]
+    x0, x1, v0, v1 = sol.x["m0"], sol.x["m1"], sol.v["m0"], sol.v["m1"]
+    assert x0.max() <= 0.1 and (x1 - x0).max() <= 0.1 * (1 + 1e-15)  # on the strings
+    # kinetic energy and the springs' (the taut strings store none): never rises
+    energy = 0.5 * (v0**2 + v1**2) + 0.5 * x0**2 + 0.1 * (x1 - x0) ** 2
+    assert np.diff(energy).max() <= 1e-15

@@ -24,8 +24,9 @@ the lock (the impulse that would stop them is not negligible). Then, from the st
    1-2 locate and apply that impact on the rest of the step, in turn (at most
    :data:`_MAX_IMPACTS`; beyond, the step is Moreau's). Elements locked at the end get
    rate zero; where that is more than round-off, the forces come from a substep a hair
-   long from the stopped velocities (a dashpot beside the lock follows its new rate). The
-   caller restarts the multistep history (BDF2 takes a BDF1 step next).
+   long from the stopped velocities (a dashpot beside the lock follows its new rate;
+   ``1e-10 dt``, longer where its Newton fails: :data:`_HAIRS`). The caller restarts the
+   multistep history (BDF2 takes a BDF1 step next).
 
 Every substep is a backward-Euler step, dissipative for passive laws, and the impulse
 only removes energy, so the energy ledger never gains. Backward Euler *across* the lock
@@ -52,6 +53,9 @@ __all__ = ["ImpactStep", "be_substep", "halved_steps", "impact_step", "impulse_i
 _LOCATE_RTOL = 1e-10
 #: Impacts located within one step at most; beyond, the step is Moreau's (an accumulation).
 _MAX_IMPACTS = 16
+#: The substep "a hair after" the end of a step (for the forces there) is this many times
+#: ``_LOCATE_RTOL dt`` long, the next where Newton fails on the shorter one.
+_HAIRS = (1.0, 1e3, 1e6)
 
 
 @dataclass
@@ -163,6 +167,17 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
                            halved[3], 0, 0, 0, [], 0, [])
         return halved[0], halved[1], halved[2], res
 
+    def hair_after(xs, vs, Fs):
+        # a substep a hair long from the end of the step, for the forces there; a lock
+        # whose elongation rounds a few ulps off its value asks a Newton step of size h
+        # for forces of m ulp(x) / h^2 (1e7 for h = 6e-13, a taut string between two
+        # masses), which it cannot polish: a longer hair then
+        for k in _HAIRS:
+            got = sub(min(k * _LOCATE_RTOL * dt, dt), xs, vs, Fs, t0 + dt)
+            if got[3].code is NewtonCode.SUCCESS:
+                break
+        return got
+
     # s: the time into the step reached so far, so that the first substep is the step
     # itself (``dt``, not ``t0 + dt - t0``, which may round an ulp off it: the same
     # system with another ``h``)
@@ -188,7 +203,7 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
                                                     restitution, out.events)
         s += s_hi
         if dt - s <= _LOCATE_RTOL * dt:  # the impact ends the step: forces from a hair after
-            x1, v1, F1, res = sub(_LOCATE_RTOL * dt, xh, v_after, Fl, t0 + dt)
+            x1, v1, F1, res = hair_after(xh, v_after, Fl)
             if res.code is not NewtonCode.SUCCESS:
                 out.failure, out.failure_t = res, t0 + dt
                 return out
@@ -206,7 +221,7 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
         else v1
     v_scale = max(abs(vi) for vi in v1) if v1 else 0.0
     if any(abs(a - b) > 1e-12 * v_scale for a, b in zip(v_stop, v1, strict=True)):
-        _, v1, F1, res = sub(_LOCATE_RTOL * dt, x1, v_stop, F1, t0 + dt)
+        _, v1, F1, res = hair_after(x1, v_stop, F1)
         if res.code is not NewtonCode.SUCCESS:
             out.failure, out.failure_t = res, t0 + dt
             return out
