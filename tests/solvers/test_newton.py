@@ -89,6 +89,21 @@ def test_large_singular_system_is_reported_without_a_warning():
     assert res.code is NewtonCode.SINGULAR
 
 
+def test_min_norm_solver_leaves_a_non_finite_step_to_newton_without_a_warning():
+    """A right-hand side with an infinity (a residual that overflowed) gives a
+    non-finite step, which Newton reports as ``NON_FINITE``; numpy's 'invalid value
+    encountered in matmul' reached the user (the LUMPED_LARGE radau5 run)."""
+    import warnings
+
+    from lumped.solvers.newton import min_norm_solver
+
+    solve = min_norm_solver([[1.0, 1.0], [1.0, 1.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        du = solve([math.inf, -math.inf])
+    assert not all(math.isfinite(d) for d in du)
+
+
 def test_nonlinear_quadratic_convergence():
     def evaluate(u):
         return [u[0] ** 3 - 8.0], [[3 * u[0] ** 2]], [abs(u[0]) ** 3 + 8.0]

@@ -379,7 +379,9 @@ def min_norm_solver(J: Sequence[Sequence[float]]):
     pinv = np.linalg.pinv(A, rcond=len(A) * 2.220446049250313e-16)
 
     def solve(b: Sequence[float]) -> list[float]:
-        return (pinv @ np.asarray(b, dtype=float)).tolist()
+        # (a non-finite result is Newton's to report, NON_FINITE: no numpy warning)
+        with np.errstate(invalid="ignore", over="ignore"):
+            return (pinv @ np.asarray(b, dtype=float)).tolist()
 
     return solve
 
