@@ -18,15 +18,13 @@ import math
 from .adaptive_output import row_of
 from .events import fold_crossed
 from .landing import Landing
-from .radau import DAMPED_AFTER, STALL_PASSES, C
+from .radau import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES, C
 from .radau import A as _A
 from .status import Status
 
 __all__ = ["StepPass"]
 
 _EPS = 2.220446049250313e-16
-#: Newton iterations of a stage solve (six times as many for a landing step's retry).
-_MAX_NEWTON = 10
 #: Accepted steps in a row shorter than the step floor after which a run that creeps
 #: (landing again and again on a guard, ``t`` moving by ulps) stops (and is bridged). At
 #: most 1 in a row in 5400 runs of random networks that did not creep (1800 draws, 3
@@ -95,20 +93,20 @@ class StepPass:
         if got is not None:
             sol, its, nfac, err_norm, self.F_seen, hit_c = got
         else:
-            sol, its, nfac = self.attempt(h, _MAX_NEWTON)
+            sol, its, nfac = self.attempt(h, MAX_NEWTON)
         if sol is None and self.target is not None:
             # a landing step near the singular end of a branch (a junction's
             # Herschel-Bulkley n < 1 dashpot stopping in finite time, its rate ~ sqrt(t* -
             # t)): Newton contracts slowly there and 10 iterations missed steps that 60
             # take; the bracket closed early, 1e-5 s before the stop, again and again
             # down to the step floor. Once more, with a longer budget
-            sol, its_more, nfac_more = self.attempt(h, 6 * _MAX_NEWTON)
+            sol, its_more, nfac_more = self.attempt(h, 6 * MAX_NEWTON)
             its, nfac, got = its + its_more, nfac + nfac_more, None
         elif sol is None and not self.cones and self.stalled >= DAMPED_AFTER:
             # an eighth failure in a row: a stage that starts where its branch's rate is
             # flat in the force (Herschel-Bulkley n > 1 at its yield force), which the
             # simplified Newton misses at every step size; the line-search fallback
-            sol, its_more, nfac_more = self.attempt(h, _MAX_NEWTON, damped=True)
+            sol, its_more, nfac_more = self.attempt(h, MAX_NEWTON, damped=True)
             its, nfac, got = its + its_more, nfac + nfac_more, None
         stats["newton_iterations"] += its
         stats["factorizations"] += nfac
@@ -129,7 +127,7 @@ class StepPass:
             err_norm = math.inf if err is None else self.system.error_norm(
                 self.U, h, x, v, F, err, self.rtol, self.atol, self.dF_n, self.watched,
                 self.Fref)
-        fac = 0.9 * (2 * _MAX_NEWTON + 1) / (2 * _MAX_NEWTON + its)
+        fac = 0.9 * (2 * MAX_NEWTON + 1) / (2 * MAX_NEWTON + its)
         if not math.isfinite(err_norm):
             stats["rejected"] += 1
             self.h *= 0.2

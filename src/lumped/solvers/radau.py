@@ -129,6 +129,10 @@ def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[fl
 #: against any cycle; backward Euler then bridges the point, :mod:`lumped.solvers.bridge`).
 STALL_PASSES = 1_000
 
+#: Newton iterations of a ``radau5`` stage solve, in both loops (a landing step retried
+#: with six times as many in the Python loop); also the controller's Newton factor.
+MAX_NEWTON = 10
+
 #: Newton failures in a row after which a ``radau5`` step tries the line-search fallback
 #: (:meth:`StageSystem.solve_damped`); the compiled loop hands that pass to Python.
 DAMPED_AFTER = 8

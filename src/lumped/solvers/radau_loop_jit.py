@@ -51,7 +51,7 @@ import numpy as np
 
 from ..codegen.jit import njit, numba_enabled
 from .crossing_root import first_root
-from .radau import DAMPED_AFTER, END_SLOPES, STALL_PASSES, C
+from .radau import DAMPED_AFTER, END_SLOPES, MAX_NEWTON, STALL_PASSES, C
 from .radau_jit import stage_solve
 from .radau_step_jit import crossed, finite, folded, forces, step_error
 
@@ -72,7 +72,6 @@ REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "flo
            FOLD: "fold", DAMPED: "damped"}
 
 _EPS = 2.220446049250313e-16
-_MAX_NEWTON = 10
 _C0, _C1, _C2 = C
 _S1, _S2, _S3 = END_SLOPES
 
@@ -160,7 +159,7 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
                 scale[k * n + N + e] = rtol * max(abs(F[e]), F_ref)
         ok = _stage(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x, v, fk,
                     scale,
-                    1e-3, _MAX_NEWTON, G, J, LU, perm, b, du, out)
+                    1e-3, MAX_NEWTON, G, J, LU, perm, b, du, out)
         its = out[0]
         nfac = out[1]
         if single:  # one attempt for the Python loop: its outcome, nothing accepted
@@ -218,7 +217,7 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
             ist[NJEV] -= nfac
             reason = SINGULAR
             break
-        fac = 0.9 * (2 * _MAX_NEWTON + 1) / (2 * _MAX_NEWTON + its)
+        fac = 0.9 * (2 * MAX_NEWTON + 1) / (2 * MAX_NEWTON + its)
         if not math.isfinite(err_norm):
             ist[REJECTED] += 1
             h *= 0.2
