@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 
 from lumped import simulate
+from lumped.codegen.branches import law_branches
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
+from lumped.solvers.adaptive_checks import StepChecks
 
 
 def _hb(gamma: float, tau: float, n: float):
@@ -342,6 +344,40 @@ def test_a_stage_of_locks_that_cannot_carry_the_load_is_not_a_solution():
     assert np.abs(sol.F["e3"][late] + 0.01 * v).max() <= 1e-9
     F2 = -sol.F["e2"][late]
     assert np.abs(v - 4.936309426029256 * np.maximum(F2 - 1.0, 0.0) ** 2).max() <= 1e-3
+
+
+class _Stages:
+    """The element nodes ``(q, F)`` at ``s = 0, c_1, c_2, 1`` of a solved step."""
+
+    def __init__(self, F_nodes):
+        self.F_nodes = F_nodes
+
+    def element_nodes(self, U, h, x, v, F, e):
+        return (0.0, -0.000487, -0.034417, -0.007908), self.F_nodes
+
+
+def _checks(F_nodes, rtol=6.25e-4):
+    chk = StepChecks()
+    chk.system, chk.x, chk.v, chk.F = _Stages(F_nodes), [0.0], [0.0], [-1.0]
+    chk.rtol, chk.atol = rtol, rtol * 0.025
+    chk.watched, chk.tangent = [0], {(0, 1)}
+    lb = law_branches(_hb(4.936309426029256, 1.0, 2.0))
+    chk.guards = [lb.stage_guards_for(1)]  # the slip branch F < -tau: guard -F - tau
+    return chk
+
+
+def test_a_stage_beyond_a_guard_read_as_a_tangency_is_another_root():
+    # the stages of a step from a Herschel-Bulkley n = 2 dashpot at rest at its yield
+    # force, found on branch F < -tau: its residual q + gamma (-F - tau)^2 = 0 also holds
+    # at -F = tau - sqrt(-q / gamma), below the yield force (0.9165 tau at a rate of
+    # 0.034, a LUMPED_LARGE state). The guard crossed at t was read as a tangency; a stage
+    # beyond it by more than the tolerance is not round-off
+    assert _checks((-1.0, -1.009938, -0.9165, -1.040024)).beyond_tangent([], 0.0079)
+    # a hair beyond it (round-off of a split, 1e-9) is the tangency
+    assert not _checks((-1.0, -1.0 + 1e-9, -1.02, -1.04)).beyond_tangent([], 0.0079)
+    # the tolerance scales with rtol: the same 0.08 is within a loose run's
+    assert not _checks((-1.0, -1.009938, -0.9165, -1.040024), rtol=0.1).beyond_tangent(
+        [], 0.0079)
 
 
 def test_a_landing_on_a_guard_flat_at_its_root_shrinks_its_bracket():

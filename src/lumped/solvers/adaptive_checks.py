@@ -147,6 +147,19 @@ class StepChecks:
         scale = max(max(abs(Fe) for Fe in F0), max(abs(f) for e in cones for f in nodes[e][0]))
         return split_kink(nodes, cones, 0.5 * self.rtol * scale)
 
+    def beyond_tangent(self, U: list[float], h: float) -> bool:
+        """Whether a guard read as held (``tangent``) is off at a stage by more than the
+        run's tolerance: not a tangency's round-off, another root of the held branch."""
+        system, x, v, F, rtol, atol = self.system, self.x, self.v, self.F, self.rtol, \
+            self.atol
+        for w, j in self.tangent:
+            e = self.watched[w]
+            q, Fe = system.element_nodes(U, h, x, v, F, e)
+            for k in (1, 2, 3):
+                if self.guards[e](q[k], Fe[k])[j] < -(atol + rtol * (abs(q[k]) + abs(Fe[k]))):
+                    return True
+        return False
+
     def end_guard(self, U: list[float], h: float, which) -> tuple[float, float]:
         """Guard ``which = (watched index, guard index)`` at the step's end, and its
         tolerance."""

@@ -150,7 +150,7 @@ class StepPass:
             self.h *= s_kink
             self.h_acc = None
             return
-        if self._redo_for_a_guard(sol, h, got is None, hit_c):
+        if self._redo_for_a_guard(sol, h, got is None, hit_c, h_min):
             return
         if self.ms.forces_from_probe and self.target is None:
             # the first step after an event, no guard crossed in it: its dense output
@@ -214,10 +214,12 @@ class StepPass:
             self.kept, self.h = self.modes == old, self.h_good
             self.tangent.clear()
 
-    def _redo_for_a_guard(self, sol: list[float], h: float, in_python: bool, hit_c) -> bool:
+    def _redo_for_a_guard(self, sol: list[float], h: float, in_python: bool, hit_c,
+                          h_min: float) -> bool:
         """The guards along a solved step: whether it is redone (shorter, to land on the
-        first crossing; or not at all, the event being at ``t``) rather than accepted.
-        A landing step is accepted once it ends on its guard."""
+        first crossing; or not at all, the event being at ``t``; or as a failed step,
+        ``h_min`` its floor, when it went beyond a guard read as a tangency) rather than
+        accepted. A landing step is accepted once it ends on its guard."""
         t, tiny = self.t, 16 * _EPS * max(1.0, abs(self.t))
         tangent, kept, target = self.tangent, self.kept, self.target
         # (the compiled attempt has found the crossing by the same algorithm; after an
@@ -236,6 +238,12 @@ class StepPass:
             # again and again, the run crept on by 1e-15 s)
             tangent.add(hit[1])
             hit = self.crossing(sol, h)
+        if tangent and self.beyond_tangent(sol, h):
+            # a guard read as a tangency is off at a stage by more than the tolerance:
+            # the stage found another root of the held branch (the mirror root of a
+            # Herschel-Bulkley n = 2 slip branch below its yield force), a failed step
+            self._failed(h, h_min)
+            return True
         if target is not None:  # a landing step: bracket the event by end-of-step values
             if hit is not None and hit[1] != target.which and hit[0] < 1.0:
                 # another guard crosses first; at t itself: no landing, the event is at t
