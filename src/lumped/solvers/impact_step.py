@@ -25,7 +25,10 @@ the lock (the impulse that would stop them is not negligible). Then, from the st
    :data:`_MAX_IMPACTS`; beyond, the step is Moreau's). Elements locked at the end get
    rate zero; where that is more than round-off, the forces come from a substep a hair
    long from the stopped velocities (a dashpot beside the lock follows its new rate;
-   ``1e-10 dt``, longer where its Newton fails: :data:`_HAIRS`). The caller restarts the
+   ``1e-10 dt``, longer where its Newton fails: :data:`_HAIRS`). A lock reached in the
+   second half of the step takes its forces at ``t_{n+1}`` from a substep ``dt`` long
+   (:func:`_forces_after`: on the lock a remainder ``h`` fixes the rate only to
+   ``ulp(x) / h``, hence the forces only to ``m ulp(x) / h^2``). The caller restarts the
    multistep history (BDF2 takes a BDF1 step next).
 
 Every substep is a backward-Euler step, dissipative for passive laws, and the impulse
@@ -56,6 +59,9 @@ _MAX_IMPACTS = 16
 #: The substep "a hair after" the end of a step (for the forces there) is this many times
 #: ``_LOCATE_RTOL dt`` long, the next where Newton fails on the shorter one.
 _HAIRS = (1.0, 1e3, 1e6)
+#: A lock reached with less than this fraction of the step left takes its forces at the
+#: end of the step from a substep ``dt`` long (:func:`_forces_after`).
+_SHORT_REST = 0.5
 
 
 @dataclass
@@ -228,8 +234,40 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
         end_locked = locking_elements(scene, x1, v1, F1)
     if end_locked:
         v1 = impact_velocities(scene, x1, v1, end_locked, 0.0, forces=F1)[0]
+    if s > 0.0 and dt - s < _SHORT_REST * dt:
+        # an impact located late in the step: a lock's force comes from the momentum
+        # balance m (v1 - v0) / h, with v1 known only to ulp(x) / h (the rounding of
+        # q = x + h v on the lock), so after a remainder h much shorter than dt the forces
+        # carry m ulp(x) / h^2 (up to the whole load): take them from a substep dt long
+        # from the state reached, if the elements locked at the impact stay locked
+        after = _forces_after(scene, t0 + dt, dt, x1, v1, F1, held, sub)
+        if after is not None:
+            v1, F1 = after
     out.x, out.v, out.F = x1, v1, F1
     return out
+
+
+def _forces_after(scene, t1, dt, x1, v1, F1, held, sub):
+    """The velocities and forces at ``t1`` when the lock is reached late in a step.
+
+    A backward-Euler substep ``dt`` long from ``(x1, v1)`` tells which of the elements
+    locked at the impact (``held``) are still locked; their rates at ``t1`` are set to zero
+    (the remainder leaves them ``ulp(x) / h``) and the forces are those of the substep from
+    there: the forces at ``t1`` to ``O(dt)`` (exactly where the locked network is at rest),
+    with the round-off of an ordinary step. Returns ``(v1, F1)``, or ``None`` when the
+    substep fails or keeps none of ``held`` locked (the remainder's forces stand)."""
+    x2, v2, F2, res = sub(dt, x1, v1, F1, t1 + dt)
+    if res.code is not NewtonCode.SUCCESS:
+        return None
+    still = [e for e in locking_elements(scene, x2, v2, F2) if e in held]
+    if not still:
+        return None
+    v_stop = impact_velocities(scene, x1, v1, still, 0.0, forces=F2)[0]
+    if v_stop != list(v1):
+        x2, v2, F2, res = sub(dt, x1, v_stop, F2, t1 + dt)
+        if res.code is not NewtonCode.SUCCESS:
+            return None
+    return v_stop, F2
 
 
 def _locate_impact(scene, ts, rest, dt, x, v, F, held, end, sub, options, out):
