@@ -9,6 +9,7 @@ a mass on a spring with an inextensible string (``k = m = 1``, ``L = 0.5``) rele
 from __future__ import annotations
 
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -45,6 +46,39 @@ def test_impact_scene_within_3_dt_of_exact(method, dt):
     assert abs(ev.t - T_IMPACT) <= 2 * dt
     assert ev.impulse == pytest.approx(math.sqrt(3) / 2, abs=3 * dt)
     assert ev.energy_lost == pytest.approx(0.375, abs=3 * dt)
+
+
+@pytest.mark.parametrize(("method", "bound"), [("bdf1", 1e-3), ("bdf2", 2e-6),
+                                             ("jit-bdf2", 2e-6)])
+def test_dense_output_jumps_at_the_impact(method, bound):
+    # the dense output has the impact as a knot (the states just before and after), so
+    # the velocity jumps there; it used to be interpolated across the impact's step: v off
+    # by 0.55 and x by 1e-4 (120 times the samples' error) inside that step at dt 1e-3
+    dt = 1e-3
+    sol = simulate(impact_scene(), method=method, dt=dt, t_end=1.5)
+    (ev,) = sol.events
+    t = np.linspace(0.0, 1.5, 150_001)
+    t = t[np.abs(t - T_IMPACT) > abs(ev.t - T_IMPACT)]  # off the impact's own error
+    rows = sol.sol(t)
+    v_exact = np.where(t < T_IMPACT, np.cos(t), -0.5 * np.sin(t - T_IMPACT))
+    assert np.abs(rows[:, 1] - exact_impact(t)).max() <= bound
+    assert np.abs(rows[:, 2] - v_exact).max() <= bound
+    # at the event time: just before, the free motion's speed; from it on, the stop
+    before, at = sol.sol(np.nextafter(ev.t, 0.0)), sol.sol(ev.t)
+    assert before[2] == pytest.approx(math.sqrt(3) / 2, abs=3 * dt)
+    assert abs(at[2]) <= 1e-12
+    # and it travels with the solution (sweeps send solutions between processes)
+    assert np.array_equal(pickle.loads(pickle.dumps(sol)).sol(t[::1000]), rows[::1000])
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_dense_output_of_the_lock_scene_holds_from_the_impact(method):
+    sol = simulate(lock_scene(), method=method, dt=1e-3, t_end=2.0)
+    (ev,) = sol.events
+    rows = sol.sol(np.linspace(ev.t, 2.0, 20_001))
+    assert np.all(rows[:, 1] == 0.5)
+    assert np.abs(rows[:, 2]).max() <= 1e-12
+    assert np.abs(rows[:, 3] + rows[:, 4] - 1.0).max() <= 1e-8
 
 
 def test_bdf2_across_an_impact_converges_at_second_order():

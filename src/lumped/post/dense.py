@@ -35,7 +35,7 @@ from lumped.scene import Mass, Scene
 
 from .columns import net_forces, v_col, x_col
 
-__all__ = ["hermite_dense", "check_times"]
+__all__ = ["HermiteDense", "hermite_dense", "check_times"]
 
 
 def check_times(t: object, t_first: float, t_last: float) -> tuple[np.ndarray, bool]:
@@ -111,3 +111,25 @@ def hermite_dense(scene: Scene, data: np.ndarray) -> Callable[[np.ndarray], np.n
         return out
 
     return dense
+
+
+class HermiteDense:
+    """:func:`hermite_dense` as a picklable object (a :class:`~lumped.result.Solution`
+    that carries it travels between processes): keeps ``scene`` and ``data``, builds the
+    interpolant on the first call.
+
+    Used for samples with extra rows, e.g. the states just before and after each impact
+    of a fixed-step run (repeated times: the later row holds from that time on)."""
+
+    def __init__(self, scene: Scene, data: np.ndarray) -> None:
+        self.scene = scene
+        self.data = np.asarray(data, dtype=float)
+        self._dense: Callable[[np.ndarray], np.ndarray] | None = None
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        if self._dense is None:
+            self._dense = hermite_dense(self.scene, self.data)
+        return self._dense(t)
+
+    def __getstate__(self) -> dict:
+        return {"scene": self.scene, "data": self.data, "_dense": None}

@@ -88,6 +88,34 @@ class RunResult:
     message: str = ""
     events: list[Event] = field(default_factory=list)
     indeterminate: dict[str, list[tuple[float, float]]] = field(default_factory=dict)
+    #: States just before and just after each impact, ``(t, x, v, F)``
+    #: (:attr:`lumped.solvers.impact_step.ImpactStep.knots`).
+    knots: list[tuple[float, list[float], list[float], list[float]]] = \
+        field(default_factory=list)
+
+    def dense(self, scene: Scene):
+        """The dense output with the impacts as knots, or ``None`` without impacts.
+
+        Between samples the cubic Hermite interpolant of :mod:`lumped.post.dense`; a step
+        that holds impacts is split at them, each impact a pair of rows at its time (the
+        state just before, then just after), so the velocities jump at the impact instead
+        of being spread over the step."""
+        if not self.knots:
+            return None
+        import numpy as np
+
+        from ..post.dense import HermiteDense
+
+        data = self.as_array()
+        N = self.n_nodes
+        rows = np.empty((len(self.knots), data.shape[1]))
+        for r, (t, x, v, F) in enumerate(self.knots):
+            rows[r, 0] = t
+            rows[r, 1:1 + 2 * N:2] = x
+            rows[r, 2:2 + 2 * N:2] = v
+            rows[r, 1 + 2 * N:] = F
+        at = np.searchsorted(data[:, 0], rows[:, 0], side="right")
+        return HermiteDense(scene, np.insert(data, at, rows, axis=0))
 
     def as_array(self):
         """``(n, 1 + 2 N + E)`` array: ``t``, then ``x_i, v_i`` per node, then ``F_e``."""
@@ -184,6 +212,7 @@ def run_bdf(
     locked = set(locking_elements(scene, x, v, F, lockable)) if lockable else set()
     restart = False
     events: list[Event] = []
+    knots: list = []
     n_impacts = 0
     log = IntervalLog()
     cyclic = cyclic_elements(scene)
@@ -274,6 +303,7 @@ def run_bdf(
                     break
                 x_new, v_new, F_new = done.x, done.v, done.F
                 events += done.events
+                knots += done.knots
                 n_impacts += 1
                 restart = True
                 J_acc = None
@@ -329,7 +359,8 @@ def run_bdf(
     }
     if lockable:  # a scene that can lock counts its impacts
         stats["impacts"] = n_impacts
-    return RunResult(dt, N, E, xs, vs, Fs, stats, status, message, events, log.result())
+    return RunResult(dt, N, E, xs, vs, Fs, stats, status, message, events, log.result(),
+                     knots)
 
 
 def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,

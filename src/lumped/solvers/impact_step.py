@@ -78,6 +78,11 @@ class ImpactStep:
     solves: int = 0
     failure: NewtonResult | None = None
     failure_t: float = 0.0
+    #: Two states per impact, just before and just after it, ``(t, x, v, F)``: the knots
+    #: of the dense output inside the step (the velocities jump there). Forces after an
+    #: impact are those the motion reaches next (the next impact's or the step's end).
+    knots: list[tuple[float, list[float], list[float], list[float]]] = \
+        field(default_factory=list)
 
 
 def be_substep(scene: Scene, t_end: float, h: float, x0: list[float], v0: list[float],
@@ -207,6 +212,9 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
                                  options, out)
         xh, v_after, Fl, s_hi, held = _apply_impact(scene, t0 + s, located, held,
                                                     restitution, out.events)
+        t_hit = (t0 + s) + s_hi  # the events' time
+        out.knots.append((t_hit, xh, list(located[1][1]), list(Fl)))
+        out.knots.append((t_hit, xh, list(v_after), []))
         s += s_hi
         if dt - s <= _LOCATE_RTOL * dt:  # the impact ends the step: forces from a hair after
             x1, v1, F1, res = hair_after(xh, v_after, Fl)
@@ -244,6 +252,9 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
         if after is not None:
             v1, F1 = after
     out.x, out.v, out.F = x1, v1, F1
+    for k in range(1, len(out.knots), 2):  # forces after an impact: those reached next
+        t, x, v, _ = out.knots[k]
+        out.knots[k] = (t, x, v, out.knots[k + 1][3] if k + 1 < len(out.knots) else F1)
     return out
 
 

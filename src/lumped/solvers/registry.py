@@ -196,7 +196,8 @@ def _run_generic(formula: str) -> Runner:
                       throw=settings.throw,
                       restitution=settings.extra.get("restitution", 0.0))
         return RawRun(out.as_array(), out.stats, out.status, out.message,
-                      events=out.events, indeterminate=out.indeterminate)
+                      events=out.events, dense=out.dense(scene),
+                      indeterminate=out.indeterminate)
 
     return runner
 
@@ -214,7 +215,7 @@ def _on_reference(scene: Scene, method: str, dt: float, n_steps: int,
                   options=settings.options, throw=settings.throw)
     stats = dict(out.stats, fallback=why)
     return RawRun(out.as_array(), stats, out.status, out.message,
-                  events=out.events, indeterminate=out.indeterminate)
+                  events=out.events, dense=out.dense(scene), indeterminate=out.indeterminate)
 
 
 def _run_jit(method: str) -> Runner:
