@@ -258,3 +258,27 @@ def test_netcdf_round_trip_keeps_every_value_and_string(tmp_path):
             else:
                 assert a.tolist() == b.tolist(), name
     assert "breaks its law" in str(back["message"].values[1])
+
+
+def test_jit_sweep_workers_are_replaced(monkeypatch):
+    # each new parameter set of a jit-* method compiles a numba module that its process
+    # keeps for good (6 MB): the pool replaces a worker after JIT_TASKS_PER_WORKER points
+    import lumped.sweep.run as run
+
+    seen = []
+
+    class Recording(run.ProcessPoolExecutor):
+        def __init__(self, *args, **kwargs):
+            seen.append(kwargs.get("max_tasks_per_child"))
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(run, "ProcessPoolExecutor", Recording)
+    monkeypatch.setattr(run, "JIT_TASKS_PER_WORKER", 1)  # a new worker for every point
+    sets = [{"nodes.mass.x0": x} for x in (-0.3, 0.1, 0.4)]
+    serial = simulate_many(RELEASE, sets, method="jit-bdf1", dt=2e-3, t_end=0.5, n_jobs=1)
+    pooled = simulate_many(RELEASE, sets, method="jit-bdf1", dt=2e-3, t_end=0.5, n_jobs=2)
+    plain = simulate_many(RELEASE, sets, method="bdf1", dt=2e-3, t_end=0.5, n_jobs=2)
+    assert seen == [1, None]  # the Python reference keeps its workers
+    assert pooled.backend == "processes"
+    pd.testing.assert_frame_equal(serial.table, pooled.table)
+    assert list(plain.table["status"]) == ["success"] * 3

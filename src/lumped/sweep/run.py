@@ -276,6 +276,18 @@ def _run_rows(job: tuple, rows: list[dict]) -> list[tuple[dict, Any]]:
     return [_run_one(job, values) for values in rows]
 
 
+#: Parameter points a worker runs before it is replaced, for the ``jit-*`` methods: each
+#: new parameter set compiles a numba module that the process keeps for good (0.5 s and
+#: 6 MB, docs/benchmarks.md, "Memory per compiled scene"), so a worker holds at most
+#: about 1.2 GB of them; a new worker costs one import (about 2 s).
+JIT_TASKS_PER_WORKER = 200
+
+
+def _tasks_per_worker(method: str) -> int | None:
+    """``max_tasks_per_child`` of the sweep's process pool for ``method``."""
+    return JIT_TASKS_PER_WORKER if method.startswith("jit-") else None
+
+
 def _generic_local(job: tuple, sets: ParameterSets, n_jobs: int | None,
                    show: bool) -> tuple[list, str]:
     rows = sets.as_dicts()
@@ -296,7 +308,8 @@ def _generic_local(job: tuple, sets: ParameterSets, n_jobs: int | None,
         bar.close()
         return results, "serial"
     # spawn, not fork: numba's threading layer is not fork-safe once it has run
-    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
+    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"),
+                             max_tasks_per_child=_tasks_per_worker(job[1])) as pool:
         futures = {pool.submit(_run_one, job, values): i for i, values in enumerate(rows)}
         for fut in as_completed(futures):
             results[futures[fut]] = fut.result()
