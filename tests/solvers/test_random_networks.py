@@ -246,10 +246,45 @@ LOOPED = ("radau5",)
 LOOPED_BOTH_EXAMPLES = 1_000 if LARGE else 4
 
 
+#: Two draws of the ``LUMPED_LARGE`` bdf1 run (session 13) against forces taken from a
+#: substep ``dt`` long after a lock reached late in a step while the network still moves:
+#: the forces of that later time created energy (3.8e-5, through the implicit spring e5)
+#: and put the Herschel-Bulkley e5 of the second above its yield force at rest.
+_LATE_LOCK_MOVING = Scene(
+    [Mass("m0", m=1.0023052380778996, x0=-1.0433664960705116e-149, v0=-0.35823522245229844),
+     Junction("j1", x0=0.026918814107526723),
+     Mass("m2", m=0.23673554360753735, x0=0.11085945002508857, v0=-0.5769984940233852),
+     Mass("m3", m=1.0000000002302585, x0=-6.103515625e-05, v0=-1.175494351e-38)],
+    [Element("e0", get_law("linear_spring").bind(k=0.30391615762904745), "ground", "m0"),
+     Element("e1", get_law("newtonian").bind(c=1.0), "ground", "j1"),
+     Element("e2", get_law("linear_spring").bind(k=18.378595185251704), "j1", "m2"),
+     Element("e3", get_law("herschel_bulkley").bind(gamma=0.10374454737519478,
+                                                    tau=0.9246773771381933, n=2.0),
+             "m0", "m3"),
+     Element("e4", get_law("string_spring").bind(k=4.356905498935696,
+                                                 L=0.010277875128619116), "m3", "ground"),
+     Element("e5", get_law("implicit_spring").bind(k=2.757639602523433,
+                                                   L0=0.013620114643377007, F0=1.0),
+             "m3", "j1"),
+     Element("e6", get_law("linear_spring").bind(k=1.0), "ground", "m0")])
+_LATE_LOCK_BESIDE_A_DASHPOT = Scene(
+    [Mass("m0", m=1.0), Junction("j1", x0=0.0),
+     Mass("m2", m=0.23713737056616552, x0=0.125, v0=-0.625), Mass("m3", m=1.0)],
+    [Element("e0", get_law("linear_spring").bind(k=1.0), "ground", "m0"),
+     Element("e1", get_law("newtonian").bind(c=1.0), "ground", "j1"),
+     Element("e2", get_law("linear_spring").bind(k=17.78279410038923), "j1", "m2"),
+     Element("e3", get_law("bingham").bind(gamma=1.0, tau=1.0), "m0", "m3"),
+     Element("e4", get_law("string_spring").bind(k=1.0, L=0.01), "m3", "ground"),
+     Element("e5", get_law("herschel_bulkley").bind(gamma=1.0, tau=0.1, n=1.5), "m0", "j1"),
+     Element("e6", get_law("linear_spring").bind(k=1.0), "ground", "m0")])
+
+
 @pytest.mark.parametrize("method", [m for m in GENERIC
                                     if m not in COMPILED and m not in LOOPED])
 @_SETTINGS
 @given(scene=passive_networks())
+@example(scene=_LATE_LOCK_MOVING)
+@example(scene=_LATE_LOCK_BESIDE_A_DASHPOT)
 def test_random_passive_network(method: str, scene: Scene) -> None:
     check_network(scene, method)
 

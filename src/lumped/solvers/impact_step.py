@@ -26,9 +26,10 @@ the lock (the impulse that would stop them is not negligible). Then, from the st
    rate zero; where that is more than round-off, the forces come from a substep a hair
    long from the stopped velocities (a dashpot beside the lock follows its new rate;
    ``1e-10 dt``, longer where its Newton fails: :data:`_HAIRS`). A lock reached in the
-   second half of the step takes its forces at ``t_{n+1}`` from a substep ``dt`` long
-   (:func:`_forces_after`: on the lock a remainder ``h`` fixes the rate only to
-   ``ulp(x) / h``, hence the forces only to ``m ulp(x) / h^2``). The caller restarts the
+   second half of the step where the network comes to rest takes its forces at
+   ``t_{n+1}`` from a substep ``dt`` long (:func:`_forces_after`: on the lock a
+   remainder ``h`` fixes the rate only to ``ulp(x) / h``, hence the forces only to
+   ``m ulp(x) / h^2``). The caller restarts the
    multistep history (BDF2 takes a BDF1 step next).
 
 Every substep is a backward-Euler step, dissipative for passive laws, and the impulse
@@ -246,9 +247,10 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
         # an impact located late in the step: a lock's force comes from the momentum
         # balance m (v1 - v0) / h, with v1 known only to ulp(x) / h (the rounding of
         # q = x + h v on the lock), so after a remainder h much shorter than dt the forces
-        # carry m ulp(x) / h^2 (up to the whole load): take them from a substep dt long
-        # from the state reached, if the elements locked at the impact stay locked
-        after = _forces_after(scene, t0 + dt, dt, x1, v1, F1, held, sub)
+        # carry m ulp(x) / h^2 (up to the whole load). Where the network comes to rest
+        # on the locks, the static forces from a substep dt long replace them
+        after = _forces_after(scene, t0 + dt, dt, x1, v1, F1, held, sub,
+                              max(map(abs, v), default=0.0))
         if after is not None:
             v1, F1 = after
     out.x, out.v, out.F = x1, v1, F1
@@ -258,26 +260,33 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
     return out
 
 
-def _forces_after(scene, t1, dt, x1, v1, F1, held, sub):
-    """The velocities and forces at ``t1`` when the lock is reached late in a step.
+def _forces_after(scene, t1, dt, x1, v1, F1, held, sub, v_scale):
+    """The velocities and forces at ``t1`` when the lock is reached late in a step and
+    the network comes to rest there.
 
-    A backward-Euler substep ``dt`` long from ``(x1, v1)`` tells which of the elements
-    locked at the impact (``held``) are still locked; their rates at ``t1`` are set to zero
-    (the remainder leaves them ``ulp(x) / h``) and the forces are those of the substep from
-    there: the forces at ``t1`` to ``O(dt)`` (exactly where the locked network is at rest),
-    with the round-off of an ordinary step. Returns ``(v1, F1)``, or ``None`` when the
-    substep fails or keeps none of ``held`` locked (the remainder's forces stand)."""
-    x2, v2, F2, res = sub(dt, x1, v1, F1, t1 + dt)
+    A backward-Euler substep ``dt`` long from ``(x1, v1)`` (the forcing read at ``t1``)
+    tells which of the elements locked at the impact (``held``) are still locked; their
+    rates at ``t1`` are set to zero (the remainder leaves them ``ulp(x) / h``). If every
+    node is then at rest, and stays at rest over the substep (velocities below
+    ``1e-12 v_scale``), the substep's forces are the static forces at ``t1``, with the
+    round-off of an ordinary step. Returns ``(v1, F1)``, or ``None`` (the remainder's
+    forces stand) when the substep fails, keeps none of ``held`` locked, or moves."""
+    x2, v2, F2, res = sub(dt, x1, v1, F1, t1)
     if res.code is not NewtonCode.SUCCESS:
         return None
     still = [e for e in locking_elements(scene, x2, v2, F2) if e in held]
     if not still:
         return None
     v_stop = impact_velocities(scene, x1, v1, still, 0.0, forces=F2)[0]
+    rest = 1e-12 * v_scale
+    if any(abs(vi) > rest for vi in v_stop):
+        return None
     if v_stop != list(v1):
-        x2, v2, F2, res = sub(dt, x1, v_stop, F2, t1 + dt)
+        x2, v2, F2, res = sub(dt, x1, v_stop, F2, t1)
         if res.code is not NewtonCode.SUCCESS:
             return None
+    if any(abs(vi) > rest for vi in v2):
+        return None
     return v_stop, F2
 
 
