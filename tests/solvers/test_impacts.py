@@ -135,6 +135,34 @@ def test_lock_reached_late_in_a_step_keeps_the_load_balanced(method, rest):
     assert np.abs(sol.F["friction"]).max() <= 0.2 * (1 + 1e-9)
 
 
+def _taut_pair() -> Scene:
+    # two unit masses, a string between them pulled taut by a load of 3 on m2 against a
+    # ground spring on m1: after the impact the pair moves on with the string taut
+    return Scene([Mass("m1", m=1.0), Mass("m2", m=1.0, v0=1.0)],
+                 [Element("g", get_law("linear_spring").bind(k=10.0), "ground", "m1"),
+                  Element("s", get_law("string_spring").bind(k=1.0, L=0.5), "m1", "m2")],
+                 {"m2": 3.0})
+
+
+@pytest.mark.parametrize("rest", [1e-2, 1e-3, 1e-4])
+def test_moving_pair_locked_late_in_a_step_has_the_string_force(rest):
+    # the string goes taut a fraction ``rest`` of a step before a grid point while the
+    # pair keeps moving: its force there comes from the balance of accelerations, not from
+    # the short remainder (at rest = 1e-3 that sample had 0.5 instead of 1.539)
+    ref = simulate(_taut_pair(), method="radau5", t_end=0.5, rtol=1e-12, atol=1e-14,
+                   compiled=False)
+    t_hit = ref.events[0].t
+    n = int(t_hit / 1e-4)
+    dt = (t_hit + rest * 1e-4) / (n + 1)
+    sol = simulate(_taut_pair(), method="bdf2", dt=dt, t_end=(n + 30) * dt)
+    (ev,) = sol.events
+    i = int(np.searchsorted(sol.t, ev.t))
+    assert 0.0 < sol.t[i] - ev.t <= max(2 * rest, 1e-3) * dt  # late in that step
+    F_ref = ref.sol(sol.t[i:i + 3])[:, 5:7]
+    assert np.abs(sol.data[i:i + 3, 5:7] - F_ref).max() <= 1e-6
+    assert sol.v["m2"][i] == pytest.approx(sol.v["m1"][i], rel=1e-15)  # the string stopped
+
+
 def _hard_stop_law() -> ElementLaw:
     # a user's one-sided stop written without Min: the same graph as string_spring
     return ElementLaw("stop", "spring", "q - Piecewise((F/k, F < k*L), (L, True))",

@@ -26,10 +26,10 @@ the lock (the impulse that would stop them is not negligible). Then, from the st
    rate zero; where that is more than round-off, the forces come from a substep a hair
    long from the stopped velocities (a dashpot beside the lock follows its new rate;
    ``1e-10 dt``, longer where its Newton fails: :data:`_HAIRS`). A lock reached in the
-   second half of the step where the network comes to rest takes its forces at
-   ``t_{n+1}`` from a substep ``dt`` long (:func:`_forces_after`: on the lock a
-   remainder ``h`` fixes the rate only to ``ulp(x) / h``, hence the forces only to
-   ``m ulp(x) / h^2``). The caller restarts the
+   second half of the step takes the forces of its locked and stuck elements at
+   ``t_{n+1}`` from the balance of accelerations (:func:`_forces_after`,
+   :mod:`lumped.solvers.lock_forces`: on the lock a remainder ``h`` fixes the rate only to
+   ``ulp(x) / h``, hence the forces only to ``m ulp(x) / h^2``). The caller restarts the
    multistep history (BDF2 takes a BDF1 step next).
 
 Every substep is a backward-Euler step, dissipative for passive laws, and the impulse
@@ -42,11 +42,14 @@ and records the impact.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from ..scene import Mass, Scene
 from .globalize import solve_globalized
 from .impacts import impact_velocities, locking_elements, onto_locks
+from .initial_state import _scalar_root
+from .lock_forces import forces_at_rest_of_locks
 from .newton import NewtonCode, NewtonOptions, NewtonResult, newton_solve
 from .status import Event
 from .step_system import _make_evaluate
@@ -247,10 +250,9 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
         # an impact located late in the step: a lock's force comes from the momentum
         # balance m (v1 - v0) / h, with v1 known only to ulp(x) / h (the rounding of
         # q = x + h v on the lock), so after a remainder h much shorter than dt the forces
-        # carry m ulp(x) / h^2 (up to the whole load). Where the network comes to rest
-        # on the locks, the static forces from a substep dt long replace them
-        after = _forces_after(scene, t0 + dt, dt, x1, v1, F1, held, sub,
-                              max(map(abs, v), default=0.0))
+        # carry m ulp(x) / h^2 (up to the whole load): the locked and stuck elements'
+        # forces from the balance of accelerations instead
+        after = _forces_after(scene, t0 + dt, dt, x1, v1, F1, held, sub)
         if after is not None:
             v1, F1 = after
     out.x, out.v, out.F = x1, v1, F1
@@ -260,17 +262,17 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
     return out
 
 
-def _forces_after(scene, t1, dt, x1, v1, F1, held, sub, v_scale):
-    """The velocities and forces at ``t1`` when the lock is reached late in a step and
-    the network comes to rest there.
+def _forces_after(scene, t1, dt, x1, v1, F1, held, sub):
+    """The velocities and forces at ``t1`` when the lock is reached late in a step.
 
     A backward-Euler substep ``dt`` long from ``(x1, v1)`` (the forcing read at ``t1``)
     tells which of the elements locked at the impact (``held``) are still locked; their
-    rates at ``t1`` are set to zero (the remainder leaves them ``ulp(x) / h``). If every
-    node is then at rest, and stays at rest over the substep (velocities below
-    ``1e-12 v_scale``), the substep's forces are the static forces at ``t1``, with the
-    round-off of an ordinary step. Returns ``(v1, F1)``, or ``None`` (the remainder's
-    forces stand) when the substep fails, keeps none of ``held`` locked, or moves."""
+    rates at ``t1`` are set to zero (the remainder leaves them ``ulp(x) / h``), a dashpot
+    whose rate that changes takes the force its law gives at the new rate, and the forces
+    of the locks and of the stuck dashpots come from the balance of accelerations
+    (:func:`lumped.solvers.lock_forces.forces_at_rest_of_locks`), not from the short
+    remainder. Returns ``(v1, F1)``, or ``None`` (the remainder's forces stand) when the
+    substep fails, keeps none of ``held`` locked, or the balance has no solution."""
     x2, v2, F2, res = sub(dt, x1, v1, F1, t1)
     if res.code is not NewtonCode.SUCCESS:
         return None
@@ -278,16 +280,24 @@ def _forces_after(scene, t1, dt, x1, v1, F1, held, sub, v_scale):
     if not still:
         return None
     v_stop = impact_velocities(scene, x1, v1, still, 0.0, forces=F2)[0]
-    rest = 1e-12 * v_scale
-    if any(abs(vi) > rest for vi in v_stop):
+    q_old, q = scene.elongations(x1, v1), scene.elongations(x1, v_stop)
+    F = list(F1)
+    free = list(still)
+    for e, el in enumerate(scene.elements):
+        if e in still:
+            continue
+        kernel = el.law.kernel
+        if el.kind != "spring" and q[e] != q_old[e] and kernel(q[e], F[e])[2] != 0.0:
+            try:
+                F[e] = _scalar_root(kernel, q[e], F[e])[0]
+            except ValueError:
+                return None
+        if kernel(q[e], F[e])[2] == 0.0:
+            free.append(e)
+    F_new = forces_at_rest_of_locks(scene, t1, x1, v_stop, F, free)
+    if F_new is None or not all(map(math.isfinite, F_new)):
         return None
-    if v_stop != list(v1):
-        x2, v2, F2, res = sub(dt, x1, v_stop, F2, t1)
-        if res.code is not NewtonCode.SUCCESS:
-            return None
-    if any(abs(vi) > rest for vi in v2):
-        return None
-    return v_stop, F2
+    return v_stop, F_new
 
 
 def _locate_impact(scene, ts, rest, dt, x, v, F, held, end, sub, options, out):
