@@ -7,7 +7,7 @@ import pytest
 
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.solvers.lock_forces import forces_at_rest_of_locks
+from lumped.solvers.lock_forces import forces_from_accelerations
 
 
 def _lock(load: float) -> Scene:
@@ -22,14 +22,14 @@ def _lock(load: float) -> Scene:
 def test_a_taut_string_beside_stuck_friction_carries_the_rest_of_the_load():
     # at rest on the lock with the string's force far off (0.5, a remainder's round-off):
     # the friction keeps its 0.2, the string carries the rest of the load of 1
-    F = forces_at_rest_of_locks(_lock(1.0), 0.0, [0.5], [0.0], [0.5, 0.2], [0, 1])
+    F = forces_from_accelerations(_lock(1.0), 0.0, [0.5], [0.0], [0.5, 0.2], [0, 1])
     assert F == pytest.approx([0.8, 0.2], abs=1e-14)
 
 
 def test_forces_leaving_their_sets_go_to_the_boundary():
     # a load of 0.1 cannot keep the string taut (it pulls k L = 0.5) nor the friction
     # stuck (0.4 > 0.2): both on the boundary of their sets, and the mass moves back
-    F = forces_at_rest_of_locks(_lock(0.1), 0.0, [0.5], [0.0], [0.5, 0.2], [0, 1])
+    F = forces_from_accelerations(_lock(0.1), 0.0, [0.5], [0.0], [0.5, 0.2], [0, 1])
     assert F == pytest.approx([0.5, -0.2], abs=1e-12)
 
 
@@ -41,17 +41,16 @@ def test_a_locked_pair_through_a_junction_accelerates_together():
                   [Element("s", get_law("string_spring").bind(k=1.0, L=0.5), "j", "m1"),
                    Element("d", get_law("coulomb").bind(tau=1.0, r=1.0), "ground", "j")],
                   forces={"m1": 0.7})
-    F = forces_at_rest_of_locks(scene, 0.0, [0.5, 0.0], [0.0, 0.0], [0.5, 0.0], [0, 1])
+    F = forces_from_accelerations(scene, 0.0, [0.5, 0.0], [0.0, 0.0], [0.5, 0.0], [0, 1])
     assert F == pytest.approx([0.7, 0.7], abs=1e-12)
 
 
 def test_no_solution_is_none():
-    # two strings in series-parallel that cannot both hold with a massless junction whose
-    # own load no force-free element can carry
+    # a load on a massless junction held only by a spring whose force is given (0): no
+    # force of the free element (a string elsewhere) balances the junction
     scene = Scene([Mass("m", m=1.0, x0=0.5), Junction("j")],
                   [Element("s", get_law("string_spring").bind(k=1.0, L=0.5), "ground", "m"),
                    Element("g", get_law("linear_spring").bind(k=1.0), "ground", "j")],
                   forces={"j": 1.0})
-    # the junction's balance holds for no force of the string alone (it does not touch j)
-    assert forces_at_rest_of_locks(scene, 0.0, [0.5, 0.0], [0.0, 0.0], [0.5, 0.0],
+    assert forces_from_accelerations(scene, 0.0, [0.5, 0.0], [0.0, 0.0], [0.5, 0.0],
                                    [0]) is None

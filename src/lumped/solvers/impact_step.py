@@ -49,7 +49,7 @@ from ..scene import Mass, Scene
 from .globalize import solve_globalized
 from .impacts import impact_velocities, locking_elements, onto_locks
 from .initial_state import _scalar_root
-from .lock_forces import forces_at_rest_of_locks
+from .lock_forces import forces_from_accelerations
 from .newton import NewtonCode, NewtonOptions, NewtonResult, newton_solve
 from .status import Event
 from .step_system import _make_evaluate
@@ -270,7 +270,7 @@ def _forces_after(scene, t1, dt, x1, v1, F1, held, sub):
     rates at ``t1`` are set to zero (the remainder leaves them ``ulp(x) / h``), a dashpot
     whose rate that changes takes the force its law gives at the new rate, and the forces
     of the locks and of the stuck dashpots come from the balance of accelerations
-    (:func:`lumped.solvers.lock_forces.forces_at_rest_of_locks`), not from the short
+    (:func:`lumped.solvers.lock_forces.forces_from_accelerations`), not from the short
     remainder. Returns ``(v1, F1)``, or ``None`` (the remainder's forces stand) when the
     substep fails, keeps none of ``held`` locked, or the balance has no solution."""
     x2, v2, F2, res = sub(dt, x1, v1, F1, t1)
@@ -294,7 +294,7 @@ def _forces_after(scene, t1, dt, x1, v1, F1, held, sub):
                 return None
         if kernel(q[e], F[e])[2] == 0.0:
             free.append(e)
-    F_new = forces_at_rest_of_locks(scene, t1, x1, v_stop, F, free)
+    F_new = forces_from_accelerations(scene, t1, x1, v_stop, F, free)
     if F_new is None or not all(map(math.isfinite, F_new)):
         return None
     return v_stop, F_new

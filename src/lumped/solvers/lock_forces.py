@@ -37,7 +37,7 @@ import numpy as np
 
 from ..scene import Mass, Scene
 
-__all__ = ["forces_at_rest_of_locks"]
+__all__ = ["forces_from_accelerations"]
 
 #: Weight of a dashpot's force change against a lock's in the minimum-norm split.
 _DASHPOT_WEIGHT = 1e3
@@ -61,7 +61,7 @@ def _boundary(kernel, q: float, good: float, bad: float, tol: float) -> float:
     return good
 
 
-def forces_at_rest_of_locks(scene: Scene, t: float, x: Sequence[float], v: Sequence[float],
+def forces_from_accelerations(scene: Scene, t: float, x: Sequence[float], v: Sequence[float],
                             F: Sequence[float], free: Sequence[int]) -> list[float] | None:
     """Forces at ``(t, x, v)`` with the elements ``free`` (force-free there: ``dR/dF = 0``
     at ``(q, F)``) holding their relative motion, the others' forces kept from ``F``.
