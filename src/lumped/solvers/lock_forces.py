@@ -61,8 +61,9 @@ def _boundary(kernel, q: float, good: float, bad: float, tol: float) -> float:
     return good
 
 
-def forces_from_accelerations(scene: Scene, t: float, x: Sequence[float], v: Sequence[float],
-                            F: Sequence[float], free: Sequence[int]) -> list[float] | None:
+def forces_from_accelerations(scene: Scene, t: float, x: Sequence[float],
+                              v: Sequence[float], F: Sequence[float],
+                              free: Sequence[int]) -> list[float] | None:
     """Forces at ``(t, x, v)`` with the elements ``free`` (force-free there: ``dR/dF = 0``
     at ``(q, F)``) holding their relative motion, the others' forces kept from ``F``.
 
