@@ -63,8 +63,9 @@ _MAX_IMPACTS = 16
 #: The substep "a hair after" the end of a step (for the forces there) is this many times
 #: ``_LOCATE_RTOL dt`` long, the next where Newton fails on the shorter one.
 _HAIRS = (1.0, 1e3, 1e6)
-#: A lock reached with less than this fraction of the step left takes its forces at the
-#: end of the step from a substep ``dt`` long (:func:`_forces_after`).
+#: A lock reached with less than this fraction of the step left takes the forces of its
+#: locked and stuck elements at the end of the step from the balance of accelerations
+#: (:func:`_forces_after`).
 _SHORT_REST = 0.5
 
 
