@@ -13,11 +13,11 @@ are noisy:
    compiled generic loop alone (every step stored; the run's setup -- consistent initial
    state, forcing tables, source hash -- is timed apart), ``simulate(method="jit-...")``
    end to end, the pure-Python generic step (``run_bdf``) and the compiled closed-form
-   step storing every step (``lumped.solvers.closed_form_jit.run_steps``); the issue's
+   step storing every step (``lumped.solvers.closed.closed_form_jit.run_steps``); the issue's
    target is generic compiled at most 3x the compiled closed form (also over the sine
    burst alone, the first 10 000 steps, where every step moves or sticks under
    forcing: on the full run most steps are at rest). The compiled generic
-   loop is timed twice: the default fast path (``lumped.codegen.jit_fast``, with its
+   loop is timed twice: the default fast path (``lumped.solvers.bdf.fast_codegen``, with its
    hand-over) and the faithful port alone (``fast=False``); both also on
    ``examples/maxwell.toml`` and ``examples/two-masses.toml`` (their ratio is to the
    paper scene's closed form, the only scene the closed form runs);
@@ -42,11 +42,11 @@ from lumped.bench import YARDSTICK_ITERATIONS, measure_unit
 from lumped.bench.timing import time_call
 from lumped.scenarios import scenario_scene
 from lumped.simulate import simulate
-from lumped.solvers.bdf_fast_jit import run_fast_path
-from lumped.solvers.bdf_jit_core import compiled_run_bdf_core
-from lumped.solvers.fixed_step import run_bdf
-from lumped.solvers.fixed_step_jit import loop_arguments
-from lumped.solvers.newton import NewtonOptions
+from lumped.solvers.bdf.core_jit import compiled_run_bdf_core
+from lumped.solvers.bdf.fast_jit import run_fast_path
+from lumped.solvers.bdf.fixed_step import run_bdf
+from lumped.solvers.bdf.fixed_step_jit import loop_arguments
+from lumped.solvers.newton.semismooth import NewtonOptions
 
 DT = 1e-4
 SCENE = "forcing-F2"
@@ -92,7 +92,7 @@ def per_step(n: int, repeats: int) -> dict[str, float]:
     try:
         import numpy as np
 
-        from lumped.solvers import closed_form_jit as C
+        from lumped.solvers.closed import closed_form_jit as C
 
         cols = [np.zeros(n + 1) for _ in range(4)]
         A, W, T = 10.0, 5.0 * math.pi, 1.0
@@ -125,7 +125,7 @@ def burst_phase(repeats: int) -> dict[str, float]:
     once; this row shows the cost of the steps that move."""
     import numpy as np
 
-    from lumped.solvers import closed_form_jit as C
+    from lumped.solvers.closed import closed_form_jit as C
 
     n = 10_000
     scene = scenario_scene(SCENE)

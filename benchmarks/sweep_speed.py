@@ -47,8 +47,8 @@ from handwritten_loop import algorithm1_loop  # noqa: E402
 
 from lumped.bench import YARDSTICK_ITERATIONS, measure_unit  # noqa: E402
 from lumped.scene import paper_F2  # noqa: E402
-from lumped.solvers import closed_form_jit as J  # noqa: E402
-from lumped.solvers.closed_form import BinghamOscillator, integrate  # noqa: E402
+from lumped.solvers.closed import closed_form_jit as J  # noqa: E402
+from lumped.solvers.closed.closed_form import BinghamOscillator, integrate  # noqa: E402
 
 M, K, GAMMA, TAU, DT = 1.0, 100.0, 1.0, 1.0, 1e-4
 A, W, T_OFF = paper_F2.amplitude, paper_F2.omega, paper_F2.t_off
@@ -57,7 +57,7 @@ _COMPILE_SNIPPET = """
 import time
 t0 = time.perf_counter()
 import numpy as np
-from lumped.solvers import closed_form_jit as J
+from lumped.solvers.closed import closed_form_jit as J
 t1 = time.perf_counter()
 out = np.empty((1, len(J.SUMMARY_FIELDS)))
 p = np.array([[1.0, 100.0, 1.0, 1.0, 0.0, 0.0, 2.0, 10.0, 15.7, 1.0]])
@@ -208,7 +208,7 @@ def per_step_and_compile(args) -> None:
         print(f"{name:48s} {sec * 1e9:9.2f} {sec / unit:10.3f} {sec / limit:12.2f}")
 
     cold, warm = compile_times()
-    print(f"\nfresh process: import lumped.solvers.closed_form_jit {cold[0]:.2f} s / "
+    print(f"\nfresh process: import lumped.solvers.closed.closed_form_jit {cold[0]:.2f} s / "
           f"{warm[0]:.2f} s; first calls of the four kernels (compile): {cold[1]:.2f} s with "
           f"an empty cache, {warm[1]:.2f} s from the disk cache")
 

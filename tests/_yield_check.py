@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from lumped.scene import Scene
-from lumped.solvers.step_system import _law_scale
+from lumped.solvers.implicit.step_system import _law_scale
 
 YIELDING = ("bingham", "coulomb", "herschel_bulkley")
 

@@ -14,8 +14,8 @@ from hypothesis import strategies as st
 
 from lumped.scene import Element, Junction, Mass, Scene, SineBurst, paper_F2
 from lumped.simulate import simulate
-from lumped.solvers.branch_check import _left_branch
-from lumped.solvers.closed_form import BinghamOscillator, initial_dashpot_force, integrate
+from lumped.solvers.closed.closed_form import BinghamOscillator, initial_dashpot_force, integrate
+from lumped.solvers.implicit.branch_check import _left_branch
 from lumped.solvers.registry import METHODS
 from lumped.solvers.status import BranchError, InconsistentInitialForce, SolverError, Status
 
@@ -463,7 +463,7 @@ def test_two_mass_chain_converges_to_its_exact_solution(formula, order):
        st.sampled_from(["paper", "maxwell", "chain"]), st.sampled_from([1e-3, 2e-3 / 3]))
 @settings(max_examples=100)
 def test_generated_step_system_equals_the_generic_one(vals, which, h):
-    from lumped.solvers.step_system import _generate_evaluate, _make_evaluate
+    from lumped.solvers.implicit.step_system import _generate_evaluate, _make_evaluate
 
     scene = {"paper": paper_scene(x0=0.1), "maxwell": maxwell_scene(),
              "chain": chain_scene()}[which]
@@ -485,7 +485,7 @@ def test_generated_step_system_equals_the_generic_one(vals, which, h):
 @pytest.mark.parametrize("which", ["paper", "maxwell", "chain"])
 def test_fast_path_is_newton_exactly(formula, which, monkeypatch):
     """The step loop's shortcut takes Newton's own path: same numbers, same counters."""
-    import lumped.solvers.fixed_step as integ
+    import lumped.solvers.bdf.fixed_step as integ
 
     def scene():
         return {"paper": paper_scene(x0=0.5, forcing=paper_F2), "maxwell": maxwell_scene(),

@@ -15,7 +15,7 @@ import numpy as np
 from .result import Solution
 from .scene import Scene
 from .simulate import simulate
-from .solvers.fixed_step import GENERIC_METHODS
+from .solvers.bdf.fixed_step import GENERIC_METHODS
 from .solvers.registry import closed_form_oscillator
 
 __all__ = ["CompareReport", "compare"]

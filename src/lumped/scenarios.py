@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from .scene import GROUND, Element, Mass, Scene
 from .scene.forcing import paper_F1, paper_F2, zero_forcing
 from .simulate import simulate
-from .solvers.closed_form import BinghamOscillator
+from .solvers.closed.closed_form import BinghamOscillator
 from .trajectory import Trajectory
 
 __all__ = [

@@ -15,7 +15,7 @@ from ._validate import as_positive
 from .result import Solution
 from .scene import Scene
 from .solvers import registry
-from .solvers.newton import NewtonOptions
+from .solvers.newton.semismooth import NewtonOptions
 from .solvers.registry import RunSettings, resolve_method
 
 __all__ = ["simulate"]
@@ -45,7 +45,7 @@ def simulate(
         Final time (``> 0``).
     dt : float, optional
         Step size; required by the fixed-step methods (all built-in ones), whose grid is
-        ``t_n = n dt`` with :func:`lumped.solvers.closed_form.steps_for` ``(dt, t_end)``
+        ``t_n = n dt`` with :func:`lumped.solvers.closed.closed_form.steps_for` ``(dt, t_end)``
         steps.
     rtol, atol : float, optional
         Relative and absolute tolerances of an adaptive method (positive, finite).
@@ -80,7 +80,7 @@ def simulate(
     if dt is None and concrete in registry.FIXED_STEP_METHODS:
         why = ""
         if method == "auto":  # say why auto chose a fixed-step method
-            from .solvers.adaptive_setup import scope_error
+            from .solvers.eventdriven.setup import scope_error
 
             why = f" (`auto` runs it on this scene: {scope_error(scene) or 'the closed form'})"
         raise ValueError(f"`dt` is required for the fixed-step method {concrete!r}{why}, "

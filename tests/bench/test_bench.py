@@ -15,7 +15,7 @@ from lumped import bench
 from lumped.bench import runner as bench_runner
 from lumped.cli import bench as cmd_bench
 from lumped.plotting import have_matplotlib
-from lumped.solvers.closed_form import BinghamOscillator
+from lumped.solvers.closed.closed_form import BinghamOscillator
 
 TINY = bench.Ladders(dts=(1e-2, 1e-3), eps=(1e-6,), rtols=(1e-6,), max_nfev=100_000,
                      min_time=0.0, creep_t_end=2.0, event_dts=(1e-3, 5e-4, 2.5e-4))
@@ -147,7 +147,7 @@ def test_closed_form_entries_time_the_python_engine_even_once_compiled_code_is_l
         monkeypatch):
     """``engine="auto"`` would switch to the compiled loop once ``closed_form_jit`` is
     imported, so one table would mix the two engines: the entries pass ``engine``."""
-    from lumped.solvers import closed_form_jit
+    from lumped.solvers.closed import closed_form_jit
 
     def refuse(*args, **kwargs):
         raise AssertionError("the closed-form bench entry ran the compiled engine")

@@ -55,7 +55,7 @@ def test_the_chain_example_file_is_the_three_mass_chain():
     a, b = simulate(scene, **kw), simulate(bingham_chain(3), **kw)
     assert settings["method"] == "radau5" and a.columns == b.columns
     # the file's forcing is an expression, so its run steps through the stuck start that
-    # the built chain's sine burst takes in one piece (lumped.solvers.stuck): the same
+    # the built chain's sine burst takes in one piece (lumped.solvers.modes.stuck): the same
     # events (the burst's switch-off is one too) and the same motion to the tolerance
     assert [(e.element, e.kind) for e in a.events] == [(e.element, e.kind) for e in b.events]
     assert max(abs(e.t - f.t) for e, f in zip(a.events, b.events, strict=True)) <= 1e-9

@@ -124,7 +124,7 @@ def test_position_lock_runs_on_the_reference_solver(method):
     # the compiled loop refuses a position lock by name; simulate() runs the whole scene
     # on the reference solver (impact located in the step) and says so
     from lumped import simulate
-    from lumped.solvers.fixed_step_jit import run_bdf_jit
+    from lumped.solvers.bdf.fixed_step_jit import run_bdf_jit
 
     scene = Scene([Mass("m", 1.0, v0=1.0)],
                   [Element("s", get_law("string_spring").bind(k=1.0, L=0.5), "ground", "m")])

@@ -28,7 +28,7 @@ from lumped.laws import (
     s_shaped_point,
     s_shaped_turning_points,
 )
-from lumped.solvers.closed_form import bdf1_step
+from lumped.solvers.closed.closed_form import bdf1_step
 
 q_, F_ = sp.symbols("q F")
 

@@ -1,6 +1,6 @@
 """The fast path of ``jit-bdf1``/``jit-bdf2`` (the default) against the reference.
 
-The fast path (:mod:`lumped.codegen.jit_fast`, :mod:`lumped.solvers.bdf_fast_jit`) solves
+The fast path (:mod:`lumped.solvers.bdf.fast_codegen`, :mod:`lumped.solvers.bdf.fast_jit`) solves
 the same step system as ``bdf1``/``bdf2`` with the same convergence tests, but its own
 Newton sequence and an explicit inverse for the linear solves: the two agree to the
 Newton tolerance, not bit for bit. Bound tested: ``|a - b| <= 1e-10 (1 + max |b|)`` per
@@ -23,7 +23,7 @@ from lumped import Element, Mass, Scene, simulate
 from lumped.io import load_scene
 from lumped.laws import ElementLaw, get_law
 from lumped.scenarios import scenario_scene
-from lumped.solvers.newton import NewtonOptions
+from lumped.solvers.newton.semismooth import NewtonOptions
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 DRAG = ElementLaw("quadratic_drag_fast", "dashpot", "F = c*q*Abs(q)", ["c"])
@@ -89,7 +89,7 @@ def test_failures_are_reported_by_the_faithful_port():
     reported as by the reference: the step, the time, the element or node."""
     scene = SCENES["maxwell"]()
     opts = NewtonOptions(rtol=1e-16, atol=1e-18)
-    from lumped.solvers.fixed_step_jit import run_bdf_jit
+    from lumped.solvers.bdf.fixed_step_jit import run_bdf_jit
 
     fast = run_bdf_jit(scene, method="jit-bdf2", dt=1e-2, n_steps=400, options=opts,
                        throw=False, fast=True)
@@ -107,7 +107,7 @@ def test_failures_are_reported_by_the_faithful_port():
 def test_short_runs_skip_the_fast_path_unless_asked():
     """``fast=None`` (the default) compiles the fast loop only for runs of at least
     ``FAST_MIN_STEPS`` steps; ``fast=True`` forces it."""
-    from lumped.solvers.fixed_step_jit import FAST_MIN_STEPS
+    from lumped.solvers.bdf.fixed_step_jit import FAST_MIN_STEPS
 
     scene = scenario_scene("release-0.5")
     short = simulate(scene, method="jit-bdf2", dt=1e-3, t_end=(FAST_MIN_STEPS - 1) * 1e-3)
@@ -130,7 +130,7 @@ def test_fast_keyword_is_checked():
 def test_fast_module_is_memoised_per_scene_structure(monkeypatch):
     """A second run of a scene does not generate the fast loop's source again (sympy
     printing, about 0.4 ms a run); a run of another structure does."""
-    from lumped.codegen import jit_fast
+    from lumped.solvers.bdf import fast_codegen as jit_fast
 
     scene = scenario_scene("release-0.5")
     first = simulate(scene, method="jit-bdf1", dt=1e-3, t_end=0.05, fast=True)

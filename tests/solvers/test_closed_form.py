@@ -11,7 +11,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from lumped.scene import SineBurst, zero_forcing
-from lumped.solvers.closed_form import (
+from lumped.solvers.closed.closed_form import (
     BinghamOscillator,
     bdf1_step,
     bdf2_step,

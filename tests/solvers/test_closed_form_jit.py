@@ -15,8 +15,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from lumped.scene import SineBurst, paper_F1, paper_F2, zero_forcing
-from lumped.solvers import closed_form_jit as J
-from lumped.solvers.closed_form import BinghamOscillator, initial_dashpot_force, integrate
+from lumped.solvers.closed import closed_form_jit as J
+from lumped.solvers.closed.closed_form import BinghamOscillator, initial_dashpot_force, integrate
 
 
 def compiled(osc, x0, v0, forcing, dt, n, method):
@@ -186,13 +186,13 @@ def test_auto_engine_keeps_short_runs_in_python():
 
     code = (
         "import sys\n"
-        "from lumped.solvers.closed_form import COMPILED_MIN_STEPS, BinghamOscillator, "
+        "from lumped.solvers.closed.closed_form import COMPILED_MIN_STEPS, BinghamOscillator, "
         "integrate\n"
         "osc = BinghamOscillator(1.0, 100.0, 1.0, 1.0)\n"
         "integrate(osc, x0=0.5, dt=1e-4, n_steps=1000)\n"
-        "print('lumped.solvers.closed_form_jit' in sys.modules)\n"
+        "print('lumped.solvers.closed.closed_form_jit' in sys.modules)\n"
         "integrate(osc, x0=0.5, dt=1e-5, n_steps=COMPILED_MIN_STEPS)\n"
-        "print('lumped.solvers.closed_form_jit' in sys.modules)\n"
+        "print('lumped.solvers.closed.closed_form_jit' in sys.modules)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()

@@ -1,7 +1,7 @@
 """The compiled generic BDF (``jit-bdf1``, ``jit-bdf2``) against its pure-Python reference.
 
 The faithful compiled loop (``fast=False``) is a port of
-:func:`lumped.solvers.fixed_step.run_bdf` operation for operation, so on these scenes (at
+:func:`lumped.solvers.bdf.fixed_step.run_bdf` operation for operation, so on these scenes (at
 most 8 unknowns, where both use the same LU) the results and the cost counters must be
 equal bit for bit, not merely close. The fast path (the default for runs of 1000 steps
 or more) is held to the reference in ``test_bdf_fast_jit.py``; the exactness tests below
@@ -123,7 +123,7 @@ def test_stuck_velocity_is_exactly_zero(jit):
 
 
 def test_bad_input():
-    from lumped.solvers.fixed_step_jit import run_bdf_jit
+    from lumped.solvers.bdf.fixed_step_jit import run_bdf_jit
 
     with pytest.raises(ValueError, match="`method`.*'jit-bdf3'"):
         run_bdf_jit(maxwell(), method="jit-bdf3", dt=1e-3, n_steps=3)
@@ -162,7 +162,7 @@ def test_newton_failure_reports_like_the_reference():
     The tolerance is tight too: with the default one, the globalised solve's restart from
     the nodes' balances solved by bisection (``balance_sweeps``, no Newton iterations)
     gives a start that one iteration takes to the solution, and nothing fails."""
-    from lumped.solvers.newton import NewtonOptions
+    from lumped.solvers.newton.semismooth import NewtonOptions
 
     opts = NewtonOptions(max_iters=1, free_steps=0, rtol=1e-16, atol=1e-300)
     scene = two_masses()
@@ -195,8 +195,8 @@ def test_second_process_loads_the_compiled_loop_from_disk():
         from lumped import simulate
         from lumped.codegen.jit import jit_scene
         from lumped.scenarios import scenario_scene
-        from lumped.codegen.jit_fast import fast_module
-        from lumped.solvers.bdf_jit_core import compiled_run_bdf_core
+        from lumped.solvers.bdf.fast_codegen import fast_module
+        from lumped.solvers.bdf.core_jit import compiled_run_bdf_core
         scene = scenario_scene("release-0.5")
         simulate(scene, method="jit-bdf2", dt=1e-3, t_end=0.01, fast=True)
         simulate(scene, method="jit-bdf2", dt=1e-3, t_end=0.01, fast=False)

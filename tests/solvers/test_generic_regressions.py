@@ -22,14 +22,14 @@ from hypothesis import strategies as st
 
 from lumped.scene import Element, Mass, Scene, zero_forcing
 from lumped.simulate import simulate
-from lumped.solvers.closed_form import (
+from lumped.solvers.closed.closed_form import (
     BinghamOscillator,
     bdf2_step,
     initial_dashpot_force,
     integrate,
 )
-from lumped.solvers.newton import _hair
-from lumped.solvers.step_system import _generate_evaluate, _law_scale, _make_evaluate
+from lumped.solvers.implicit.step_system import _generate_evaluate, _law_scale, _make_evaluate
+from lumped.solvers.newton.semismooth import _hair
 
 STUCK_X0 = 2.1060533511106927e-05  # (4 x0 - x0) / 3 != x0 in floating point
 

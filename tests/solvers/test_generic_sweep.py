@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 from lumped.laws import get_law
 from lumped.scene import Element, Mass, Scene, SineBurst, zero_forcing
 from lumped.simulate import simulate
-from lumped.solvers.closed_form import BinghamOscillator, integrate
+from lumped.solvers.closed.closed_form import BinghamOscillator, integrate
 
 
 def scene_of(m, k, gamma, tau, x0, v0, forcing=None):
@@ -112,7 +112,7 @@ def test_generic_agrees_with_closed_form_on_extreme_parameters(method, problem):
 def test_forcing_below_yield_is_exact_eq19(method):
     """Paper eq. (19): forcing F1 = 0.5 sin(5 pi t) < tau from rest -> x = v = F_s = 0 and
     F_d = F1(t) exactly at every step (the stuck dashpot's row ``v = 0`` is a singleton
-    row of the step Jacobian and is pivoted first, see ``lumped.solvers.linalg.lu_factor``)."""
+    row of the step Jacobian and is pivoted first, see ``lumped.solvers.newton.linalg.lu_factor``)."""
     F = SineBurst(0.5, 5.0 * math.pi, 1.0)
     sol = simulate(scene_of(1.0, 100.0, 1.0, 1.0, 0.0, 0.0, F), method=method, dt=1e-4,
                    t_end=1.2)
@@ -125,7 +125,7 @@ def test_forcing_below_yield_is_exact_eq19(method):
 
 def test_lu_pivots_a_singleton_row_first():
     """A row with one nonzero fixes its unknown by one division, exactly."""
-    from lumped.solvers.linalg import lu_factor, lu_solve
+    from lumped.solvers.newton.linalg import lu_factor, lu_solve
 
     A = [[1e4, 1.0, 1.0], [-1e-2, 1.0, 0.0], [1.0, 0.0, 0.0]]
     b = [0.1, 0.3, 0.0]
@@ -173,7 +173,7 @@ def test_initial_force_beyond_tau_by_a_newton_tolerance():
     clip), not ``F(0) - k x0`` (found by the hypothesis test of test_generic_regressions:
     the solve reached ``tau`` and then applied a last correction taken with the stuck
     piece's Jacobian, which pointed back across the kink)."""
-    from lumped.solvers.closed_form import initial_dashpot_force
+    from lumped.solvers.closed.closed_form import initial_dashpot_force
 
     m, k, gamma, tau, x0 = 1.0, 1.0, 5.0, 0.00390625, 1.0
     F0 = k * x0 + tau * (1.0 + 1135745 * 2.0**-52)

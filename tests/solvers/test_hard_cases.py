@@ -37,7 +37,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lumped.scene import SineBurst, paper_F2, zero_forcing
-from lumped.solvers.closed_form import BinghamOscillator, integrate
+from lumped.solvers.closed.closed_form import BinghamOscillator, integrate
 from lumped.trajectory import Trajectory
 
 U = 2.0**-53
@@ -74,7 +74,7 @@ ROUNDOFF = Tol(TOL, 0.0)
 def _newton_tol() -> Tol:
     """The generic solver: its Newton stops at ``|G_i| <= rtol S_i + atol`` (defaults
     ``1e-10, 1e-12``, rows in force units); we allow ten times that."""
-    from lumped.solvers.newton import NewtonOptions
+    from lumped.solvers.newton.semismooth import NewtonOptions
 
     opts = NewtonOptions()
     return Tol(10.0 * opts.rtol, 10.0 * opts.atol)

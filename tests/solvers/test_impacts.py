@@ -18,7 +18,7 @@ from lumped import simulate
 from lumped.bench.impact_scenes import exact_impact, impact_scene, lock_scene
 from lumped.laws import ElementLaw, get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.solvers.impacts import impact_velocities, locking_elements
+from lumped.solvers.nonsmooth.impacts import impact_velocities, locking_elements
 
 T_IMPACT = math.pi / 6
 

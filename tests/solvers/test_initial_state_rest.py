@@ -10,8 +10,8 @@ from hypothesis import strategies as st
 
 from lumped.laws import get_law
 from lumped.scene import Element, Mass, Scene
-from lumped.solvers import initial_state
-from lumped.solvers.initial_state import consistent_initial_state
+from lumped.solvers.implicit import initial_state
+from lumped.solvers.implicit.initial_state import consistent_initial_state
 
 DASHPOTS = ("newtonian", "bingham", "coulomb", "herschel_bulkley")
 SPRINGS = ("linear_spring", "string_spring")

@@ -1,4 +1,4 @@
-"""The bracket of a radau5 landing on a guard's root (:mod:`lumped.solvers.landing`)."""
+"""The bracket of a radau5 landing on a guard's root (:mod:`lumped.solvers.eventdriven.landing`)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from lumped.solvers.landing import MAX_PASSES, Landing
+from lumped.solvers.eventdriven.landing import MAX_PASSES, Landing
 
 
 def _land(g, h_found: float, s_hit: float, tol: float = 1e-14) -> tuple[float, int]:

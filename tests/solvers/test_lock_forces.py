@@ -1,4 +1,4 @@
-"""lumped.solvers.lock_forces: forces of locked and stuck elements from the balance of
+"""lumped.solvers.nonsmooth.lock_forces: forces of locked and stuck elements from the balance of
 accelerations at a given state (no step, no division by a step size)."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import pytest
 
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.solvers.lock_forces import forces_from_accelerations
+from lumped.solvers.nonsmooth.lock_forces import forces_from_accelerations
 
 
 def _lock(load: float) -> Scene:

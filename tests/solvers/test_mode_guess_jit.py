@@ -1,5 +1,5 @@
-"""The compiled mode probe (:mod:`lumped.solvers.mode_guess_jit`) against the Python one
-(:func:`lumped.solvers.mode_guess.try_modes`, the reference) on the probes that real
+"""The compiled mode probe (:mod:`lumped.solvers.modes.mode_guess_jit`) against the Python one
+(:func:`lumped.solvers.modes.mode_guess.try_modes`, the reference) on the probes that real
 ``radau5`` runs make: the same mode, velocities and forces, bit for bit."""
 
 from __future__ import annotations
@@ -12,7 +12,8 @@ from lumped.bench.scenes import OWN_SCENES, PAPER_SCENES, generic_scene
 from lumped.codegen.jit import numba_enabled
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.solvers import adaptive_modes, mode_guess
+from lumped.solvers.eventdriven import modes as adaptive_modes
+from lumped.solvers.modes import mode_guess
 
 pytestmark = pytest.mark.skipif(not numba_enabled(), reason="needs numba")
 

@@ -185,7 +185,7 @@ def test_initial_state_with_a_root_between_two_floats(n, idle):
     is kept when every law holds there to its round-off (as for the steps). With the idle
     junction, whose balance row has no terms, the split weighted that row by ``1e300``
     and failed; such a row now counts in the units of the forces it may receive."""
-    from lumped.solvers.initial_state import consistent_initial_state
+    from lumped.solvers.implicit.initial_state import consistent_initial_state
 
     scene = _junction_between_a_stuck_and_a_creeping_dashpot(n, idle)
     for time_scale in (0.025, 0.0125):
@@ -221,7 +221,7 @@ def test_initial_state_with_two_junctions_stuck_together():
     state was refused ('no consistent initial state: Newton failed (diverged)'). The
     sweeps now also snap a junction onto another junction's velocity (or a mass's
     ``v0``)."""
-    from lumped.solvers.initial_state import consistent_initial_state
+    from lumped.solvers.implicit.initial_state import consistent_initial_state
 
     scene = _junctions_stuck_together_on_friction()
     for time_scale in (0.025, 0.001):
@@ -368,7 +368,7 @@ def test_projection_gives_up_at_once_on_a_string_past_its_length(monkeypatch):
     in a chain, five impacts in one step at ``t = 0.2``) spent 166 of its 169 s there,
     and the counter's 60 s alarm stopped it. Three kernel calls now tell that there is
     no root (a cost budget, counted, not timed)."""
-    import lumped.solvers.globalize as G
+    import lumped.solvers.implicit.globalize as G
 
     L = 0.06809540547434552
     scene = Scene([Mass("m0", m=1.0, x0=math.nextafter(L, 1.0), v0=0.0)],

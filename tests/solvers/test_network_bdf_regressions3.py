@@ -12,9 +12,9 @@ from _yield_check import run_checked as _run_ok
 
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.solvers.impact_step import impact_step, impulse_is_negligible
-from lumped.solvers.initial_state import consistent_initial_state
-from lumped.solvers.newton import NewtonOptions
+from lumped.solvers.bdf.impact_step import impact_step, impulse_is_negligible
+from lumped.solvers.implicit.initial_state import consistent_initial_state
+from lumped.solvers.newton.semismooth import NewtonOptions
 
 
 def _string_taut_beside_a_stuck_parallel_pair() -> Scene:

@@ -14,8 +14,8 @@ from _yield_check import check_yield
 from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.solvers.initial_state import consistent_initial_state
-from lumped.solvers.junction_balance import force_range
+from lumped.solvers.implicit.initial_state import consistent_initial_state
+from lumped.solvers.nonsmooth.junction_balance import force_range
 
 
 def _assert_consistent(scene: Scene, v: list[float], F: list[float]) -> None:

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from lumped.solvers.newton import (
+from lumped.solvers.newton.semismooth import (
     DENSE_PYTHON_MAX,
     NewtonCode,
     NewtonOptions,
@@ -95,7 +95,7 @@ def test_min_norm_solver_leaves_a_non_finite_step_to_newton_without_a_warning():
     encountered in matmul' reached the user (the LUMPED_LARGE radau5 run)."""
     import warnings
 
-    from lumped.solvers.newton import min_norm_solver
+    from lumped.solvers.newton.semismooth import min_norm_solver
 
     solve = min_norm_solver([[1.0, 1.0], [1.0, 1.0]])
     with warnings.catch_warnings():
@@ -155,7 +155,7 @@ def test_bad_options(kw):
 def test_unrolled_solve_is_lu_solve_bit_for_bit(Ab):
     import struct
 
-    from lumped.solvers.linalg import unrolled_lu_solve
+    from lumped.solvers.newton.linalg import unrolled_lu_solve
 
     def bits(xs):  # bit patterns: NaN == NaN when its bits agree (list == compares NaN by id)
         return [struct.pack("<d", x) for x in xs]
@@ -167,7 +167,7 @@ def test_unrolled_solve_is_lu_solve_bit_for_bit(Ab):
 
 
 def test_factor_cache_reuses_factors_across_solves():
-    from lumped.solvers.linalg import FactorCache
+    from lumped.solvers.newton.linalg import FactorCache
 
     cache = FactorCache()
     ev = _linear([[2.0, 1.0], [1.0, 3.0]], [3.0, 5.0])

@@ -20,7 +20,7 @@ from scipy.optimize import brentq
 from lumped import Element, Junction, Mass, Scene, SolverError, Status, get_law, simulate
 from lumped.reference import exact_solution
 from lumped.scenarios import get_scenario, scenario_scene
-from lumped.solvers.radau import A, StageSystem
+from lumped.solvers.radau.stage import A, StageSystem
 
 
 def _reference(name: str, t: np.ndarray):
@@ -122,7 +122,7 @@ def _bingham_scene(m, k, gamma, tau, x0, amplitude, omega):
        tau=log_uniform(0.3, 3.0), x0=st.floats(-0.05, 0.05),
        amplitude=st.floats(0.0, 10.0), omega=st.floats(1.0, 20.0))
 def test_exact_sticking_against_the_reference(m, k, gamma, tau, x0, amplitude, omega):
-    from lumped.solvers.closed_form import BinghamOscillator
+    from lumped.solvers.closed.closed_form import BinghamOscillator
 
     scene, forcing = _bingham_scene(m, k, gamma, tau, x0, amplitude, omega)
     rtol = 1e-8
@@ -309,13 +309,13 @@ def test_bad_tolerances_are_refused(kw, match):
 def _has_impacts() -> bool:
     import importlib.util
 
-    return importlib.util.find_spec("lumped.solvers.impacts") is not None
+    return importlib.util.find_spec("lumped.solvers.nonsmooth.impacts") is not None
 
 
 def test_an_impact_is_applied_or_stops_cleanly():
     """Issue 11's impact scene: x = sin t until the string goes taut at t = pi/6, a perfectly
     inelastic impact, then x = 0.5 cos(t - pi/6). With the impact model
-    (``lumped.solvers.impacts``) radau5 applies the impulse; without it, it stops there with
+    (``lumped.solvers.nonsmooth.impacts``) radau5 applies the impulse; without it, it stops there with
     a message, never a silently wrong answer."""
     string = get_law("string_spring").bind(k=1.0, L=0.5)
     scene = Scene([Mass("mass", m=1.0, v0=1.0)], [Element("s", string, "ground", "mass")])
@@ -394,8 +394,8 @@ def test_a_two_mass_bingham_chain_agrees_with_bdf2():
 
 
 def test_the_compiled_stage_newton_gives_the_same_run():
-    """``compiled=True``: the compiled loop (:mod:`lumped.solvers.radau_loop_jit`), and the
-    stage Newton of :mod:`lumped.solvers.radau_jit` (numba) in the Python loop's own
+    """``compiled=True``: the compiled loop (:mod:`lumped.solvers.eventdriven.loop_jit`), and the
+    stage Newton of :mod:`lumped.solvers.radau.stage_jit` (numba) in the Python loop's own
     solves, in place of the pure-Python ones, bit for bit."""
     scene = scenario_scene("forcing-F2")
     ours = simulate(scene, method="radau5", t_end=1.5, rtol=1e-7, compiled=False)

@@ -1,7 +1,7 @@
 """The dense output of ``radau5``: positions of order 5 per step, against exact solutions.
 
 The position of a node between step points integrates the collocation cubic of its
-velocity (:func:`lumped.solvers.adaptive_output.position_weights`); the cubic through the
+velocity (:func:`lumped.solvers.radau.dense.position_weights`); the cubic through the
 stage positions, used before, is one order lower and made the error on an output grid up
 to 200 times the error at the step points at tight tolerances.
 """
@@ -17,8 +17,8 @@ from lumped import get_law, simulate
 from lumped.codegen.jit import numba_enabled
 from lumped.reference import exact_solution
 from lumped.scenarios import get_scenario, scenario_scene
-from lumped.solvers.adaptive_output import DenseOutput, position_weights
-from lumped.solvers.radau import A, C, StageSystem
+from lumped.solvers.radau.dense import DenseOutput, position_weights
+from lumped.solvers.radau.stage import A, C, StageSystem
 
 
 def test_position_weights_meet_the_step_ends():
@@ -107,11 +107,11 @@ def test_dense_positions_are_continuous_with_slope_v():
 def test_the_compiled_dense_output_is_the_numpy_one_across_stuck_intervals(monkeypatch,
                                                                           shuffle):
     """A run that sticks and breaks out again and again (a held interval without steps
-    each time, :mod:`lumped.solvers.stuck`): the compiled evaluation, which leaves the rows
+    each time, :mod:`lumped.solvers.modes.stuck`): the compiled evaluation, which leaves the rows
     of a held interval to the static balance and walks the steps for sorted times, gives
     the numpy evaluation's numbers at the step points, at the ends of every held interval
     and on a grid, in order and shuffled."""
-    import lumped.solvers.adaptive_output as out
+    import lumped.solvers.radau.dense as out
     from lumped import Element, Mass, Scene
     from lumped.scene.forcing import SineBurst
 
@@ -137,7 +137,7 @@ def test_the_output_keeps_its_steps_in_order_as_it_grows():
     """Steps added one at a time (the Python loop), as blocks (``extend``) and written in
     place (``block``/``commit``, the compiled loop), well past the first capacity: the
     arrays hold them in their order, and the rows likewise."""
-    from lumped.solvers.adaptive_output import Rows
+    from lumped.solvers.radau.dense import Rows
 
     rng = np.random.default_rng(3)
     N, E = 1, 2
@@ -188,7 +188,7 @@ def test_a_run_held_from_the_start_has_an_exact_dense_output(monkeypatch, forcin
     frozen at x0, velocities exactly 0, the dashpot carries the load less the spring, bit
     for bit, at every time and at the segments' ends (a time event at t_off = 1), and the
     numpy evaluation gives the same numbers, in order and shuffled."""
-    import lumped.solvers.adaptive_output as out
+    import lumped.solvers.radau.dense as out
     from lumped import Element, Mass, Scene
     from lumped.scene.forcing import paper_F1
 

@@ -1,6 +1,6 @@
-"""``radau5`` at events: stuck intervals without steps (:mod:`lumped.solvers.stuck`), the
-guessed mode (:mod:`lumped.solvers.mode_guess`) and the crossing root
-(:mod:`lumped.solvers.crossing_root`).
+"""``radau5`` at events: stuck intervals without steps (:mod:`lumped.solvers.modes.stuck`), the
+guessed mode (:mod:`lumped.solvers.modes.mode_guess`) and the crossing root
+(:mod:`lumped.solvers.modes.crossing_root`).
 
 Accuracy against :mod:`lumped.reference` (the exact event-driven solution); the shortcuts
 against the full paths they replace.
@@ -20,9 +20,9 @@ from lumped.bench.network_scenes import bingham_chain
 from lumped.bench.scenes import SCENES, generic_scene
 from lumped.reference import exact_solution
 from lumped.scene.forcing import SineBurst
-from lumped.solvers import adaptive_modes
-from lumped.solvers.closed_form import BinghamOscillator
-from lumped.solvers.crossing_root import first_root_py, illinois
+from lumped.solvers.closed.closed_form import BinghamOscillator
+from lumped.solvers.eventdriven import modes as adaptive_modes
+from lumped.solvers.modes.crossing_root import first_root_py, illinois
 
 
 def _bench(name: str):
@@ -133,7 +133,7 @@ def test_the_illinois_root_is_found_to_round_off():
 def test_the_first_crossing_on_a_step_polynomial():
     # a guard g = q on q(s) = 1 - 2 s (linear through the nodes): root at s = 0.5; a second
     # guard crossing later (q + 0.5 at s = 0.75) is not the first
-    from lumped.solvers.radau import C
+    from lumped.solvers.radau.stage import C
 
     nodes = [(tuple(1.0 - 2.0 * s for s in (0.0, *C)), (0.0, 0.0, 0.0, 0.0))]
     got = first_root_py(nodes, [lambda q, F: (q + 0.5, q)])
@@ -153,8 +153,8 @@ def test_the_parts_of_a_mode_kept_per_plan_are_those_made_anew():
 
     from lumped import Element, Mass, Scene
     from lumped.laws import get_law
-    from lumped.solvers.adaptive_setup import read_options, scene_plan
-    from lumped.solvers.events import lock_cones
+    from lumped.solvers.eventdriven.setup import read_options, scene_plan
+    from lumped.solvers.modes.events import lock_cones
     from lumped.solvers.registry import RunSettings
 
     bingham = get_law("bingham")
@@ -189,7 +189,7 @@ def test_the_parts_of_a_mode_kept_per_plan_are_those_made_anew():
 
 
 def test_held_forces_follow_each_scene_s_own_forcing():
-    """The forcing's kinds are kept per forcing (:class:`lumped.solvers.stuck.StaticHold`):
+    """The forcing's kinds are kept per forcing (:class:`lumped.solvers.modes.stuck.StaticHold`):
     scenes of one structure, even of the same element objects, under other forcings (two
     sine bursts, a constant, none), run in turn, each carry their own load in the held
     dashpot, bit for bit, in the rows and the dense output."""

@@ -1,6 +1,6 @@
 """The compiled Radau IIA stage system against the pure-Python one of ``radau5``.
 
-Runs once the adaptive method (``lumped.solvers.radau``, branch ``adaptive``) is merged:
+Runs once the adaptive method (``lumped.solvers.radau.stage``, branch ``adaptive``) is merged:
 the compiled port must give the same residual, Jacobian and Newton solution bit for bit.
 """
 
@@ -16,12 +16,12 @@ from lumped.codegen.branches import law_branches
 from lumped.codegen.jit import jit_scene
 from lumped.laws import get_law
 
-radau = pytest.importorskip("lumped.solvers.radau")
+radau = pytest.importorskip("lumped.solvers.radau.stage")
 from lumped.codegen.jit import njit, numba_enabled  # noqa: E402
-from lumped.solvers.radau_jit import compiled_stage_solve, workspace  # noqa: E402
-from lumped.solvers.radau_jit import stage_evaluate as _cached_stage_evaluate  # noqa: E402
+from lumped.solvers.radau.stage_jit import compiled_stage_solve, workspace  # noqa: E402
+from lumped.solvers.radau.stage_jit import stage_evaluate as _cached_stage_evaluate  # noqa: E402
 
-#: :func:`~lumped.solvers.radau_jit.stage_evaluate` compiled here without numba's disk
+#: :func:`~lumped.solvers.radau.stage_jit.stage_evaluate` compiled here without numba's disk
 #: cache. The tests pass the scene's kernels as a dispatcher, whose numba type is new in
 #: every process; a cached entry keyed on it cannot be pickled again once its dispatcher
 #: is gone, and the suite's second run on a machine failed with numba's "ReferenceError:

@@ -1,4 +1,4 @@
-"""The compiled inner loop of ``radau5`` (:mod:`lumped.solvers.radau_loop_jit`) against the
+"""The compiled inner loop of ``radau5`` (:mod:`lumped.solvers.eventdriven.loop_jit`) against the
 pure-Python loop it ports (``compiled=False``, the readable reference): the same steps,
 dense output, events and counters; the fallback to Python and its reasons; exact sticking.
 
@@ -98,7 +98,7 @@ def test_the_compiled_loop_gives_the_python_loop_run(name):
 
 
 def test_exact_sticking_is_kept_in_the_compiled_loop():
-    # eq. (17a): the mass never moves (held without steps, lumped.solvers.stuck);
+    # eq. (17a): the mass never moves (held without steps, lumped.solvers.modes.stuck);
     # release-0.5: it sticks for good after its last event
     stuck = simulate(scenario_scene("forcing-F1"), method="radau5", t_end=3.0, rtol=1e-8,
                      compiled=True)
@@ -119,7 +119,7 @@ def test_the_steps_to_a_stop_are_compiled(monkeypatch):
     """The step that ends on a forcing breakpoint or on ``t_end`` is the compiled loop's:
     a run without guard events makes no single attempts from Python, and gives the Python
     loop's run (the breakpoint at t = 1.5 is a time event in both)."""
-    from lumped.solvers.adaptive_fast import CompiledLoop
+    from lumped.solvers.eventdriven.fast import CompiledLoop
 
     base = scenario_scene("release-0.005")  # stuck from the start: no guard event
     attempts = []
@@ -169,7 +169,7 @@ def test_by_default_a_new_scene_compiles_once_a_run_is_long(monkeypatch):
     and switches to the compiled loop after ``COMPILE_AFTER`` steps, seamlessly (the same
     run as the Python loop's); a short run stays in Python; a compiled scene starts
     compiled."""
-    from lumped.solvers import adaptive_fast
+    from lumped.solvers.eventdriven import fast as adaptive_fast
 
     COMPILE_AFTER = 200  # a shorter run than the default's
     monkeypatch.setattr(adaptive_fast, "COMPILE_AFTER", COMPILE_AFTER)
@@ -196,9 +196,9 @@ def test_the_compiled_keyword_is_checked():
 
 def test_the_compiled_dense_output_is_the_numpy_one(monkeypatch):
     """``sol(t)`` of ``radau5`` evaluated by the compiled loop of
-    :mod:`lumped.solvers.adaptive_output` gives the numpy evaluation's numbers, also at the
+    :mod:`lumped.solvers.radau.dense` gives the numpy evaluation's numbers, also at the
     step points and events (the later step: right limits)."""
-    import lumped.solvers.adaptive_output as out
+    import lumped.solvers.radau.dense as out
 
     sol = simulate(scenario_scene("forcing-F2"), method="radau5", t_end=3.0, rtol=1e-7,
                    compiled=True)

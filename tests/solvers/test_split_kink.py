@@ -1,5 +1,5 @@
 """radau5 ends a step at a kink of the force split among locks in parallel
-(:mod:`lumped.solvers.split_kink`): the held force's dense output stays in its lock's
+(:mod:`lumped.solvers.modes.split_kink`): the held force's dense output stays in its lock's
 interval, and the split's kink is where the tight run puts it."""
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ from _yield_check import check_yield
 from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.solvers.crossing_root import _on
-from lumped.solvers.radau import C
-from lumped.solvers.split_kink import split_kink
+from lumped.solvers.modes.crossing_root import _on
+from lumped.solvers.modes.split_kink import split_kink
+from lumped.solvers.radau.stage import C
 
 TAU = 0.15900919888305598
 

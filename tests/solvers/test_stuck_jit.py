@@ -1,6 +1,6 @@
-"""The compiled break-out root and scan of a held interval (:mod:`lumped.solvers.stuck_jit`)
-against the Python reference (:meth:`lumped.solvers.stuck.StaticHold._root` with
-:func:`scipy.optimize.brentq`, :meth:`~lumped.solvers.stuck.StaticHold.breakout` without
+"""The compiled break-out root and scan of a held interval (:mod:`lumped.solvers.modes.stuck_jit`)
+against the Python reference (:meth:`lumped.solvers.modes.stuck.StaticHold._root` with
+:func:`scipy.optimize.brentq`, :meth:`~lumped.solvers.modes.stuck.StaticHold.breakout` without
 the compiled loop): the same root and samples, bit for bit."""
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from lumped import simulate
 from lumped.bench.network_scenes import bingham_chain
 from lumped.bench.scenes import OWN_SCENES, PAPER_SCENES, generic_scene
 from lumped.codegen.jit import numba_enabled
-from lumped.solvers import stuck
-from lumped.solvers.stuck_jit import brent, compiled_breakout_root
+from lumped.solvers.modes import stuck
+from lumped.solvers.modes.stuck_jit import brent, compiled_breakout_root
 
 
 def test_brent_takes_the_steps_of_scipy_brentq():
@@ -42,7 +42,7 @@ def test_brent_takes_the_steps_of_scipy_brentq():
 
 def _runs_through(method: str, record, names: tuple[str, ...]) -> None:
     """Run ``radau5`` (compiled) on the bench scenes ``names`` at rtol 1e-4 and 1e-9 and
-    on a 3-mass chain, with :class:`~lumped.solvers.stuck.StaticHold`'s ``method``
+    on a 3-mass chain, with :class:`~lumped.solvers.modes.stuck.StaticHold`'s ``method``
     replaced by ``record`` for the runs; every run must succeed."""
     scenes = {s.name: s for s in PAPER_SCENES + OWN_SCENES}
     runs = [(generic_scene(scenes[name]), rtol) for name in names for rtol in (1e-4, 1e-9)]
@@ -82,7 +82,7 @@ def test_compiled_breakout_root_agrees_with_the_reference():
 
 @pytest.mark.skipif(not numba_enabled(), reason="needs numba")
 def test_compiled_breakout_scan_agrees_with_the_reference():
-    """The scan of a held interval's samples compiled (:func:`lumped.solvers.stuck_jit.
+    """The scan of a held interval's samples compiled (:func:`lumped.solvers.modes.stuck_jit.
     breakout_scan`, taken with a sine-burst forcing and more than two samples) and in
     Python (``fast=None``): the same break-out time and the same samples passed before it,
     and the same forces at each of them, bit for bit, on every held interval of runs that

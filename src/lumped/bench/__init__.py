@@ -8,25 +8,10 @@ exact law with terminal events), :mod:`.runner` (timing, runs, the method regist
 :mod:`.event_study`; the full description is in :mod:`.runner`.
 """
 
-from .event_peer import (
-    MAX_EVENTS,
-    event_driven_solver,
-)
-from .event_study import (
-    EVENT_SCENES,
-    event_markdown,
-    event_study,
-)
-from .methods import (
-    Method,
-    Solved,
-    tolerance_method,
-    x_on_grid,
-)
-from .peers import (
-    regularised_jacobian,
-    regularised_rhs,
-)
+from .event_peer import MAX_EVENTS, event_driven_solver
+from .event_study import EVENT_SCENES, event_markdown, event_study
+from .methods import Method, Solved, tolerance_method, x_on_grid
+from .peers import regularised_jacobian, regularised_rhs
 from .report import (
     markdown_tables,
     observed_orders,

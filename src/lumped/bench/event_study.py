@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..solvers.closed_form import integrate
+from ..solvers.closed.closed_form import integrate
 from .scenes import SCENES
 
 __all__ = [

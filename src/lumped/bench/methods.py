@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from .._validate import as_positive
-from ..solvers.closed_form import integrate
+from ..solvers.closed.closed_form import integrate
 from .scenes import GRID_DT, BenchScene, Ladders, generic_scene
 
 __all__ = [
@@ -74,9 +74,9 @@ class Method:
 
 def _closed_form(method: str, engine: str = "python"
                  ) -> Callable[[BenchScene, dict, Ladders], Callable[[], Solved]]:
-    """The closed form (:func:`lumped.solvers.closed_form.integrate`) with an explicit
+    """The closed form (:func:`lumped.solvers.closed.closed_form.integrate`) with an explicit
     ``engine``: ``"auto"`` would switch to the compiled loop once
-    :mod:`lumped.solvers.closed_form_jit` is imported, and one table would mix the two."""
+    :mod:`lumped.solvers.closed.closed_form_jit` is imported, and one table would mix the two."""
 
     def solve(scene: BenchScene, setting: dict, ladders: Ladders) -> Callable[[], Solved]:
         dt = setting["dt"]

@@ -37,8 +37,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..scene import Mass, Scene
-from ..solvers.adaptive_setup import breakpoints
-from ..solvers.linalg import lu_factor, lu_solve
+from ..solvers.eventdriven.setup import breakpoints
+from ..solvers.newton.linalg import lu_factor, lu_solve
 
 __all__ = ["SMOOTHED_LAWS", "TanhNetwork", "solve_tanh_network"]
 

@@ -9,7 +9,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..solvers.closed_form import BinghamOscillator
+from ..solvers.closed.closed_form import BinghamOscillator
 from .methods import Solved
 from .scenes import GRID_DT, BenchScene, Ladders
 

@@ -21,7 +21,7 @@ event-driven exact solution of :mod:`lumped.reference`:
 
 Methods (see :data:`METHODS`, a registry: adding a method is one entry):
 
-* ``closed-bdf1`` / ``closed-bdf2`` -- :func:`lumped.solvers.closed_form.integrate` over a
+* ``closed-bdf1`` / ``closed-bdf2`` -- :func:`lumped.solvers.closed.closed_form.integrate` over a
   ladder of ``dt``;
 * ``generic-bdf1`` / ``generic-bdf2`` -- the semismooth-Newton steps of
   :func:`lumped.simulate.simulate` on the same scene built from the ``linear_spring`` and
@@ -60,15 +60,7 @@ from .event_peer import _events
 from .event_study import event_study
 from .methods import Method, Solved, _closed_form, _generic, tolerance_method
 from .peers import _scipy, _scipy_solver
-from .scenes import (
-    FULL,
-    GRID_DT,
-    PAPER_SCENES,
-    SCENES,
-    BenchScene,
-    Ladders,
-    reference_grid,
-)
+from .scenes import FULL, GRID_DT, PAPER_SCENES, SCENES, BenchScene, Ladders, reference_grid
 from .timing import measure_unit, time_call
 
 __all__ = [

@@ -13,7 +13,7 @@ import numpy as np
 
 from .._validate import as_positive
 from ..scene.forcing import SineBurst, paper_F1, paper_F2, zero_forcing
-from ..solvers.closed_form import BinghamOscillator
+from ..solvers.closed.closed_form import BinghamOscillator
 
 __all__ = [
     "GRID_DT",

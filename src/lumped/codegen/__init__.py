@@ -8,13 +8,7 @@ guard functions, locking branches) for the event model.
 
 from .branches import BranchInfo, LawBranches, law_branches
 from .emit import Kernel, compile_function, compile_kernel
-from .rewrite import (
-    check_supported,
-    diff_branchwise,
-    magnitude_expression,
-    prepare,
-    rewrite_kinks,
-)
+from .rewrite import check_supported, diff_branchwise, magnitude_expression, prepare, rewrite_kinks
 
 __all__ = [
     "BranchInfo",

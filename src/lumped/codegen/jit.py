@@ -22,7 +22,7 @@ rate (dashpot), ``F`` its force (sign convention of :mod:`lumped.scene`).
 ``evaluate(u, p, G, J, S, roundoff)``
     The residual ``G``, generalised Jacobian ``J`` (``n x n``, structural zeros left
     untouched) and row scales ``S`` of the BDF step system of
-    :mod:`lumped.solvers.fixed_step` in ``u``, with ``p = [h, m_i / h (N), v_hat (N),
+    :mod:`lumped.solvers.bdf.fixed_step` in ``u``, with ``p = [h, m_i / h (N), v_hat (N),
     x_hat (N), f(t) (N)]``: momentum rows ``(m_i / h)(v_i - v_hat_i) - f_i - sum_{a_e = i}
     F_e + sum_{b_e = i} F_e``, junction rows without the first term, law rows
     ``R_e(q_e, F_e)`` with ``q_e = x_hat_b + h v_b - (x_hat_a + h v_a)`` (springs) or
@@ -40,7 +40,7 @@ rate (dashpot), ``F`` its force (sign convention of :mod:`lumped.scene`).
     all ``> 0`` strictly inside branch ``i``, some ``< 0`` outside; an event is a sign
     change) written to ``out[0 .. k-1]``; returns ``k`` (0 for a smooth law).
 
-The solvers are compiled once for all scenes (:mod:`lumped.solvers.bdf_jit_core`) and
+The solvers are compiled once for all scenes (:mod:`lumped.solvers.bdf.core_jit`) and
 take ``evaluate`` and ``element_law`` as function pointers (numba's first-class
 function types): a new scene compiles only its own small functions.
 
@@ -381,7 +381,7 @@ def position_locks(scene) -> np.ndarray:
     (:attr:`~lumped.codegen.branches.BranchInfo.lock_value`, e.g. ``L`` of a taut string),
     ``nan`` for other branches and for dashpots; one column per branch of the law with the
     most. ``radau5`` holds such a lock on the velocity level (see
-    :meth:`lumped.solvers.radau.StageSystem.evaluate`)."""
+    :meth:`lumped.solvers.radau.stage.StageSystem.evaluate`)."""
     from lumped.codegen.branches import law_branches
 
     lbs = [law_branches(el.law) for el in scene.elements]

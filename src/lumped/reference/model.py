@@ -12,7 +12,7 @@ import numpy as np
 
 from .._validate import as_finite, as_nonnegative, as_positive
 from ..scene.forcing import SineBurst, zero_forcing
-from ..solvers.closed_form import BinghamOscillator
+from ..solvers.closed.closed_form import BinghamOscillator
 
 __all__ = ['Event', 'Interval', 'ReferenceNotApplicable', 'TooManyEvents']
 

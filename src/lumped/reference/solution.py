@@ -5,7 +5,7 @@ Bingham dashpot ``(gamma, tau = mu_s N_f)`` (or its Coulomb limit
 ``gamma -> infinity``, Remark 2.1), driven by no force or by a sine burst
 ``F(t) = A sin(w t)`` for ``t <= t_off`` and ``0`` after (:class:`~lumped.scene.SineBurst`).
 
-Model and sign convention (as in :mod:`lumped.solvers.closed_form`)::
+Model and sign convention (as in :mod:`lumped.solvers.closed.closed_form`)::
 
     m v' = F(t) - F_s - F_d,    x' = v,    F_s = k x,
     v = gamma (F_d - clip(F_d, -tau, tau)).
@@ -52,17 +52,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._validate import as_finite, as_int_at_least, as_positive
-from ..solvers.closed_form import BinghamOscillator, steps_for
+from ..solvers.closed.closed_form import BinghamOscillator, steps_for
 from ..trajectory import Trajectory
 from .arcs import _EPS, _SlipArc
 from .events import _phases
-from .model import (
-    Event,
-    Interval,
-    _as_times,
-    _Params,
-    _params_from,
-)
+from .model import Event, Interval, _as_times, _Params, _params_from
 
 __all__ = ["ExactSolution", "exact_solution", "reference_for_grid"]
 
@@ -133,7 +127,7 @@ def exact_solution(
         omitted.
     x0, v0 : float
         Initial state.  ``v0 = 0``: the mass starts stuck if ``|F(0) - k x0| <= tau``
-        (``F_d(0) = F(0) - k x0``, as in :func:`lumped.solvers.closed_form.initial_dashpot_force`),
+        (``F_d(0) = F(0) - k x0``, as in :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`),
         otherwise it slips in the direction of ``F(0) - k x0``.  ``v0 != 0``: slip
         with ``sgn(v0)``.
     forcing : None, zero_forcing or SineBurst
@@ -217,7 +211,7 @@ def reference_for_grid(
 ) -> Trajectory:
     """The exact solution on the grid ``t_n = n dt`` used by the numerical methods.
 
-    The grid is that of :func:`lumped.solvers.closed_form.integrate` (``steps_for(dt, t_end)``
+    The grid is that of :func:`lumped.solvers.closed.closed_form.integrate` (``steps_for(dt, t_end)``
     steps), so ``traj.to_csv(path)`` writes the same columns and rows as a numerical
     run.  ``stats`` holds the number of grid points, events and intervals.
     Raises :class:`ReferenceNotApplicable` (a ``ValueError``) for a forcing the

@@ -7,10 +7,10 @@ one implicit step), :mod:`.initial_state`, :mod:`.branch_check`, :mod:`.fixed_st
 :mod:`.registry` (name -> runner).
 """
 
-from .closed_form import BinghamOscillator, bdf1_step, bdf2_step, integrate, steps_for
-from .fixed_step import GENERIC_METHODS, RunResult, run_bdf
-from .initial_state import consistent_initial_state
-from .newton import NewtonCode, NewtonOptions, NewtonResult, newton_solve
+from .bdf.fixed_step import GENERIC_METHODS, RunResult, run_bdf
+from .closed.closed_form import BinghamOscillator, bdf1_step, bdf2_step, integrate, steps_for
+from .implicit.initial_state import consistent_initial_state
+from .newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve
 from .registry import (
     FIXED_STEP_METHODS,
     METHOD_REGISTRY,
@@ -19,14 +19,7 @@ from .registry import (
     register_method,
     resolve_method,
 )
-from .status import (
-    BranchError,
-    Event,
-    InconsistentInitialForce,
-    RawRun,
-    SolverError,
-    Status,
-)
+from .status import BranchError, Event, InconsistentInitialForce, RawRun, SolverError, Status
 
 __all__ = [
     "FIXED_STEP_METHODS",

@@ -3,16 +3,16 @@ r"""The registry of methods: name -> runner ``runner(scene, settings) -> RawRun`
 Built-in methods (the same names on the command line):
 
 ``bdf1``, ``bdf2``
-    The generic semismooth-Newton BDF steps of :mod:`lumped.solvers.fixed_step`, for any
+    The generic semismooth-Newton BDF steps of :mod:`lumped.solvers.bdf.fixed_step`, for any
     scene.
 ``jit-bdf1``, ``jit-bdf2``
-    The same steps compiled with numba (:mod:`lumped.solvers.fixed_step_jit`): the same
+    The same steps compiled with numba (:mod:`lumped.solvers.bdf.fixed_step_jit`): the same
     numbers to the Newton tolerance (``fast=False``: bit for bit), much faster per step,
     after a one-off compile cached on disk. Not for hand-written kernels. A scene with a
     position lock (a taut string: impacts, indeterminate forces) and a run whose compiled
     Newton fails run whole on the reference solver, and ``stats["fallback"]`` says why.
 ``closed-bdf1``, ``closed-bdf2``
-    The closed-form steps of :mod:`lumped.solvers.closed_form` (``closed-bdf1`` is the
+    The closed-form steps of :mod:`lumped.solvers.closed.closed_form` (``closed-bdf1`` is the
     paper's Algorithm 1). Only for a scene that is exactly one mass with one
     ``linear_spring`` and one ``bingham`` dashpot, both to ground; any other scene is
     refused.
@@ -20,7 +20,7 @@ Built-in methods (the same names on the command line):
     The event-driven exact reference of :mod:`lumped.reference`, on the same grid; for
     that same scene with no forcing or a sine burst (``{ kind = "sine", ... }``).
 ``radau5``
-    The adaptive Radau IIA (order 5) method of :mod:`lumped.solvers.adaptive`, with
+    The adaptive Radau IIA (order 5) method of :mod:`lumped.solvers.eventdriven.runner`, with
     events located inside the step (``rtol``/``atol``; no ``dt``).
 ``auto``
     ``closed-bdf2`` for exactly that scene, else ``radau5``, else (a law ``radau5`` does
@@ -42,10 +42,10 @@ import numpy as np
 from ..scene import GROUND, Mass, Scene
 from ..scene.forcing import zero_forcing
 from ..trajectory import Trajectory
-from .closed_form import BinghamOscillator, integrate, steps_for
-from .fixed_step import run_bdf
-from .initial_state import consistent_initial_state
-from .newton import NewtonOptions
+from .bdf.fixed_step import run_bdf
+from .closed.closed_form import BinghamOscillator, integrate, steps_for
+from .implicit.initial_state import consistent_initial_state
+from .newton.semismooth import NewtonOptions
 from .status import RawRun, Status
 
 __all__ = [
@@ -220,7 +220,7 @@ def _on_reference(scene: Scene, method: str, dt: float, n_steps: int,
 
 def _run_jit(method: str) -> Runner:
     def runner(scene: Scene, settings: RunSettings) -> RawRun:
-        from .fixed_step_jit import position_lock, run_bdf_jit
+        from .bdf.fixed_step_jit import position_lock, run_bdf_jit
 
         dt, n_steps = _fixed_step_grid(method, settings, ("fast",))
         fast = settings.extra.get("fast")
@@ -299,18 +299,18 @@ def register_method(name: str, runner: Runner, *, fixed_step: bool = False) -> N
 def resolve_method(scene: Scene, method: str) -> str:
     """The concrete method ``auto`` stands for on ``scene`` (others unchanged):
     ``closed-bdf2`` on the paper's scene, else ``radau5``, else (a law ``radau5`` does not
-    take, :func:`lumped.solvers.adaptive_setup.scope_error`) ``bdf2``."""
+    take, :func:`lumped.solvers.eventdriven.setup.scope_error`) ``bdf2``."""
     if method == "auto":
         if not isinstance(closed_form_oscillator(scene), str):
             return "closed-bdf2"
-        from .adaptive_setup import scope_error
+        from .eventdriven.setup import scope_error
 
         return "bdf2" if scope_error(scene) else "radau5"
     return method
 
 
 def _register_adaptive() -> None:
-    from .adaptive import run_radau5
+    from .eventdriven.runner import run_radau5
 
     register_method("radau5", run_radau5)
 

@@ -4,7 +4,7 @@ When the template is the paper's oscillator (one mass, a ``linear_spring`` and a
 ``bingham`` dashpot to ground; zero, constant or sine-burst forcing) and every swept
 path is one of its numbers, the scenes never become :class:`~lumped.scene.Scene`
 objects: each is one row ``(m, k, 1/gamma, tau, x0, v0, kind, p0, p1, p2)`` of an array
-that :func:`lumped.solvers.closed_form_jit.summary_batch` runs in parallel over the
+that :func:`lumped.solvers.closed.closed_form_jit.summary_batch` runs in parallel over the
 cores (numba ``prange``), or in chunks on Dask workers.
 
 Every swept value is still checked by the scene-file reader (one call per distinct
@@ -44,7 +44,7 @@ def plan_closed(template: Mapping[str, Any], names: tuple[str, ...]) -> ClosedPl
     """A :class:`ClosedPlan` when the batched closed form covers the sweep, else ``None``."""
     from lumped.io import scene_from_dict
     from lumped.solvers import closed_form_oscillator
-    from lumped.solvers.closed_form_jit import FORCE_SAMPLED, FORCE_SINE, forcing_code
+    from lumped.solvers.closed.closed_form_jit import FORCE_SAMPLED, FORCE_SINE, forcing_code
 
     scene, _ = scene_from_dict(dict(template), source="<template>")
     found = closed_form_oscillator(scene)
@@ -84,7 +84,7 @@ def closed_parameters(plan: ClosedPlan, template: Mapping[str, Any],
     """The ``(n_scenes, 10)`` parameter array; every distinct swept value is checked by
     the scene-file reader first (``ValueError`` naming the path and the value)."""
     from lumped.io import scene_from_dict
-    from lumped.solvers.closed_form_jit import FORCE_CONSTANT
+    from lumped.solvers.closed.closed_form_jit import FORCE_CONSTANT
 
     for name in sets.names:
         seen: set = set()
@@ -114,7 +114,7 @@ def run_chunk(params: np.ndarray, dt: float, n: int, bdf2: bool, parallel: bool)
     ``parallel=True`` uses every numba thread (``prange``); ``False`` runs on the calling
     thread without the GIL, for Dask workers that already run side by side.
     """
-    from lumped.solvers.closed_form_jit import (
+    from lumped.solvers.closed.closed_form_jit import (
         SUMMARY_FIELDS,
         summary_batch,
         summary_batch_serial,

@@ -1,0 +1,367 @@
+r"""The step loop of the generic fixed-step BDF1/BDF2, written for numba.
+
+The same loop as :func:`lumped.solvers.bdf.fixed_step.run_bdf` (read it for the maths),
+operation for operation, on preallocated arrays:
+
+* BDF1: ``h = dt``, ``x_hat = x_n``, ``v_hat = v_n``; BDF2 (from the second step on):
+  ``h = 2 dt / 3``, ``x_hat = x_n + (x_n - x_{n-1}) / 3``, ``v_hat = v_n + (v_n - v_{n-1}) / 3``
+  (exact for a stuck state);
+* the unknowns ``u = (v_1 .. v_N, F_1 .. F_E)``, from the previous step's solution; the
+  fast path (the same Jacobian as the cached factors: accept ``u`` or take one full
+  step, checked with the linearised row scales) and otherwise the full Newton of
+  :func:`lumped.solvers.newton.semismooth_jit.newton` with the round-off row scales;
+* ``x_{n+1} = x_hat + h v_{n+1}``;
+* the fold check of :mod:`lumped.solvers.implicit.branch_check` on the elements whose law is not a
+  known monotone built-in.
+
+The scene enters through two compiled callbacks generated per scene by
+:mod:`lumped.codegen.jit`, ``evaluate(u, p, G, J, S, roundoff)`` (the step system, with
+``p = [h, m_i / h (N), v_hat (N), x_hat (N), f(t) (N)]``) and ``element_law(e, q, F)``
+(element ``e``'s kernel), passed as *function pointers* (numba's first-class function
+types, :data:`EVALUATE_TYPE`, :data:`ELEMENT_LAW_TYPE`): the loop is compiled once for
+every scene (:func:`compiled_run_bdf_core`, cached on disk), and a new scene compiles
+only its own small functions. Nothing else comes from the scene: the forcing is read
+from ``fkind, fpar, ftab`` by :func:`forcing_into` (kinds: 0 none, 1 constant
+``fpar[i, 0]``, 2 sine burst ``fpar[i] = (A, omega, t_off)``, 3 a table
+``ftab[step, i]`` computed before the loop).
+
+``info`` receives the outcome: ``info[0]`` 0 success, 1 Newton failed, 2 a fold
+(branch lost), 3 a non-finite force; ``info[1]`` the step; ``info[2]`` the Newton code;
+``info[3]`` the worst row, element or node; ``info[4..7]`` the counters (Newton
+iterations, residual and Jacobian evaluations, factorisations), ``info[8]`` the largest
+iteration count of one step. ``finfo`` receives floats for the message: the residual
+(or force value), then for a fold ``q0, F0, q1, F1``; ``finfo[5]`` the last Newton
+iteration count on failure.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...codegen.jit import _numba, njit, numba_enabled
+from ..implicit.branch_check import _sign as _py_sign
+from ..newton.semismooth_jit import (
+    _D2,
+    _DU,
+    _G,
+    _GN,
+    _J,
+    _JN,
+    _S,
+    _SN,
+    _UN,
+    finite_sum,
+    lu_solve_into,
+    newton,
+    residual_ok,
+    same,
+    update_ok,
+    worst_row,
+)
+
+__all__ = ["EVALUATE_TYPE", "ELEMENT_LAW_TYPE", "compiled_run_bdf_core", "forcing_into",
+           "fast_step", "left_branch", "loop_workspace", "run_bdf_core"]
+
+FORCE_NONE, FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE = 0, 1, 2, 3
+OK, NEWTON_FAILED, BRANCH_LOST, BAD_FORCE = 0, 1, 2, 3
+
+
+@njit(cache=True, inline="always")
+def forcing_into(step, t, fkind, fpar, ftab, f) -> int:
+    """Write ``f_i(t)`` into ``f``; return the first node whose force is not finite, or -1."""
+    for i in range(f.shape[0]):
+        k = fkind[i]
+        if k == FORCE_NONE:
+            continue
+        if k == FORCE_CONSTANT:
+            val = fpar[i, 0]
+        elif k == FORCE_SINE:
+            val = 0.0 if t > fpar[i, 2] else fpar[i, 0] * math.sin(fpar[i, 1] * t)
+        else:
+            val = ftab[step, i]
+        if not math.isfinite(val):
+            f[i] = val
+            return i
+        f[i] = val
+    return -1
+
+
+@njit(cache=True, inline="always")
+def fast_step(evaluate, p, u0, u, cJ, cLU, cperm, cvalid, wv, wm, rtol, atol) -> int:
+    """The common step (the reference's ``_fast_step``): returns the Newton iterations it
+    took (0 or 1) with the solution in ``u``, or -1 when full Newton must run."""
+    n = u.shape[0]
+    G, S, J, du = wv[_G], wv[_S], wm[_J], wv[_DU]
+    evaluate(u0, p, G, J, S, False)
+    if cvalid[0] == 0 or not same(J, cJ) or not finite_sum(G):
+        return -1
+    lu_solve_into(cLU, cperm, G, du)
+    if not finite_sum(du):
+        return -1
+    if residual_ok(G, S, rtol, atol):
+        if update_ok(du, u0, rtol, atol):
+            for i in range(n):
+                u[i] = u0[i] - du[i]
+            return 0
+        return -1
+    u1, G1, S1, J1, d = wv[_UN], wv[_GN], wv[_SN], wm[_JN], wv[_D2]
+    for i in range(n):
+        u1[i] = u0[i] - du[i]
+    evaluate(u1, p, G1, J1, S1, False)
+    if not same(J1, J) or not finite_sum(G1) or not residual_ok(G1, S1, rtol, atol):
+        return -1
+    lu_solve_into(cLU, cperm, G1, d)
+    if not (finite_sum(d) and update_ok(d, u1, rtol, atol)):
+        return -1
+    for i in range(n):
+        u[i] = u1[i] - d[i]
+    return 1
+
+
+def loop_workspace(N: int, E: int) -> tuple:
+    """The arrays :func:`run_bdf_core` works in (``P, cJ, cLU, cperm, cvalid, counts,
+    vec``), for ``N`` nodes and ``E`` elements."""
+    n = N + E
+    return (np.zeros((2, 1 + 4 * N)), np.zeros((2, n, n)), np.zeros((2, n, n)),
+            np.zeros((2, n), dtype=np.int64), np.zeros((2, 1), dtype=np.int64),
+            np.zeros(4, dtype=np.int64), np.zeros((10, n)))
+
+
+#: The reference's sign with a dead band (:mod:`lumped.solvers.implicit.branch_check`), compiled.
+_sign = njit(cache=True, inline="always")(_py_sign)
+
+
+@njit(cache=True, inline="always")
+def left_branch(element_law, e, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
+    """The fold test of :func:`lumped.solvers.implicit.branch_check.left_branch` for element ``e``:
+    ``dR/dq`` or ``dR/dF`` of strictly opposite signs at the two ends, or at three
+    interior points when the step leaves the law's tangent."""
+    s0 = abs(Rq0) + abs(RF0)
+    s1 = abs(Rq1) + abs(RF1)
+    # sign sets as bit masks: 1 for +1, 2 for -1 (0 adds nothing)
+    mq = _bit(_sign(Rq0, s0)) | _bit(_sign(Rq1, s1))
+    mf = _bit(_sign(RF0, s0)) | _bit(_sign(RF1, s1))
+    if mq == 3 or mf == 3:
+        return True
+    dq = q1 - q0
+    dF = F1 - F0
+    off = 0.0
+    for k in range(2):
+        Rq = Rq0 if k == 0 else Rq1
+        RF = RF0 if k == 0 else RF1
+        total = abs(Rq * dq) + abs(RF * dF)
+        if total > 0.0:
+            off = max(off, abs(Rq * dq + RF * dF) / total)
+    if off <= 0.5:
+        return False
+    for s in (0.25, 0.5, 0.75):
+        _, Rq, RF = element_law(e, q0 + s * dq, F0 + s * dF)
+        sc = abs(Rq) + abs(RF)
+        mq |= _bit(_sign(Rq, sc))
+        mf |= _bit(_sign(RF, sc))
+        if mq == 3 or mf == 3:
+            return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def _bit(s: int) -> int:
+    return 1 if s > 0 else (2 if s < 0 else 0)
+
+
+@njit(cache=True, inline="always")
+def _elongation(y, a, b) -> float:
+    return (y[b] if b >= 0 else 0.0) - (y[a] if a >= 0 else 0.0)
+
+
+def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0, F0,
+                 dt, n_steps, bdf2, rtol, atol, max_iters, max_backtracks, free_steps,
+                 fkind, fpar, ftab, xs, vs, Fs, info, finfo, wv, wm, wperm, P, cJ, cLU,
+                 cperm, cvalid, counts, vec, step0=0, step_stop=-1) -> int:
+    """Advance the fixed steps from ``step0 + 1`` to ``step_stop`` (to ``n_steps`` when
+    ``step_stop < 0``) from ``(x0, v0, F0)`` at step ``step0``; fill rows ``step0`` to
+    the last step taken of ``xs, vs, Fs`` and ``info, finfo`` (see the module notes);
+    return the rows filled (the last step taken + 1).
+
+    For ``step0 >= 1`` the previous state (BDF2) is read from row ``step0 - 1`` of ``xs,
+    vs``: a run can be continued from any stored step (the fast path of
+    :mod:`lumped.solvers.bdf.fast_codegen` hands single steps over this way).
+
+    ``wv, wm, wperm`` is Newton's workspace (:func:`lumped.solvers.newton.semismooth_jit.workspace`),
+    ``P .. vec`` the loop's (:func:`loop_workspace`), both allocated by the caller.
+    Compiled by :func:`compiled_run_bdf_core`."""
+    N = x0.shape[0]
+    E = F0.shape[0]
+    n = N + E
+    h1 = dt
+    h2 = 2.0 * dt / 3.0
+    # step parameters for each step size: [h, m/h, v_hat, x_hat, f]
+    for k in range(2):
+        h = h1 if k == 0 else h2
+        P[k, 0] = h
+        for i in range(N):
+            P[k, 1 + i] = masses[i] / h if masses[i] != 0.0 else 0.0
+        cvalid[k, 0] = 0
+    u0, u, x, v, xp, vp = vec[0], vec[1], vec[2][:N], vec[3][:N], vec[4][:N], vec[5][:N]
+    F, prev_q, prev_Rq, prev_RF = vec[6][:E], vec[7][:E], vec[8][:E], vec[9][:E]
+    for i in range(N):
+        x[i] = x0[i]
+        v[i] = v0[i]
+        xs[step0, i] = x0[i]
+        vs[step0, i] = v0[i]
+        if step0 >= 1:
+            xp[i] = xs[step0 - 1, i]
+            vp[i] = vs[step0 - 1, i]
+    for e in range(E):
+        F[e] = F0[e]
+        Fs[step0, e] = F0[e]
+    for c in range(checked.shape[0]):
+        e = checked[c]
+        q = _elongation(x if spring[e] else v, ea[e], eb[e])
+        _, Rq, RF = element_law(e, q, F[e])
+        prev_q[e] = q
+        prev_Rq[e] = Rq
+        prev_RF[e] = RF
+    fast = free_steps >= 1
+    total_it = res_ev = jac_ev = facts = max_it = 0
+    for i in range(9):
+        info[i] = 0
+    rows = step0 + 1
+    last = n_steps if step_stop < 0 else step_stop
+    for step in range(step0 + 1, last + 1):
+        t = step * dt
+        k = 0 if (not bdf2 or step == 1) else 1
+        p = P[k]
+        h = p[0]
+        off = 1 + 3 * N
+        bad = forcing_into(step, t, fkind, fpar, ftab, p[off:off + N])
+        if bad >= 0:
+            info[0] = BAD_FORCE
+            info[1] = step
+            info[3] = bad
+            finfo[0] = p[off + bad]
+            finfo[1] = t
+            break
+        for i in range(N):
+            if k == 0:
+                p[1 + 2 * N + i] = x[i]
+                p[1 + N + i] = v[i]
+            else:
+                xi = x[i]
+                vi = v[i]
+                p[1 + 2 * N + i] = xi + (xi - xp[i]) / 3.0
+                p[1 + N + i] = vi + (vi - vp[i]) / 3.0
+        for i in range(N):
+            u0[i] = v[i]
+        for e in range(E):
+            u0[N + e] = F[e]
+        it = fast_step(evaluate, p, u0, u, cJ[k], cLU[k], cperm[k], cvalid[k], wv, wm,
+                       rtol, atol) if fast else -1
+        if it >= 0:
+            total_it += it
+            res_ev += 1 + it
+            jac_ev += 1
+            if it > max_it:
+                max_it = it
+        else:
+            for j in range(n):
+                u[j] = u0[j]
+            code = newton(evaluate, p, u, True, rtol, atol, max_iters, max_backtracks,
+                          free_steps, cJ[k], cLU[k], cperm[k], cvalid[k], wv, wm, wperm,
+                          counts)
+            total_it += counts[0]
+            res_ev += counts[1]
+            jac_ev += counts[2]
+            facts += counts[3]
+            if counts[0] > max_it:
+                max_it = counts[0]
+            if code != 0:
+                w = worst_row(wv[_G], wv[_S], rtol, atol)
+                info[0] = NEWTON_FAILED
+                info[1] = step
+                info[2] = code
+                info[3] = w
+                finfo[0] = wv[_G][w]
+                finfo[1] = t
+                finfo[5] = counts[0]
+                break
+        for i in range(N):
+            xp[i] = x[i]
+            vp[i] = v[i]
+            v[i] = u[i]
+            x[i] = p[1 + 2 * N + i] + h * u[i]
+        lost = -1
+        for c in range(checked.shape[0]):
+            e = checked[c]
+            q1 = _elongation(x if spring[e] else v, ea[e], eb[e])
+            R1, Rq1, RF1 = element_law(e, q1, u[N + e])
+            if left_branch(element_law, e, prev_q[e], F[e], prev_Rq[e], prev_RF[e],
+                           q1, u[N + e], Rq1, RF1):
+                lost = e
+                finfo[0] = R1
+                finfo[1] = t
+                finfo[2] = prev_q[e]
+                finfo[3] = F[e]
+                finfo[4] = q1
+                finfo[5] = u[N + e]
+                break
+            prev_q[e] = q1
+            prev_Rq[e] = Rq1
+            prev_RF[e] = RF1
+        if lost >= 0:
+            info[0] = BRANCH_LOST
+            info[1] = step
+            info[3] = lost
+            break
+        for e in range(E):
+            F[e] = u[N + e]
+            Fs[rows, e] = F[e]
+        for i in range(N):
+            xs[rows, i] = x[i]
+            vs[rows, i] = v[i]
+        rows += 1
+    info[4] = total_it
+    info[5] = res_ev
+    info[6] = jac_ev
+    info[7] = facts
+    info[8] = max_it
+    return rows
+
+
+def _signature():
+    from numba import types as T
+
+    f8, i8, b1 = T.float64, T.int64, T.boolean
+    v, m, c = f8[::1], f8[:, ::1], f8[:, :, ::1]
+    iv, im = i8[::1], i8[:, ::1]
+    return T.int64(EVALUATE_TYPE, ELEMENT_LAW_TYPE, v, iv, iv, b1[::1], iv, v, v, v, f8, i8,
+                   b1, f8, f8, i8, i8, i8, iv, m, m, m, m, m, iv, v, m, c, iv, m, c, c, im,
+                   im, iv, m, i8, i8)
+
+
+if _numba is not None:
+    from numba import types as _T
+
+    _f8 = _T.float64
+    #: ``evaluate(u, p, G, J, S, roundoff) -> None`` as a numba function type.
+    EVALUATE_TYPE = _T.FunctionType(_T.none(_f8[::1], _f8[::1], _f8[::1], _f8[:, ::1],
+                                            _f8[::1], _T.boolean))
+    #: ``element_law(e, q, F) -> (R, dR/dq, dR/dF)`` as a numba function type.
+    ELEMENT_LAW_TYPE = _T.FunctionType(_T.UniTuple(_f8, 3)(_T.int64, _f8, _f8))
+else:  # pragma: no cover - without numba
+    EVALUATE_TYPE = ELEMENT_LAW_TYPE = None
+
+_COMPILED: list = []
+
+
+def compiled_run_bdf_core():
+    """:func:`run_bdf_core` compiled for the function-pointer callbacks (once per process,
+    from numba's disk cache after the first time on a machine); the plain function when
+    numba is absent or disabled."""
+    if not numba_enabled():
+        return run_bdf_core
+    if not _COMPILED:
+        _COMPILED.append(njit(_signature(), cache=True)(run_bdf_core))
+    return _COMPILED[0]

@@ -1,0 +1,234 @@
+r"""``jit-bdf1`` / ``jit-bdf2``: the generic fixed-step BDF of
+:mod:`lumped.solvers.bdf.fixed_step`, compiled with numba.
+
+:func:`run_bdf_jit` runs, by default, the scene's generated fast loop
+(:mod:`lumped.solvers.bdf.fast_codegen`, driven by :mod:`lumped.solvers.bdf.fast_jit`): the step
+system unrolled, the laws inlined, a Newton specialised to the scene's size, agreeing
+with the reference to the Newton tolerance (round-off on piecewise-linear laws). The
+steps it cannot take go to the faithful port, the scene's generated module
+(:mod:`lumped.codegen.jit`) on the step loop of :mod:`lumped.solvers.bdf.core_jit`: the
+step system, the semismooth Newton with its convergence tests and law-row scales, the
+singleton-first LU and the fold check, all compiled and cached on disk. That port
+(alone with ``fast=False``) follows :func:`lumped.solvers.bdf.fixed_step.run_bdf` (the
+readable reference) operation for operation: on systems of at most 8 unknowns the two
+give the same numbers bit for bit, and the same counters; above that the reference
+hands the LU to LAPACK and they agree to round-off.
+
+Scope: every scene :func:`~lumped.solvers.bdf.fixed_step.run_bdf` runs, with laws given as
+sympy residuals (a hand-written kernel cannot be compiled: ``ValueError``), except
+scenes with a position lock (a spring law with a branch on which the force is free,
+such as a taut string), refused with a ``ValueError``: the event model of impacts is
+not part of this compiled port. (Through :func:`lumped.simulate`, ``method="jit-bdf1"`` or
+``"jit-bdf2"`` runs such a scene whole on the reference solver instead, and so a run whose
+compiled Newton fails; ``stats["fallback"]`` says so.)
+
+The consistent initial state is computed by the reference in Python (once per run).
+Forcing: ``None``, constants and :class:`~lumped.scene.forcing.SineBurst` are evaluated
+in the compiled loop; any other callable (a sympy expression, a Python function) is
+tabulated on the grid in Python before the loop (a Python call per step).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...scene import Scene
+from ..implicit.branch_check import _known_monotone
+from ..implicit.initial_state import consistent_initial_state
+from ..implicit.step_system import _newton_failure
+from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult
+from ..status import BranchError, RawRun, Status
+
+__all__ = ["JIT_METHODS", "FAST_MIN_STEPS", "run_bdf_jit", "loop_arguments", "forcing_arrays",
+           "refuse_position_locks"]
+
+#: Compiled method name -> step formula.
+JIT_METHODS = {"jit-bdf1": "bdf1", "jit-bdf2": "bdf2"}
+#: ``fast=None`` takes the fast path from this many steps on (see :func:`run_bdf_jit`).
+FAST_MIN_STEPS = 1000
+
+
+def forcing_arrays(scene: Scene, dt: float, n_steps: int):
+    """``(fkind, fpar, ftab)`` of :func:`lumped.solvers.bdf.core_jit.forcing_into`."""
+    from ...scene.forcing import SineBurst
+
+    N = len(scene.nodes)
+    fkind = np.zeros(N, dtype=np.int64)
+    fpar = np.zeros((N, 3))
+    tabulated = [i for i, fn in enumerate(scene.forcing)
+                 if fn is not None and not isinstance(fn, SineBurst) and not _constant(fn)]
+    ftab = np.zeros((n_steps + 1 if tabulated else 1, N))
+    for i, fn in enumerate(scene.forcing):
+        if fn is None:
+            continue
+        if isinstance(fn, SineBurst):
+            fkind[i] = 2
+            fpar[i] = (fn.amplitude, fn.omega, fn.t_off)
+        elif _constant(fn):
+            fkind[i] = 1
+            fpar[i, 0] = fn.value
+        else:
+            fkind[i] = 3
+            col = ftab[:, i]
+            for step in range(1, n_steps + 1):
+                # a non-finite value is reported by the loop when it reaches that step
+                col[step] = float(fn(step * dt))
+    return fkind, fpar, ftab
+
+
+def _constant(fn) -> bool:
+    """A constant force of :func:`lumped.scene.as_forcing` (``fn.value`` for every ``t``)."""
+    from ...scene.network import _Constant
+
+    return type(fn) is _Constant
+
+
+def position_lock(scene: Scene, method: str) -> str | None:
+    """Why ``method`` cannot run ``scene`` compiled (a spring element's law has a branch
+    that locks its elongation: a taut string), or ``None``."""
+    try:
+        from ...codegen.branches import law_branches
+    except ImportError:  # pragma: no cover - before the branch machinery exists
+        return None
+    for el in scene.elements:
+        if el.kind != "spring":
+            continue
+        lb = law_branches(el.law)
+        for i in range(lb.count):
+            if lb.info[i].locks:
+                return (f"method {method!r} does not take position locks: branch {i} of "
+                        f"law {el.law_name!r} of element {el.name!r} fixes its elongation "
+                        f"(use {JIT_METHODS[method]!r})")
+    return None
+
+
+def refuse_position_locks(scene: Scene, method: str) -> None:
+    """``ValueError`` if a spring element's law has a branch that locks its elongation
+    (:func:`position_lock`)."""
+    why = position_lock(scene, method)
+    if why is not None:
+        raise ValueError(why)
+
+
+def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,
+                   options: NewtonOptions):
+    """``(jit_scene, args, ic_stats)``: the scene's compiled module; the arguments of
+    :func:`lumped.solvers.bdf.core_jit.run_bdf_core` after its two callbacks, for one
+    run (consistent initial state, forcing, outputs, workspaces; ``args[19:25]`` are
+    ``xs, vs, Fs, info, finfo`` and Newton's vector workspace); the initial state's
+    Newton counters."""
+    from ...codegen.jit import jit_scene
+    from ..newton.semismooth_jit import workspace
+    from .core_jit import loop_workspace
+
+    js = jit_scene(scene)
+    v, F, ic_stats = consistent_initial_state(scene, time_scale=dt, options=options)
+    N, E = len(scene.nodes), len(scene.elements)
+    fkind, fpar, ftab = forcing_arrays(scene, dt, n_steps)
+    checked = np.array([e for e, el in enumerate(scene.elements)
+                        if not _known_monotone(el.law)], dtype=np.int64)
+    args = (js.masses, js.ea, js.eb, js.spring, checked,
+            np.array([nd.x0 for nd in scene.nodes], dtype=float), np.array(v, dtype=float),
+            np.array(F, dtype=float), float(dt), int(n_steps), formula == "bdf2",
+            options.rtol, options.atol, options.max_iters, options.max_backtracks,
+            options.free_steps, fkind, fpar, ftab,
+            np.empty((n_steps + 1, N)), np.empty((n_steps + 1, N)), np.empty((n_steps + 1, E)),
+            np.zeros(9, dtype=np.int64), np.zeros(6), *workspace(N + E),
+            *loop_workspace(N, E))
+    return js, args, ic_stats
+
+
+def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
+                options: NewtonOptions | None = None, throw: bool = True,
+                fast: bool | None = None) -> RawRun:
+    """Advance ``scene`` by ``n_steps`` compiled BDF steps (``method`` ``jit-bdf1`` or
+    ``jit-bdf2``); the same output and errors as :func:`~lumped.solvers.bdf.fixed_step.run_bdf`.
+
+    With ``fast=True`` the scene's generated fast loop takes every step it can and hands
+    the others to the faithful port (:mod:`lumped.solvers.bdf.fast_jit`:
+    the reference's numbers to round-off on piecewise-linear laws, its solution to the
+    Newton tolerance otherwise; ``stats`` adds ``fast_steps`` and ``handovers``). With
+    ``fast=False``, or a step system of more than
+    :data:`~lumped.solvers.bdf.fast_codegen.MAX_FAST_UNKNOWNS` unknowns, the faithful port alone
+    runs: the reference's numbers and counters bit for bit. ``fast=None`` (the default)
+    is ``True`` for runs of at least :data:`FAST_MIN_STEPS` steps: the fast loop is
+    compiled per scene (a few seconds the first time on a machine, then from the disk
+    cache), which a short run does not pay back.
+
+    Raises
+    ------
+    ValueError
+        Unknown ``method``; a law without a sympy residual; a position lock; a forcing
+        that returns a non-finite value.
+    SolverError, BranchError
+        A failed step, with ``throw=True`` (else the run so far with its status).
+    """
+    if method not in JIT_METHODS:
+        raise ValueError(f"`method` must be one of {tuple(JIT_METHODS)}, got {method!r}")
+    refuse_position_locks(scene, method)
+    options = options or NewtonOptions()
+    from .core_jit import compiled_run_bdf_core
+
+    if fast is not None and not isinstance(fast, bool):
+        raise TypeError(f"`fast` must be True, False or None, got {fast!r}")
+    if fast is None:
+        fast = n_steps >= FAST_MIN_STEPS
+    js, args, ic_stats = loop_arguments(scene, JIT_METHODS[method], dt, n_steps, options)
+    from .fast_codegen import MAX_FAST_UNKNOWNS
+
+    if fast and len(scene.nodes) + len(scene.elements) <= MAX_FAST_UNKNOWNS:
+        from .fast_jit import run_fast_path
+
+        rows, stats = run_fast_path(scene, js, args)
+    else:
+        fast = False
+        rows = compiled_run_bdf_core()(js.module.evaluate, js.module.element_law, *args, 0,
+                                       -1)
+    N, E = len(scene.nodes), len(scene.elements)
+    xs, vs, Fs, info, finfo, wv = args[19:25]
+    status, message = Status.SUCCESS, ""
+    outcome, step = int(info[0]), int(info[1])
+    t = float(finfo[1])
+    if outcome == 3:
+        node = scene.nodes[int(info[3])]
+        raise ValueError(f"force on node {node.name!r} returned {float(finfo[0])!r} at "
+                         f"t = {t!r}")
+    if outcome == 1:
+        from ..newton.semismooth_jit import CODE_NAMES
+
+        res = NewtonResult([], NewtonCode(CODE_NAMES[int(info[2])]), int(finfo[5]), 0, 0, 0,
+                           wv[0].tolist(), int(info[3]), [])
+        err = _newton_failure(scene, res, t, step)
+        if throw:
+            raise err
+        status, message = err.status, str(err)
+    elif outcome == 2:
+        el = scene.elements[int(info[3])]
+        q0, F0, q1, F1 = (float(x) for x in finfo[2:6])
+        message = (
+            f"element {el.name!r} (law {el.law_name!r}) left its branch at t = {t!r} "
+            f"(step {step}): from (q, F) = ({q0!r}, {F0!r}) to "
+            f"({q1!r}, {F1!r}) the law's dR/dq or dR/dF changes sign -- a fold; "
+            "there is no solution continuous with the past at this step")
+        err = BranchError(message, status=Status.BRANCH_LOST, t=t,
+                          where=f"law {el.law_name!r} of element {el.name!r}",
+                          residual=float(finfo[0]))
+        if throw:
+            raise err
+        status = Status.BRANCH_LOST
+    data = np.empty((rows, 1 + 2 * N + E))
+    data[:, 0] = np.arange(rows, dtype=float) * dt
+    data[:, 1:1 + 2 * N:2] = xs[:rows]
+    data[:, 2:2 + 2 * N:2] = vs[:rows]
+    data[:, 1 + 2 * N:] = Fs[:rows]
+    if not fast:
+        stats = {
+            "steps": rows - 1,
+            "newton_iterations": int(info[4]),
+            "residual_evals": int(info[5]),
+            "jacobian_evals": int(info[6]),
+            "factorizations": int(info[7]),
+            "max_newton_iterations": int(info[8]),
+        }
+    stats["initial_newton_iterations"] = ic_stats["newton_iterations"]
+    return RawRun(data, stats, status, message)

@@ -1,0 +1,321 @@
+r"""The bridge between the ``radau5`` driver and its compiled inner loop.
+
+:func:`compiled_loop` decides whether a scene runs its held-mode steps in
+:func:`lumped.solvers.eventdriven.loop_jit.advance` (and says why not when it does not), and
+:class:`CompiledLoop` moves the driver's state into that loop's arrays and back, and its
+accepted steps into the dense output and the output rows.
+
+The compiled loop takes a scene when numba is enabled, every forcing is absent, zero,
+constant or a :class:`~lumped.scene.forcing.SineBurst` (a tabulated forcing is fixed-grid only),
+every law is a sympy residual (the generated kernels of :mod:`lumped.codegen.jit`), and
+no locked elements sit in parallel (their forces are the minimum-norm split, Python's).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...scene import Scene
+from ..modes.mode_guess_jit import branch_type, compiled_probe_modes, probe_workspace
+from . import loop_jit as L
+
+__all__ = ["CompiledLoop", "compiled_loop"]
+
+#: Steps per block of output arrays (a full block returns to Python, which keeps it).
+BLOCK = 256
+
+
+#: With ``compiled=None``, a scene whose compiled parts are not built yet in this process
+#: starts in the Python loop and is compiled once a run has taken this many steps (about
+#: 0.25 s of Python steps, the order of what a compile costs: about 0.8 s of CPU for a new
+#: scene's kernels, 0.3 s from numba's disk cache): a short run never pays for a
+#: compile, a long one soon does; the two loops give the same numbers.
+COMPILE_AFTER = 2000
+
+
+def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
+                  ) -> tuple[CompiledLoop | None, str]:
+    """``(loop, "compiled")`` or ``(None, why the Python loop runs)``.
+
+    ``plan`` is the scene's :class:`~lumped.solvers.eventdriven.setup.ScenePlan` (the
+    compiled parts are kept on it); ``option`` is the ``compiled`` keyword: ``False``
+    asks for the Python loop, ``True`` for the compiled loop now, ``None`` for it now if
+    the scene's parts are built, else once the run has taken :data:`COMPILE_AFTER`
+    ``steps``."""
+    if option is False:
+        return None, "python: compiled=False"
+    with plan.lock:
+        if plan.fast is None:
+            if option is None and steps < COMPILE_AFTER and not _loaded(scene, plan):
+                return None, "python: not compiled yet (a short run)"
+            plan.fast = _parts(scene, plan)
+    if isinstance(plan.fast, str):
+        return None, plan.fast
+    return CompiledLoop(*plan.fast), "compiled" if steps == 0 else f"compiled from step {steps}"
+
+
+def _loaded(scene: Scene, plan) -> bool:
+    """The scene's generated module is loaded in this process already (another scene
+    object with the same laws and structure compiled it): nothing left to compile.
+    Checked once per plan."""
+    import hashlib
+
+    from ...codegen import jit
+
+    if getattr(plan, "module_loaded", None) is None:
+        try:
+            source, _ = jit.scene_source(scene)
+        except ValueError:  # a hand-written kernel: _parts says why
+            plan.module_loaded = True
+        else:
+            digest = hashlib.sha256(source.encode()).hexdigest()[:24]
+            plan.module_loaded = digest in jit._MODULES  # the key of jit.scene_module
+    return plan.module_loaded
+
+
+def _parts(scene: Scene, plan) -> tuple | str:
+    """The compiled loop's per-scene parts, or why the scene runs in Python."""
+    from ...codegen.jit import jit_scene, numba_enabled
+    from ...scene.forcing import zero_forcing
+    from ..bdf.fixed_step_jit import forcing_arrays
+
+    if not numba_enabled():
+        return "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
+    if _locks_in_parallel(scene, plan.branches, plan.cyclic):
+        return "python: locked elements in parallel (minimum-norm forces)"
+    fkind, fpar, _ = forcing_arrays(scene, 1.0, 0)
+    for i, fn in enumerate(scene.forcing):
+        if fn is zero_forcing:  # f = 0.0, as no forcing
+            fkind[i] = 0
+    if (fkind == 3).any():
+        node = scene.nodes[int(np.argmax(fkind == 3))].name
+        return f"python: the forcing on node {node!r} is tabulated (fixed-grid only)"
+    try:
+        js = jit_scene(scene)
+    except ValueError as err:  # a hand-written kernel: no generated code
+        return f"python: {err}"
+    return (js, _pointer(js.module.branch_law, L.law_type()),
+            _pointer(js.module.branch_guards, L.guards_type()), fkind, fpar,
+            np.array(plan.checked, dtype=np.int64),
+            _pointer(js.module.active_branch, branch_type()))
+
+
+def _locks_in_parallel(scene: Scene, lbs: list, cyclic) -> bool:
+    """Some elements that can be force-free (a branch whose ``dR/dF`` is not a nonzero
+    constant) close a cycle: their forces can become indeterminate
+    (:mod:`lumped.solvers.nonsmooth.locks`)."""
+    from ..nonsmooth.locks import _on_cycles
+
+    free = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in cyclic
+                 if any(not (info.dR_dF.is_number and info.dR_dF != 0)
+                        for info in lbs[e].info))
+    return len(free) > 1 and bool(_on_cycles(len(scene.nodes), free))
+
+
+_POINTERS: dict = {}
+
+
+def _pointer(dispatcher, ftype):
+    """``dispatcher`` as a first-class function of numba type ``ftype`` whose address and
+    type are looked up once (cached per dispatcher).
+
+    numba converts a dispatcher passed for a function-type argument to its address on
+    every call, and types an object of its *wrapper address protocol* anew on every call
+    (each about 0.1 ms); :class:`_Pointer` carries both, ready."""
+    from numba.experimental.function_type import _get_wrapper_address
+
+    key = id(dispatcher)
+    got = _POINTERS.get(key)
+    if got is None or got.keep is not dispatcher:
+        addr = _get_wrapper_address(dispatcher, ftype.signature)
+        got = _POINTERS[key] = _Pointer(addr, ftype, dispatcher)
+    return got
+
+
+class _Pointer:
+    """A compiled function's address and numba type (``_numba_type_``, read by numba's
+    ``typeof``; ``__wrapper_address__``, read when the argument is unboxed); it keeps
+    the dispatcher, hence the code, alive."""
+
+    def __init__(self, addr: int, ftype, keep) -> None:
+        self.addr, self._numba_type_, self.keep = addr, ftype, keep
+
+    def __wrapper_address__(self) -> int:
+        return self.addr
+
+    def signature(self):
+        return self._numba_type_.signature
+
+
+class CompiledLoop:
+    """The compiled loop of one scene: its generated kernels, arrays and output blocks."""
+
+    def __init__(self, js, law, guards, fkind: np.ndarray, fpar: np.ndarray,
+                 checked: np.ndarray, branch) -> None:
+        self.js, self.law, self.guards, self.branch = js, law, guards, branch
+        self._probe: tuple | None = None
+        self.fn = L.compiled_advance()
+        self.fkind, self.fpar, self.checked = fkind, fpar, checked
+        self.A, self.W = _butcher()
+        self.N, self.E = len(js.masses), len(js.ea)
+        self.outputs = self.ws = self.wm = self.iw = None  # on the first call
+        self.fst = np.zeros(15)
+        self.ist = np.zeros(20, dtype=np.int64)
+        self.calls = 0
+        self._akey: tuple | None = None
+        self._arrays: tuple = ()
+
+    def setup(self, t_final: float, rtol: float, atol: float, m_min: float) -> None:
+        """The run's constants."""
+        fst = self.fst
+        fst[L.T_FINAL], fst[L.RTOL], fst[L.ATOL], fst[L.M_MIN] = t_final, rtol, atol, m_min
+        fst[L.TWO] = 2.0
+
+    def _load(self, st: dict, modes: list[int], watched: list[int], stats: dict | None):
+        """The driver's state into the arrays of :func:`~lumped.solvers.eventdriven.loop_jit.
+        advance`; returns ``(x, v, F, dF)``."""
+        fst, ist = self.fst, self.ist
+        x = np.array(st["x"], dtype=float)
+        v = np.array(st["v"], dtype=float)
+        F = np.array(st["F"], dtype=float)
+        dF = np.zeros(self.E) if st["dF_n"] is None else np.array(st["dF_n"], dtype=float)
+        fst[L.T], fst[L.H], fst[L.F_SEEN] = st["t"], st["h"], st["F_seen"]
+        fst[L.H_ACC] = 0.0 if st["h_acc"] is None else st["h_acc"]
+        fst[L.ERR_ACC] = 0.0 if st["err_acc"] is None else st["err_acc"]
+        fst[L.H_GOOD], fst[L.T_STOP], fst[L.T_FINAL] = st["h_good"], st["t_stop"], st["t_final"]
+        fst[L.RTOL], fst[L.ATOL], fst[L.M_MIN] = st["rtol"], st["atol"], st["m_min"]
+        fst[L.PREV_BREAK], fst[L.TWO] = st["prev_break"], 2.0
+        ist[:] = 0
+        ist[L.HAVE_ACC] = st["h_acc"] is not None
+        ist[L.HAVE_DF] = st["dF_n"] is not None
+        ist[L.STALLED] = st["stalled"]
+        ist[L.MAX_STEPS] = st["max_steps"]
+        if stats is not None:
+            for key, i in _COUNTERS:
+                ist[i] = stats[key]
+        self.modes_a = np.array(modes, dtype=np.int64)
+        self.watched_a = np.array(watched, dtype=np.int64)
+        return x, v, F, dF
+
+    def _call(self, x, v, F, dF, T0, HS, Y0, D, ROWS) -> None:
+        self.fn(self.law.addr, self.guards.addr, self.js.masses, self.js.ea, self.js.eb,
+                self.js.spring, self.js.lock_q, self.modes_a, self.watched_a, self.checked,
+                self.A, self.W, self.fkind, self.fpar, x, v, F, dF, self.fst, self.ist,
+                T0, HS, Y0, D, ROWS, self.ws, self.wm, self.iw)
+        self.calls += 1
+
+    def _workspace(self) -> None:
+        """The compiled loop's work arrays, made on the first call (a run that is stuck
+        throughout makes none); the attempts write no output rows: their blocks hold one
+        row (a run writes its steps in place, :meth:`run`)."""
+        self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(self.N, self.E, self.E, 1)
+
+    def probe_modes(self, candidates, current, f: list[float], x: list[float],
+                    v: list[float], F: list[float], h_p: float) -> tuple[int, np.ndarray]:
+        """:func:`lumped.solvers.modes.mode_guess_jit.probe_modes` on the scene's kernels:
+        ``(the index of the confirmed candidate or UNDECIDED or REFUSED, out)`` with
+        ``v_p, F_p`` in ``out`` (see :func:`lumped.solvers.modes.mode_guess.try_modes`)."""
+        if self._probe is None:
+            self._probe = (compiled_probe_modes(), *probe_workspace(self.N, self.E))
+        fn, out, wm = self._probe
+        js = self.js
+        cands = np.array(candidates, dtype=np.int64).reshape(len(candidates), self.E)
+        cur = _NO_MODE if current is None else np.array(current, dtype=np.int64)
+        k = fn(self.law.addr, self.branch.addr, js.masses, js.ea, js.eb, js.spring, cands,
+               cur, np.array(f, dtype=float), np.array(x, dtype=float),
+               np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
+        return k, out
+
+    def forget(self) -> None:
+        """The driver changed its state lists in place (an event): convert them again."""
+        self._akey = None
+
+    def attempt(self, t: float, h: float, x: list[float], v: list[float], F: list[float],
+                dF_n: list[float] | None, F_seen: float, prev_break: float, modes: list[int],
+                watched: list[int]):
+        """One step of size ``h`` from ``t``, not accepted: ``(U or None, its, nfac,
+        err_norm, F_seen, hit)`` as the Python loop computes them (``hit``: ``(s, (w, j))``,
+        the first guard crossing on the step, :func:`lumped.solvers.modes.crossing_root.
+        first_root`, or ``None``), or ``None`` when a Jacobian is
+        singular (the Python loop's minimum-norm solve must run).
+
+        The state lists are converted to arrays once while they are the same objects
+        (the landing steps of an event retry one state with other ``h``); a driver that
+        changes them in place calls :meth:`forget`."""
+        fst, ist = self.fst, self.ist
+        key = self._akey
+        if (key is None or key[0] is not x or key[1] is not v or key[2] is not F
+                or key[3] is not dF_n or key[4] != modes or key[5] != watched):
+            self._akey = (x, v, F, dF_n, list(modes), list(watched))
+            self._arrays = (np.array(x, dtype=float), np.array(v, dtype=float),
+                            np.array(F, dtype=float),
+                            np.zeros(self.E) if dF_n is None else np.array(dF_n, dtype=float))
+            self.modes_a = np.array(modes, dtype=np.int64)
+            self.watched_a = np.array(watched, dtype=np.int64)
+        else:  # run() may have replaced the mode arrays with equal ones: keep them
+            pass
+        fst[L.T], fst[L.H], fst[L.F_SEEN], fst[L.PREV_BREAK] = t, h, F_seen, prev_break
+        ist[L.SINGLE] = 1
+        ist[L.HAVE_DF] = dF_n is not None
+        if self.ws is None:
+            self._workspace()
+        self._call(*self._arrays, *self.outputs)  # (an attempt writes no output)
+        ok = int(ist[L.A_OK])
+        if ok < 0:
+            return None
+        U = self.ws[0, :3 * (self.N + self.E)].tolist() if ok else None
+        hit = ((float(fst[L.A_ROOT]), (int(ist[L.A_W]), int(ist[L.A_J])))
+               if ok and ist[L.A_HIT] else None)
+        return (U, int(ist[L.A_ITS]), int(ist[L.A_NFAC]), float(fst[L.A_ERR]),
+                float(fst[L.F_SEEN]), hit)
+
+    def run(self, st: dict, modes: list[int], watched: list[int], stats: dict, dense,
+            rows) -> str:
+        """Advance the driver's state ``st`` (keys ``t, h, x, v, F, dF_n, F_seen, h_acc,
+        err_acc, h_good, stalled, t_stop, t_final, prev_break, rtol, atol, m_min,
+        max_steps``) in place; returns the reason the loop stopped (``REASONS``)."""
+        x, v, F, dF = self._load(st, modes, watched, stats)
+        fst, ist = self.fst, self.ist
+        width = 1 + 2 * self.N + self.E
+        if self.ws is None:
+            self._workspace()
+        while True:  # the accepted steps written in place into the output's arrays
+            ist[L.N_OUT] = 0
+            self._call(x, v, F, dF, *dense.block(BLOCK), rows.block(BLOCK, width))
+            k = int(ist[L.N_OUT])
+            dense.commit(k)
+            rows.commit(k)
+            if ist[L.REASON] != L.FULL:
+                break
+        for key, i in _COUNTERS:
+            stats[key] = int(ist[i])
+        st["t"], st["h"], st["F_seen"] = float(fst[L.T]), float(fst[L.H]), float(fst[L.F_SEEN])
+        st["stalled"] = int(ist[L.STALLED])
+        if ist[L.HAVE_ACC]:
+            st["h_acc"], st["err_acc"] = float(fst[L.H_ACC]), float(fst[L.ERR_ACC])
+        else:
+            st["h_acc"] = st["err_acc"] = None
+        st["h_good"] = float(fst[L.H_GOOD])
+        st["x"], st["v"], st["F"] = x.tolist(), v.tolist(), F.tolist()
+        st["dF_n"] = dF.tolist() if ist[L.HAVE_DF] else None
+        return L.REASONS.get(int(ist[L.REASON]), "?")
+
+
+_NO_MODE = np.zeros(0, dtype=np.int64)
+_BUTCHER: list = []
+
+
+def _butcher() -> tuple[np.ndarray, np.ndarray]:
+    """``A`` and ``W = A^-1`` of :mod:`lumped.solvers.radau.stage` as arrays, made once (the
+    loop only reads them)."""
+    if not _BUTCHER:
+        from ..radau.stage import A, W
+
+        _BUTCHER.extend((np.array(A), np.array(W)))
+    return _BUTCHER[0], _BUTCHER[1]
+
+
+_COUNTERS = (("steps", L.STEPS), ("rejected", L.REJECTED),
+             ("newton_iterations", L.NEWTON_ITERATIONS), ("factorizations", L.FACTORIZATIONS),
+             ("nfev", L.NFEV), ("njev", L.NJEV),
+             ("max_newton_iterations", L.MAX_NEWTON_ITERATIONS))

@@ -1,0 +1,380 @@
+r"""The inner loop of ``radau5`` compiled with numba: consecutive steps with the modes held.
+
+:func:`advance` takes Radau IIA steps from ``t`` towards the next stop (a forcing
+breakpoint or ``t_end``) with every element held on its mode's branch, exactly as the
+reference loop of :class:`lumped.solvers.eventdriven.run.Radau5Run` takes them, operation for
+operation (the numbers agree bit for bit):
+
+1. the stage Newton (:func:`lumped.solvers.radau.stage_jit.stage_solve`) with the scales
+   ``atol + rtol |v_i|`` and ``rtol max(|F_e|, F_ref)``, ``F_ref = max(F_seen, m_min
+   (max |v| + atol / rtol) / h)``;
+2. the filtered error estimate of RADAU5 and its norm
+   (:func:`lumped.solvers.radau.step_jit.step_error`): ``(mu / h M - J) e = f(y_n) + M
+   sum_k E_k Z_k / h``, RMS of ``e / (atol + rtol max(|y_n|, |y_n+1|))`` over ``x``, the
+   masses' ``v`` and the guarded elements' forces;
+3. Gustafsson's predictive step control, ``h_new = h / max(quot, facgus)``;
+4. the guards of the watched elements on the step's collocation polynomial at the
+   samples ``s = k / 8`` of :data:`lumped.solvers.modes.events.SAMPLES` (only *detected*: the
+   root and the landing are the reference's);
+5. the accepted step's dense-output record ``(t_n, h, y_n, Y_k - y_n)`` and its output row.
+
+It returns to Python, with the state as at the top of the reference loop's pass that
+must run next, when any of these holds (the code in ``ist[REASON]``): the next step
+would reach the stop and the room left is below the step floor (:data:`STOP`; else the
+loop takes the step to the stop, with ``h`` the room left, and returns after it:
+:data:`STOPPED`), a guard turns negative in a candidate step
+(:data:`CROSSING`: Python redoes that step and lands on the event), a law that is not a
+known monotone one crosses a fold of its graph (:data:`FOLD`: Python redoes the step and
+stops with its message), a Jacobian is singular but finite (:data:`SINGULAR`: Python's
+minimum-norm solve), the step size is below its floor (:data:`FLOOR`), the output arrays
+are full (:data:`FULL`), ``max_steps`` or the stall limit (:data:`LIMIT`), or the eighth
+Newton failure in a row (:data:`DAMPED`: Python redoes that pass with its line-search
+fallback). With
+``ist[SINGLE] = 1`` it makes one attempt of size ``h`` for the Python loop and returns
+(:data:`ATTEMPT`) its outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular),
+``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]``, ``ist[A_HIT]`` (1 when a guard is
+negative at a sample), the first crossing's root ``fst[A_ROOT]`` on guard ``ist[A_J]``
+of watched element ``ist[A_W]`` (:func:`lumped.solvers.modes.crossing_root.first_root`, the
+Python loop's algorithm) and the stage values in ``ws[0]``.
+
+State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. A_ERR``)
+and ``ist`` (ints, indices ``HAVE_ACC .. A_J``).  The forcing is ``(fkind, fpar)`` of
+:func:`lumped.solvers.bdf.core_jit.forcing_into` (kinds 0 none, 1 constant, 2 sine burst;
+a tabulated forcing is not taken here).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...codegen.jit import njit, numba_enabled
+from ..modes.crossing_root import first_root
+from ..radau.stage import DAMPED_AFTER, END_SLOPES, MAX_NEWTON, STALL_PASSES, C
+from ..radau.stage_jit import stage_solve
+from ..radau.step_jit import crossed, finite, folded, forces, step_error
+
+__all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", "SINGULAR",
+           "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "DAMPED", "REASONS", "law_type",
+           "guards_type"]
+
+# fst: float state
+(T, H, F_SEEN, H_ACC, ERR_ACC, H_GOOD, T_STOP, T_FINAL, RTOL, ATOL, M_MIN, PREV_BREAK,
+ TWO, A_ERR, A_ROOT) = range(15)
+# ist: int state and counters
+(HAVE_ACC, HAVE_DF, STALLED, STEPS, REJECTED, NEWTON_ITERATIONS, FACTORIZATIONS, NFEV, NJEV,
+ MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK,
+ A_HIT, A_W, A_J) = range(20)
+STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD, STOPPED, DAMPED = range(1, 11)
+REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "floor",
+           FULL: "full", LIMIT: "limit", ATTEMPT: "attempt", STOPPED: "stopped",
+           FOLD: "fold", DAMPED: "damped"}
+
+_EPS = 2.220446049250313e-16
+_C0, _C1, _C2 = C
+_S1, _S2, _S3 = END_SLOPES
+
+_stage = njit(cache=True)(stage_solve)
+
+
+def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watched, checked,
+            A, W,
+            fkind,
+            fpar, x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
+    """Steps with the modes held until a reason to return (see the module notes).
+
+    ``law_addr`` and ``guards_addr`` are the addresses of the scene's compiled
+    ``branch_law`` and ``branch_guards`` (:func:`law_type`, :func:`guards_type`; the
+    caller keeps them alive): an integer is passed in a few nanoseconds, where numba
+    passes a first-class function argument through two Python calls that unpickle its
+    signature (about 3.5 us each, per call). ``ws`` (vectors), ``wm`` (matrices) and
+    ``iw`` (ints) are :func:`loop_workspace`."""
+    branch_law = _law_at(law_addr)
+    branch_guards = _guards_at(guards_addr)
+    N = masses.shape[0]
+    E = ea.shape[0]
+    n = N + E
+    ny = 2 * N + E
+    size = 3 * n
+    U, scale, b, du, G = ws[0, :size], ws[1, :size], ws[2, :size], ws[3, :size], ws[4, :size]
+    rhs, err, net, gbuf, ftmp = ws[5, :ny], ws[6, :ny], ws[7, :N], ws[8], ws[9, :N]
+    fk = wm[0, :3, :N]
+    J, LU = wm[1, :size, :size], wm[2, :size, :size]
+    M, LUm = wm[3, :ny, :ny], wm[4, :ny, :ny]
+    nw = max(watched.shape[0], 1)
+    qn, Fn = wm[5, :nw, :4], wm[6, :nw, :4]
+    perm, out, permm = iw[0, :size], iw[1, :3], iw[2, :ny]
+    rtol, atol, m_min = fst[RTOL], fst[ATOL], fst[M_MIN]
+    t_stop, t_final, prev_break = fst[T_STOP], fst[T_FINAL], fst[PREV_BREAK]
+    t, h, F_seen = fst[T], fst[H], fst[F_SEEN]
+    cap = T0.shape[0]
+    while True:
+        reason = 0
+        single = ist[SINGLE] == 1
+        to_stop = False
+        if single:
+            pass
+        elif ist[STALLED] + 1 > STALL_PASSES or ist[STEPS] >= ist[MAX_STEPS]:
+            reason = LIMIT
+        elif ist[N_OUT] >= cap:
+            reason = FULL
+        elif t + 1.0001 * h >= t_stop or h >= t_stop - t:
+            # the step to the stop, as the Python loop takes it (h = the room left); a
+            # room below the step floor is Python's (it may change the mode there)
+            if t_stop - t < 16.0 * _EPS * max(abs(t), t_final * 1e-3):
+                reason = STOP
+            else:
+                h = t_stop - t
+                to_stop = True
+        elif h < 16.0 * _EPS * max(abs(t), t_final * 1e-3):
+            reason = FLOOR
+        if reason:
+            break
+        if not single:
+            ist[STALLED] += 1
+        for k in range(3):
+            ck = _C0 if k == 0 else (_C1 if k == 1 else _C2)
+            forces(t + ck * h, fkind, fpar, ftmp)
+            for i in range(N):
+                fk[k, i] = ftmp[i]
+        for k in range(3):
+            for i in range(N):
+                U[k * n + i] = v[i]
+            for e in range(E):
+                U[k * n + N + e] = F[e]
+        F_new = F_seen
+        for e in range(E):
+            F_new = max(F_new, abs(F[e]))
+        for i in range(N):
+            F_new = max(F_new, abs(fk[2, i]))
+        vmax = 0.0
+        for i in range(N):
+            vmax = abs(v[i]) if i == 0 else max(vmax, abs(v[i]))
+        F_ref = max(F_new, m_min * (vmax + atol / rtol) / h)
+        for k in range(3):
+            for i in range(N):
+                scale[k * n + i] = atol + rtol * abs(v[i])
+            for e in range(E):
+                scale[k * n + N + e] = rtol * max(abs(F[e]), F_ref)
+        ok = _stage(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x, v, fk,
+                    scale,
+                    1e-3, MAX_NEWTON, G, J, LU, perm, b, du, out)
+        its = out[0]
+        nfac = out[1]
+        if single:  # one attempt for the Python loop: its outcome, nothing accepted
+            F_seen = F_new
+            ist[A_ITS] = its
+            ist[A_NFAC] = nfac
+            reason = ATTEMPT
+            ist[A_OK] = 0
+            if ok or (out[2] == 1 and finite(J)):
+                ist[A_OK] = -1  # singular: Python's minimum-norm solve
+            if ok:
+                fst[A_ERR] = step_error(branch_law, masses, ea, eb, spring, modes, watched,
+                                         A, U, h, t, prev_break, x, v, F, dF, ist[HAVE_DF],
+                                         fkind, fpar, net, rtol, atol, F_ref, M, LUm, permm,
+                                         rhs, err, fst[TWO])
+                if fst[A_ERR] != -1.0:
+                    ist[A_OK] = 1
+                    ist[A_HIT] = 0
+                    if watched.shape[0] > 0:  # the crossing's root too (the landing's)
+                        fst[A_ROOT] = first_root(branch_guards, ea, eb, spring, modes,
+                                                 watched, A, h, x, v, F, U, N, n, qn, Fn,
+                                                 gbuf, ist[A_W:A_J + 1])
+                        ist[A_HIT] = fst[A_ROOT] >= 0.0
+            break
+        if not ok and out[2] == 1:
+            if finite(J):
+                ist[STALLED] -= 1
+                reason = SINGULAR
+                break
+        if not ok and ist[STALLED] >= DAMPED_AFTER:
+            # the eighth failure in a row: Python redoes this pass with its line-search
+            # fallback (the loops stay the same)
+            ist[STALLED] -= 1
+            reason = DAMPED
+            break
+        F_seen = F_new
+        ist[NEWTON_ITERATIONS] += its
+        ist[FACTORIZATIONS] += nfac
+        ist[NFEV] += its + 1
+        ist[NJEV] += nfac
+        ist[MAX_NEWTON_ITERATIONS] = max(ist[MAX_NEWTON_ITERATIONS], its)
+        if not ok:
+            ist[REJECTED] += 1
+            h *= 0.5
+            ist[HAVE_ACC] = 0
+            continue
+        err_norm = step_error(branch_law, masses, ea, eb, spring, modes, watched, A, U, h,
+                               t, prev_break, x, v, F, dF, ist[HAVE_DF], fkind, fpar, net,
+                               rtol, atol, F_ref, M, LUm, permm, rhs, err, fst[TWO])
+        if err_norm == -1.0:  # singular: undo this pass's counters, Python redoes it
+            ist[STALLED] -= 1
+            ist[NEWTON_ITERATIONS] -= its
+            ist[FACTORIZATIONS] -= nfac
+            ist[NFEV] -= its + 1
+            ist[NJEV] -= nfac
+            reason = SINGULAR
+            break
+        fac = 0.9 * (2 * MAX_NEWTON + 1) / (2 * MAX_NEWTON + its)
+        if not math.isfinite(err_norm):
+            ist[REJECTED] += 1
+            h *= 0.2
+            ist[HAVE_ACC] = 0
+            continue
+        quot = max(0.125, min(5.0, err_norm ** 0.25 / fac))
+        if err_norm > 1.0:
+            ist[REJECTED] += 1
+            h = h / quot
+            ist[HAVE_ACC] = 0
+            continue
+        hit = watched.shape[0] > 0 and crossed(branch_guards, ea, eb, spring, modes, watched,
+                                               A, h, x, v, F, U, N, n, qn, Fn, gbuf)
+        if hit or (checked.shape[0] > 0 and folded(
+                branch_law, ea, eb, spring, modes, checked, A, h, x, v, F, U, N, n, qn[0],
+                Fn[0])):
+            # Python redoes this pass (and lands on the event, or stops at the fold)
+            ist[STALLED] -= 1
+            ist[NEWTON_ITERATIONS] -= its
+            ist[FACTORIZATIONS] -= nfac
+            ist[NFEV] -= its + 1
+            ist[NJEV] -= nfac
+            reason = CROSSING if hit else FOLD
+            break
+        # accept: the dense record (t, h, y_n, Y_k - y_n) and the output row
+        o = ist[N_OUT]
+        T0[o] = t
+        HS[o] = h
+        for i in range(N):
+            Y0[o, i] = x[i]
+            Y0[o, N + i] = v[i]
+        for e in range(E):
+            Y0[o, 2 * N + e] = F[e]
+        for k in range(3):
+            for i in range(N):
+                s_ = 0.0
+                for j in range(3):
+                    s_ += A[k, j] * U[j * n + i]
+                D[o, k, i] = (x[i] + h * s_) - x[i]
+                D[o, k, N + i] = U[k * n + i] - v[i]
+            for e in range(E):
+                D[o, k, 2 * N + e] = U[k * n + N + e] - F[e]
+        for e in range(E):
+            dF[e] = (_S1 * (U[N + e] - F[e]) + _S2 * (U[n + N + e] - F[e])
+                     + _S3 * (U[2 * n + N + e] - F[e])) / h
+        ist[HAVE_DF] = 1
+        t = t_stop if to_stop else t + h
+        for i in range(N):
+            s_ = 0.0
+            for j in range(3):
+                s_ += A[2, j] * U[j * n + i]
+            x[i] = x[i] + h * s_
+            v[i] = U[2 * n + i]
+        for e in range(E):
+            F[e] = U[2 * n + N + e]
+        ist[STEPS] += 1
+        ROWS[o, 0] = t
+        for i in range(N):
+            ROWS[o, 1 + 2 * i] = x[i]
+            ROWS[o, 2 + 2 * i] = v[i]
+        for e in range(E):
+            ROWS[o, 1 + 2 * N + e] = F[e]
+        ist[N_OUT] = o + 1
+        h_new = h / quot
+        if ist[HAVE_ACC] == 1 and err_norm > 0.0:
+            facgus = (fst[H_ACC] / h) * (err_norm ** fst[TWO] / fst[ERR_ACC]) ** 0.25 / 0.9
+            facgus = max(0.125, min(5.0, facgus))
+            h_new = h / max(quot, facgus)
+        fst[H_ACC] = h
+        fst[ERR_ACC] = max(1e-2, err_norm)
+        ist[HAVE_ACC] = 1
+        fst[H_GOOD] = h
+        ist[STALLED] = 0
+        h = h_new
+        if to_stop:  # Python handles what happens at the stop (a time event, the end)
+            reason = STOPPED
+            break
+    fst[T] = t
+    fst[H] = h
+    fst[F_SEEN] = F_seen
+    ist[REASON] = reason
+
+
+def _function_at(ftype):
+    """An intrinsic ``addr -> ftype``: the first-class function whose C wrapper is at
+    ``addr`` (:func:`numba.experimental.function_type._get_wrapper_address`), as numba
+    unboxes a function argument, without its Python object (``py_addr``) and jit
+    address (``jit_addr``, 0 for a wrapper-address object): calls go through the C
+    wrapper, as they do for such an argument."""
+    from numba.core import cgutils
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def at(typingctx, addr):
+        def codegen(context, builder, signature, args):
+            fn = cgutils.create_struct_proxy(ftype)(context, builder)
+            voidptr = context.get_value_type(_T.voidptr)
+            fn.c_addr = builder.inttoptr(args[0], voidptr)
+            fn.py_addr = cgutils.get_null_value(voidptr)
+            fn.jit_addr = cgutils.get_null_value(voidptr)
+            return fn._getvalue()
+
+        return ftype(_T.int64), codegen
+
+    return at
+
+
+def law_type():
+    """The numba function type of ``branch_law(e, i, q, F) -> (R, dR/dq, dR/dF)``."""
+    from ..radau.stage_jit import BRANCH_LAW_TYPE
+
+    return BRANCH_LAW_TYPE
+
+
+def guards_type():
+    """The numba function type of ``branch_guards(e, i, q, F, out) -> count``."""
+    from numba import types as T_
+
+    f8 = T_.float64
+    return T_.FunctionType(T_.int64(T_.int64, T_.int64, f8, f8, f8[::1]))
+
+
+if numba_enabled():
+    from numba import types as _T
+
+    _law_at = _function_at(law_type())
+    _guards_at = _function_at(guards_type())
+
+_COMPILED: list = []
+
+
+def compiled_advance():
+    """:func:`advance` compiled once for every scene (numba's disk cache after the first
+    time on a machine), or ``None`` without numba."""
+    if not numba_enabled():
+        return None
+    if not _COMPILED:
+        from numba import types as T_
+
+        f8 = T_.float64
+        v, m, m3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
+        iv = T_.int64[::1]
+        sig = T_.none(T_.int64, T_.int64, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
+                      m,
+                      iv, m, v, v, v, v, v, iv, v, v, m, m3, m, m, m3,
+                      T_.int64[:, ::1])
+        _COMPILED.append(njit(sig, cache=True)(advance))
+    return _COMPILED[0]
+
+
+def loop_workspace(N: int, E: int, watched: int, cap: int):
+    """``(outputs, ws, wm, iw)``: the output arrays ``(T0, HS, Y0, D, ROWS)`` for ``cap``
+    steps and the work arrays of :func:`advance`."""
+    ny = 2 * N + E
+    s = 3 * (N + E)
+    outputs = (np.zeros(cap), np.zeros(cap), np.zeros((cap, ny)), np.zeros((cap, 3, ny)),
+               np.zeros((cap, 1 + ny)))
+    big = max(s, ny, 4, watched)
+    return (outputs, np.zeros((10, max(big, 64))), np.zeros((7, big, big)),
+            np.zeros((3, big), dtype=np.int64))

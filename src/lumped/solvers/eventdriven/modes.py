@@ -1,0 +1,315 @@
+r"""The mode of the ``radau5`` driver: which branch of its law every element is held on,
+and what happens at an event (a guard crossing, a time event, the start).
+
+:class:`ModeState` is the small state object of a ``radau5`` run
+(:class:`lumped.solvers.eventdriven.run.Radau5Run`) that owns the held branches
+(``modes``), their kernels and guards, the elements whose guards are watched, the
+force-split cones of locks in parallel, and the event record.
+:meth:`ModeState.at_event` chooses the mode after an event by a vanishing implicit step of
+the full laws (:func:`lumped.solvers.modes.events.select_modes`), applies impacts, records the
+switches and tests for an accumulation of events.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+from ...scene import Mass, Scene
+from ..modes.events import apply_impacts, hold_rate_locks, lock_cones, select_modes, snap_to_locks
+from ..modes.mode_guess import try_modes
+from ..nonsmooth.locks import (
+    IntervalLog,
+    cycles_among,
+    indeterminate_elements,
+    lock_parallel_rates,
+    prefer_locks,
+)
+from ..status import Event, Status
+from .setup import accumulating, too_many
+
+__all__ = ["ModeState"]
+
+_EPS = 2.220446049250313e-16
+
+
+class ModeState:
+    """The held branches of a run and its events (see the module notes).
+
+    Parameters
+    ----------
+    scene : Scene
+    plan : ScenePlan
+        The scene's :func:`~lumped.solvers.eventdriven.setup.scene_plan` (branches, cycles).
+    settings : RunSettings
+        ``options`` (the Newton options of the probe step) are read from it.
+    opts : dict
+        The ``radau5`` keywords (:func:`~lumped.solvers.eventdriven.setup.read_options`).
+    rtol, atol : float
+        The run's tolerances (the rate scale below which a rate snaps onto a lock).
+    stats : dict
+        The run's counters (``events`` is kept up to date).
+    """
+
+    def __init__(self, scene: Scene, plan, settings, opts: dict, rtol: float, atol: float,
+                 stats: dict, zeno_window: float) -> None:
+        self.scene, self.lbs, self.settings, self.opts = scene, plan.branches, settings, opts
+        self.rtol, self.atol, self.stats = rtol, atol, stats
+        self.names = scene.element_names
+        self.N, self.E = len(scene.nodes), len(scene.elements)
+        self.is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+        self.m_min = min((nd.m for nd in scene.nodes if isinstance(nd, Mass)), default=1.0)
+        self.cyclic = plan.cyclic
+        self.zeno_window = zeno_window
+        self.modes = [0] * self.E
+        self.kernels: list = [None] * self.E
+        self.guards: list = [None] * self.E
+        self.watched: list[int] = []
+        # locks in parallel: force split (centre, half-width, lo, hi)
+        self.cones: dict[int, tuple[float, float, float, float]] = {}
+        self.events: list[Event] = []
+        self.recent: deque = deque(maxlen=opts["zeno_events"])
+        self.log = IntervalLog()
+        self.fast = None  # the compiled loop (told when x, v, F change in place)
+        # a guessed mode is tried first when every law is monotone (lumped.solvers.
+        # mode_guess); ``hint``: the element whose guard the driver landed on
+        self.guessing = not plan.checked
+        self.hint: int | None = None
+        self.forces_from_probe = False  # the forces at t are an event probe's
+        # mode -> (kernels, guards, watched, locks on cycles), kept per scene plan
+        self._mode_parts: dict[tuple[int, ...], tuple] = plan.__dict__.setdefault(
+            "mode_parts", {})
+
+    def set_modes(self, new: list[int], F: list[float]) -> None:
+        """Hold every element on branch ``new[e]`` (the list ``modes`` is kept)."""
+        lbs = self.lbs
+        self.modes[:] = new
+        key = tuple(new)
+        parts = self._mode_parts.get(key)
+        if parts is None:
+            parts = _mode_parts(lbs, key, self.cyclic)
+            if len(self._mode_parts) >= 4096:  # (a network with very many modes)
+                self._mode_parts.clear()
+            self._mode_parts[key] = parts
+        # (in place: the driver holds these lists)
+        self.kernels[:], self.guards[:], self.watched[:] = parts[0], parts[1], parts[2]
+        self.cones.clear()
+        if parts[3] < 2:  # a cone needs two locks on cycles: with fewer, none is read
+            return
+        locked = lock_cones(lbs, new, F, self.cyclic)
+        # only locks in parallel with each other leave their split free (a stuck link in
+        # series with another keeps its exact LU solve, and so its exact zero rate)
+        parallel = cycles_among(self.scene, tuple(locked)) if len(locked) > 1 else ()
+        if len(parallel) > 1:
+            self.cones.update({e: locked[e] for e in parallel})
+
+    def change_mode(self, t: float, h_probe: float, cause: str, x: list[float],
+                    v: list[float], F: list[float]) -> str:
+        """Choose the mode after ``t`` and record the switches (``x, v, F`` in place);
+        '' or a failure message."""
+        scene, lbs, modes, names, events = self.scene, self.lbs, self.modes, self.names, \
+            self.events
+        rtol, atol, options = self.rtol, self.atol, self.settings.options
+        if self.fast is not None:
+            self.fast.forget()  # x, v, F may change in place here
+        h0 = h_probe
+        v_free, held = list(v), []
+        if cause == "guard":  # rates within the tolerance of a lock: exactly on it
+            held = snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v),
+                                 atol + rtol * max(abs(xi) for xi in x))
+        hint = self.hint
+        sel = self._choose(t, h_probe, cause, x, v, F)
+        if isinstance(sel, str):
+            return sel
+        new = sel[0]
+        if held and v != v_free and not any(lbs[e].info[new[e]].locks for e in held) \
+                and any(new[e] != modes[e] for e in range(self.E) if e not in held):
+            # the snap's premise failed (no element it held stays locked) and another
+            # element switched: a rate below the snap's tolerance, flipped by it, decided
+            # that switch (a Bingham dashpot between two masses sent to its other slip
+            # branch by the snap of a Herschel-Bulkley n = 2 dashpot at its flat yield
+            # end, then back, 1e-9 s later, 50 times). Choose from the state as it was.
+            v_snapped, v[:], self.hint = list(v), v_free, hint
+            again = self._choose(t, h0, cause, x, v, F)
+            if isinstance(again, str):
+                v[:] = v_snapped
+            else:
+                sel = again
+        new, v_p, F_p = sel
+        scale_v = atol + rtol * max(abs(vi) for vi in v)
+        hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"],
+                            F)
+        if isinstance(hit, str):
+            return f"impact at t = {t!r}: {hit}"
+        if hit[0]:
+            for e, impulse in hit[0]:
+                events.append(Event(t, names[e], "impact", modes[e], new[e], impulse=impulse,
+                                    energy_lost=hit[1] if e == hit[0][0][0] else 0.0))
+                self.recent.append(t)
+            # the mode after the impact, from the velocities after it (the probe's guess:
+            # the forces before it; a failed probe is tried longer, as above)
+            for k in range(3):
+                sel = select_modes(scene, lbs, t, x, v, F, h0 * 1000.0 ** k, options)
+                if not isinstance(sel, str):
+                    break
+            if isinstance(sel, str):
+                return sel
+            new, v_p, F_p = sel
+        for p in range(self.N):
+            if not self.is_mass[p]:
+                v[p] = v_p[p]
+        # at t = 0 the consistent initial forces stay, unless they miss a law at the
+        # probe's junction velocities (the initial state can leave a junction between
+        # two slipping dashpots unresolved)
+        if cause != "start" or not _laws_hold(lbs, new, scene.elongations(x, v), F):
+            F[:] = F_p
+        for e in range(self.E):
+            if new[e] != modes[e] and not any(ev.t == t and ev.element == names[e]
+                                              and ev.kind == "impact"
+                                              for ev in events[-self.E:]):
+                events.append(Event(t, names[e], "switch", modes[e], new[e]))
+                self.recent.append(t)
+        self.set_modes(new, F)
+        hold_rate_locks(scene, lbs, modes, v)
+        return ""
+
+    def _choose(self, t: float, h_probe: float, cause: str, x: list[float], v: list[float],
+                F: list[float]):
+        """The full laws' mode after ``t`` from ``(x, v, F)``: ``(modes, v_p, F_p)`` of the
+        probe that decided (a guessed mode first, then the full search, longer probes when
+        one fails or keeps the mode at a guard), the elements held at rate 0 put on their
+        locks; or the failure message."""
+        scene, lbs, modes = self.scene, self.lbs, self.modes
+        h0 = h_probe
+        guess = self._guesses(cause, x, v, F)
+        sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
+                         modes if cause == "guard" else None, 3, self.fast)
+               if guess else None) or ""
+        if sel:
+            sel = self._locked(sel, h_probe)
+            if cause == "guard" and sel[0] == modes:  # the locks undid the guess: undecided
+                sel = ""
+        for _ in range(0 if sel else 3):
+            sel = select_modes(scene, lbs, t, x, v, F, h_probe, self.settings.options)
+            if not isinstance(sel, str):
+                # (a mode the locks below turn back into the old one is undecided too: a
+                # slow break-out of locks in parallel under a load just past their joint
+                # yield force moves the probe by less than its round-off, issue 11)
+                sel = self._locked(sel, h_probe)
+                if sel[0] != modes or cause != "guard":
+                    break
+            h_probe *= 1000.0  # a failed or undecided probe: a longer one
+        if isinstance(sel, str):
+            # every probe failed: shorter ones, nearer the start (the semismooth Newton
+            # diverged at 4e-9 s and longer where a stuck Bingham dashpot joined a
+            # junction's Herschel-Bulkley n = 0.3 dashpot and locks in parallel, and
+            # converged at 1e-10 s; issue 11)
+            for k in (1, 2):
+                h_short = max(h0 * 1e-2**k, 1e2 * _EPS * max(1.0, abs(t)))
+                got = select_modes(scene, lbs, t, x, v, F, h_short, self.settings.options)
+                if not isinstance(got, str):
+                    return self._locked(got, h_short)
+        if isinstance(sel, str) and cause == "guard" and self.cones:
+            # ... and the guessed modes, locks in parallel by the minimum-norm correction
+            # (a junction's Herschel-Bulkley n = 0.3 dashpot stopping exactly at its
+            # kink beside a Bingham and a Coulomb element stuck in parallel: the full
+            # laws' semismooth Newton diverged at every probe size from 1e-12 to 1e-6 s)
+            guess = self._guesses(cause, x, v, F, cones=True)
+            got = try_modes(scene, lbs, guess, t, x, v, F, h0, modes, 3, None,
+                            min_norm=True) if guess else None
+            if got is not None:
+                return self._locked(got, h0)
+        return sel
+
+    def _locked(self, sel: tuple, h_probe: float) -> tuple[list[int], list[float], list[float]]:
+        """The probe's ``(modes, v_p, F_p)`` with the dashpots that sit on a lock put on it
+        (:func:`~lumped.solvers.nonsmooth.locks.prefer_locks`,
+        :func:`~lumped.solvers.nonsmooth.locks.lock_parallel_rates`; ``h_probe`` the probe's size)."""
+        scene, lbs = self.scene, self.lbs
+        new, v_p, F_p = sel
+        new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked
+        # held at rate 0 by locks: locked, unless the probe moved it by more than the
+        # forces' round-off (sqrt(eps) of the largest) does over the probe step
+        rate_tol = 1.4901161193847656e-08 * h_probe * max(abs(f) for f in F_p) / self.m_min
+        new = lock_parallel_rates(scene, lbs, new, v_p, F_p, rate_tol)
+        return new, v_p, F_p
+
+    def _guesses(self, cause: str, x: list[float], v: list[float], F: list[float],
+                 cones: bool = False) -> list[list[int]]:
+        """The modes to try before the full search: at the start the branches the laws
+        read at the initial state; after a guard crossing, the landed element on each of
+        its other branches (every watched element when the driver gave no hint and there
+        are at most 3); at a time event the mode kept first. None with locks in parallel
+        (their probe is singular), unless ``cones`` (the minimum-norm fallback)."""
+        if not self.guessing or (self.cones and not cones):
+            return []
+        if cause == "start":  # (then each element with branches on its others: a force
+            q = self.scene.elongations(x, v)  # at a yield limit reads as the lock)
+            read = [self.lbs[e].branch(q[e], F[e]) for e in range(self.E)]
+            multi = [e for e in range(self.E) if self.lbs[e].count > 1]
+            return [read] + [[b if k == e else m for k, m in enumerate(read)] for e in
+                             (multi if len(multi) <= 3 else []) for b in
+                             range(self.lbs[e].count) if b != read[e]]
+        hint, self.hint = self.hint, None
+        elements = [hint] if hint is not None else (
+            list(self.watched) if len(self.watched) <= 3 else [])
+        out = [list(self.modes)] if cause == "time" else []
+        for e in elements:
+            for b in range(self.lbs[e].count):
+                if b != self.modes[e]:
+                    out.append([b if k == e else m for k, m in enumerate(self.modes)])
+        return out
+
+    def at_event(self, t: float, h: float, cause: str, x: list[float], v: list[float],
+                 F: list[float]) -> tuple[Status, str] | None:
+        """The mode after an event at ``t``; ``(status, message)`` if the run must stop."""
+        msg = self.change_mode(t, max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t))), cause,
+                               x, v, F)
+        self.forces_from_probe = True
+        if self.cyclic and not msg:  # forces not unique from the event on
+            free = indeterminate_elements(self.scene, self.scene.elongations(x, v), F,
+                                          self.cyclic)
+            self.log.mark(t, t, [self.names[e] for e in free])
+        self.stats["events"] = len(self.events)
+        if msg:
+            return Status.INCONSISTENT, msg
+        if accumulating(self.recent, self.zeno_window) or \
+                len(self.events) > self.opts["max_events"]:
+            return too_many(self.events, self.recent, t, self.opts)
+        return None
+
+    def time_event(self, t: float) -> None:
+        """Record a time event of the forcing at ``t``."""
+        self.events.append(Event(t, "", "time", -1, -1))
+        self.recent.append(t)
+
+    def mark_free(self, t0: float, t1: float, x: list[float], v: list[float],
+                  F: list[float]) -> None:
+        """Log the elements whose forces are not unique on ``[t0, t1]`` (locks on cycles)."""
+        if self.cyclic:
+            free = indeterminate_elements(self.scene, self.scene.elongations(x, v), F,
+                                          self.cyclic)
+            self.log.mark(t0, t1, [self.names[e] for e in free])
+
+
+def _laws_hold(lbs: list, modes: list[int], q: list[float], F: list[float]) -> bool:
+    """Whether every element's law holds at ``(q_e, F_e)`` on its branch, to ``1e-8``
+    relative to the size of its terms."""
+    for e, (qe, Fe) in enumerate(zip(q, F, strict=True)):
+        R, Rq, RF = lbs[e].stage_kernel_for(modes[e])(qe, Fe)
+        if not abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe)):
+            return False
+    return True
+
+
+def _mode_parts(lbs: list, modes: tuple[int, ...], cyclic: tuple[int, ...]
+                ) -> tuple[list, list, list[int], int]:
+    """What :meth:`ModeState.set_modes` holds for ``modes``, which depends only on the
+    scene's laws: the branch kernels and guards in the stage solve's form, the elements
+    with more than one branch (their guards are watched), and how many elements on
+    cycles are held on a lock with a known value (:func:`lock_cones` takes them)."""
+    E = len(lbs)
+    return ([lbs[e].stage_kernel_for(modes[e]) for e in range(E)],
+            [lbs[e].stage_guards_for(modes[e]) for e in range(E)],
+            [e for e in range(E) if lbs[e].count > 1],
+            sum(1 for e in cyclic if lbs[e].info[modes[e]].locks
+                and lbs[e].info[modes[e]].lock_value is not None))

@@ -1,0 +1,183 @@
+r"""Setup of the adaptive method ``radau5``: its keywords, the forcing's breakpoints, the
+optional compiled stage Newton and the per-scene plan (:func:`scene_plan`).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import weakref
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...scene import Scene
+
+__all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "compiled_stage_solver",
+           "scope_error", "ScenePlan", "scene_plan", "accumulating", "too_many"]
+
+
+#: Method-specific keywords of ``radau5`` and their defaults.
+EXTRA_OPTIONS = {"max_events": 10_000, "zeno_events": 50, "zeno_window": None,
+                 "max_steps": 1_000_000, "first_step": None, "restitution": 0.0,
+                 "compiled": None, "bridge": True}
+
+
+def read_options(settings) -> dict:
+    """The keywords of ``settings.extra`` over :data:`EXTRA_OPTIONS`, checked.
+
+    Raises
+    ------
+    TypeError
+        For an unknown keyword, or a ``compiled`` that is not ``True``, ``False`` or
+        ``None`` (``None``, the default: the compiled loop where the scene allows it).
+    ValueError
+        For a bad value; the message names the keyword and quotes the value.
+    """
+    out = dict(EXTRA_OPTIONS)
+    for key, val in settings.extra.items():
+        if key not in EXTRA_OPTIONS:
+            raise TypeError(f"method 'radau5' takes no keyword argument {key!r} "
+                            f"(it takes {sorted(EXTRA_OPTIONS)})")
+        out[key] = val
+    for key in ("max_events", "zeno_events", "max_steps"):
+        if isinstance(out[key], bool) or not isinstance(out[key], int) or out[key] < 1:
+            raise ValueError(f"`{key}` must be a positive integer, got {out[key]!r}")
+    e = out["restitution"]
+    if out["compiled"] is not None and not isinstance(out["compiled"], bool):
+        raise TypeError(f"`compiled` must be True, False or None, got {out['compiled']!r}")
+    if not isinstance(out["bridge"], bool):
+        raise TypeError(f"`bridge` must be True or False, got {out['bridge']!r}")
+    if isinstance(e, bool) or not isinstance(e, (int, float)) or not 0.0 <= e <= 1.0:
+        raise ValueError(f"`restitution` must be a number in [0, 1], got {e!r}")
+    for key in ("zeno_window", "first_step"):
+        val = out[key]
+        if val is not None and not (isinstance(val, (int, float)) and math.isfinite(val)
+                                    and val > 0):
+            raise ValueError(f"`{key}` must be a positive number, got {val!r}")
+    return out
+
+
+def scope_error(scene: Scene) -> str | None:
+    """Why ``radau5`` does not take ``scene``, or ``None`` when it does.
+
+    A branch whose ``dR/dF`` is unbounded at its boundary
+    (:attr:`lumped.codegen.branches.BranchInfo.steep`: Herschel-Bulkley with ``n < 1`` at
+    its yield force, where ``dq/dF -> infinity``) is solved in its inverse form
+    ``F = G(q)`` (:attr:`~lumped.codegen.branches.BranchInfo.stage`), smooth there. A
+    steep branch with no such form would make the stage Newton of a step that starts on
+    that boundary fail at every step size: ``radau5`` refuses such a scene rather than
+    stop mid-run, and ``auto`` runs ``bdf2`` there (its globalised Newton takes such
+    points).
+    """
+    from ...codegen.branches import law_branches
+
+    for el in scene.elements:
+        lb = law_branches(el.law)
+        for info in lb.info:
+            if info.steep and info.stage is None:
+                return (f"method 'radau5' does not take element {el.name!r}: branch "
+                        f"{info.index} of its law {el.law_name!r} has an unbounded dR/dF "
+                        f"({info.dR_dF}) at its boundary and no inverse form F = G(q); "
+                        "use 'bdf2' (or 'auto')")
+    return None
+
+
+def breakpoints(scene: Scene, t_end: float) -> list[float]:
+    """The times in ``(0, t_end)`` where a forcing of ``scene`` jumps or kinks, from the
+    ``breakpoints(t0, t1)`` method of the forcing objects that have one (time events)."""
+    out: set[float] = set()
+    for fn in scene.forcing:
+        get = getattr(fn, "breakpoints", None)
+        if get is not None:
+            out.update(float(b) for b in get(0.0, t_end) if 0.0 < b < t_end)
+    return sorted(out)
+
+
+def compiled_stage_solver(scene: Scene, modes: list[int]):
+    """The stage Newton compiled with numba (:mod:`lumped.solvers.radau.stage_jit`, the same
+    operations as :meth:`StageSystem.solve`, bit for bit), on the scene's generated
+    branch kernels; ``(U, h, x, v, f, scale, max_iters) -> (U or None, its, nfac)``."""
+    from ...codegen.jit import jit_scene
+    from ..radau.stage import A, W
+    from ..radau.stage_jit import compiled_stage_solve, workspace
+
+    js = jit_scene(scene)
+    solve = compiled_stage_solve()
+    ws = workspace(len(scene.nodes), len(scene.elements))
+    A_np, W_np = np.array(A), np.array(W)
+    law = js.module.branch_law
+
+    def run(U, h, x, v, f, scale, max_iters):
+        Ua = np.array(U, dtype=float)
+        ok = solve(law, js.masses, js.ea, js.eb, js.spring, js.lock_q,
+                   np.array(modes, dtype=np.int64),
+                   A_np, W_np, Ua, h, np.array(x, dtype=float), np.array(v, dtype=float),
+                   np.array(f, dtype=float), np.array(scale, dtype=float), 1e-3, max_iters,
+                   *ws)
+        out = ws[-1]
+        return (Ua.tolist() if ok else None), int(out[0]), int(out[1])
+
+    return run
+
+
+@dataclass
+class ScenePlan:
+    """What ``radau5`` reads from a scene's structure and laws before it steps, kept per
+    scene object (:func:`scene_plan`): the refusal (:func:`scope_error`), the laws'
+    branches, the elements whose law needs the fold check (not a known monotone one),
+    the elements on cycles of the network, ``fast`` (the compiled loop's parts or why
+    there is none, :mod:`lumped.solvers.eventdriven.fast`) and ``module_loaded`` (its
+    generated module was loaded in this process when the plan was first asked)."""
+
+    refused: str | None
+    branches: list
+    checked: list[int]
+    cyclic: tuple[int, ...]
+    key: tuple
+    fast: object = None
+    module_loaded: bool | None = None
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+
+_PLANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def scene_plan(scene: Scene) -> ScenePlan:
+    """The :class:`ScenePlan` of ``scene``, made once per scene object (the nodes,
+    elements and forcing it was made from must be the same objects), so that repeated
+    runs of one scene (a benchmark, a study) skip this set-up."""
+    key = (scene.nodes, scene.elements, tuple(id(f) for f in scene.forcing))
+    plan = _PLANS.get(scene)
+    if plan is not None and plan.key[0] is key[0] and plan.key[1] is key[1] \
+            and plan.key[2] == key[2]:
+        return plan
+    from ...codegen.branches import law_branches
+    from ..implicit.branch_check import _known_monotone
+    from ..nonsmooth.locks import cyclic_elements
+
+    plan = ScenePlan(scope_error(scene), [law_branches(el.law) for el in scene.elements],
+                     [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)],
+                     cyclic_elements(scene), key)
+    _PLANS[scene] = plan
+    return plan
+
+
+def accumulating(recent: deque, window: float) -> bool:
+    """The last ``recent.maxlen`` events fell within ``window`` seconds (Zeno, chattering)."""
+    return len(recent) == recent.maxlen and recent[-1] - recent[0] <= window
+
+
+def too_many(events: list, recent: deque, t: float, opts: dict) -> tuple:
+    """``(Status.TOO_MANY_EVENTS, message)``: too many events, or an accumulation."""
+    from ..status import Status
+
+    if len(events) > opts["max_events"]:
+        return Status.TOO_MANY_EVENTS, (
+            f"radau5 stopped at t = {t!r}: more than max_events = {opts['max_events']} events")
+    names = sorted({ev.element for ev in events[-len(recent):]})
+    return Status.TOO_MANY_EVENTS, (
+        f"radau5 stopped at t = {t!r}: {len(recent)} events within "
+        f"{recent[-1] - recent[0]!r} s (elements {names}): an accumulation of events "
+        "(Zeno or chattering)")

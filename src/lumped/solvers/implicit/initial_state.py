@@ -1,0 +1,500 @@
+r"""Consistent initial state: the velocities of all nodes and the forces of all elements at
+``t = 0``.
+
+The step system with a vanishing step ``h = eps`` and the masses' accelerations as
+unknowns (``v_i = v_i(0) + eps a_i``) selects the initial forces that the limit
+``dt -> 0`` of the implicit steps selects: a stuck dashpot takes the force that keeps its
+mass at rest if its law admits it, else the nearest admissible one (for the paper's scene
+``clip(F(0) - k x0, -tau, tau)``, as :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`),
+and junction velocities follow from the laws.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from functools import lru_cache
+
+from ...scene import Junction, Mass, Scene
+from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, _residual_ok, newton_solve
+from ..nonsmooth.groups import connected_groups
+from ..nonsmooth.junction_balance import refuse_unbalanced_junctions
+from ..nonsmooth.rest_balance import rest_forces, rest_inverse
+from ..status import InconsistentInitialForce, SolverError
+from .branch_check import _known_monotone
+from .step_system import _EPS, _law_scale, _newton_failure
+
+__all__ = ["consistent_initial_state"]
+
+_DEFAULT_OPTIONS = NewtonOptions()
+
+
+@lru_cache(maxsize=32)
+def _ic_options(options: NewtonOptions) -> NewtonOptions:
+    """``options`` with the budget of the one initial solve per run (degenerate yields
+    converge linearly): at least 200 iterations (made once per ``options``)."""
+    return NewtonOptions(rtol=options.rtol, atol=options.atol,
+                         max_iters=max(options.max_iters, 200),
+                         max_backtracks=options.max_backtracks, free_steps=options.free_steps)
+
+
+# ---------------------------------------------------------------------------------------
+# consistent initial state
+
+
+def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
+    """Solve ``R(q, F) = 0`` for ``F`` (``q`` fixed) by safeguarded Newton in a bracket.
+
+    Returns ``(F, pinned)``: ``pinned`` is False when the law is flat in ``F`` at an
+    exact root (``R = 0`` with ``dR/dF = 0``: a set-valued law, e.g. a stuck Bingham
+    dashpot), so that ``F`` is not fixed by the law alone; a root found only as a sign
+    change between neighbouring floats is isolated, hence pinned. Raises ValueError if
+    no sign change is found.
+    """
+    R, _, RF = kernel(q, F0)
+    if R == 0.0:
+        return F0, RF != 0.0
+    # bracket: expand both ways from F0
+    lo = hi = None
+    step = 1.0 + abs(F0)
+    for _ in range(2000):
+        for cand in (F0 + step, F0 - step):
+            Rc = kernel(q, cand)[0]
+            if Rc == 0.0:
+                _, _, RFc = kernel(q, cand)
+                return cand, RFc != 0.0
+            if (Rc > 0.0) != (R > 0.0):
+                lo, hi = (F0, cand) if cand > F0 else (cand, F0)
+                break
+        if lo is not None or step > 1e300:
+            break
+        step *= 2.0
+    if lo is None:
+        raise ValueError(f"no root of the law in F at q = {q!r}")
+    R_lo = kernel(q, lo)[0]
+    F = F0 if lo <= F0 <= hi else 0.5 * (lo + hi)
+    for _ in range(400):
+        R, _, RF = kernel(q, F)
+        if R == 0.0:
+            return F, RF != 0.0
+        if (R > 0.0) == (R_lo > 0.0):
+            lo, R_lo = F, R
+        else:
+            hi = F
+        F_new = F - R / RF if RF != 0.0 else math.nan
+        if not (lo < F_new < hi):
+            F_new = 0.5 * (lo + hi)
+        if F_new == F or not (lo < F_new < hi):
+            break
+        F = F_new
+    # No exact zero: the root lies between floating-point neighbours (e.g. a Bingham
+    # force tau + q / gamma with q / gamma below an ulp of tau, at the kink). The sign
+    # change isolates it, so the law fixes F there even if the nearest float sits on a
+    # flat piece: take the candidate with the smallest |R| (the correctly rounded root).
+    best = min((F, lo, hi), key=lambda c: abs(kernel(q, c)[0]))
+    return best, True
+
+
+#: At most this many cluster guesses (:func:`_cluster_guesses`) per initial state.
+_MAX_CLUSTER_GUESSES = 64
+
+
+def _cluster_guesses(scene: Scene, v0: list[float]) -> list[list[float]]:
+    """Velocity guesses (``N`` entries) with every cluster of junctions (joined to each
+    other by dashpots) moving as one with one of its dashpot neighbours outside it (a
+    mass's ``v0``, or ground's rest), each combination of the clusters' choices (at most
+    :data:`_MAX_CLUSTER_GUESSES`). A chain of stuck elements from a moving mass (mass,
+    Coulomb, junction, Herschel-Bulkley, junction) moves so; the guesses of
+    :func:`lumped.solvers.implicit.globalize.stuck_guesses` move each junction with its own
+    neighbour only, as it was, and swept one junction at a time such a chain stays at
+    rest (each junction's balance holds on its own with the next element slipping)."""
+    N = len(scene.nodes)
+    junction = [isinstance(nd, Junction) for nd in scene.nodes]
+    links = [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
+             if el.kind == "dashpot"]
+    clusters = connected_groups([i for i in range(N) if junction[i]], links)
+    members, anchors = [], []
+    for group in clusters:
+        outside = []
+        for a, b in links:
+            for end, other in ((a, b), (b, a)):
+                if end in group and (other < 0 or not junction[other]):
+                    vel = 0.0 if other < 0 else v0[other]
+                    if vel not in outside:
+                        outside.append(vel)
+        if outside:
+            members.append(group)
+            anchors.append(outside)
+    out = []
+    for choice in itertools.islice(itertools.product(*anchors), _MAX_CLUSTER_GUESSES):
+        w = list(v0[:N])
+        for group, vel in zip(members, choice, strict=True):
+            for i in group:
+                w[i] = vel
+        out.append(w)
+    return out
+
+
+_MONOTONE: dict[int, tuple[object, bool]] = {}
+
+
+def _monotone(bound) -> bool:
+    """:func:`lumped.solvers.implicit.branch_check._known_monotone`, kept per bound law object."""
+    got = _MONOTONE.get(id(bound))
+    if got is None or got[0] is not bound:
+        if len(_MONOTONE) > 256:
+            _MONOTONE.clear()
+        got = _MONOTONE[id(bound)] = (bound, _known_monotone(bound))
+    return got[1]
+
+
+def _rest_forces(scene: Scene, pinned: list[float | None], q0: list[float],
+                 f: list[float]) -> list[float] | None:
+    """The forces of the limit system when it needs no Newton (every node a mass), or
+    ``None``: every force fixed by its law (the accelerations, which the result does not
+    hold, are then the only unknowns), or the others held by the balance with every mass
+    at rest, one per node on a regular incidence matrix
+    (:func:`lumped.solvers.nonsmooth.rest_balance.rest_forces`, the held interval's formula), each
+    admitted by its law at its ``q0`` exactly (``R(q0, F) = 0``: with the accelerations
+    zero the limit system holds, its mass rows to round-off).
+
+    The forces so held are those of dashpots at rest (``q0 = 0``: their rows
+    ``R(eps (a_b - a_a), F) = 0`` then fix the accelerations) whose laws have no folds
+    (:func:`lumped.solvers.implicit.branch_check._known_monotone`): the limit system has one
+    solution, which Newton finds too. A force the law leaves free at ``q0 != 0`` (a taut
+    string, whose row sees ``q0 + eps^2 a``, which rounds to ``q0``) leaves the
+    accelerations to Newton's minimum-norm rule: not taken here."""
+    free = tuple(e for e, Fp in enumerate(pinned) if Fp is None)
+    F = [0.0 if Fp is None else Fp for Fp in pinned]
+    if not free:
+        return F
+    elements = scene.elements
+    for e in free:
+        if not (elements[e].kind == "dashpot" and q0[e] == 0.0 and _monotone(elements[e].law)):
+            return None
+    got = rest_inverse(len(scene.nodes), tuple(zip(scene.elem_a, scene.elem_b, strict=True)),
+                       free)
+    if got is None:
+        return None
+    F, _ = rest_forces(*got, free, f, F)
+    for e in free:
+        if not (math.isfinite(F[e]) and elements[e].law.kernel(q0[e], F[e])[0] == 0.0):
+            return None
+    return F
+
+
+def consistent_initial_state(
+    scene: Scene, *, time_scale: float = 1.0, options: NewtonOptions | None = None
+) -> tuple[list[float], list[float], dict]:
+    """Initial velocities of all nodes and forces of all elements at ``t = 0``.
+
+    Masses keep their given ``v0``. Then:
+
+    1. every element whose ``q`` is known at ``t = 0`` (all springs; dashpots between
+       masses and ground) gets its force from its own law, ``R(q0, F) = 0``, if the law
+       fixes it there (``dR/dF != 0``);
+    2. the rest -- forces of laws that are flat in ``F`` at ``q0`` (a stuck dashpot),
+       dashpots at junctions, junction velocities -- solve the limit ``h -> 0`` of an
+       implicit step: the masses' accelerations ``a`` are unknowns, a flat law is read
+       at ``q0 + h (a_b - a_a)`` with ``h = 1e-20 * time_scale``, junction balances hold.
+       A stuck dashpot thus takes the force that keeps its mass at rest if its law
+       admits it, else the nearest admissible one (for the paper's scene
+       ``clip(F(0) - k x0, -tau, tau)``, as
+       :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`).
+
+    User forces ``Element.F0`` are checked against the law at the initial state (and the
+    junction balances), then replace the computed ones.
+
+    Returns
+    -------
+    v, F, stats
+        Node velocities, element forces and Newton counters.
+
+    Raises
+    ------
+    ValueError
+        If no law admits the initial state: an element's law admits no force at its
+        initial elongation, or no forces within the laws' ranges balance the junctions
+        (:func:`lumped.solvers.nonsmooth.junction_balance.refuse_unbalanced_junctions`).
+    InconsistentInitialForce
+        If a user ``F0`` breaks its element's law or a junction's force balance.
+    SolverError
+        If the algebraic system has no solution Newton can find.
+    """
+    options = options or _DEFAULT_OPTIONS
+    nodes, elements = scene.nodes, scene.elements
+    E = len(elements)
+    eps = 1e-20 * time_scale
+    is_mass = [isinstance(nd, Mass) for nd in nodes]
+    v0 = [nd.v0 if isinstance(nd, Mass) else 0.0 for nd in nodes]
+    x0 = [nd.x0 for nd in nodes]
+    ea, eb = scene.elem_a, scene.elem_b
+    f = scene.external_forces(0.0)
+
+    def at(vals: list[float], i: int) -> float:
+        return vals[i] if i >= 0 else 0.0
+
+    # 1. forces fixed by the laws alone
+    pinned: list[float | None] = [None] * E
+    q0 = [0.0] * E
+    for e, el in enumerate(elements):
+        a, b = ea[e], eb[e]
+        if el.kind == "spring":
+            q0[e] = at(x0, b) - at(x0, a)
+        else:
+            # a dashpot: the masses' part of its rate (v0 is 0 at junctions, whose
+            # velocities are unknowns of the limit system below)
+            q0[e] = at(v0, b) - at(v0, a)
+            if not all(i < 0 or is_mass[i] for i in (a, b)):
+                continue  # a dashpot at a junction: its rate is unknown
+        guess = el.F0 if el.F0 is not None else 0.0
+        try:
+            F_root, fixed = _scalar_root(el.law.kernel, q0[e], guess)
+        except ValueError as err:
+            what = "elongation" if el.kind == "spring" else "elongation rate"
+            raise ValueError(
+                f"inconsistent initial state: element {el.name!r} starts at the {what} "
+                f"q = {q0[e]!r}, which its law {el.law_name!r} admits with no force ({err}); "
+                "change the initial positions or velocities"
+            ) from None
+        if fixed:
+            pinned[e] = F_root
+    F_rest = _rest_forces(scene, pinned, q0, f) if all(is_mass) else None
+    if F_rest is not None:  # at rest, the load held by locks: no Newton
+        v, F = list(v0), F_rest
+        stats = {"newton_iterations": 0, "residual_evals": 0, "jacobian_evals": 0,
+                 "factorizations": 0}
+    else:
+        v, F, stats = _limit_system(scene, pinned, q0, f, eps, options)
+    user = [e for e, el in enumerate(elements) if el.F0 is not None]
+    if user:
+        q_init = scene.elongations(x0, v)
+        for e in user:
+            el = elements[e]
+            R, Rq, RF = el.law.kernel(q_init[e], el.F0)
+            tol = 1e-9 * (abs(Rq * q_init[e]) + abs(RF * el.F0)) + 1e-12
+            if not abs(R) <= tol:
+                raise InconsistentInitialForce(
+                    f"initial force F0 = {el.F0!r} of element {el.name!r} breaks its law "
+                    f"{el.law_name!r}: R(q={q_init[e]!r}, F={el.F0!r}) = {R!r} != 0"
+                )
+            F[e] = el.F0
+        net = scene.net_forces(0.0, F)
+        for i, node in enumerate(nodes):
+            if isinstance(node, Junction):
+                scale = abs(f[i]) + sum(abs(F[e]) for e in range(E) if i in (ea[e], eb[e]))
+                if not abs(net[i]) <= 1e-9 * scale + 1e-12:
+                    raise InconsistentInitialForce(
+                        f"initial forces break the force balance of junction {node.name!r}: "
+                        f"net force {net[i]!r} != 0"
+                    )
+    return v, F, stats
+
+
+def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: list[float],
+                  eps: float, options: NewtonOptions
+                  ) -> tuple[list[float], list[float], dict]:
+    """Step 2 of :func:`consistent_initial_state`: the limit ``h -> 0`` of an implicit
+    step, by Newton's method; ``(v, F, stats)``."""
+    nodes, elements = scene.nodes, scene.elements
+    N, E = len(nodes), len(elements)
+    n = N + E
+    is_mass = [isinstance(nd, Mass) for nd in nodes]
+    mass = [nd.m if isinstance(nd, Mass) else 0.0 for nd in nodes]
+    v0 = [nd.v0 if isinstance(nd, Mass) else 0.0 for nd in nodes]
+    ea, eb = scene.elem_a, scene.elem_b
+
+    def at(vals: list[float], i: int) -> float:
+        return vals[i] if i >= 0 else 0.0
+
+    # 2. the limit system
+    kernels = [el.law.kernel for el in elements]
+    spring = [el.kind == "spring" for el in elements]
+
+    def evaluate(u: list[float]):
+        G = [0.0] * n
+        S = [0.0] * n
+        J = [[0.0] * n for _ in range(n)]
+        # d_i: the node's velocity increment (eps a for masses, v for junctions)
+        d = [eps * u[i] if is_mass[i] else u[i] for i in range(N)]
+        dd = [eps if is_mass[i] else 1.0 for i in range(N)]
+        for i in range(N):
+            if is_mass[i]:
+                p = mass[i] * u[i]
+                G[i] = p - f[i]
+                S[i] = abs(p) + abs(f[i])
+                J[i][i] = mass[i]
+            else:
+                G[i] = -f[i]
+                S[i] = abs(f[i])
+        for e in range(E):
+            k = N + e
+            Fe = u[k]
+            a, b = ea[e], eb[e]
+            for i, sgn in ((a, -1.0), (b, 1.0)):
+                if i >= 0:
+                    G[i] += sgn * Fe
+                    S[i] += abs(Fe)
+                    J[i][k] = sgn
+            row = J[k]
+            Fp = pinned[e]
+            if Fp is not None:
+                G[k] = Fe - Fp
+                S[k] = abs(Fe) + abs(Fp)
+                row[k] = 1.0
+                continue
+            scale = eps if spring[e] else 1.0  # springs see x0 + eps * v
+            q = q0[e] + scale * (at(d, b) - at(d, a))
+            R, Rq, RF = kernels[e](q, Fe)
+            G[k] = R
+            S[k] = _law_scale(kernels[e], q, Fe, R, Rq, RF)
+            row[k] = RF
+            if a >= 0:
+                row[a] = -Rq * scale * dd[a]
+            if b >= 0:
+                row[b] = Rq * scale * dd[b]
+        return G, J, S
+
+    u0 = [0.0] * N + [
+        Fp if Fp is not None else (el.F0 if el.F0 is not None else 0.0)
+        for Fp, el in zip(pinned, elements, strict=True)
+    ]
+    # one solve per run: allow a generous budget (degenerate yields converge linearly)
+    ic_options = _ic_options(options)
+    res = newton_solve(evaluate, u0, ic_options, min_norm=True, check_scaled=True)
+    if res.code is not NewtonCode.SUCCESS:
+        # restarts: the junctions' velocities from their balances solved one by one
+        # (lumped.solvers.implicit.globalize.balance_sweeps), then every junction
+        # moving with each dashpot neighbour in turn (see
+        # lumped.solvers.implicit.globalize.stuck_guesses), the masses' accelerations zero; each
+        # by plain Newton, then with every free force on its own law (nonlinear
+        # elimination, see lumped.solvers.implicit.globalize.force_projector: a law steep in F,
+        # Herschel-Bulkley n < 1 near its yield force, is solved in its inverse form)
+        from .globalize import balance_sweeps, split_free_forces, stuck_guesses
+
+        def elongation(u: list[float], e: int) -> float:
+            a, b = ea[e], eb[e]
+            scale = eps if spring[e] else 1.0
+            du_b = (eps * u[b] if is_mass[b] else u[b]) if b >= 0 else 0.0
+            du_a = (eps * u[a] if is_mass[a] else u[a]) if a >= 0 else 0.0
+            return q0[e] + scale * (du_b - du_a)
+
+        def project(u: list[float], free_out: list | None = None) -> list[float]:
+            """Every free force on its own law where the law fixes it; with ``free_out``
+            (see :func:`lumped.solvers.implicit.globalize.split_free_forces`) the forces it leaves
+            free are moved to one it admits if needed and listed with their ``q``."""
+            out = list(u)
+            for e in free:
+                q = elongation(u, e)
+                try:
+                    F, fixed = _scalar_root(kernels[e], q, u[N + e])
+                except ValueError:
+                    continue
+                if not math.isfinite(F):
+                    continue
+                if fixed:
+                    out[N + e] = F
+                elif free_out is not None:
+                    if kernels[e](q, u[N + e])[0] != 0.0:
+                        out[N + e] = F
+                    free_out.append((N + e, q))
+            return out
+
+        def settle(u: list[float]) -> list[float]:
+            """From the swept junction velocities: the forces the laws leave free (stuck
+            dashpots) split to balance the junctions, then every mass's acceleration from
+            its own row (linear in it)."""
+            u = split_free_forces(scene, evaluate, project, u, rows=junctions)
+            G = evaluate(u)[0]
+            for i in range(N):
+                if is_mass[i]:
+                    u[i] -= G[i] / mass[i]
+            return u
+
+        def ulp_floor_ok(u: list[float]) -> bool:
+            """The residual test at ``u``, each law row measured against at least its
+            round-off floor (the change of ``R`` when ``F`` moves one ulp): a law steep
+            in ``F`` whose root lies between two floats (Herschel-Bulkley ``n < 1`` a hair
+            beyond its yield force) has no float with a smaller residual, and no Newton
+            step can polish it (as for the steps, see
+            :func:`lumped.solvers.implicit.globalize.solve_globalized`)."""
+            G, _, S = evaluate(u)
+            S = list(S)
+            for e in range(E):
+                k, q, F = N + e, elongation(u, e), u[N + e]
+                R = kernels[e](q, F)[0]
+                rho = max(abs(kernels[e](q, math.nextafter(F, d))[0] - R)
+                          for d in (-math.inf, math.inf))
+                if math.isfinite(rho) and rho / _EPS > S[k]:
+                    S[k] = rho / _EPS
+            return _residual_ok(G, S, ic_options.rtol, ic_options.atol)
+
+        free = [e for e in range(E) if pinned[e] is None]
+        starts = [u0] + [[0.0 if is_mass[i] else g[i] for i in range(N)] + g[N:]
+                         for g in stuck_guesses(scene, v0, u0[N:])]
+        junctions = [i for i in range(N) if not is_mass[i]]
+        # a junction may snap onto rest or onto a neighbour's velocity (a junction's
+        # u, a mass's v0; the mass's rate eps a is then left to Newton): two junctions
+        # joined by a stuck friction element and left a few ulps apart would make it
+        # slip with its full yield force, which no start a hair off the kink settles
+        def anchors(u: list[float]) -> list[float]:
+            return [v0[i] if is_mass[i] else u[i] for i in range(N)]
+
+        balanced = balance_sweeps(evaluate, project, list(u0), junctions, anchors)
+        settled_points = []
+        if balanced is not None:  # the junctions' monotone balances solved one by one
+            starts.insert(1, balanced)
+            settled_points.append(settle(balanced))
+            starts.insert(2, settled_points[-1])
+        def cluster_starts():
+            # last: every cluster of junctions moving as one with a neighbour outside it
+            # (a chain of stuck elements from a moving mass), each also settled as
+            # above (also when the guess itself was among the stuck guesses); made only
+            # once every start before has failed
+            for g in _cluster_guesses(scene, v0):
+                start = [0.0 if is_mass[i] else g[i] for i in range(N)] + u0[N:]
+                if start not in starts:  # (starts, as before: the ones tried so far)
+                    starts.append(start)
+                    yield start
+                settled_start = settle(project(list(start)))
+                if settled_start not in starts:
+                    settled_points.append(settled_start)
+                    starts.append(settled_start)
+                    yield settled_start
+
+        for start in itertools.chain(starts, cluster_starts()):
+            for proj in (None, project):
+                if start is u0 and proj is None:
+                    continue  # done above
+                retry = newton_solve(evaluate, start, ic_options, min_norm=True, project=proj,
+                                     check_scaled=True)
+                if retry.code is NewtonCode.SUCCESS:
+                    res = retry
+                    break
+            if res.code is NewtonCode.SUCCESS:
+                break
+        settled = None
+        if res.code is not NewtonCode.SUCCESS:
+            settled = next((p for p in settled_points if ulp_floor_ok(p)), None)
+        if settled is not None:
+            # no Newton polishes a settled point (a root between two floats: Newton
+            # reads the law there as flat, stuck, and moves the velocities off), but
+            # every law holds there to its round-off and every node balances: keep the
+            # first such point
+            res = NewtonResult(settled, NewtonCode.SUCCESS, res.iterations, res.residual_evals,
+                               res.jacobian_evals, res.factorizations, [], 0, [])
+    if res.code is not NewtonCode.SUCCESS:
+        refuse_unbalanced_junctions(scene, pinned, q0, f)
+        err = _newton_failure(scene, res, 0.0, 0)
+        raise SolverError(
+            f"no consistent initial state: {err}", status=err.status, t=0.0,
+            where=err.where, residual=err.residual,
+        )
+    u = res.u
+    v = [v0[i] if is_mass[i] else u[i] for i in range(N)]
+    F = list(u[N:])
+    stats = {
+        "newton_iterations": res.iterations, "residual_evals": res.residual_evals,
+        "jacobian_evals": res.jacobian_evals, "factorizations": res.factorizations,
+    }
+    return v, F, stats

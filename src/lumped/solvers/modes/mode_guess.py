@@ -1,0 +1,184 @@
+r"""A cheap first try of the mode after an event: the vanishing implicit step of
+:func:`lumped.solvers.modes.events.select_modes` on a *guessed* mode, checked against the full
+laws.
+
+:func:`select_modes` solves one backward-Euler step of size ``h_p`` of the full,
+nonsmooth laws by the semismooth Newton of the fixed-step methods and reads each
+element's branch at the result. When only one element changes branch (the common event:
+a dashpot sticks, slips or reverses), the same step on the guessed mode is a smooth
+system in the unknowns ``u = (v, F)``,
+
+.. math::
+
+    \frac{m_i}{h_p} (v_i - v_i^0) - \Bigl(f_i(t + h_p) + \sum_{a_e = i} F_e
+        - \sum_{b_e = i} F_e\Bigr) = 0, \qquad R_e^{(b_e)}(q_e, F_e) = 0,
+
+with ``q_e`` the elongation of ``x + h_p v`` (springs) or the rate of ``v`` (dashpots),
+solved by a plain Newton iteration on lists (Gaussian elimination with partial pivoting).
+The guess is accepted only when every element's branch function at the result,
+``law_branches(...).branch(q_e, F_e)``, gives the guessed branch: the result then solves
+the full laws' step too, and for laws without folds (the elements that
+:func:`~lumped.solvers.implicit.branch_check._known_monotone` accepts; a scene with other laws
+always takes the full search) that step has one solution, so the full search would read
+the same mode. Otherwise (no convergence, a singular matrix, another branch read) the
+caller runs the full search.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from ...scene import Mass, Scene
+from .mode_guess_jit import REFUSED
+
+__all__ = ["try_modes"]
+
+_MAX_ITERS = 30
+
+
+def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[int]],
+              t: float, x: list[float], v: list[float], F: list[float], h_p: float,
+              current: Sequence[int] | None = None, longer: int = 1, fast=None,
+              min_norm: bool = False
+              ) -> tuple[list[int], list[float], list[float]] | None:
+    """The first of ``candidates`` (modes) that the full laws confirm after the probe step
+    of size ``h_p`` from ``t`` (see the module notes): ``(modes, v_p, F_p)``, or ``None``.
+
+    With ``current`` (a guard event) a result that reads as ``current`` is undecided, as
+    in :func:`~lumped.solvers.eventdriven.modes.ModeState.change_mode`: if no candidate is
+    confirmed and one is undecided, the probe is tried ``1000`` times longer, up to
+    ``longer`` sizes in all.
+
+    With ``fast`` (the run's :class:`~lumped.solvers.eventdriven.fast.CompiledLoop`) the
+    probes and the branch reads run compiled
+    (:func:`lumped.solvers.modes.mode_guess_jit.probe_modes`, the same numbers); the loop below
+    is the reference. With ``min_norm`` (Python only) a singular step matrix (locks in
+    parallel, whose split is free) is solved by the minimum-norm correction instead of
+    refusing the candidate."""
+    for _ in range(longer):
+        f = scene.external_forces(t + h_p)
+        if fast is not None:
+            k, out = fast.probe_modes(candidates, current, f, x, v, F, h_p)
+            if k >= 0:
+                N = len(x)
+                return list(candidates[k]), out[:N].tolist(), out[N:].tolist()
+            if k == REFUSED:
+                return None
+            h_p *= 1000.0
+            continue
+        undecided = False
+        for modes in candidates:
+            got = _probe(scene, branches, modes, f, x, v, F, h_p, min_norm)
+            if got is None:
+                continue
+            v_p, F_p, q = got
+            read = [branches[e].branch(q[e], F_p[e]) for e in range(len(F))]
+            if read == list(modes):
+                return list(modes), v_p, F_p
+            undecided = undecided or (current is not None and read == list(current))
+        if not undecided:
+            return None
+        h_p *= 1000.0
+    return None
+
+
+def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float],
+           x: list[float], v: list[float], F: list[float], h_p: float,
+           min_norm: bool = False):
+    """The held-mode probe step by Newton's method: ``(v_p, F_p, q)`` or ``None``
+    (``min_norm``: a singular matrix by the minimum-norm correction)."""
+    N, E = len(scene.nodes), len(scene.elements)
+    n = N + E
+    ea, eb = scene.elem_a, scene.elem_b
+    kernels = [branches[e].stage_kernel_for(modes[e]) for e in range(E)]
+    spring = [el.kind == "spring" for el in scene.elements]
+    cm = [nd.m / h_p if isinstance(nd, Mass) else 0.0 for nd in scene.nodes]
+    u = list(v) + list(F)
+    for _ in range(_MAX_ITERS):
+        vel = u[:N]
+        G = [0.0] * n
+        J = [[0.0] * n for _ in range(n)]
+        for i in range(N):
+            G[i] = cm[i] * (vel[i] - v[i]) - f[i]
+            J[i][i] = cm[i]
+        q = [0.0] * E
+        for e in range(E):
+            a, b = ea[e], eb[e]
+            Fe = u[N + e]
+            if a >= 0:
+                G[a] -= Fe
+                J[a][N + e] -= 1.0
+            if b >= 0:
+                G[b] += Fe
+                J[b][N + e] += 1.0
+            if spring[e]:
+                qe = ((x[b] + h_p * vel[b]) if b >= 0 else 0.0) - (
+                    (x[a] + h_p * vel[a]) if a >= 0 else 0.0)
+                dq = h_p
+            else:
+                qe = (vel[b] if b >= 0 else 0.0) - (vel[a] if a >= 0 else 0.0)
+                dq = 1.0
+            q[e] = qe
+            R, Rq, RF = kernels[e](qe, Fe)
+            G[N + e] = R
+            if b >= 0:
+                J[N + e][b] += Rq * dq
+            if a >= 0:
+                J[N + e][a] -= Rq * dq
+            J[N + e][N + e] = RF
+        du = _solve([row[:] for row in J], G[:]) if min_norm else _solve(J, G)
+        if du is None and min_norm:
+            du = np.linalg.lstsq(np.array(J), np.array(G), rcond=None)[0].tolist()
+            if not all(math.isfinite(d) for d in du):
+                return None
+        if du is None:
+            return None
+        done = True
+        for k in range(n):
+            u[k] -= du[k]
+            if not abs(du[k]) <= 1e-14 * (1.0 + abs(u[k])):
+                done = False
+        if done:
+            vel = u[:N]
+            q = [((x[eb[e]] + h_p * vel[eb[e]]) if eb[e] >= 0 else 0.0)
+                 - ((x[ea[e]] + h_p * vel[ea[e]]) if ea[e] >= 0 else 0.0) if spring[e]
+                 else (vel[eb[e]] if eb[e] >= 0 else 0.0) - (vel[ea[e]] if ea[e] >= 0 else 0.0)
+                 for e in range(E)]
+            return vel, u[N:], q
+    return None
+
+
+def _solve(J: list[list[float]], G: list[float]) -> list[float] | None:
+    """``J^-1 G`` by Gaussian elimination with partial pivoting (``J``, ``G`` consumed);
+    ``None`` for a zero pivot or a non-finite result (a nearly singular matrix gives an
+    iterate that does not converge, or a result the branch check refuses)."""
+    n = len(G)
+    for c in range(n):
+        p, big = c, abs(J[c][c])
+        for r in range(c + 1, n):
+            if abs(J[r][c]) > big:
+                p, big = r, abs(J[r][c])
+        if not 0.0 < big < math.inf:
+            return None
+        if p != c:
+            J[c], J[p] = J[p], J[c]
+            G[c], G[p] = G[p], G[c]
+        piv = J[c][c]
+        for r in range(c + 1, n):
+            fac = J[r][c] / piv
+            if fac != 0.0:
+                row, top = J[r], J[c]
+                for k in range(c, n):
+                    row[k] -= fac * top[k]
+                G[r] -= fac * G[c]
+    out = [0.0] * n
+    for c in range(n - 1, -1, -1):
+        s = G[c]
+        row = J[c]
+        for k in range(c + 1, n):
+            s -= row[k] * out[k]
+        out[c] = s / row[c]
+    return out if all(math.isfinite(o) for o in out) else None

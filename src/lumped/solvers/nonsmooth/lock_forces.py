@@ -1,0 +1,132 @@
+r"""The forces of locked and stuck elements at a given state, from the accelerations.
+
+At a state ``(x, v)`` of a scene, an element whose law leaves its force free there (a
+taut string on its lock, ``q = L`` with any ``F >= k L``; a stuck dashpot, rate ``0``
+with ``|F| <= tau``: ``dR/dF = 0`` on the law's kernel) keeps its relative motion only
+if the forces make the relative *acceleration* across it vanish. With the forces of all
+other elements fixed (their laws give them at ``(x, v)``), the balances
+
+.. math::
+
+    m_i a_i = f_i(t) + \sum_{a_e = i} F_e - \sum_{b_e = i} F_e \quad (\text{masses};
+    \ 0 = \dots \text{ at a junction}), \qquad a_{b_e} - a_{a_e} = 0 \ (e \in K)
+
+are linear in the accelerations ``a`` and the forces ``F_K`` of the force-free set
+``K`` (ground has ``a = 0``). Their solution gives the forces these elements carry at
+that instant, the right limit ``h -> 0`` of an implicit step, without dividing by ``h``.
+
+A backward-Euler step of size ``h`` reads the same forces from ``m (v_1 - v_0) / h``, and
+on a position lock ``v_1`` is fixed only to ``ulp(x) / h`` (the rounding of
+``q = x + h v``): after a short remainder of a step across an impact those forces are off
+by ``m ulp(x) / h^2`` (:mod:`lumped.solvers.bdf.impact_step` uses this module there).
+
+Several force-free elements in parallel leave the split free: the least-squares solution
+of minimum weighted norm is taken, the change from the given forces, with a stuck
+dashpot's change weighted ``1000`` times a lock's (the dashpot keeps its force, the rigid
+element carries the rest). A solution that leaves an element's admissible set (a string
+pushed below ``k L``: it goes slack; a dashpot beyond its yield force: it slips) puts
+that element on the boundary of its set, read from its kernel by bisection, and solves
+again without it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ...scene import Mass, Scene
+
+__all__ = ["forces_from_accelerations"]
+
+#: Weight of a dashpot's force change against a lock's in the minimum-norm split.
+_DASHPOT_WEIGHT = 1e3
+
+
+def _admissible(kernel, q: float, F: float, tol: float) -> bool:
+    R, _, RF = kernel(q, F)
+    return RF == 0.0 and abs(R) <= tol
+
+
+def _boundary(kernel, q: float, good: float, bad: float, tol: float) -> float:
+    """The admissible force nearest ``bad`` between ``good`` (admissible) and ``bad``."""
+    for _ in range(200):
+        mid = 0.5 * (good + bad)
+        if mid in (good, bad):
+            break
+        if _admissible(kernel, q, mid, tol):
+            good = mid
+        else:
+            bad = mid
+    return good
+
+
+def forces_from_accelerations(scene: Scene, t: float, x: Sequence[float],
+                              v: Sequence[float], F: Sequence[float],
+                              free: Sequence[int]) -> list[float] | None:
+    """Forces at ``(t, x, v)`` with the elements ``free`` (force-free there: ``dR/dF = 0``
+    at ``(q, F)``) holding their relative motion, the others' forces kept from ``F``.
+
+    Parameters
+    ----------
+    scene : Scene
+    t : float
+        Time (the forcing is read there).
+    x, v : sequence of float
+        Node displacements and velocities (the rates across ``free`` are taken as they are).
+    F : sequence of float
+        Element forces: the others' forces (kept), the start of the split of ``free``.
+    free : sequence of int
+        Indices of the force-free elements (see the module notes).
+
+    Returns
+    -------
+    list of float or None
+        All element forces; ``None`` when the balances have no solution (the least-squares
+        residual above ``1e-9`` of the forces' scale), e.g. no motion holds every lock.
+    """
+    N = len(scene.nodes)
+    ea, eb = scene.elem_a, scene.elem_b
+    q = scene.elongations(x, v)
+    out = [float(f) for f in F]
+    kernels = [el.law.kernel for el in scene.elements]
+    masses = [nd.m if isinstance(nd, Mass) else 0.0 for nd in scene.nodes]
+    K = list(free)
+    scale = 1.0 + max((abs(f) for f in out), default=0.0) \
+        + max((abs(f) for f in scene.external_forces(t)), default=0.0)
+    tol = [1e-12 * (abs(qe) + abs(fe)) + 1e-300 for qe, fe in zip(q, out, strict=True)]
+    for _ in range(len(K) + 1):
+        # with the forces of K at their given values: the balances' rest, per node
+        rhs = np.array(scene.net_forces(t, out), dtype=float)
+        n = N + len(K)
+        A = np.zeros((n, n))
+        A[np.arange(N), np.arange(N)] = masses
+        rhs_full = np.zeros(n)
+        rhs_full[:N] = rhs  # m a - B_K^T dF_K = the net forces at the given F
+        w = np.ones(n)
+        for c, e in enumerate(K):
+            col = N + c
+            if ea[e] >= 0:
+                A[ea[e], col] = -1.0
+                A[col, ea[e]] = -1.0
+            if eb[e] >= 0:
+                A[eb[e], col] = 1.0
+                A[col, eb[e]] = 1.0
+            if scene.elements[e].kind != "spring":
+                w[col] = _DASHPOT_WEIGHT
+        y, *_ = np.linalg.lstsq(A / w, rhs_full, rcond=None)
+        z = y / w
+        if np.abs(A @ z - rhs_full).max() > 1e-9 * scale:
+            return None
+        trial = list(out)
+        for c, e in enumerate(K):
+            trial[e] = out[e] + float(z[N + c])
+        leaving = [e for e in K if not _admissible(kernels[e], q[e], trial[e], tol[e])]
+        if not leaving:
+            return trial
+        for e in leaving:  # on the boundary of its set, off the balance's unknowns
+            out[e] = _boundary(kernels[e], q[e], out[e], trial[e], tol[e])
+        K = [e for e in K if e not in leaving]
+        if not K:
+            return out
+    return out

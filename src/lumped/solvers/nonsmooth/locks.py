@@ -1,0 +1,224 @@
+r"""Locked elements in parallel: which forces are not unique, and over which intervals.
+
+An element is *force-free* at a point ``(q, F)`` of its law when the active branch there
+leaves the force free: ``dR/dF = 0`` from the law's compiled kernel (a taut string,
+``F >= k L``; a stuck dashpot, ``|F| <= tau``, also at ``|F| = tau`` where the kernels
+return the stuck branch). The test reads the kernel, so it holds for user laws as for the
+built-in ones.
+
+With the motion fixed, a change ``dF`` of the force-free elements' forces must keep every
+node's balance (ground takes any reaction). Such a change exists exactly when the
+force-free elements close a *cycle* in the network (ground one vertex): two elements in
+parallel, a loop through ground, a junction between force-free elements on both sides
+and ground. The elements on such cycles are the ones whose forces are *indeterminate*:
+the motion is determinate, the split of the load among them is not. The solver then
+picks the split by its documented rule (the minimum-norm Newton correction from the
+previous step's forces, see :func:`lumped.solvers.newton.semismooth.newton_solve`) and reports the
+elements and intervals here. Scenes without a cycle of elements skip the test
+(:func:`cyclic_elements`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import lru_cache
+
+__all__ = ["cyclic_elements", "cycles_among", "indeterminate_elements", "IntervalLog",
+           "prefer_locks", "lock_parallel_rates"]
+
+@lru_cache(maxsize=256)
+def _on_cycles(n_nodes: int, edges: tuple[tuple[int, int, int], ...]) -> tuple[int, ...]:
+    """Elements (first entry of each edge) that lie on a cycle of the graph of ``edges``
+    (``(element, a, b)``, ground ``-1``): those whose removal keeps ``a`` and ``b``
+    connected."""
+    out = []
+    m = n_nodes + 1  # ground (-1) is vertex n_nodes
+    for k, (e, a, b) in enumerate(edges):
+        parent = list(range(m))
+        for j, (_, a2, b2) in enumerate(edges):
+            if j != k:
+                parent[_find(parent, a2 % m)] = _find(parent, b2 % m)
+        if _find(parent, a % m) == _find(parent, b % m):
+            out.append(e)
+    return tuple(out)
+
+
+def _find(parent: list[int], i: int) -> int:
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+def cyclic_elements(scene) -> tuple[int, ...]:
+    """Elements on some cycle of the whole network (ground one vertex): the only ones whose
+    forces can ever be indeterminate."""
+    edges = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in range(len(scene.elements)))
+    return _on_cycles(len(scene.nodes), edges)
+
+
+def cycles_among(scene, elements) -> tuple[int, ...]:
+    """Those of ``elements`` that lie on a cycle of the subnetwork made of ``elements`` alone
+    (ground one vertex): e.g. of the locked elements, the ones locked in parallel."""
+    edges = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in elements)
+    return _on_cycles(len(scene.nodes), edges)
+
+
+def indeterminate_elements(scene, q: Sequence[float], F: Sequence[float],
+                           candidates: Sequence[int] | None = None) -> tuple[int, ...]:
+    """Indices of the elements whose forces are not unique at ``(q, F)`` (see the module
+    notes): force-free elements on a cycle of force-free elements. ``candidates`` (e.g.
+    :func:`cyclic_elements`) limits the elements examined."""
+    elements = scene.elements
+    ea, eb = scene.elem_a, scene.elem_b
+    free = []
+    for e in (range(len(elements)) if candidates is None else candidates):
+        if elements[e].law.kernel(q[e], F[e])[2] == 0.0:
+            free.append((e, ea[e], eb[e]))
+    if len(free) < 2:
+        return ()
+    return _on_cycles(len(scene.nodes), tuple(free))
+
+
+class IntervalLog:
+    """Collects, step by step, the intervals on which each element's force is not unique.
+
+    ``mark(t_prev, t, elements)`` records that ``elements`` (names) were indeterminate at
+    the end of the step ``[t_prev, t]``; consecutive steps join into one interval
+    ``(t_first, t_last)``. ``result()`` gives ``{name: [(t0, t1), ...]}``.
+    """
+
+    def __init__(self) -> None:
+        self._open: dict[str, list[float]] = {}
+        self._done: dict[str, list[tuple[float, float]]] = {}
+
+    @property
+    def open(self) -> bool:
+        """Some interval is open (its element was indeterminate at the last mark)."""
+        return bool(self._open)
+
+    def mark(self, t_prev: float, t: float, names: Sequence[str]) -> None:
+        names = set(names)
+        for name in list(self._open):
+            if name not in names:
+                t0, t1 = self._open.pop(name)
+                self._done.setdefault(name, []).append((t0, t1))
+        for name in names:
+            span = self._open.get(name)
+            if span is not None and span[1] == t_prev:
+                span[1] = t
+            else:
+                if span is not None:
+                    self._done.setdefault(name, []).append((span[0], span[1]))
+                self._open[name] = [t, t]
+
+    def add_closed(self, intervals: dict[str, list[tuple[float, float]]]) -> None:
+        """Close every open interval, then add ``intervals`` (``{name: [(t0, t1), ...]}``,
+        later than every mark so far: a backward-Euler bridge's, :mod:`lumped.solvers.
+        bridge`)."""
+        for name, (t0, t1) in self._open.items():
+            self._done.setdefault(name, []).append((t0, t1))
+        self._open.clear()
+        for name, spans in intervals.items():
+            self._done.setdefault(name, []).extend(spans)
+
+    def result(self) -> dict[str, list[tuple[float, float]]]:
+        out = {k: list(v) for k, v in self._done.items()}
+        for name, (t0, t1) in self._open.items():
+            out.setdefault(name, []).append((t0, t1))
+        return out
+
+
+def prefer_locks(scene, branches: Sequence, modes: Sequence[int], v: Sequence[float],
+                 F: Sequence[float]) -> list[int]:
+    """``modes`` with every dashpot that sits *exactly* on a rate lock put on that lock.
+
+    A dashpot whose rate ``q`` at the velocities ``v`` equals the value ``L`` of one of
+    its law's locking branches bit for bit (:attr:`BranchInfo.locks`, ``lock_value``;
+    ``q = 0`` for a stuck dashpot), and whose force ``F_e`` that branch admits up to
+    ``sqrt(eps) (1 + |F_e|)`` (its guards at ``(L, F_e)``), is on the lock: a slip branch
+    at zero rate and the stuck branch at its yield force are the same point of the law.
+    The mode probe at an event may read such an element as slipping when a load is shared
+    by locks in parallel (its Newton puts one element's force a few ulps beyond its
+    yield force, the other's rate fixes the common rate to 0). Held on a slip branch that
+    ends flat (Herschel-Bulkley ``n > 1``: ``dq/dF = 0`` at the yield force) the stage
+    Newton is singular there and the step fell to its floor. A rate that is not exactly
+    ``L`` (a break-out, however slow) keeps the probe's branch.
+    """
+    out = list(modes)
+    ea, eb = scene.elem_a, scene.elem_b
+    for e, el in enumerate(scene.elements):
+        lb = branches[e]
+        if el.kind != "dashpot" or lb.info[out[e]].locks:
+            continue
+        got = _admitting_lock(lb, _rate(v, ea[e], eb[e]), F[e])
+        if got is not None:
+            out[e] = got
+    return out
+
+
+def _rate(v: Sequence[float], a: int, b: int) -> float:
+    """``v_b - v_a``, ground (``-1``) at rest."""
+    return (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+
+
+def _admitting_lock(lb, value: float, F_e: float) -> int | None:
+    """The index of a locking branch of ``lb`` that fixes ``q = value`` and whose guards at
+    ``(value, F_e)`` admit ``F_e`` up to ``sqrt(eps) (1 + |F_e|)``; ``None`` if none."""
+    eps_slack = 1.4901161193847656e-08  # sqrt(eps)
+    for info in lb.info:
+        if not info.locks or info.lock_value is None or value != info.lock_value:
+            continue
+        gs = lb.guards_for(info.index)(info.lock_value, F_e)
+        if all(g >= -eps_slack * (1.0 + abs(F_e)) for g in gs):
+            return info.index
+    return None
+
+
+def lock_parallel_rates(scene, branches: Sequence, modes: Sequence[int], v: Sequence[float],
+                        F: Sequence[float], rate_tol: float) -> list[int]:
+    """``modes`` with every dashpot whose rate the other locks hold at zero put on its own
+    zero-rate lock, when its force ``F_e`` is admitted there and its rate at the
+    velocities ``v`` is at most ``rate_tol`` (the mode probe's: what round-off in the
+    forces gives over the probe step, :meth:`ModeState.change_mode`).
+
+    The elements locked in ``modes`` with a zero rate (a stuck dashpot, ``q = 0``; a taut
+    string, whose ``q = L`` holds ``dq/dt = 0``) join the nodes they connect. A dashpot
+    whose two ends are joined by a path of such elements (in parallel with a stuck one,
+    or on a cycle of them through ground) has rate exactly zero for as long as they hold:
+    on a slip branch it would slip at zero rate, which is the stuck branch's point of the
+    law when its force is within the yield force (its lock's guards at ``(0, F_e)``, to
+    ``sqrt(eps) (1 + |F_e|)``). The mode probe reads such a dashpot as slipping when it
+    splits a load among locks in parallel with one force at its yield force and the
+    common rate a round-off away from 0; on a slip branch that ends flat (Herschel-Bulkley
+    ``n > 1``, ``dq/dF = 0`` at the yield force) the stage Newton then fails for all but
+    the shortest steps, and the run crept on by steps of ``1e-7``. A dashpot whose force
+    is beyond its yield force keeps the probe's branch (the locks cannot all hold then:
+    the stage solve says so), and so does one with a rate above ``rate_tol``: elements
+    reversing together through zero rate under a load beyond their joint yield force
+    (the probe reads a Herschel-Bulkley ``n < 1`` dashpot as stuck at a rate of
+    ``1e-9``, where its force is ``tau`` to the last bit) must not be locked together.
+    """
+    out = list(modes)
+    ea, eb = scene.elem_a, scene.elem_b
+    m = len(scene.nodes) + 1  # ground (-1) is vertex m - 1
+    parent = list(range(m))
+    held = False
+    for e, el in enumerate(scene.elements):
+        info = branches[e].info[out[e]]
+        if info.locks and (el.kind == "spring" or info.lock_value == 0.0):
+            parent[_find(parent, ea[e] % m)] = _find(parent, eb[e] % m)
+            held = True
+    if not held:
+        return out
+    for e, el in enumerate(scene.elements):
+        lb = branches[e]
+        a, b = ea[e], eb[e]
+        if el.kind != "dashpot" or lb.info[out[e]].locks or \
+                _find(parent, a % m) != _find(parent, b % m) or \
+                abs(_rate(v, a, b)) > rate_tol:
+            continue
+        got = _admitting_lock(lb, 0.0, F[e])
+        if got is not None:
+            out[e] = got
+    return out

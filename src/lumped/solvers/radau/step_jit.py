@@ -1,0 +1,255 @@
+r"""The compiled pieces of one Radau IIA step of ``radau5`` (for
+:mod:`lumped.solvers.eventdriven.loop_jit`): the error estimate and its norm, the guard test on
+the collocation polynomial, the fold test, the forcing.
+
+Ports, operation for operation, of :meth:`lumped.solvers.radau.stage.StageSystem.error`,
+:meth:`~lumped.solvers.radau.stage.StageSystem.error_norm`,
+:meth:`~lumped.solvers.radau.stage.StageSystem.element_nodes`,
+:func:`lumped.solvers.modes.events.first_crossing_on` (only the test that some sample is
+negative) and :func:`lumped.solvers.modes.events.fold_crossed`; the unknowns are laid out as in
+:mod:`lumped.solvers.radau.stage` (``U[k*n + i]`` a node's stage velocity, ``U[k*n + N + e]`` an
+element's stage force). The scene's kernels come in as numba first-class functions,
+``branch_law(e, i, q, F)`` and ``branch_guards(e, i, q, F, out)`` of
+:mod:`lumped.codegen.jit`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...codegen.jit import njit
+from ..bdf.core_jit import _bit, _sign, forcing_into
+from ..modes.events import SAMPLES
+from ..newton.semismooth_jit import lu_factor_into, lu_solve_into
+from .stage import E_ERR, FORCE_TOL_FACTOR, MU_REAL, C
+
+__all__ = ["element_nodes", "folded", "crossed", "error_norm", "step_error", "forces",
+           "finite"]
+
+_C0, _C1, _C2 = C
+_E0, _E1, _E2 = E_ERR
+_SAMPLES = tuple(SAMPLES)
+# the denominators of radau.dense_weights
+_D1 = _C0 * (_C0 - _C1) * (_C0 - _C2)
+_D2 = _C1 * (_C1 - _C0) * (_C1 - _C2)
+_D3 = _C2 * (_C2 - _C0) * (_C2 - _C1)
+
+
+@njit(cache=True, inline="always")
+def _elem_at(spring, A, h, x_n, v_n, U, n, i, k) -> float:
+    """Node ``i``'s position (spring) or velocity at polynomial node ``k`` (-1: the
+    start), 0 for the ground (:meth:`StageSystem.element_nodes`)."""
+    if i < 0:
+        return 0.0
+    if spring:
+        if k < 0:
+            return x_n[i]
+        return x_n[i] + h * (A[k, 0] * U[i] + A[k, 1] * U[n + i] + A[k, 2] * U[2 * n + i])
+    return v_n[i] if k < 0 else U[k * n + i]
+
+
+@njit(cache=True, inline="always")
+def element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, e, q, F) -> None:
+    """``q`` and ``F`` of element ``e`` at ``s = 0, c_1, c_2, 1`` into ``q[:4]``,
+    ``F[:4]`` (:meth:`StageSystem.element_nodes`)."""
+    for k in range(4):
+        q[k] = (_elem_at(spring[e], A, h, x_n, v_n, U, n, eb[e], k - 1)
+                - _elem_at(spring[e], A, h, x_n, v_n, U, n, ea[e], k - 1))
+    F[0] = F_n[e]
+    for k in range(3):
+        F[k + 1] = U[k * n + N + e]
+
+
+@njit(cache=True)
+def folded(branch_law, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n, U, N, n, q,
+            F) -> bool:
+    """A checked element's law crosses a fold along the step
+    (:func:`lumped.solvers.modes.events.fold_crossed` on the held branch's kernel)."""
+    for c in range(checked.shape[0]):
+        e = checked[c]
+        element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, e, q, F)
+        _, Rq0, RF0 = branch_law(e, modes[e], q[0], F[0])
+        for k in range(3):
+            _, Rq1, RF1 = branch_law(e, modes[e], q[k + 1], F[k + 1])
+            if _left_branch(branch_law, e, modes[e], q[k], F[k], Rq0, RF0, q[k + 1],
+                            F[k + 1], Rq1, RF1):
+                return True
+            Rq0, RF0 = Rq1, RF1
+    return False
+
+
+@njit(cache=True, inline="always")
+def _left_branch(branch_law, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
+    """:func:`lumped.solvers.bdf.core_jit.left_branch` (the fold test of
+    :mod:`lumped.solvers.implicit.branch_check`) on element ``e``'s branch ``mode``."""
+    s0 = abs(Rq0) + abs(RF0)
+    s1 = abs(Rq1) + abs(RF1)
+    mq = _bit(_sign(Rq0, s0)) | _bit(_sign(Rq1, s1))
+    mf = _bit(_sign(RF0, s0)) | _bit(_sign(RF1, s1))
+    if mq == 3 or mf == 3:
+        return True
+    dq = q1 - q0
+    dF = F1 - F0
+    off = 0.0
+    for k in range(2):
+        Rq = Rq0 if k == 0 else Rq1
+        RF = RF0 if k == 0 else RF1
+        total = abs(Rq * dq) + abs(RF * dF)
+        if total > 0.0:
+            off = max(off, abs(Rq * dq + RF * dF) / total)
+    if off <= 0.5:
+        return False
+    for s in (0.25, 0.5, 0.75):
+        _, Rq, RF = branch_law(e, mode, q0 + s * dq, F0 + s * dF)
+        sc = abs(Rq) + abs(RF)
+        mq |= _bit(_sign(Rq, sc))
+        mf |= _bit(_sign(RF, sc))
+        if mq == 3 or mf == 3:
+            return True
+    return False
+
+
+@njit(cache=True)
+def crossed(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, U, N, n,
+             qn, Fn, gbuf) -> bool:
+    """True when a watched guard (shifted by its round-off tolerance) is negative at a
+    sample of the step: :func:`lumped.solvers.modes.events.first_crossing_on`'s test."""
+    for w in range(watched.shape[0]):
+        element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, watched[w], qn[w], Fn[w])
+    for s in _SAMPLES:
+        l1 = s * (s - _C1) * (s - _C2) / _D1
+        l2 = s * (s - _C0) * (s - _C2) / _D2
+        l3 = s * (s - _C0) * (s - _C1) / _D3
+        for w in range(watched.shape[0]):
+            e = watched[w]
+            q0 = qn[w, 0]
+            f0 = Fn[w, 0]
+            qs = q0 + (l1 * (qn[w, 1] - q0) + l2 * (qn[w, 2] - q0) + l3 * (qn[w, 3] - q0))
+            Fs = f0 + (l1 * (Fn[w, 1] - f0) + l2 * (Fn[w, 2] - f0) + l3 * (Fn[w, 3] - f0))
+            tol = 64.0 * 2.220446049250313e-16 * (1.0 + abs(qs) + abs(Fs))
+            count = branch_guards(e, modes[e], qs, Fs, gbuf)
+            for j in range(count):
+                if gbuf[j] + tol < 0.0:
+                    return True
+    return False
+
+
+@njit(cache=True)
+def error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x_n, v_n, F_n,
+                net_n, dF, have_dF, rtol, atol, F_ref, M, LU, perm, rhs, err, two) -> float:
+    """The scaled RMS error of the step (``StageSystem.error`` then ``error_norm``);
+    NaN for a non-finite system, -1.0 for a singular finite one (Python's minimum norm).
+
+    ``two`` is 2.0, a run-time value: CPython's ``y ** 2`` is the C library's ``pow``, which
+    differs from ``y * y`` in the last bit now and then, and numba (LLVM) turns a constant
+    exponent 2 into ``y * y``."""
+    N = masses.shape[0]
+    E = ea.shape[0]
+    n = N + E
+    size = 2 * N + E
+    for r in range(size):
+        rhs[r] = 0.0
+        for c in range(size):
+            M[r, c] = 0.0
+    g = MU_REAL / h
+    for i in range(N):
+        zx = 0.0
+        zv = 0.0
+        for k in range(3):
+            s = 0.0
+            for j in range(3):
+                s += A[k, j] * U[j * n + i]
+            ek = _E0 if k == 0 else (_E1 if k == 1 else _E2)
+            zx += ek * s
+            zv += ek * (U[k * n + i] - v_n[i])
+        M[i, i] = g
+        M[i, N + i] = -1.0
+        rhs[i] = v_n[i] + zx
+        if masses[i] > 0.0:
+            M[N + i, N + i] = g * masses[i]
+            rhs[N + i] = net_n[i] + masses[i] * zv / h
+    for e in range(E):
+        col = 2 * N + e
+        a = ea[e]
+        b = eb[e]
+        if a >= 0:
+            M[N + a, col] -= 1.0
+        if b >= 0:
+            M[N + b, col] += 1.0
+        q_e = (_elem_at(spring[e], A, h, x_n, v_n, U, n, b, -1)
+               - _elem_at(spring[e], A, h, x_n, v_n, U, n, a, -1))
+        _R, Rq, RF = branch_law(e, modes[e], q_e, F_n[e])
+        off = 0 if spring[e] else N
+        if b >= 0:
+            M[col, off + b] -= Rq
+        if a >= 0:
+            M[col, off + a] += Rq
+        M[col, col] = -RF
+    if not lu_factor_into(M, LU, perm):
+        for r in range(size):
+            for c in range(size):
+                if not math.isfinite(M[r, c]):
+                    return math.nan
+        return -1.0
+    lu_solve_into(LU, perm, rhs, err)
+    acc = 0.0
+    cnt = 0
+    for i in range(N):
+        x_new = x_n[i] + h * (A[2, 0] * U[i] + A[2, 1] * U[n + i] + A[2, 2] * U[2 * n + i])
+        sc = atol + rtol * max(abs(x_n[i]), abs(x_new))
+        acc += (err[i] / sc) ** two
+        cnt += 1
+        if masses[i] > 0.0:
+            sc = atol + rtol * max(abs(v_n[i]), abs(U[2 * n + i]))
+            acc += (err[N + i] / sc) ** two
+            cnt += 1
+    if have_dF:
+        g0 = 1.0 / MU_REAL
+        rtol_F = min(1e-3, FORCE_TOL_FACTOR * rtol)
+        for w in range(watched.shape[0]):
+            e = watched[w]
+            k0 = N + e
+            Fe = F_n[e]
+            est = h * dF[e]
+            est += _E0 * (U[k0] - Fe)
+            est += _E1 * (U[n + k0] - Fe)
+            est += _E2 * (U[2 * n + k0] - Fe)
+            sc = rtol_F * max(abs(Fe), abs(U[2 * n + k0]), F_ref)
+            acc += (g0 * est / sc) ** two
+            cnt += 1
+    return math.sqrt(acc / cnt)
+
+
+@njit(cache=True, inline="always")
+def forces(t, fkind, fpar, f) -> None:
+    """``f_i(t)`` per node (``scene.external_forces``): 0 where there is no forcing."""
+    for i in range(f.shape[0]):
+        f[i] = 0.0
+    forcing_into(0, t, fkind, fpar, fpar, f)
+
+
+@njit(cache=True, inline="always")
+def finite(J) -> bool:
+    for r in range(J.shape[0]):
+        for c in range(J.shape[1]):
+            if not math.isfinite(J[r, c]):
+                return False
+    return True
+
+
+@njit(cache=True)
+def step_error(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, t, prev_break,
+                x, v, F, dF, have_dF, fkind, fpar, net, rtol, atol, F_ref, M, LUm, permm, rhs,
+                err, two) -> float:
+    """The error norm of the step from ``t`` (the forces right after a breakpoint)."""
+    t_n0 = np.nextafter(t, math.inf) if t == prev_break else t
+    forces(t_n0, fkind, fpar, net)
+    for e in range(ea.shape[0]):
+        if ea[e] >= 0:
+            net[ea[e]] += F[e]
+        if eb[e] >= 0:
+            net[eb[e]] -= F[e]
+    return error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x, v, F,
+                       net, dF, have_dF == 1, rtol, atol, F_ref, M, LUm, permm, rhs, err, two)
