@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from lumped.scene import Scene
-from lumped.solvers.implicit.step_system import _law_scale
+from lumped.solvers.implicit.step_system import law_scale
 
 YIELDING = ("bingham", "coulomb", "herschel_bulkley")
 
@@ -66,7 +66,7 @@ def check_yield(scene: Scene, sol, force_tol: float = 0.0, rate_tol: float = 0.0
             assert not (stuck_above & (over > 0.0)).any(), f"{el.name} stuck above its yield force"
             continue
         # Newton accepts the law's row when |R| <= rtol S + atol (NewtonOptions: 1e-10,
-        # 1e-12; S = _law_scale, the magnitude of the row's terms). Where dR/dF vanishes
+        # 1e-12; S = law_scale, the magnitude of the row's terms). Where dR/dF vanishes
         # at the yield force (Herschel-Bulkley n > 1) a stuck element may thus carry
         # |F| - tau up to about (atol / gamma)^(1/n) (3e-7 for n = 2, gamma = 9): the
         # method's own tolerance, not an error. Flag only a state whose law residual
@@ -74,7 +74,7 @@ def check_yield(scene: Scene, sol, force_tol: float = 0.0, rate_tol: float = 0.0
         for i in np.nonzero(stuck_above)[0]:
             Fi = float(sol.F[el.name][i])
             R, Rq, RF = el.law.kernel(float(q_signed[i]), Fi)
-            S = _law_scale(el.law.kernel, float(q_signed[i]), Fi, R, Rq, RF)
+            S = law_scale(el.law.kernel, float(q_signed[i]), Fi, R, Rq, RF)
             stuck_above[i] = abs(R) > 2.0 * (1e-10 * S + 1e-12)
         assert not stuck_above.any(), f"{el.name} stuck above its yield force"
 

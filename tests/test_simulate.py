@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from lumped.scene import Element, Junction, Mass, Scene, SineBurst, paper_F2
 from lumped.simulate import simulate
 from lumped.solvers.closed.closed_form import BinghamOscillator, initial_dashpot_force, integrate
-from lumped.solvers.implicit.branch_check import _left_branch
+from lumped.solvers.implicit.branch_check import left_branch
 from lumped.solvers.registry import METHODS
 from lumped.solvers.status import BranchError, InconsistentInitialForce, SolverError, Status
 
@@ -331,19 +331,19 @@ def test_fold_detector():
     def jump(F0, F1):
         q0, F0, Rq0, RF0 = pt(F0)
         q1, F1, Rq1, RF1 = pt(F1)
-        return _left_branch(kernel, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1)
+        return left_branch(kernel, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1)
 
     assert not jump(1.2, 1.19)  # along the upper branch
     assert not jump(-1.2, -1.21)  # along the lower branch
     assert jump(0.7, 0.4)  # over the fold into the middle branch
     q = 0.7**3 - 0.7
     lower = -1.1  # roughly the same q on the lower branch
-    assert _left_branch(kernel, q, 0.7, *kernel(q, 0.7)[1:], lower**3 - lower, lower,
+    assert left_branch(kernel, q, 0.7, *kernel(q, 0.7)[1:], lower**3 - lower, lower,
                         *kernel(lower**3 - lower, lower)[1:])
     # monotone piecewise-linear laws never trip it: Bingham stick -> slip
     bk = bound("bingham", gamma=1.0, tau=1.0).kernel
-    assert not _left_branch(bk, 0.0, 0.3, *bk(0.0, 0.3)[1:], 0.5, 1.5, *bk(0.5, 1.5)[1:])
-    assert not _left_branch(bk, 0.0, 0.9, *bk(0.0, 0.9)[1:], 0.0, -0.9, *bk(0.0, -0.9)[1:])
+    assert not left_branch(bk, 0.0, 0.3, *bk(0.0, 0.3)[1:], 0.5, 1.5, *bk(0.5, 1.5)[1:])
+    assert not left_branch(bk, 0.0, 0.9, *bk(0.0, 0.9)[1:], 0.0, -0.9, *bk(0.0, -0.9)[1:])
 
 
 # ---------------------------------------------------------------------------------------
@@ -463,7 +463,7 @@ def test_two_mass_chain_converges_to_its_exact_solution(formula, order):
        st.sampled_from(["paper", "maxwell", "chain"]), st.sampled_from([1e-3, 2e-3 / 3]))
 @settings(max_examples=100)
 def test_generated_step_system_equals_the_generic_one(vals, which, h):
-    from lumped.solvers.implicit.step_system import _generate_evaluate, _make_evaluate
+    from lumped.solvers.implicit.step_system import generate_evaluate, make_evaluate
 
     scene = {"paper": paper_scene(x0=0.1), "maxwell": maxwell_scene(),
              "chain": chain_scene()}[which]
@@ -473,10 +473,10 @@ def test_generated_step_system_equals_the_generic_one(vals, which, h):
     for make in ("generic", "generated"):
         qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
         if make == "generic":
-            ev = _make_evaluate(scene, h, [m / h for m in scene.masses], [0.0] * N, [1.0] * N,
+            ev = make_evaluate(scene, h, [m / h for m in scene.masses], [0.0] * N, [1.0] * N,
                                 uref, x_hat, f, qs, rq, rf)
         else:
-            ev = _generate_evaluate(scene, h, uref, x_hat, f)
+            ev = generate_evaluate(scene, h, uref, x_hat, f)
         outs.append(ev(vals[2 * N:2 * N + N + E]))
     assert outs[0] == outs[1]
 

@@ -28,7 +28,7 @@ from lumped.solvers.closed.closed_form import (
     initial_dashpot_force,
     integrate,
 )
-from lumped.solvers.implicit.step_system import _generate_evaluate, _law_scale, _make_evaluate
+from lumped.solvers.implicit.step_system import generate_evaluate, law_scale, make_evaluate
 from lumped.solvers.newton.semismooth import _hair
 
 STUCK_X0 = 2.1060533511106927e-05  # (4 x0 - x0) / 3 != x0 in floating point
@@ -155,12 +155,12 @@ def test_law_scale():
     """Linearised scale on a smooth piece; the size of the cancelling terms at a kink."""
     spring = law("linear_spring", k=100.0).kernel
     R, Rq, RF = spring(0.01, 1.0)
-    assert _law_scale(spring, 0.01, 1.0, R, Rq, RF) == pytest.approx(2.0, rel=0.6)
+    assert law_scale(spring, 0.01, 1.0, R, Rq, RF) == pytest.approx(2.0, rel=0.6)
     bingham = law("bingham", gamma=1e8, tau=1.0).kernel
     q = -1.25e-9
     R, Rq, RF = bingham(q, -1.0)
     assert (R, Rq, RF) == (q, 1.0, 0.0)  # the stuck piece: linearised scale |q|
-    s = _law_scale(bingham, q, -1.0, R, Rq, RF)
+    s = law_scale(bingham, q, -1.0, R, Rq, RF)
     assert 1e7 <= s <= 1e9  # ~ gamma tau
     assert abs(R) <= 1e-10 * s  # round-off of the terms gamma F, gamma tau
 
@@ -175,10 +175,10 @@ def test_generated_roundoff_system_equals_the_reference(vals, h, F_d):
     uref, x_hat, f = vals[:N], vals[N:2 * N], [vals[-1]] * N
     u = vals[2 * N:2 * N + N + E]
     u[-1] = F_d  # on and off the kinks of the Bingham law
-    ref = _make_evaluate(scene, h, [m / h for m in scene.masses], [0.0] * N, [1.0] * N,
+    ref = make_evaluate(scene, h, [m / h for m in scene.masses], [0.0] * N, [1.0] * N,
                          uref, x_hat, f, [0.0] * E, [0.0] * E, [0.0] * E, roundoff=True)
-    gen = _generate_evaluate(scene, h, uref, x_hat, f, roundoff=True)
-    plain = _generate_evaluate(scene, h, uref, x_hat, f)
+    gen = generate_evaluate(scene, h, uref, x_hat, f, roundoff=True)
+    plain = generate_evaluate(scene, h, uref, x_hat, f)
     G, J, S = gen(u)
     assert (G, J, S) == ref(u)
     Gp, Jp, Sp = plain(u)

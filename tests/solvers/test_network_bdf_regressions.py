@@ -383,7 +383,7 @@ def test_projection_gives_up_at_once_on_a_string_past_its_length(monkeypatch):
             return fn(k, q, F)
         return wrapper
 
-    monkeypatch.setattr(G, "_scalar_root", counted(G._scalar_root))
+    monkeypatch.setattr(G, "scalar_root", counted(G.scalar_root))
     if hasattr(G, "_no_force_at"):
         monkeypatch.setattr(G, "_no_force_at", counted(G._no_force_at))
     project = G.force_projector(scene, 1e-3, [scene.nodes[0].x0])

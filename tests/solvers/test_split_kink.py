@@ -11,7 +11,7 @@ from _yield_check import check_yield
 from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.solvers.modes.crossing_root import _on
+from lumped.solvers.modes.crossing_root import collocation_at
 from lumped.solvers.modes.split_kink import split_kink
 from lumped.solvers.radau.stage import C
 
@@ -71,7 +71,7 @@ def test_split_kink_where_the_free_split_leaves_its_interval():
     the bound (1e-6 of the half-width inside) bend the cubic beyond it."""
     free = _nodes(lambda s: 0.4 + s)
     held = tuple(min(f, 1.0 - 1e-6) for f in free)
-    assert max(_on(s, *held) for s in np.linspace(0, 1, 101)) > 1.0 + 1e-4
+    assert max(collocation_at(s, *held) for s in np.linspace(0, 1, 101)) > 1.0 + 1e-4
     s = split_kink({0: (held, free)}, {0: (0.0, 1.0, -1.0, 1.0)}, 1e-8)
     assert s == pytest.approx(0.6, abs=1e-12)
     # nothing held, or an overshoot within the tolerance: no kink
@@ -87,11 +87,11 @@ def test_split_kink_where_a_held_share_comes_back():
     held = tuple(max(f, -1.0 + 1e-6) for f in free)
     held = (-1.0 + 1e-6,) + held[1:]
     free = (-1.0 + 1e-6,) + free[1:]
-    assert min(_on(s, *held) for s in np.linspace(0, 1, 101)) < -1.0 - 1e-4
+    assert min(collocation_at(s, *held) for s in np.linspace(0, 1, 101)) < -1.0 - 1e-4
     s = split_kink({0: (held, free)}, {0: (0.0, 1.0, -1.0, 1.0)}, 1e-8)
     assert 0.2 < s < 0.5  # (the cubic through the held start is not the line)
-    assert _on(s, *free) == pytest.approx(-1.0 + 2e-6, abs=1e-12)
-    assert all(_on(r, *free) < -1.0 for r in np.linspace(0.05, s - 0.02, 20))
+    assert collocation_at(s, *free) == pytest.approx(-1.0 + 2e-6, abs=1e-12)
+    assert all(collocation_at(r, *free) < -1.0 for r in np.linspace(0.05, s - 0.02, 20))
 
 
 def test_no_kink_when_a_stage_is_beyond_its_interval():

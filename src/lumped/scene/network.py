@@ -147,7 +147,7 @@ def as_forcing(spec: object, *, where: str = "forcing") -> Forcing:
     """
     if isinstance(spec, numbers.Real) and not isinstance(spec, bool):
         value = as_finite(where, spec)
-        return _Constant(value)
+        return ConstantForce(value)
     if isinstance(spec, str):
         from ..laws.parser import parse_expression
 
@@ -174,7 +174,7 @@ def as_forcing(spec: object, *, where: str = "forcing") -> Forcing:
     )
 
 
-class _Constant:
+class ConstantForce:
     __slots__ = ("value",)
 
     def __init__(self, value: float) -> None:

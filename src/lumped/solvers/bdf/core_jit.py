@@ -36,22 +36,21 @@ iteration count on failure.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from ...codegen.jit import _numba, njit, numba_enabled
-from ..implicit.branch_check import _sign as _py_sign
+from ...codegen.jit import njit, numba_enabled, numba_module
+from ...scene.forcing_jit import forcing_into
+from ..implicit.branch_check_jit import left_branch
 from ..newton.semismooth_jit import (
-    _D2,
-    _DU,
-    _G,
-    _GN,
-    _J,
-    _JN,
-    _S,
-    _SN,
-    _UN,
+    WS_D2,
+    WS_DU,
+    WS_G,
+    WS_GN,
+    WS_J,
+    WS_JN,
+    WS_S,
+    WS_SN,
+    WS_UN,
     finite_sum,
     lu_solve_into,
     newton,
@@ -61,31 +60,10 @@ from ..newton.semismooth_jit import (
     worst_row,
 )
 
-__all__ = ["EVALUATE_TYPE", "ELEMENT_LAW_TYPE", "compiled_run_bdf_core", "forcing_into",
-           "fast_step", "left_branch", "loop_workspace", "run_bdf_core"]
+__all__ = ["EVALUATE_TYPE", "ELEMENT_LAW_TYPE", "compiled_run_bdf_core",
+           "fast_step", "loop_workspace", "run_bdf_core"]
 
-FORCE_NONE, FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE = 0, 1, 2, 3
 OK, NEWTON_FAILED, BRANCH_LOST, BAD_FORCE = 0, 1, 2, 3
-
-
-@njit(cache=True, inline="always")
-def forcing_into(step, t, fkind, fpar, ftab, f) -> int:
-    """Write ``f_i(t)`` into ``f``; return the first node whose force is not finite, or -1."""
-    for i in range(f.shape[0]):
-        k = fkind[i]
-        if k == FORCE_NONE:
-            continue
-        if k == FORCE_CONSTANT:
-            val = fpar[i, 0]
-        elif k == FORCE_SINE:
-            val = 0.0 if t > fpar[i, 2] else fpar[i, 0] * math.sin(fpar[i, 1] * t)
-        else:
-            val = ftab[step, i]
-        if not math.isfinite(val):
-            f[i] = val
-            return i
-        f[i] = val
-    return -1
 
 
 @njit(cache=True, inline="always")
@@ -93,7 +71,7 @@ def fast_step(evaluate, p, u0, u, cJ, cLU, cperm, cvalid, wv, wm, rtol, atol) ->
     """The common step (the reference's ``_fast_step``): returns the Newton iterations it
     took (0 or 1) with the solution in ``u``, or -1 when full Newton must run."""
     n = u.shape[0]
-    G, S, J, du = wv[_G], wv[_S], wm[_J], wv[_DU]
+    G, S, J, du = wv[WS_G], wv[WS_S], wm[WS_J], wv[WS_DU]
     evaluate(u0, p, G, J, S, False)
     if cvalid[0] == 0 or not same(J, cJ) or not finite_sum(G):
         return -1
@@ -106,7 +84,7 @@ def fast_step(evaluate, p, u0, u, cJ, cLU, cperm, cvalid, wv, wm, rtol, atol) ->
                 u[i] = u0[i] - du[i]
             return 0
         return -1
-    u1, G1, S1, J1, d = wv[_UN], wv[_GN], wv[_SN], wm[_JN], wv[_D2]
+    u1, G1, S1, J1, d = wv[WS_UN], wv[WS_GN], wv[WS_SN], wm[WS_JN], wv[WS_D2]
     for i in range(n):
         u1[i] = u0[i] - du[i]
     evaluate(u1, p, G1, J1, S1, False)
@@ -127,48 +105,6 @@ def loop_workspace(N: int, E: int) -> tuple:
     return (np.zeros((2, 1 + 4 * N)), np.zeros((2, n, n)), np.zeros((2, n, n)),
             np.zeros((2, n), dtype=np.int64), np.zeros((2, 1), dtype=np.int64),
             np.zeros(4, dtype=np.int64), np.zeros((10, n)))
-
-
-#: The reference's sign with a dead band (:mod:`lumped.solvers.implicit.branch_check`), compiled.
-_sign = njit(cache=True, inline="always")(_py_sign)
-
-
-@njit(cache=True, inline="always")
-def left_branch(element_law, e, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
-    """The fold test of :func:`lumped.solvers.implicit.branch_check.left_branch` for element ``e``:
-    ``dR/dq`` or ``dR/dF`` of strictly opposite signs at the two ends, or at three
-    interior points when the step leaves the law's tangent."""
-    s0 = abs(Rq0) + abs(RF0)
-    s1 = abs(Rq1) + abs(RF1)
-    # sign sets as bit masks: 1 for +1, 2 for -1 (0 adds nothing)
-    mq = _bit(_sign(Rq0, s0)) | _bit(_sign(Rq1, s1))
-    mf = _bit(_sign(RF0, s0)) | _bit(_sign(RF1, s1))
-    if mq == 3 or mf == 3:
-        return True
-    dq = q1 - q0
-    dF = F1 - F0
-    off = 0.0
-    for k in range(2):
-        Rq = Rq0 if k == 0 else Rq1
-        RF = RF0 if k == 0 else RF1
-        total = abs(Rq * dq) + abs(RF * dF)
-        if total > 0.0:
-            off = max(off, abs(Rq * dq + RF * dF) / total)
-    if off <= 0.5:
-        return False
-    for s in (0.25, 0.5, 0.75):
-        _, Rq, RF = element_law(e, q0 + s * dq, F0 + s * dF)
-        sc = abs(Rq) + abs(RF)
-        mq |= _bit(_sign(Rq, sc))
-        mf |= _bit(_sign(RF, sc))
-        if mq == 3 or mf == 3:
-            return True
-    return False
-
-
-@njit(cache=True, inline="always")
-def _bit(s: int) -> int:
-    return 1 if s > 0 else (2 if s < 0 else 0)
 
 
 @njit(cache=True, inline="always")
@@ -278,12 +214,12 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
             if counts[0] > max_it:
                 max_it = counts[0]
             if code != 0:
-                w = worst_row(wv[_G], wv[_S], rtol, atol)
+                w = worst_row(wv[WS_G], wv[WS_S], rtol, atol)
                 info[0] = NEWTON_FAILED
                 info[1] = step
                 info[2] = code
                 info[3] = w
-                finfo[0] = wv[_G][w]
+                finfo[0] = wv[WS_G][w]
                 finfo[1] = t
                 finfo[5] = counts[0]
                 break
@@ -341,7 +277,7 @@ def _signature():
                    im, iv, m, i8, i8)
 
 
-if _numba is not None:
+if numba_module is not None:
     from numba import types as _T
 
     _f8 = _T.float64

@@ -44,17 +44,17 @@ import math
 from dataclasses import dataclass, field
 
 from ...scene import Scene
-from ..implicit.branch_check import _known_monotone, _left_branch
+from ..implicit.branch_check import known_monotone, left_branch
 from ..implicit.globalize import laws_hold, solve_globalized
 from ..implicit.initial_state import consistent_initial_state
-from ..implicit.step_system import _EPS, _generate_evaluate, _newton_failure
+from ..implicit.step_system import EPS, generate_evaluate, newton_failure
 from ..newton.semismooth import (
     FactorCache,
     NewtonCode,
     NewtonOptions,
-    _residual_ok,
-    _update_ok,
     newton_solve,
+    residual_ok,
+    update_ok,
 )
 from ..nonsmooth.impacts import lockable_elements, locking_elements
 from ..nonsmooth.locks import IntervalLog, cyclic_elements, indeterminate_elements
@@ -183,15 +183,15 @@ def run_bdf(
     h2 = 2.0 * dt / 3.0
     # the fast path tests with the linearised row scales; Newton proper (from the same
     # start, when the fast path declines) with the round-off scales of _law_scale
-    ev1 = _generate_evaluate(scene, h1, uref, x_hat, f)
-    full1 = _generate_evaluate(scene, h1, uref, x_hat, f, roundoff=True)
+    ev1 = generate_evaluate(scene, h1, uref, x_hat, f)
+    full1 = generate_evaluate(scene, h1, uref, x_hat, f, roundoff=True)
     ev2 = full2 = None
     if method == "bdf2":
-        ev2 = _generate_evaluate(scene, h2, uref, x_hat, f)
-        full2 = _generate_evaluate(scene, h2, uref, x_hat, f, roundoff=True)
+        ev2 = generate_evaluate(scene, h2, uref, x_hat, f)
+        full2 = generate_evaluate(scene, h2, uref, x_hat, f, roundoff=True)
 
     # branch bookkeeping: q, dR/dq, dR/dF at the last accepted point of checked elements
-    checked = [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)]
+    checked = [e for e, el in enumerate(scene.elements) if not known_monotone(el.law)]
     prev_q = scene.elongations(x, v)
     prev_d = [el.law.kernel(prev_q[e], F[e]) for e, el in enumerate(scene.elements)]
 
@@ -266,7 +266,7 @@ def run_bdf(
             if res.code is not NewtonCode.SUCCESS:  # last resort: backward-Euler substeps
                 halved = halved_steps(scene, t - dt, dt, x, v, F, options)
             if res.code is not NewtonCode.SUCCESS and halved is None:
-                err = _newton_failure(scene, res, t, step)
+                err = newton_failure(scene, res, t, step)
                 if throw:
                     raise err
                 status, message = err.status, str(err)
@@ -287,12 +287,12 @@ def run_bdf(
             new = [e for e in sorted(now) if e not in locked]
             # an impulse below the round-off of the step's momentum change is none
             if new and not impulse_is_negligible(
-                    scene, v, new, 4.0 * _EPS * dt * max(map(abs, F_new + f), default=0.0)):
+                    scene, v, new, 4.0 * EPS * dt * max(map(abs, F_new + f), default=0.0)):
                 done = impact_step(scene, t - dt, dt, x, v, F, locked, options, restitution)
                 total_it += done.newton_iterations
                 res_ev += done.solves
                 if done.failure is not None:
-                    err = _newton_failure(scene, done.failure, done.failure_t, step)
+                    err = newton_failure(scene, done.failure, done.failure_t, step)
                     if throw:
                         raise err
                     status, message = err.status, str(err)
@@ -311,7 +311,7 @@ def run_bdf(
             q0, d0 = prev_q[e], prev_d[e]
             kernel = scene.elements[e].law.kernel
             d1 = kernel(q_new[e], F[e])  # at the accepted point
-            if _left_branch(kernel, q0, F_prev[e], d0[1], d0[2], q_new[e], F[e], d1[1], d1[2]):
+            if left_branch(kernel, q0, F_prev[e], d0[1], d0[2], q_new[e], F[e], d1[1], d1[2]):
                 el = scene.elements[e]
                 msg = (
                     f"element {el.name!r} (law {el.law_name!r}) left its branch at t = {t!r} "
@@ -377,18 +377,18 @@ def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,
     du = solve(G)
     if not math.isfinite(sum(du)):
         return None
-    if _residual_ok(G, S, rtol, atol):
-        if _update_ok(du, u0, rtol, atol):
+    if residual_ok(G, S, rtol, atol):
+        if update_ok(du, u0, rtol, atol):
             out = [ui - di for ui, di in zip(u0, du, strict=True)]
             out.append(0)
             return out
         return None  # newton_solve would try a directional Jacobian here
     u1 = [ui - di for ui, di in zip(u0, du, strict=True)]
     G1, J1, S1 = evaluate(u1)
-    if J1 != J or not math.isfinite(sum(G1)) or not _residual_ok(G1, S1, rtol, atol):
+    if J1 != J or not math.isfinite(sum(G1)) or not residual_ok(G1, S1, rtol, atol):
         return None
     d = solve(G1)
-    if not (math.isfinite(sum(d)) and _update_ok(d, u1, rtol, atol)):
+    if not (math.isfinite(sum(d)) and update_ok(d, u1, rtol, atol)):
         return None
     out = [ui - di for ui, di in zip(u1, d, strict=True)]
     out.append(1)

@@ -33,54 +33,18 @@ from __future__ import annotations
 import numpy as np
 
 from ...scene import Scene
-from ..implicit.branch_check import _known_monotone
+from ..implicit.branch_check import known_monotone
 from ..implicit.initial_state import consistent_initial_state
-from ..implicit.step_system import _newton_failure
+from ..implicit.step_system import newton_failure
 from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult
 from ..status import BranchError, RawRun, Status
 
-__all__ = ["JIT_METHODS", "FAST_MIN_STEPS", "run_bdf_jit", "loop_arguments", "forcing_arrays",
-           "refuse_position_locks"]
+__all__ = ["JIT_METHODS", "FAST_MIN_STEPS", "run_bdf_jit", "loop_arguments", "refuse_position_locks"]
 
 #: Compiled method name -> step formula.
 JIT_METHODS = {"jit-bdf1": "bdf1", "jit-bdf2": "bdf2"}
 #: ``fast=None`` takes the fast path from this many steps on (see :func:`run_bdf_jit`).
 FAST_MIN_STEPS = 1000
-
-
-def forcing_arrays(scene: Scene, dt: float, n_steps: int):
-    """``(fkind, fpar, ftab)`` of :func:`lumped.solvers.bdf.core_jit.forcing_into`."""
-    from ...scene.forcing import SineBurst
-
-    N = len(scene.nodes)
-    fkind = np.zeros(N, dtype=np.int64)
-    fpar = np.zeros((N, 3))
-    tabulated = [i for i, fn in enumerate(scene.forcing)
-                 if fn is not None and not isinstance(fn, SineBurst) and not _constant(fn)]
-    ftab = np.zeros((n_steps + 1 if tabulated else 1, N))
-    for i, fn in enumerate(scene.forcing):
-        if fn is None:
-            continue
-        if isinstance(fn, SineBurst):
-            fkind[i] = 2
-            fpar[i] = (fn.amplitude, fn.omega, fn.t_off)
-        elif _constant(fn):
-            fkind[i] = 1
-            fpar[i, 0] = fn.value
-        else:
-            fkind[i] = 3
-            col = ftab[:, i]
-            for step in range(1, n_steps + 1):
-                # a non-finite value is reported by the loop when it reaches that step
-                col[step] = float(fn(step * dt))
-    return fkind, fpar, ftab
-
-
-def _constant(fn) -> bool:
-    """A constant force of :func:`lumped.scene.as_forcing` (``fn.value`` for every ``t``)."""
-    from ...scene.network import _Constant
-
-    return type(fn) is _Constant
 
 
 def position_lock(scene: Scene, method: str) -> str | None:
@@ -124,9 +88,11 @@ def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,
     js = jit_scene(scene)
     v, F, ic_stats = consistent_initial_state(scene, time_scale=dt, options=options)
     N, E = len(scene.nodes), len(scene.elements)
+    from ...scene.forcing_jit import forcing_arrays
+
     fkind, fpar, ftab = forcing_arrays(scene, dt, n_steps)
     checked = np.array([e for e, el in enumerate(scene.elements)
-                        if not _known_monotone(el.law)], dtype=np.int64)
+                        if not known_monotone(el.law)], dtype=np.int64)
     args = (js.masses, js.ea, js.eb, js.spring, checked,
             np.array([nd.x0 for nd in scene.nodes], dtype=float), np.array(v, dtype=float),
             np.array(F, dtype=float), float(dt), int(n_steps), formula == "bdf2",
@@ -198,7 +164,7 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
 
         res = NewtonResult([], NewtonCode(CODE_NAMES[int(info[2])]), int(finfo[5]), 0, 0, 0,
                            wv[0].tolist(), int(info[3]), [])
-        err = _newton_failure(scene, res, t, step)
+        err = newton_failure(scene, res, t, step)
         if throw:
             raise err
         status, message = err.status, str(err)

@@ -47,8 +47,8 @@ from dataclasses import dataclass, field
 
 from ...scene import Mass, Scene
 from ..implicit.globalize import solve_globalized
-from ..implicit.initial_state import _scalar_root
-from ..implicit.step_system import _make_evaluate
+from ..implicit.step_system import make_evaluate
+from ..newton.scalar_root import scalar_root
 from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve
 from ..nonsmooth.impacts import impact_velocities, locking_elements, onto_locks
 from ..nonsmooth.lock_forces import forces_from_accelerations
@@ -99,7 +99,7 @@ def be_substep(scene: Scene, t_end: float, h: float, x0: list[float], v0: list[f
     f = scene.external_forces(t_end)
     cm = [nd.m / h if isinstance(nd, Mass) else 0.0 for nd in scene.nodes]
     qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
-    ev = _make_evaluate(scene, h, cm, [0.0] * N, [1.0] * N, list(v0), list(x0), f, qs, rq,
+    ev = make_evaluate(scene, h, cm, [0.0] * N, [1.0] * N, list(v0), list(x0), f, qs, rq,
                         rf, roundoff=True)
     res = newton_solve(ev, list(v0) + list(F0), options, min_norm=True)
     if res.code is not NewtonCode.SUCCESS:
@@ -290,7 +290,7 @@ def _forces_after(scene, t1, dt, x1, v1, F1, held, sub):
         kernel = el.law.kernel
         if el.kind != "spring" and q[e] != q_old[e] and kernel(q[e], F[e])[2] != 0.0:
             try:
-                F[e] = _scalar_root(kernel, q[e], F[e])[0]
+                F[e] = scalar_root(kernel, q[e], F[e])[0]
             except ValueError:
                 return None
         if kernel(q[e], F[e])[2] == 0.0:

@@ -50,6 +50,14 @@ from collections.abc import Callable
 import numpy as np
 from numba import njit, prange
 
+from ...scene.forcing_jit import (
+    FORCE_CONSTANT,
+    FORCE_NONE,
+    FORCE_SINE,
+    FORCE_TABLE,
+    forcing_code,
+)
+
 __all__ = [
     "FORCE_ZERO",
     "FORCE_CONSTANT",
@@ -64,10 +72,9 @@ __all__ = [
     "summary_batch_serial",
 ]
 
-FORCE_ZERO = 0
-FORCE_CONSTANT = 1
-FORCE_SINE = 2
-FORCE_SAMPLED = 3
+#: The kinds of :mod:`lumped.scene.forcing_jit` (zero and sampled are its none and table).
+FORCE_ZERO = FORCE_NONE
+FORCE_SAMPLED = FORCE_TABLE
 
 #: Columns of the summary arrays returned by :func:`summary_one` / :func:`summary_batch`.
 SUMMARY_FIELDS = (
@@ -80,26 +87,6 @@ SUMMARY_FIELDS = (
     "dissipated",   # sum over steps of dt F_d,n v_n (dashpot work, right-endpoint rule)
     "F_d_end",      # dashpot force at the last good step
 )
-
-
-def forcing_code(forcing: Callable[[float], float] | None) -> tuple[int, float, float, float]:
-    """``(code, p0, p1, p2)`` for a forcing the compiled loop evaluates natively.
-
-    Recognises ``None`` and :func:`lumped.scene.zero_forcing` (zero), a constant (what
-    :func:`lumped.scene.as_forcing` builds for a number) and
-    :class:`lumped.scene.SineBurst`. Anything else gives :data:`FORCE_SAMPLED`: the
-    caller samples it on the grid.
-    """
-    from lumped.scene import SineBurst, zero_forcing
-    from lumped.scene.network import _Constant
-
-    if forcing is None or forcing is zero_forcing:
-        return FORCE_ZERO, 0.0, 0.0, 0.0
-    if isinstance(forcing, SineBurst):
-        return FORCE_SINE, float(forcing.amplitude), float(forcing.omega), float(forcing.t_off)
-    if isinstance(forcing, _Constant):
-        return FORCE_CONSTANT, float(forcing.value), 0.0, 0.0
-    return FORCE_SAMPLED, 0.0, 0.0, 0.0
 
 
 @njit(cache=True, nogil=True)

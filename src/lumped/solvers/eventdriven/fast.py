@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...codegen.function_types import branch_type, guards_type, law_type
 from ...scene import Scene
-from ..modes.mode_guess_jit import branch_type, compiled_probe_modes, probe_workspace
+from ..modes.mode_guess_jit import compiled_probe_modes, probe_workspace
 from . import loop_jit as L
 
 __all__ = ["CompiledLoop", "compiled_loop"]
@@ -69,7 +70,7 @@ def _loaded(scene: Scene, plan) -> bool:
             plan.module_loaded = True
         else:
             digest = hashlib.sha256(source.encode()).hexdigest()[:24]
-            plan.module_loaded = digest in jit._MODULES  # the key of jit.scene_module
+            plan.module_loaded = digest in jit.LOADED_MODULES  # the key of jit.scene_module
     return plan.module_loaded
 
 
@@ -77,7 +78,7 @@ def _parts(scene: Scene, plan) -> tuple | str:
     """The compiled loop's per-scene parts, or why the scene runs in Python."""
     from ...codegen.jit import jit_scene, numba_enabled
     from ...scene.forcing import zero_forcing
-    from ..bdf.fixed_step_jit import forcing_arrays
+    from ...scene.forcing_jit import forcing_arrays
 
     if not numba_enabled():
         return "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
@@ -94,8 +95,8 @@ def _parts(scene: Scene, plan) -> tuple | str:
         js = jit_scene(scene)
     except ValueError as err:  # a hand-written kernel: no generated code
         return f"python: {err}"
-    return (js, _pointer(js.module.branch_law, L.law_type()),
-            _pointer(js.module.branch_guards, L.guards_type()), fkind, fpar,
+    return (js, _pointer(js.module.branch_law, law_type()),
+            _pointer(js.module.branch_guards, guards_type()), fkind, fpar,
             np.array(plan.checked, dtype=np.int64),
             _pointer(js.module.active_branch, branch_type()))
 
@@ -104,12 +105,12 @@ def _locks_in_parallel(scene: Scene, lbs: list, cyclic) -> bool:
     """Some elements that can be force-free (a branch whose ``dR/dF`` is not a nonzero
     constant) close a cycle: their forces can become indeterminate
     (:mod:`lumped.solvers.nonsmooth.locks`)."""
-    from ..nonsmooth.locks import _on_cycles
+    from ..nonsmooth.locks import on_cycles
 
     free = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in cyclic
                  if any(not (info.dR_dF.is_number and info.dR_dF != 0)
                         for info in lbs[e].info))
-    return len(free) > 1 and bool(_on_cycles(len(scene.nodes), free))
+    return len(free) > 1 and bool(on_cycles(len(scene.nodes), free))
 
 
 _POINTERS: dict = {}

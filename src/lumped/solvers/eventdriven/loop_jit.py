@@ -39,7 +39,7 @@ Python loop's algorithm) and the stage values in ``ws[0]``.
 
 State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. A_ERR``)
 and ``ist`` (ints, indices ``HAVE_ACC .. A_J``).  The forcing is ``(fkind, fpar)`` of
-:func:`lumped.solvers.bdf.core_jit.forcing_into` (kinds 0 none, 1 constant, 2 sine burst;
+:func:`lumped.scene.forcing_jit.forcing_into` (kinds 0 none, 1 constant, 2 sine burst;
 a tabulated forcing is not taken here).
 """
 
@@ -49,6 +49,7 @@ import math
 
 import numpy as np
 
+from ...codegen.function_types import function_at, guards_type, law_type
 from ...codegen.jit import njit, numba_enabled
 from ..modes.crossing_root import first_root
 from ..radau.stage import DAMPED_AFTER, END_SLOPES, MAX_NEWTON, STALL_PASSES, C
@@ -56,8 +57,7 @@ from ..radau.stage_jit import stage_solve
 from ..radau.step_jit import crossed, finite, folded, forces, step_error
 
 __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", "SINGULAR",
-           "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "DAMPED", "REASONS", "law_type",
-           "guards_type"]
+           "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "DAMPED", "REASONS"]
 
 # fst: float state
 (T, H, F_SEEN, H_ACC, ERR_ACC, H_GOOD, T_STOP, T_FINAL, RTOL, ATOL, M_MIN, PREV_BREAK,
@@ -301,50 +301,9 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
     ist[REASON] = reason
 
 
-def _function_at(ftype):
-    """An intrinsic ``addr -> ftype``: the first-class function whose C wrapper is at
-    ``addr`` (:func:`numba.experimental.function_type._get_wrapper_address`), as numba
-    unboxes a function argument, without its Python object (``py_addr``) and jit
-    address (``jit_addr``, 0 for a wrapper-address object): calls go through the C
-    wrapper, as they do for such an argument."""
-    from numba.core import cgutils
-    from numba.extending import intrinsic
-
-    @intrinsic
-    def at(typingctx, addr):
-        def codegen(context, builder, signature, args):
-            fn = cgutils.create_struct_proxy(ftype)(context, builder)
-            voidptr = context.get_value_type(_T.voidptr)
-            fn.c_addr = builder.inttoptr(args[0], voidptr)
-            fn.py_addr = cgutils.get_null_value(voidptr)
-            fn.jit_addr = cgutils.get_null_value(voidptr)
-            return fn._getvalue()
-
-        return ftype(_T.int64), codegen
-
-    return at
-
-
-def law_type():
-    """The numba function type of ``branch_law(e, i, q, F) -> (R, dR/dq, dR/dF)``."""
-    from ..radau.stage_jit import BRANCH_LAW_TYPE
-
-    return BRANCH_LAW_TYPE
-
-
-def guards_type():
-    """The numba function type of ``branch_guards(e, i, q, F, out) -> count``."""
-    from numba import types as T_
-
-    f8 = T_.float64
-    return T_.FunctionType(T_.int64(T_.int64, T_.int64, f8, f8, f8[::1]))
-
-
 if numba_enabled():
-    from numba import types as _T
-
-    _law_at = _function_at(law_type())
-    _guards_at = _function_at(guards_type())
+    _law_at = function_at(law_type())
+    _guards_at = function_at(guards_type())
 
 _COMPILED: list = []
 

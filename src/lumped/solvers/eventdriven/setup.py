@@ -154,11 +154,11 @@ def scene_plan(scene: Scene) -> ScenePlan:
             and plan.key[2] == key[2]:
         return plan
     from ...codegen.branches import law_branches
-    from ..implicit.branch_check import _known_monotone
+    from ..implicit.branch_check import known_monotone
     from ..nonsmooth.locks import cyclic_elements
 
     plan = ScenePlan(scope_error(scene), [law_branches(el.law) for el in scene.elements],
-                     [e for e, el in enumerate(scene.elements) if not _known_monotone(el.law)],
+                     [e for e, el in enumerate(scene.elements) if not known_monotone(el.law)],
                      cyclic_elements(scene), key)
     _PLANS[scene] = plan
     return plan

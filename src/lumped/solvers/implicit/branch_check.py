@@ -19,7 +19,7 @@ MONOTONE_BUILTINS = frozenset(
 )
 
 
-def _known_monotone(bound) -> bool:
+def known_monotone(bound) -> bool:
     """True for the built-in monotone laws (their graphs have no folds)."""
     law = getattr(bound, "law", None)
     name = getattr(law, "name", None)
@@ -33,7 +33,8 @@ def _known_monotone(bound) -> bool:
     return builtin is not None and (law is builtin or law == builtin)
 
 
-def _sign(x: float, scale: float) -> int:
+def dead_band_sign(x: float, scale: float) -> int:
+    """The sign of ``x``, 0 within ``1e-12 scale`` of zero."""
     if x > 1e-12 * scale:
         return 1
     if x < -1e-12 * scale:
@@ -41,7 +42,7 @@ def _sign(x: float, scale: float) -> int:
     return 0
 
 
-def _left_branch(kernel, q0: float, F0: float, Rq0: float, RF0: float,
+def left_branch(kernel, q0: float, F0: float, Rq0: float, RF0: float,
                  q1: float, F1: float, Rq1: float, RF1: float) -> bool:
     """Did the step from ``(q0, F0)`` to ``(q1, F1)`` cross or skip a fold of ``R = 0``?
 
@@ -52,8 +53,8 @@ def _left_branch(kernel, q0: float, F0: float, Rq0: float, RF0: float,
     """
     s0 = abs(Rq0) + abs(RF0)
     s1 = abs(Rq1) + abs(RF1)
-    signs_q = {_sign(Rq0, s0), _sign(Rq1, s1)}
-    signs_F = {_sign(RF0, s0), _sign(RF1, s1)}
+    signs_q = {dead_band_sign(Rq0, s0), dead_band_sign(Rq1, s1)}
+    signs_F = {dead_band_sign(RF0, s0), dead_band_sign(RF1, s1)}
     if {1, -1} <= signs_q or {1, -1} <= signs_F:
         return True
     dq, dF = q1 - q0, F1 - F0
@@ -67,8 +68,8 @@ def _left_branch(kernel, q0: float, F0: float, Rq0: float, RF0: float,
     for s in (0.25, 0.5, 0.75):
         _, Rq, RF = kernel(q0 + s * dq, F0 + s * dF)
         sc = abs(Rq) + abs(RF)
-        signs_q.add(_sign(Rq, sc))
-        signs_F.add(_sign(RF, sc))
+        signs_q.add(dead_band_sign(Rq, sc))
+        signs_F.add(dead_band_sign(RF, sc))
         if {1, -1} <= signs_q or {1, -1} <= signs_F:
             return True
     return False

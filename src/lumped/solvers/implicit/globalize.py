@@ -20,11 +20,11 @@ from __future__ import annotations
 import math
 
 from ...scene import Junction, Scene
-from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, _residual_ok, newton_solve
+from ..newton.scalar_root import scalar_root
+from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve, residual_ok
 from ..nonsmooth.groups import connected_groups
 from ..nonsmooth.impacts import lock_state, lockable_elements
-from .branch_check import _known_monotone
-from .initial_state import _scalar_root
+from .branch_check import known_monotone
 
 __all__ = [
     "balance_sweeps", "force_projector", "laws_hold", "solve_globalized", "split_free_forces",
@@ -35,7 +35,7 @@ __all__ = [
 def _no_force_at(kernel, q: float, F0: float) -> bool:
     """True when a law monotone in ``F`` admits no force at ``q``: ``R`` has one sign at
     ``F0`` and at ``+-1e300`` (a taut string's law past its length, ``q > L``). Three
-    kernel calls, where :func:`~lumped.solvers.implicit.initial_state._scalar_root` would double its
+    kernel calls, where :func:`~lumped.solvers.newton.scalar_root.scalar_root` would double its
     bracket some 2000 times before it gives up (most of the time of a globalised step
     with a string an ulp past its length)."""
     R0 = kernel(q, F0)[0]
@@ -79,7 +79,7 @@ def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool =
     # springs whose law may admit no force at some q (a string past its length), tested
     # first by _no_force_at; only laws known to be monotone in F (no folds)
     may_miss = {N + e for e, el in enumerate(scene.elements)
-                if el.kind == "spring" and _known_monotone(el.law)}
+                if el.kind == "spring" and known_monotone(el.law)}
 
     def elongation(u: list[float], a: int, b: int, is_spring: bool) -> float:
         if is_spring:
@@ -106,7 +106,7 @@ def force_projector(scene: Scene, h: float, x_hat: list[float], *, admit: bool =
             try:
                 if k in may_miss and _no_force_at(kernel, q, u[k]):
                     raise ValueError  # a string past its length: no root to search for
-                F, fixed = _scalar_root(kernel, q, u[k])
+                F, fixed = scalar_root(kernel, q, u[k])
             except ValueError:  # no force at this q: leave it to Newton
                 missing.append(k)
                 continue
@@ -139,14 +139,14 @@ def laws_hold(scene: Scene, h: float, x_hat: list[float], u: list[float], rtol: 
               atol: float) -> bool:
     """Every element's law holds at the step's solution ``u`` (velocities, forces) to
     Newton's residual test, ``|R| <= rtol S + atol`` (``S`` from
-    :func:`~lumped.solvers.implicit.step_system._law_scale`), read from the kernels directly.
+    :func:`~lumped.solvers.implicit.step_system.law_scale`), read from the kernels directly.
 
     Newton applies its last correction without evaluating where it lands (it is below
     the update tolerance); taken with the Jacobian of one piece of a law in a direction
     the balances leave free (locks in parallel), it can leave a stuck dashpot ``1e-8``
     beyond its yield force. This check costs one kernel call per element and no
     residual evaluation, so the counters of a step that passes are unchanged."""
-    from .step_system import _law_scale
+    from .step_system import law_scale
 
     N = len(scene.nodes)
     for e, el in enumerate(scene.elements):
@@ -158,7 +158,7 @@ def laws_hold(scene: Scene, h: float, x_hat: list[float], u: list[float], rtol: 
             q = (u[b] if b >= 0 else 0.0) - (u[a] if a >= 0 else 0.0)
         F = u[N + e]
         R, Rq, RF = el.law.kernel(q, F)
-        if not abs(R) <= rtol * _law_scale(el.law.kernel, q, F, R, Rq, RF) + atol:
+        if not abs(R) <= rtol * law_scale(el.law.kernel, q, F, R, Rq, RF) + atol:
             return False
     return True
 
@@ -458,13 +458,13 @@ def _motion_determined(evaluate, u: list[float], N: int, options: NewtonOptions)
     locks in parallel whose free split of the forces is pinned only by a law flat at its
     yield force (Herschel-Bulkley ``n > 1``: ``dR/dF -> 0`` there, so the step matrix is
     nearly, not exactly, singular and no minimum-norm step leaves the split alone)."""
-    from ..newton.semismooth import _equilibrated_min_norm, _update_ok
+    from ..newton.semismooth import equilibrated_min_norm, update_ok
 
     G, J, S = evaluate(u)
-    if not (math.isfinite(sum(G)) and _residual_ok(G, S, options.rtol, options.atol)):
+    if not (math.isfinite(sum(G)) and residual_ok(G, S, options.rtol, options.atol)):
         return False
-    du = _equilibrated_min_norm(J, G)
-    return math.isfinite(sum(du)) and _update_ok(du[:N], u[:N], options.rtol, options.atol)
+    du = equilibrated_min_norm(J, G)
+    return math.isfinite(sum(du)) and update_ok(du[:N], u[:N], options.rtol, options.atol)
 
 
 def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: list[float],
@@ -543,7 +543,7 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
                 # correction may leave a friction element's interval by 1e-8)
                 G, _, S = evaluate(res.u)
                 res_ev += 1
-                if _residual_ok(G, S, options.rtol, options.atol):
+                if residual_ok(G, S, options.rtol, options.atol):
                     break
                 res.code = NewtonCode.DIVERGED
             first = first or res
@@ -560,7 +560,7 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
             for k, floor in project.ulp_scales(start):
                 if floor > S[k] and math.isfinite(floor):
                     S[k] = floor
-            if _residual_ok(G, S, options.rtol, options.atol):
+            if residual_ok(G, S, options.rtol, options.atol):
                 res = NewtonResult(list(start), NewtonCode.SUCCESS, 0, 0, 0, 0, G, 0, J)
         if res.code is NewtonCode.SUCCESS:
             break

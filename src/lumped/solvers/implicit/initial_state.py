@@ -16,13 +16,14 @@ import math
 from functools import lru_cache
 
 from ...scene import Junction, Mass, Scene
-from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, _residual_ok, newton_solve
+from ..newton.scalar_root import scalar_root
+from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve, residual_ok
 from ..nonsmooth.groups import connected_groups
 from ..nonsmooth.junction_balance import refuse_unbalanced_junctions
 from ..nonsmooth.rest_balance import rest_forces, rest_inverse
 from ..status import InconsistentInitialForce, SolverError
-from .branch_check import _known_monotone
-from .step_system import _EPS, _law_scale, _newton_failure
+from .branch_check import known_monotone
+from .step_system import EPS, law_scale, newton_failure
 
 __all__ = ["consistent_initial_state"]
 
@@ -40,59 +41,6 @@ def _ic_options(options: NewtonOptions) -> NewtonOptions:
 
 # ---------------------------------------------------------------------------------------
 # consistent initial state
-
-
-def _scalar_root(kernel, q: float, F0: float) -> tuple[float, bool]:
-    """Solve ``R(q, F) = 0`` for ``F`` (``q`` fixed) by safeguarded Newton in a bracket.
-
-    Returns ``(F, pinned)``: ``pinned`` is False when the law is flat in ``F`` at an
-    exact root (``R = 0`` with ``dR/dF = 0``: a set-valued law, e.g. a stuck Bingham
-    dashpot), so that ``F`` is not fixed by the law alone; a root found only as a sign
-    change between neighbouring floats is isolated, hence pinned. Raises ValueError if
-    no sign change is found.
-    """
-    R, _, RF = kernel(q, F0)
-    if R == 0.0:
-        return F0, RF != 0.0
-    # bracket: expand both ways from F0
-    lo = hi = None
-    step = 1.0 + abs(F0)
-    for _ in range(2000):
-        for cand in (F0 + step, F0 - step):
-            Rc = kernel(q, cand)[0]
-            if Rc == 0.0:
-                _, _, RFc = kernel(q, cand)
-                return cand, RFc != 0.0
-            if (Rc > 0.0) != (R > 0.0):
-                lo, hi = (F0, cand) if cand > F0 else (cand, F0)
-                break
-        if lo is not None or step > 1e300:
-            break
-        step *= 2.0
-    if lo is None:
-        raise ValueError(f"no root of the law in F at q = {q!r}")
-    R_lo = kernel(q, lo)[0]
-    F = F0 if lo <= F0 <= hi else 0.5 * (lo + hi)
-    for _ in range(400):
-        R, _, RF = kernel(q, F)
-        if R == 0.0:
-            return F, RF != 0.0
-        if (R > 0.0) == (R_lo > 0.0):
-            lo, R_lo = F, R
-        else:
-            hi = F
-        F_new = F - R / RF if RF != 0.0 else math.nan
-        if not (lo < F_new < hi):
-            F_new = 0.5 * (lo + hi)
-        if F_new == F or not (lo < F_new < hi):
-            break
-        F = F_new
-    # No exact zero: the root lies between floating-point neighbours (e.g. a Bingham
-    # force tau + q / gamma with q / gamma below an ulp of tau, at the kink). The sign
-    # change isolates it, so the law fixes F there even if the nearest float sits on a
-    # flat piece: take the candidate with the smallest |R| (the correctly rounded root).
-    best = min((F, lo, hi), key=lambda c: abs(kernel(q, c)[0]))
-    return best, True
 
 
 #: At most this many cluster guesses (:func:`_cluster_guesses`) per initial state.
@@ -139,12 +87,12 @@ _MONOTONE: dict[int, tuple[object, bool]] = {}
 
 
 def _monotone(bound) -> bool:
-    """:func:`lumped.solvers.implicit.branch_check._known_monotone`, kept per bound law object."""
+    """:func:`lumped.solvers.implicit.branch_check.known_monotone`, kept per bound law object."""
     got = _MONOTONE.get(id(bound))
     if got is None or got[0] is not bound:
         if len(_MONOTONE) > 256:
             _MONOTONE.clear()
-        got = _MONOTONE[id(bound)] = (bound, _known_monotone(bound))
+        got = _MONOTONE[id(bound)] = (bound, known_monotone(bound))
     return got[1]
 
 
@@ -160,7 +108,7 @@ def _rest_forces(scene: Scene, pinned: list[float | None], q0: list[float],
 
     The forces so held are those of dashpots at rest (``q0 = 0``: their rows
     ``R(eps (a_b - a_a), F) = 0`` then fix the accelerations) whose laws have no folds
-    (:func:`lumped.solvers.implicit.branch_check._known_monotone`): the limit system has one
+    (:func:`lumped.solvers.implicit.branch_check.known_monotone`): the limit system has one
     solution, which Newton finds too. A force the law leaves free at ``q0 != 0`` (a taut
     string, whose row sees ``q0 + eps^2 a``, which rounds to ``q0``) leaves the
     accelerations to Newton's minimum-norm rule: not taken here."""
@@ -249,7 +197,7 @@ def consistent_initial_state(
                 continue  # a dashpot at a junction: its rate is unknown
         guess = el.F0 if el.F0 is not None else 0.0
         try:
-            F_root, fixed = _scalar_root(el.law.kernel, q0[e], guess)
+            F_root, fixed = scalar_root(el.law.kernel, q0[e], guess)
         except ValueError as err:
             what = "elongation" if el.kind == "spring" else "elongation rate"
             raise ValueError(
@@ -347,7 +295,7 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
             q = q0[e] + scale * (at(d, b) - at(d, a))
             R, Rq, RF = kernels[e](q, Fe)
             G[k] = R
-            S[k] = _law_scale(kernels[e], q, Fe, R, Rq, RF)
+            S[k] = law_scale(kernels[e], q, Fe, R, Rq, RF)
             row[k] = RF
             if a >= 0:
                 row[a] = -Rq * scale * dd[a]
@@ -387,7 +335,7 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
             for e in free:
                 q = elongation(u, e)
                 try:
-                    F, fixed = _scalar_root(kernels[e], q, u[N + e])
+                    F, fixed = scalar_root(kernels[e], q, u[N + e])
                 except ValueError:
                     continue
                 if not math.isfinite(F):
@@ -425,9 +373,9 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
                 R = kernels[e](q, F)[0]
                 rho = max(abs(kernels[e](q, math.nextafter(F, d))[0] - R)
                           for d in (-math.inf, math.inf))
-                if math.isfinite(rho) and rho / _EPS > S[k]:
-                    S[k] = rho / _EPS
-            return _residual_ok(G, S, ic_options.rtol, ic_options.atol)
+                if math.isfinite(rho) and rho / EPS > S[k]:
+                    S[k] = rho / EPS
+            return residual_ok(G, S, ic_options.rtol, ic_options.atol)
 
         free = [e for e in range(E) if pinned[e] is None]
         starts = [u0] + [[0.0 if is_mass[i] else g[i] for i in range(N)] + g[N:]
@@ -485,7 +433,7 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
                                res.jacobian_evals, res.factorizations, [], 0, [])
     if res.code is not NewtonCode.SUCCESS:
         refuse_unbalanced_junctions(scene, pinned, q0, f)
-        err = _newton_failure(scene, res, 0.0, 0)
+        err = newton_failure(scene, res, 0.0, 0)
         raise SolverError(
             f"no consistent initial state: {err}", status=err.status, t=0.0,
             where=err.where, residual=err.residual,

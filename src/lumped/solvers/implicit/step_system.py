@@ -19,21 +19,21 @@ from ..status import SolverError, Status
 # the discrete system of one step
 
 
-def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[float],
+def make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[float],
                    vscale: Sequence[float], uref: list[float], x_hat: list[float],
                    f: list[float], qs: list[float], rq: list[float], rf: list[float],
                    roundoff: bool = False, kernels: Sequence[Callable] | None = None):
     """Build ``evaluate(u) -> (G, J, S)`` for one step size.
 
     The scale of a law row is ``|dR/dq q| + |dR/dF F|``; with ``roundoff`` it is
-    :func:`_law_scale` (at least that, more where the law's terms cancel).
+    :func:`law_scale` (at least that, more where the law's terms cancel).
 
     ``uref, x_hat, f`` are read at call time (the step loop updates them in place);
     ``qs, rq, rf`` receive each element's ``q, dR/dq, dR/dF`` at the last evaluated point.
     ``kernels`` replaces the laws' own kernels (e.g. by their stage forms,
     :meth:`lumped.codegen.branches.LawBranches.stage_law_for`). This loop version is the
     readable reference of the step system; the step loop runs its generated twin
-    :func:`_generate_evaluate` (tested equal)."""
+    :func:`generate_evaluate` (tested equal)."""
     N = len(scene.nodes)
     E = len(scene.elements)
     n = N + E
@@ -80,7 +80,7 @@ def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[
             q = qb - qa
             R, Rq, RF = kernel(q, Fe)
             G[k] = R
-            S[k] = (_law_scale(kernel, q, Fe, R, Rq, RF) if roundoff
+            S[k] = (law_scale(kernel, q, Fe, R, Rq, RF) if roundoff
                     else abs(Rq * q) + abs(RF * Fe))
             row = J[k]
             row[k] = RF
@@ -103,13 +103,13 @@ def _make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[
     return evaluate
 
 
-def _generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[float],
+def generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[float],
                        f: list[float], roundoff: bool = False):
-    """The step system of :func:`_make_evaluate` (regular steps, ``v = u``, without the
+    """The step system of :func:`make_evaluate` (regular steps, ``v = u``, without the
     per-element side outputs) as generated, unrolled straight-line Python for this scene:
     no loops, no index lookups, constants inlined. Only indices and float literals enter
     the source (never a name from the scene), so a scene file cannot inject code. The
-    source is kept in ``__source__``. ``roundoff`` as in :func:`_make_evaluate`."""
+    source is kept in ``__source__``. ``roundoff`` as in :func:`make_evaluate`."""
     N, E = len(scene.nodes), len(scene.elements)
     n = N + E
     masses = scene.masses
@@ -152,7 +152,7 @@ def _generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[fl
     lines += ["    return ([" + ", ".join(f"G{i}" for i in range(n)) + "], [" + rows + "], ["
               + ", ".join(f"S{i}" for i in range(n)) + "])"]
     src = "\n".join(lines) + "\n"
-    namespace: dict = {"uref": uref, "xh": x_hat, "f": f, "abs": abs, "law_scale": _law_scale,
+    namespace: dict = {"uref": uref, "xh": x_hat, "f": f, "abs": abs, "law_scale": law_scale,
                        "__builtins__": {}}
     for e, el in enumerate(scene.elements):
         namespace[f"k{e}"] = el.law.kernel
@@ -163,10 +163,10 @@ def _generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[fl
 
 
 #: Unit roundoff of a double (``2**-52``).
-_EPS = sys.float_info.epsilon
+EPS = sys.float_info.epsilon
 
 
-def _law_scale(kernel, q: float, F: float, R: float, Rq: float, RF: float) -> float:
+def law_scale(kernel, q: float, F: float, R: float, Rq: float, RF: float) -> float:
     r"""Scale of the terms of a law row ``R(q, F)``, for the residual test.
 
     ``max(|R_q q| + |R_F F|, M)``, ``M = kernel.magnitude(q, F)`` the magnitude of the
@@ -197,7 +197,7 @@ def _law_scale(kernel, q: float, F: float, R: float, Rq: float, RF: float) -> fl
         d = abs(kernel(qq, FF)[0] - R)
         if d > rho and d != inf:  # NaN fails the comparison
             rho = d
-    ro = rho / _EPS
+    ro = rho / EPS
     return ro if ro > lin else lin
 
 
@@ -211,7 +211,7 @@ def _where(scene: Scene, row: int) -> str:
     return f"law {el.law_name!r} of element {el.name!r}"
 
 
-def _newton_failure(scene: Scene, res: NewtonResult, t: float, step: int) -> SolverError:
+def newton_failure(scene: Scene, res: NewtonResult, t: float, step: int) -> SolverError:
     where = _where(scene, res.worst_row)
     r = float(res.residual[res.worst_row]) if res.residual else math.nan
     t = float(t)  # plain numbers in the message, never numpy's np.float64(...)

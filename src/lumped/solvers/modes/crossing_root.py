@@ -36,7 +36,7 @@ _MAX_ITERS = 200
 
 
 @njit(cache=True, inline="always")
-def _on(s, y0, y1, y2, y3):
+def collocation_at(s, y0, y1, y2, y3):
     """The polynomial through ``y0..y3`` at the nodes ``0, c_1, c_2, 1``, at ``s``."""
     l1 = s * (s - _C1) * (s - _C2) / _D1
     l2 = s * (s - _C0) * (s - _C2) / _D2
@@ -80,8 +80,8 @@ def first_root_py(nodes: Sequence[tuple[Sequence[float], Sequence[float]]],
     for s in SAMPLES:
         best, which = np.inf, (0, 0)
         for w, ((q0, q1, q2, q3), (f0, f1, f2, f3)) in enumerate(nodes):
-            qs = _on(s, q0, q1, q2, q3)
-            Fs = _on(s, f0, f1, f2, f3)
+            qs = collocation_at(s, q0, q1, q2, q3)
+            Fs = collocation_at(s, f0, f1, f2, f3)
             tol = _TOL * (1.0 + abs(qs) + abs(Fs))
             for j, g in enumerate(guard_fns[w](qs, Fs)):
                 if g + tol < best:
@@ -91,7 +91,7 @@ def first_root_py(nodes: Sequence[tuple[Sequence[float], Sequence[float]]],
             (q0, q1, q2, q3), (f0, f1, f2, f3) = nodes[w]
 
             def g(z: float, w=w, j=j, q=(q0, q1, q2, q3), f=(f0, f1, f2, f3)) -> float:
-                return guard_fns[w](_on(z, *q), _on(z, *f))[j]
+                return guard_fns[w](collocation_at(z, *q), collocation_at(z, *f))[j]
 
             g0 = g(prev)
             if not g0 > 0.0:
@@ -103,8 +103,8 @@ def first_root_py(nodes: Sequence[tuple[Sequence[float], Sequence[float]]],
 
 @njit(cache=True)
 def _guard(branch_guards, e, mode, j, s, qw, Fw, gbuf) -> float:
-    branch_guards(e, mode, _on(s, qw[0], qw[1], qw[2], qw[3]),
-                  _on(s, Fw[0], Fw[1], Fw[2], Fw[3]), gbuf)
+    branch_guards(e, mode, collocation_at(s, qw[0], qw[1], qw[2], qw[3]),
+                  collocation_at(s, Fw[0], Fw[1], Fw[2], Fw[3]), gbuf)
     return gbuf[j]
 
 
@@ -124,8 +124,8 @@ def first_root(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_
         bj = 0
         for w in range(nw):
             e = watched[w]
-            qs = _on(s, qn[w, 0], qn[w, 1], qn[w, 2], qn[w, 3])
-            Fs = _on(s, Fn[w, 0], Fn[w, 1], Fn[w, 2], Fn[w, 3])
+            qs = collocation_at(s, qn[w, 0], qn[w, 1], qn[w, 2], qn[w, 3])
+            Fs = collocation_at(s, Fn[w, 0], Fn[w, 1], Fn[w, 2], Fn[w, 3])
             tol = _TOL * (1.0 + abs(qs) + abs(Fs))
             count = branch_guards(e, modes[e], qs, Fs, gbuf)
             for j in range(count):

@@ -27,10 +27,10 @@ from collections.abc import Callable, Sequence
 from scipy.optimize import brentq
 
 from ...scene import Mass, Scene
-from ..implicit.branch_check import _left_branch
+from ..implicit.branch_check import left_branch
 from ..implicit.globalize import solve_globalized
-from ..implicit.step_system import _make_evaluate
-from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, _residual_ok, newton_solve
+from ..implicit.step_system import make_evaluate
+from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve, residual_ok
 from ..radau.stage import dense_weights
 
 __all__ = ["SAMPLES", "first_crossing", "first_crossing_on", "select_modes", "hold_rate_locks",
@@ -145,7 +145,7 @@ def select_modes(
     # steep branches in their inverse form: the same zeros, a root Newton can reach
     kernels = [branches[e].stage_law_for(el.law.kernel) or el.law.kernel
                for e, el in enumerate(scene.elements)]
-    evaluate = _make_evaluate(scene, h_probe, cm, [0.0] * N, [1.0] * N, uref, x_hat, f,
+    evaluate = make_evaluate(scene, h_probe, cm, [0.0] * N, [1.0] * N, uref, x_hat, f,
                               qs, rq, rf, roundoff=True, kernels=kernels)
     probe_opts = _probe_options(options)
     # as the fixed-step methods: locks in parallel (a singular step) by the minimum-norm
@@ -207,7 +207,7 @@ def _accept_at_roundoff(res: NewtonResult, evaluate, options: NewtonOptions) -> 
     if res.code is not NewtonCode.MAX_ITERS:
         return res
     G, _, S = evaluate(res.u)
-    if not _residual_ok(G, S, options.rtol, options.atol):
+    if not residual_ok(G, S, options.rtol, options.atol):
         return res
     return dataclasses.replace(res, code=NewtonCode.SUCCESS, residual=G)
 
@@ -282,7 +282,7 @@ def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[floa
     list of int
         The elements held (empty: ``v`` is unchanged).
     """
-    from ..nonsmooth.impacts import _solve
+    from ..nonsmooth.impacts import impact_solve
 
     slack = math.sqrt(_EPS)
     held, target = [], []
@@ -306,7 +306,7 @@ def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[floa
                 target.append(float(L) if dashpot else 0.0)
                 break
     if held and not _ground_locks(scene, held, target, v):
-        v_new, _, _ = _solve(scene, v, held, 0.0, target=target)
+        v_new, _, _ = impact_solve(scene, v, held, 0.0, target=target)
         v[:] = v_new
     return held
 
@@ -425,9 +425,9 @@ def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Seq
             inner.append(e)
             gaps.append(float(L) - (x[b] - x[a]))
     if inner:  # between two nodes: the least move (kinetic-energy norm) onto q = L
-        from ..nonsmooth.impacts import _solve
+        from ..nonsmooth.impacts import impact_solve
 
-        dx, _, _ = _solve(scene, [0.0] * len(x), inner, 0.0, target=gaps)
+        dx, _, _ = impact_solve(scene, [0.0] * len(x), inner, 0.0, target=gaps)
         x[:] = [xi + di for xi, di in zip(x, dx, strict=True)]
     return [(e, impulses[locked.index(e)]) for e in hits], lost
 
@@ -438,7 +438,7 @@ def fold_crossed(kernel: Callable, q: Sequence[float], F: Sequence[float]) -> bo
     of the fixed-step methods, :mod:`lumped.solvers.implicit.branch_check`)."""
     d = [kernel(qk, Fk) for qk, Fk in zip(q, F, strict=True)]
     for k in range(len(q) - 1):
-        if _left_branch(kernel, q[k], F[k], d[k][1], d[k][2], q[k + 1], F[k + 1],
+        if left_branch(kernel, q[k], F[k], d[k][1], d[k][2], q[k + 1], F[k + 1],
                         d[k + 1][1], d[k + 1][2]):
             return True
     return False

@@ -18,7 +18,7 @@ solved by a plain Newton iteration on lists (Gaussian elimination with partial p
 The guess is accepted only when every element's branch function at the result,
 ``law_branches(...).branch(q_e, F_e)``, gives the guessed branch: the result then solves
 the full laws' step too, and for laws without folds (the elements that
-:func:`~lumped.solvers.implicit.branch_check._known_monotone` accepts; a scene with other laws
+:func:`~lumped.solvers.implicit.branch_check.known_monotone` accepts; a scene with other laws
 always takes the full search) that step has one solution, so the full search would read
 the same mode. Otherwise (no convergence, a singular matrix, another branch read) the
 caller runs the full search.

@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 
+from ...codegen.function_types import branch_type, function_at, law_type
 from ...codegen.jit import njit, numba_enabled
 
 __all__ = ["probe_modes", "branch_type", "compiled_probe_modes", "CONFIRMED", "UNDECIDED",
@@ -167,19 +168,9 @@ def _solve(J, G, n) -> bool:
     return True
 
 
-def branch_type():
-    """The numba function type of ``active_branch(e, q, F) -> int``."""
-    from numba import types as T_
-
-    f8 = T_.float64
-    return T_.FunctionType(T_.int64(T_.int64, f8, f8))
-
-
 if numba_enabled():
-    from ..eventdriven.loop_jit import _function_at, law_type
-
-    _law_at = _function_at(law_type())
-    _branch_at = _function_at(branch_type())
+    _law_at = function_at(law_type())
+    _branch_at = function_at(branch_type())
 
 _COMPILED: list = []
 

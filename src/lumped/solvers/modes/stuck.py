@@ -26,7 +26,7 @@ half-way samples are a heuristic.
 Nothing here names a law: the locks, the guards and the lock values come from the
 generated branches (:func:`lumped.codegen.branches.law_branches`). Only forcings that are
 absent, constant or a sine burst are taken (the kinds of the compiled loop,
-:func:`lumped.solvers.bdf.fixed_step_jit.forcing_arrays`); any other runs the steps.
+:func:`lumped.scene.forcing_jit.forcing_arrays`); any other runs the steps.
 """
 
 from __future__ import annotations
@@ -249,7 +249,7 @@ def forcing_kinds(scene: Scene, plan) -> tuple[np.ndarray | None, np.ndarray | N
     got = getattr(plan, "forcing_kinds", None)
     if got is None:
         from ...scene.forcing import zero_forcing
-        from ..bdf.fixed_step_jit import forcing_arrays
+        from ...scene.forcing_jit import forcing_arrays
 
         fkind, fpar, _ = forcing_arrays(scene, 1.0, 0)
         for i, fn in enumerate(scene.forcing):

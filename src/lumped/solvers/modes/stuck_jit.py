@@ -20,6 +20,7 @@ import math
 
 import numpy as np
 
+from ...codegen.function_types import function_at, guards_type
 from ...codegen.jit import njit, numba_enabled
 
 __all__ = ["breakout_root", "breakout_scan", "brent", "compiled_breakout_root",
@@ -201,9 +202,7 @@ def brent(f, xa: float, xb: float, xtol: float, rtol: float, maxiter: int = _MAX
 
 
 if numba_enabled():
-    from ..eventdriven.loop_jit import _function_at, guards_type
-
-    _guards_at = _function_at(guards_type())
+    _guards_at = function_at(guards_type())
 
 _COMPILED: list = []
 _SCAN: list = []

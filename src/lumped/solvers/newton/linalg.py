@@ -110,7 +110,7 @@ class _NumpyLU:
         return scipy.linalg.lu_solve(self._f, list(b), check_finite=False).tolist()
 
 
-def _factor(J: list[list[float]]):
+def factor_solver(J: list[list[float]]):
     """Return a ``solve(b)`` callable for ``J``, or ``None`` if ``J`` is singular."""
     if len(J) <= DENSE_PYTHON_MAX:
         f = lu_factor(J)

@@ -53,7 +53,14 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from .linalg import DENSE_PYTHON_MAX, FactorCache, _factor, lu_factor, lu_solve, unrolled_lu_solve
+from .linalg import (
+    DENSE_PYTHON_MAX,
+    FactorCache,
+    factor_solver,
+    lu_factor,
+    lu_solve,
+    unrolled_lu_solve,
+)
 
 __all__ = [
     "NewtonCode",
@@ -234,7 +241,7 @@ def newton_solve(
         if solve_prev is not None and J != J_prev:
             G_c, J_c, S_c = evaluate(u_c)
             n_res += 1
-            if J_c != J and not (finite(G_c) and _residual_ok(G_c, S_c, rtol, atol)):
+            if J_c != J and not (finite(G_c) and residual_ok(G_c, S_c, rtol, atol)):
                 return result(NewtonCode.SUCCESS)
             G, J, S = G_c, J_c, S_c
         u = u_c
@@ -253,19 +260,19 @@ def newton_solve(
     while True:
         if not isfinite(sum(map(sum, J))):
             return result(NewtonCode.NON_FINITE)
-        res_ok = _residual_ok(G, S, rtol, atol)
+        res_ok = residual_ok(G, S, rtol, atol)
         if res_ok and solve_prev is not None and J == J_prev:
             # same Jacobian as the last factorisation (same pieces of piecewise laws): the
             # next correction costs a back-substitution only
             delta = solve_prev(G)
-            if finite(delta) and _update_ok(delta, u, rtol, atol):
+            if finite(delta) and update_ok(delta, u, rtol, atol):
                 u = [ui - di for ui, di in zip(u, delta, strict=True)]
                 return result(NewtonCode.SUCCESS)
         n_jac += 1
         if cache is not None and cache.J == J:
             solve = cache.hit()
         else:
-            solve = _factor(J)
+            solve = factor_solver(J)
             n_fact += 1
             if solve is None:
                 met_singular = True
@@ -283,7 +290,7 @@ def newton_solve(
                 met_singular = True
                 du = d3
         if res_ok:
-            if _update_ok(du, u, rtol, atol):
+            if update_ok(du, u, rtol, atol):
                 return final_correction(du)
             # At a kink the residual can be zero up to rounding while the Jacobian of the
             # piece on one side proposes a long step (no floating-point root exists on
@@ -295,11 +302,11 @@ def newton_solve(
             n_res += 1
             if J_dir != J and all(finite(row) for row in J_dir):
                 n_jac += 1
-                solve_dir = _factor(J_dir)
+                solve_dir = factor_solver(J_dir)
                 n_fact += 1
                 if solve_dir is not None:
                     d2 = solve_dir(G)
-                    if finite(d2) and _update_ok(d2, u, rtol, atol):
+                    if finite(d2) and update_ok(d2, u, rtol, atol):
                         u = [ui - di for ui, di in zip(u, d2, strict=True)]
                         return result(NewtonCode.SUCCESS)
             # An unknown near zero whose rounding is set by large terms (a velocity
@@ -316,8 +323,8 @@ def newton_solve(
             # free split of the forces -- and Newton wanders there until its budget
             # runs out. The minimum-norm correction leaves that split alone.
             if min_norm:
-                d3 = _equilibrated_min_norm(J, G)
-                if finite(d3) and (_update_ok(d3, u, rtol, atol)
+                d3 = equilibrated_min_norm(J, G)
+                if finite(d3) and (update_ok(d3, u, rtol, atol)
                                    or _update_ok_scaled(d3, u, J, S, rtol, atol)):
                     met_singular = True
                     u = [ui - di for ui, di in zip(u, d3, strict=True)]
@@ -337,7 +344,7 @@ def newton_solve(
             G_new, J_new, S_new = evaluate(u_new)
             n_res += 1
             if (lam == 1.0 and J_new != J and finite(G_new)
-                    and not _residual_ok(G_new, S_new, rtol, atol)):
+                    and not residual_ok(G_new, S_new, rtol, atol)):
                 # The step left the piece it was computed on and missed. If that piece's
                 # root lies on its own boundary (a kink; in floating point the root can
                 # sit within rounding of it), a hair short of the full step stays on the
@@ -345,10 +352,10 @@ def newton_solve(
                 u_alt = [ui - (1.0 - 1e-12) * di for ui, di in zip(u, du, strict=True)]
                 G_alt, J_alt, S_alt = evaluate(u_alt)
                 n_res += 1
-                if finite(G_alt) and _residual_ok(G_alt, S_alt, rtol, atol):
+                if finite(G_alt) and residual_ok(G_alt, S_alt, rtol, atol):
                     u_new, G_new, J_new, S_new = u_alt, G_alt, J_alt, S_alt
             if finite(G_new):
-                if iters < options.free_steps or _residual_ok(G_new, S_new, rtol, atol):
+                if iters < options.free_steps or residual_ok(G_new, S_new, rtol, atol):
                     break
                 # sufficient decrease of the merit, with the weights of the current iterate
                 if _merit(G_new, S, floor) <= (1.0 - 1e-4 * lam) * norm:
@@ -386,7 +393,7 @@ def min_norm_solver(J: Sequence[Sequence[float]]):
     return solve
 
 
-def _equilibrated_min_norm(J: Sequence[Sequence[float]], G: Sequence[float]) -> list[float]:
+def equilibrated_min_norm(J: Sequence[Sequence[float]], G: Sequence[float]) -> list[float]:
     """The minimum-norm solution of ``J d = G`` with rows and columns scaled to unit
     largest entries first: a matrix singular only in its scales (``k h = 1e8`` beside
     ``m / h = 1``) keeps its full rank (the plain LU solution), one with rows that are
@@ -422,13 +429,13 @@ def _null_step_removed(J: Sequence[Sequence[float]], G: Sequence[float], du: lis
     (``1e13``), from where Newton crawls back by halving and runs out of iterations.
     Checked only when ``du`` exceeds :data:`_NULL_STEP_RATIO` times ``1 + max |u|``:
     the minimum-norm solution of the equilibrated matrix
-    (:func:`_equilibrated_min_norm`) replaces it when it is a thousand times shorter and
+    (:func:`equilibrated_min_norm`) replaces it when it is a thousand times shorter and
     solves ``J d = G`` (residual below ``1e-8`` of the terms). On a regular matrix the two
     agree to rounding, so ``du`` stays."""
     big = max(abs(d) for d in du)
     if not big > _NULL_STEP_RATIO * (1.0 + max(abs(x) for x in u)):
         return None
-    d3 = _equilibrated_min_norm(J, G)
+    d3 = equilibrated_min_norm(J, G)
     short = max(abs(d) for d in d3)
     if not (math.isfinite(short) and 1e3 * short < big):
         return None
@@ -464,14 +471,14 @@ def _merit(G: Sequence[float], S: Sequence[float], floor: float) -> float:
     return m
 
 
-def _residual_ok(G: Sequence[float], S: Sequence[float], rtol: float, atol: float) -> bool:
+def residual_ok(G: Sequence[float], S: Sequence[float], rtol: float, atol: float) -> bool:
     for g, s in zip(G, S, strict=True):
         if not abs(g) <= rtol * s + atol:
             return False
     return True
 
 
-def _update_ok(du: Sequence[float], u: Sequence[float], rtol: float, atol: float) -> bool:
+def update_ok(du: Sequence[float], u: Sequence[float], rtol: float, atol: float) -> bool:
     for d, x in zip(du, u, strict=True):
         if not abs(d) <= rtol * abs(x) + atol:
             return False
@@ -503,4 +510,4 @@ def _update_ok_scaled(du: Sequence[float], u: Sequence[float], J: Sequence[Seque
 
 
 def _converged(G, S, du, u, rtol, atol) -> bool:
-    return _residual_ok(G, S, rtol, atol) and _update_ok(du, u, rtol, atol)
+    return residual_ok(G, S, rtol, atol) and update_ok(du, u, rtol, atol)

@@ -51,11 +51,11 @@ CODE_NAMES = ("success", "max_iters", "diverged", "singular", "non_finite")
 SUCCESS, MAX_ITERS, DIVERGED, SINGULAR, NON_FINITE = 0, 1, 2, 3, 4
 
 # rows of the vector workspace
-_G, _S, _DU, _UN, _GN, _SN, _UA, _GA, _SA, _PR, _GD, _SD, _D2, _UC, _GC, _SC = range(16)
+WS_G, WS_S, WS_DU, WS_UN, WS_GN, WS_SN, WS_UA, WS_GA, WS_SA, WS_PR, WS_GD, WS_SD, WS_D2, WS_UC, WS_GC, WS_SC = range(16)
 #: Vectors in the workspace of :func:`newton`.
 N_VECTORS = 16
 # matrices of the matrix workspace
-_J, _JN, _JA, _JD, _JC, _LUD = range(6)
+WS_J, WS_JN, WS_JA, WS_JD, WS_JC, WS_LUD = range(6)
 #: Matrices in the workspace of :func:`newton`.
 N_MATRICES = 6
 
@@ -288,8 +288,8 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
         The code (0 success, see the module notes).
     """
     n = u.shape[0]
-    G, S, du = wv[_G], wv[_S], wv[_DU]
-    J = wm[_J]
+    G, S, du = wv[WS_G], wv[WS_S], wv[WS_DU]
+    J = wm[WS_J]
     evaluate(u, p, G, J, S, roundoff)
     n_res = 1
     n_jac = 0
@@ -306,12 +306,12 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
             code = NON_FINITE
             break
         res_ok = residual_ok(G, S, rtol, atol)
-        # J_prev is wm[_JC]; its factors are the cache's (stored in that iteration)
-        if res_ok and have_prev and same(J, wm[_JC]):
-            lu_solve_into(cLU, cperm, G, wv[_D2])
-            if finite_sum(wv[_D2]) and update_ok(wv[_D2], u, rtol, atol):
+        # J_prev is wm[WS_JC]; its factors are the cache's (stored in that iteration)
+        if res_ok and have_prev and same(J, wm[WS_JC]):
+            lu_solve_into(cLU, cperm, G, wv[WS_D2])
+            if finite_sum(wv[WS_D2]) and update_ok(wv[WS_D2], u, rtol, atol):
                 for i in range(n):
-                    u[i] = u[i] - wv[_D2][i]
+                    u[i] = u[i] - wv[WS_D2][i]
                 break
         n_jac += 1
         if not (cvalid[0] == 1 and same(cJ, J)):
@@ -330,12 +330,12 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
             break
         if res_ok:
             if update_ok(du, u, rtol, atol):
-                uc = wv[_UC]
+                uc = wv[WS_UC]
                 for i in range(n):
                     uc[i] = u[i] - du[i]
-                if have_prev and not same(J, wm[_JC]):
-                    # wm[_JC] holds J_prev here (see the end of the loop)
-                    Gc, Sc, Jc = wv[_GC], wv[_SC], wm[_JN]
+                if have_prev and not same(J, wm[WS_JC]):
+                    # wm[WS_JC] holds J_prev here (see the end of the loop)
+                    Gc, Sc, Jc = wv[WS_GC], wv[WS_SC], wm[WS_JN]
                     evaluate(uc, p, Gc, Jc, Sc, roundoff)
                     n_res += 1
                     if not same(Jc, J) and not (finite_sum(Gc) and residual_ok(Gc, Sc, rtol,
@@ -347,18 +347,18 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
                 copy_into(uc, u)
                 break
             # directional retry: the Jacobian of the piece the step points into
-            probe = wv[_PR]
+            probe = wv[WS_PR]
             for i in range(n):
                 probe[i] = hair(u[i], du[i])
-            Jd = wm[_JD]
-            evaluate(probe, p, wv[_GD], Jd, wv[_SD], roundoff)
+            Jd = wm[WS_JD]
+            evaluate(probe, p, wv[WS_GD], Jd, wv[WS_SD], roundoff)
             n_res += 1
             if not same(Jd, J) and finite_matrix_rows(Jd):
                 n_jac += 1
                 n_fact += 1
-                if lu_factor_into(Jd, wm[_LUD], wperm):
-                    d2 = wv[_D2]
-                    lu_solve_into(wm[_LUD], wperm, G, d2)
+                if lu_factor_into(Jd, wm[WS_LUD], wperm):
+                    d2 = wv[WS_D2]
+                    lu_solve_into(wm[WS_LUD], wperm, G, d2)
                     if finite_sum(d2) and update_ok(d2, u, rtol, atol):
                         for i in range(n):
                             u[i] = u[i] - d2[i]
@@ -373,7 +373,7 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
         lam = 1.0
         if iters >= free_steps and norm < 0.0:
             norm = merit(G, S, floor)
-        un, Gn, Sn, Jn = wv[_UN], wv[_GN], wv[_SN], wm[_JN]
+        un, Gn, Sn, Jn = wv[WS_UN], wv[WS_GN], wv[WS_SN], wm[WS_JN]
         accepted = False
         for _ in range(max_backtracks + 1):
             if lam == 1.0:
@@ -386,7 +386,7 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
             n_res += 1
             if (lam == 1.0 and not same(Jn, J) and finite_sum(Gn)
                     and not residual_ok(Gn, Sn, rtol, atol)):
-                ua, Ga, Sa, Ja = wv[_UA], wv[_GA], wv[_SA], wm[_JA]
+                ua, Ga, Sa, Ja = wv[WS_UA], wv[WS_GA], wv[WS_SA], wm[WS_JA]
                 for i in range(n):
                     ua[i] = u[i] - (1.0 - 1e-12) * du[i]
                 evaluate(ua, p, Ga, Ja, Sa, roundoff)
@@ -416,7 +416,7 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
             code = DIVERGED
             break
         have_prev = True
-        copy_into(J, wm[_JC])  # J_prev
+        copy_into(J, wm[WS_JC])  # J_prev
         copy_into(un, u)
         copy_into(Gn, G)
         copy_into(Sn, S)

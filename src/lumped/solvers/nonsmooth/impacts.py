@@ -120,7 +120,7 @@ def _rates(scene, v: Sequence[float], elems: Sequence[int]) -> list[float]:
     return out
 
 
-def _solve(scene, v: Sequence[float], elems: Sequence[int], restitution: float,
+def impact_solve(scene, v: Sequence[float], elems: Sequence[int], restitution: float,
            target: Sequence[float] | None = None):
     """The impact equations for the elements ``elems``: ``(v+, P)`` (minimum norm);
     ``target`` replaces ``-e B v`` as the locked rates after the impact."""
@@ -218,7 +218,7 @@ def impact_velocities(scene, x: Sequence[float], v: Sequence[float], locked: Seq
     for _ in range(len(locked) + 1):
         if not active:
             break
-        v_after, P, rates = _solve(scene, v, active, restitution)
+        v_after, P, rates = impact_solve(scene, v, active, restitution)
         # a lock holds, it never pushes: the impulse opposes the approach rate; an
         # element at rest on its lock (rate below the velocities' round-off, e.g. a
         # string holding a mass that another lock stopped) holds the way its force acts
@@ -254,5 +254,5 @@ def onto_locks(scene, x: Sequence[float], F: Sequence[float],
         dq.append(-R / Rq if Rq != 0.0 and R == R else 0.0)
     if not any(dq):
         return list(x)
-    dx, _, _ = _solve(scene, [0.0] * len(x), list(locked), 0.0, target=dq)
+    dx, _, _ = impact_solve(scene, [0.0] * len(x), list(locked), 0.0, target=dq)
     return [xi + di for xi, di in zip(x, dx, strict=True)]

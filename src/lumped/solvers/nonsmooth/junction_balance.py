@@ -135,10 +135,10 @@ def refuse_unbalanced_junctions(scene: Scene, pinned: Sequence[float | None],
                 scale[r] += abs(pinned[e])
             continue
         if el.kind == "spring":  # q known, the law leaves F free there (a taut string)
-            from ..implicit.initial_state import _scalar_root
+            from ..newton.scalar_root import scalar_root
 
             try:
-                start, _ = _scalar_root(el.law.kernel, q0[e], 0.0)
+                start, _ = scalar_root(el.law.kernel, q0[e], 0.0)
             except ValueError:
                 continue  # refused element by element before
             lo, hi = force_range(el.law.kernel, q0[e], start)

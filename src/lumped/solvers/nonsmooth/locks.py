@@ -27,7 +27,7 @@ __all__ = ["cyclic_elements", "cycles_among", "indeterminate_elements", "Interva
            "prefer_locks", "lock_parallel_rates"]
 
 @lru_cache(maxsize=256)
-def _on_cycles(n_nodes: int, edges: tuple[tuple[int, int, int], ...]) -> tuple[int, ...]:
+def on_cycles(n_nodes: int, edges: tuple[tuple[int, int, int], ...]) -> tuple[int, ...]:
     """Elements (first entry of each edge) that lie on a cycle of the graph of ``edges``
     (``(element, a, b)``, ground ``-1``): those whose removal keeps ``a`` and ``b``
     connected."""
@@ -54,14 +54,14 @@ def cyclic_elements(scene) -> tuple[int, ...]:
     """Elements on some cycle of the whole network (ground one vertex): the only ones whose
     forces can ever be indeterminate."""
     edges = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in range(len(scene.elements)))
-    return _on_cycles(len(scene.nodes), edges)
+    return on_cycles(len(scene.nodes), edges)
 
 
 def cycles_among(scene, elements) -> tuple[int, ...]:
     """Those of ``elements`` that lie on a cycle of the subnetwork made of ``elements`` alone
     (ground one vertex): e.g. of the locked elements, the ones locked in parallel."""
     edges = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in elements)
-    return _on_cycles(len(scene.nodes), edges)
+    return on_cycles(len(scene.nodes), edges)
 
 
 def indeterminate_elements(scene, q: Sequence[float], F: Sequence[float],
@@ -77,7 +77,7 @@ def indeterminate_elements(scene, q: Sequence[float], F: Sequence[float],
             free.append((e, ea[e], eb[e]))
     if len(free) < 2:
         return ()
-    return _on_cycles(len(scene.nodes), tuple(free))
+    return on_cycles(len(scene.nodes), tuple(free))
 
 
 class IntervalLog:

@@ -26,7 +26,8 @@ import math
 
 import numpy as np
 
-from ...codegen.jit import _numba, njit, numba_enabled
+from ...codegen.function_types import BRANCH_LAW_TYPE
+from ...codegen.jit import njit, numba_enabled
 from ..newton.semismooth_jit import lu_factor_into, lu_solve_into
 
 __all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_solve"]
@@ -157,15 +158,6 @@ def stage_solve(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x
     out[1] = nfac
     return False
 
-
-if _numba is not None:
-    from numba import types as _T
-
-    _f8 = _T.float64
-    #: ``branch_law(e, i, q, F) -> (R, dR/dq, dR/dF)`` as a numba function type.
-    BRANCH_LAW_TYPE = _T.FunctionType(_T.UniTuple(_f8, 3)(_T.int64, _T.int64, _f8, _f8))
-else:  # pragma: no cover - without numba
-    BRANCH_LAW_TYPE = None
 
 _COMPILED: list = []
 

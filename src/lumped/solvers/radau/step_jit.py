@@ -20,7 +20,8 @@ import math
 import numpy as np
 
 from ...codegen.jit import njit
-from ..bdf.core_jit import _bit, _sign, forcing_into
+from ...scene.forcing_jit import forcing_into
+from ..implicit.branch_check_jit import dead_band_sign, sign_bit
 from ..modes.events import SAMPLES
 from ..newton.semismooth_jit import lu_factor_into, lu_solve_into
 from .stage import E_ERR, FORCE_TOL_FACTOR, MU_REAL, C
@@ -86,8 +87,8 @@ def _left_branch(branch_law, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> boo
     :mod:`lumped.solvers.implicit.branch_check`) on element ``e``'s branch ``mode``."""
     s0 = abs(Rq0) + abs(RF0)
     s1 = abs(Rq1) + abs(RF1)
-    mq = _bit(_sign(Rq0, s0)) | _bit(_sign(Rq1, s1))
-    mf = _bit(_sign(RF0, s0)) | _bit(_sign(RF1, s1))
+    mq = sign_bit(dead_band_sign(Rq0, s0)) | sign_bit(dead_band_sign(Rq1, s1))
+    mf = sign_bit(dead_band_sign(RF0, s0)) | sign_bit(dead_band_sign(RF1, s1))
     if mq == 3 or mf == 3:
         return True
     dq = q1 - q0
@@ -104,8 +105,8 @@ def _left_branch(branch_law, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> boo
     for s in (0.25, 0.5, 0.75):
         _, Rq, RF = branch_law(e, mode, q0 + s * dq, F0 + s * dF)
         sc = abs(Rq) + abs(RF)
-        mq |= _bit(_sign(Rq, sc))
-        mf |= _bit(_sign(RF, sc))
+        mq |= sign_bit(dead_band_sign(Rq, sc))
+        mf |= sign_bit(dead_band_sign(RF, sc))
         if mq == 3 or mf == 3:
             return True
     return False

@@ -1,0 +1,68 @@
+r"""Numba function types of the generated kernels, and calls through their addresses.
+
+The compiled loops are compiled once for every scene; a scene's generated kernels reach
+them as plain integers, the addresses of their C wrappers, and :func:`function_at` turns
+such an address back into a callable first-class function of a known type:
+
+* :data:`BRANCH_LAW_TYPE` (:func:`law_type`): ``branch_law(e, i, q, F) -> (R, dR/dq,
+  dR/dF)``, element ``e`` held on branch ``i``;
+* :func:`guards_type`: ``branch_guards(e, i, q, F, out) -> count``, the guard values of
+  element ``e`` on branch ``i`` written into ``out``;
+* :func:`branch_type`: ``active_branch(e, q, F) -> int``.
+"""
+
+from __future__ import annotations
+
+from .jit import numba_module
+
+__all__ = ["BRANCH_LAW_TYPE", "function_at", "law_type", "guards_type", "branch_type"]
+
+if numba_module is not None:
+    from numba import types as _T
+
+    _f8 = _T.float64
+    #: ``branch_law(e, i, q, F) -> (R, dR/dq, dR/dF)`` as a numba function type.
+    BRANCH_LAW_TYPE = _T.FunctionType(_T.UniTuple(_f8, 3)(_T.int64, _T.int64, _f8, _f8))
+else:  # pragma: no cover - without numba
+    BRANCH_LAW_TYPE = None
+
+
+def function_at(ftype):
+    """An intrinsic ``addr -> ftype``: the first-class function whose C wrapper is at
+    ``addr`` (:func:`numba.experimental.function_type._get_wrapper_address`), as numba
+    unboxes a function argument, without its Python object (``py_addr``) and jit
+    address (``jit_addr``, 0 for a wrapper-address object): calls go through the C
+    wrapper, as they do for such an argument."""
+    from numba.core import cgutils
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def at(typingctx, addr):
+        def codegen(context, builder, signature, args):
+            fn = cgutils.create_struct_proxy(ftype)(context, builder)
+            voidptr = context.get_value_type(_T.voidptr)
+            fn.c_addr = builder.inttoptr(args[0], voidptr)
+            fn.py_addr = cgutils.get_null_value(voidptr)
+            fn.jit_addr = cgutils.get_null_value(voidptr)
+            return fn._getvalue()
+
+        return ftype(_T.int64), codegen
+
+    return at
+
+
+def law_type():
+    """The numba function type of ``branch_law(e, i, q, F) -> (R, dR/dq, dR/dF)``."""
+    return BRANCH_LAW_TYPE
+
+
+def guards_type():
+    """The numba function type of ``branch_guards(e, i, q, F, out) -> count``."""
+    f8 = _T.float64
+    return _T.FunctionType(_T.int64(_T.int64, _T.int64, f8, f8, f8[::1]))
+
+
+def branch_type():
+    """The numba function type of ``active_branch(e, q, F) -> int``."""
+    f8 = _T.float64
+    return _T.FunctionType(_T.int64(_T.int64, f8, f8))
