@@ -6,9 +6,8 @@ written out; each test failed before its fix."""
 
 from __future__ import annotations
 
-import re
-
 import math
+import re
 
 import numpy as np
 import pytest
