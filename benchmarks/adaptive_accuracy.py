@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from lumped import simulate
-from lumped.bench.peers import _scipy_solver
+from lumped.bench.peers import scipy_solver
 from lumped.bench.report import print_and_save
 from lumped.bench.runner import measure_unit, time_call
 from lumped.bench.scenes import GRID_DT, PAPER_SCENES, generic_scene
@@ -38,7 +38,7 @@ def _peers(scene, grid, x_ref, unit):
     out = []
     for eps in PEER_EPS:
         for rtol in PEER_RTOLS:
-            run = _scipy_solver(scene, "LSODA", eps, rtol, rtol * 1e-3, 50_000, scene.t_end)
+            run = scipy_solver(scene, "LSODA", eps, rtol, rtol * 1e-3, 50_000, scene.t_end)
             try:
                 solved, cpu, _ = time_call(run, min_time=0.02, max_repeats=3)
             except Exception:  # noqa: BLE001 - a failed peer run is skipped, as in the bench

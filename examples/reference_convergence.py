@@ -21,7 +21,8 @@ import numpy as np
 
 from lumped.reference import exact_solution, reference_for_grid
 from lumped.scene import SineBurst, paper_F1, paper_F2, zero_forcing
-from lumped.solvers.closed.closed_form import BinghamOscillator, integrate
+from lumped.solvers.closed.closed_form import BinghamOscillator
+from lumped.solvers.closed.integrate import integrate
 
 PAPER = BinghamOscillator(m=1.0, k=100.0, gamma=1.0, tau=1.0)
 SCENES = {

@@ -14,7 +14,8 @@ from hypothesis import strategies as st
 
 from lumped.scene import Element, Junction, Mass, Scene, SineBurst, paper_F2
 from lumped.simulate import simulate
-from lumped.solvers.closed.closed_form import BinghamOscillator, initial_dashpot_force, integrate
+from lumped.solvers.closed.closed_form import BinghamOscillator, initial_dashpot_force
+from lumped.solvers.closed.integrate import integrate
 from lumped.solvers.implicit.branch_check import left_branch
 from lumped.solvers.registry import METHODS
 from lumped.solvers.status import BranchError, InconsistentInitialForce, SolverError, Status

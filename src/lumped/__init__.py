@@ -4,7 +4,7 @@ Elements are declared by implicit residuals ``alpha(x, F_s) = 0`` (springs) or
 ``beta(v, F_d) = 0`` (dashpots); a scene of masses and elements is a semi-explicit
 DAE, advanced by BDF1/BDF2 with a semismooth Newton solver (:func:`simulate`).  For one
 mass with a linear spring and a Bingham dashpot the step has a closed form (the paper's
-Algorithm 1, :func:`lumped.solvers.closed.closed_form.integrate`), and :mod:`lumped.reference`
+Algorithm 1, :func:`lumped.solvers.closed.integrate.integrate`), and :mod:`lumped.reference`
 gives the exact solution.
 
 The top level holds only the everyday names; everything else lives in its sub-package

@@ -116,5 +116,5 @@ def summarize(traj: Trajectory, v_tol: float = 0.0) -> StickSummary:
     )
 
 
-def _fmt(value: float | None) -> str:
+def fmt_number(value: float | None) -> str:
     return "-" if value is None or not math.isfinite(value) else f"{value:.6g}"

@@ -14,7 +14,8 @@ from lumped.cli import run as cmd_run
 from lumped.compare import compare
 from lumped.io.scenefile import SceneFileError, load_scene, scene_from_dict
 from lumped.scene import Junction, Mass, SineBurst
-from lumped.solvers.closed.closed_form import BinghamOscillator, integrate
+from lumped.solvers.closed.closed_form import BinghamOscillator
+from lumped.solvers.closed.integrate import integrate
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 PAPER = {"forcing-F1": (0.0, 0.5), "forcing-F2": (0.0, 10.0),

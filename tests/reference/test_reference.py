@@ -26,7 +26,8 @@ from lumped.reference import (
     reference_for_grid,
 )
 from lumped.scene import SineBurst, paper_F1, paper_F2, zero_forcing
-from lumped.solvers.closed.closed_form import BinghamOscillator, integrate
+from lumped.solvers.closed.closed_form import BinghamOscillator
+from lumped.solvers.closed.integrate import integrate
 
 PAPER = BinghamOscillator(m=1.0, k=100.0, gamma=1.0, tau=1.0)
 

@@ -17,9 +17,9 @@ from lumped.solvers.closed.closed_form import (
     bdf2_step,
     correct,
     initial_dashpot_force,
-    integrate,
     steps_for,
 )
+from lumped.solvers.closed.integrate import integrate
 
 EPS = np.finfo(float).eps
 

@@ -16,7 +16,8 @@ from hypothesis import strategies as st
 
 from lumped.scene import SineBurst, paper_F1, paper_F2, zero_forcing
 from lumped.solvers.closed import closed_form_jit as J
-from lumped.solvers.closed.closed_form import BinghamOscillator, initial_dashpot_force, integrate
+from lumped.solvers.closed.closed_form import BinghamOscillator, initial_dashpot_force
+from lumped.solvers.closed.integrate import integrate
 
 
 def compiled(osc, x0, v0, forcing, dt, n, method):

@@ -22,12 +22,8 @@ from hypothesis import strategies as st
 
 from lumped.scene import Element, Mass, Scene, zero_forcing
 from lumped.simulate import simulate
-from lumped.solvers.closed.closed_form import (
-    BinghamOscillator,
-    bdf2_step,
-    initial_dashpot_force,
-    integrate,
-)
+from lumped.solvers.closed.closed_form import BinghamOscillator, bdf2_step, initial_dashpot_force
+from lumped.solvers.closed.integrate import integrate
 from lumped.solvers.implicit.step_system import generate_evaluate, law_scale, make_evaluate
 from lumped.solvers.newton.semismooth import _hair
 

@@ -22,7 +22,8 @@ from hypothesis import strategies as st
 from lumped.laws import get_law
 from lumped.scene import Element, Mass, Scene, SineBurst, zero_forcing
 from lumped.simulate import simulate
-from lumped.solvers.closed.closed_form import BinghamOscillator, integrate
+from lumped.solvers.closed.closed_form import BinghamOscillator
+from lumped.solvers.closed.integrate import integrate
 
 
 def scene_of(m, k, gamma, tau, x0, v0, forcing=None):

@@ -37,7 +37,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lumped.scene import SineBurst, paper_F2, zero_forcing
-from lumped.solvers.closed.closed_form import BinghamOscillator, integrate
+from lumped.solvers.closed.closed_form import BinghamOscillator
+from lumped.solvers.closed.integrate import integrate
 from lumped.trajectory import Trajectory
 
 U = 2.0**-53

@@ -205,7 +205,7 @@ def event_driven_solver(
     return run
 
 
-def _events(method: str) -> Callable[[BenchScene, dict, Ladders], Callable[[], Solved]]:
+def event_peer_methods(method: str) -> Callable[[BenchScene, dict, Ladders], Callable[[], Solved]]:
     """The bench entry ``scipy-events-<method>``: one run per ``(rtol, atol)`` setting."""
 
     def solve(scene: BenchScene, setting: dict, ladders: Ladders) -> Callable[[], Solved]:

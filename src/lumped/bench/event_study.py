@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..solvers.closed.closed_form import integrate
+from ..solvers.closed.integrate import integrate
 from .scenes import SCENES
 
 __all__ = [
@@ -73,7 +73,7 @@ def event_study(
                 errs.setdefault("whole run", []).append((dt, float(np.max(err))))
                 errs.setdefault("end value", []).append((dt, float(err[-1])))
             for label, pts in errs.items():
-                p = _slope(pts, 1e-13)
+                p = slope_above_floor(pts, 1e-13)
                 spread = math.nan
                 if math.isfinite(p):
                     c = [e / d**p for d, e in pts if e > 1e-13]
@@ -94,7 +94,7 @@ def event_markdown(rows: Sequence[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _slope(points: list[tuple[float, float]], floor: float) -> float:
+def slope_above_floor(points: list[tuple[float, float]], floor: float) -> float:
     pts = [(math.log(d), math.log(e)) for d, e in points if e > floor]
     if len(pts) < 3:
         return math.nan

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from .._validate import as_positive
-from ..solvers.closed.closed_form import integrate
+from ..solvers.closed.integrate import integrate
 from .scenes import GRID_DT, BenchScene, Ladders, generic_scene
 
 __all__ = [
@@ -72,9 +72,9 @@ class Method:
     warmup: bool = False
 
 
-def _closed_form(method: str, engine: str = "python"
+def closed_form_method(method: str, engine: str = "python"
                  ) -> Callable[[BenchScene, dict, Ladders], Callable[[], Solved]]:
-    """The closed form (:func:`lumped.solvers.closed.closed_form.integrate`) with an explicit
+    """The closed form (:func:`lumped.solvers.closed.integrate.integrate`) with an explicit
     ``engine``: ``"auto"`` would switch to the compiled loop once
     :mod:`lumped.solvers.closed.closed_form_jit` is imported, and one table would mix the two."""
 
@@ -91,7 +91,7 @@ def _closed_form(method: str, engine: str = "python"
     return solve
 
 
-def _generic(method: str) -> Callable[[BenchScene, dict, Ladders], Callable[[], Solved]]:
+def generic_method(method: str) -> Callable[[BenchScene, dict, Ladders], Callable[[], Solved]]:
     """The generic semismooth-Newton BDF steps of :func:`lumped.simulate.simulate`."""
 
     def solve(scene: BenchScene, setting: dict, ladders: Ladders) -> Callable[[], Solved]:

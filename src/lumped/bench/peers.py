@@ -66,15 +66,15 @@ class _BudgetExceeded(RuntimeError):
     pass
 
 
-def _scipy(method: str) -> Callable[[BenchScene, dict, Ladders], Callable[[], Solved]]:
+def scipy_method(method: str) -> Callable[[BenchScene, dict, Ladders], Callable[[], Solved]]:
     def solve(scene: BenchScene, setting: dict, ladders: Ladders) -> Callable[[], Solved]:
-        return _scipy_solver(scene, method, setting["eps"], setting["rtol"],
+        return scipy_solver(scene, method, setting["eps"], setting["rtol"],
                              setting["atol"], ladders.max_nfev, scene.t_end)
 
     return solve
 
 
-def _scipy_solver(
+def scipy_solver(
     scene: BenchScene, method: str, eps: float, rtol: float, atol: float,
     max_nfev: int, t_end: float, grid_dt: float = GRID_DT,
 ) -> Callable[[], Solved]:

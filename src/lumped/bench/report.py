@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from dataclasses import fields
 from pathlib import Path
 
-from .event_study import _slope, event_markdown
+from .event_study import event_markdown, slope_above_floor
 from .runner import BENCH_METHODS, BenchReport, RunResult
 from .scenes import FULL, GRID_DT, TARGETS, YARDSTICK_ITERATIONS
 
@@ -71,8 +71,8 @@ def observed_orders(
         if len(fine) < 3:
             fine = rows[:3]
         span = f"{fine[0].dt:g}..{fine[-1].dt:g}"
-        out[key] = (_slope([(r.dt, r.max_err) for r in fine], floor),
-                    _slope([(r.dt, r.end_err) for r in fine], floor), span)
+        out[key] = (slope_above_floor([(r.dt, r.max_err) for r in fine], floor),
+                    slope_above_floor([(r.dt, r.end_err) for r in fine], floor), span)
     return out
 
 

@@ -21,7 +21,7 @@ event-driven exact solution of :mod:`lumped.reference`:
 
 Methods (see :data:`METHODS`, a registry: adding a method is one entry):
 
-* ``closed-bdf1`` / ``closed-bdf2`` -- :func:`lumped.solvers.closed.closed_form.integrate` over a
+* ``closed-bdf1`` / ``closed-bdf2`` -- :func:`lumped.solvers.closed.integrate.integrate` over a
   ladder of ``dt``;
 * ``generic-bdf1`` / ``generic-bdf2`` -- the semismooth-Newton steps of
   :func:`lumped.simulate.simulate` on the same scene built from the ``linear_spring`` and
@@ -56,10 +56,10 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .event_peer import _events
+from .event_peer import event_peer_methods
 from .event_study import event_study
-from .methods import Method, Solved, _closed_form, _generic, tolerance_method
-from .peers import _scipy, _scipy_solver
+from .methods import Method, Solved, closed_form_method, generic_method, tolerance_method
+from .peers import scipy_method, scipy_solver
 from .scenes import FULL, GRID_DT, PAPER_SCENES, SCENES, BenchScene, Ladders, reference_grid
 from .timing import measure_unit, time_call
 
@@ -118,19 +118,19 @@ def register_bench_method(method: Method) -> Method:
 KINDS = ("step", "scipy", "tol")
 
 for _m in (
-    Method("closed-bdf1", "step", _closed_form("bdf1")),
-    Method("closed-bdf2", "step", _closed_form("bdf2")),
-    Method("generic-bdf1", "step", _generic("bdf1"), slow=True),
-    Method("generic-bdf2", "step", _generic("bdf2"), slow=True),
+    Method("closed-bdf1", "step", closed_form_method("bdf1")),
+    Method("closed-bdf2", "step", closed_form_method("bdf2")),
+    Method("generic-bdf1", "step", generic_method("bdf1"), slow=True),
+    Method("generic-bdf2", "step", generic_method("bdf2"), slow=True),
     # compiled at once: the untimed warm-up call pays the compile, the timed calls run
     # the compiled loop (a short run of a new scene would otherwise stay in Python)
     tolerance_method("radau5", "radau5", compiled=True),
-    Method("scipy-Radau", "scipy", _scipy("Radau"), ours=False),
-    Method("scipy-BDF", "scipy", _scipy("BDF"), ours=False),
-    Method("scipy-LSODA", "scipy", _scipy("LSODA"), ours=False),
-    Method("scipy-events-DOP853", "tol", _events("DOP853"), ours=False),
-    Method("scipy-events-LSODA", "tol", _events("LSODA"), ours=False),
-    Method("scipy-events-RK45", "tol", _events("RK45"), ours=False),
+    Method("scipy-Radau", "scipy", scipy_method("Radau"), ours=False),
+    Method("scipy-BDF", "scipy", scipy_method("BDF"), ours=False),
+    Method("scipy-LSODA", "scipy", scipy_method("LSODA"), ours=False),
+    Method("scipy-events-DOP853", "tol", event_peer_methods("DOP853"), ours=False),
+    Method("scipy-events-LSODA", "tol", event_peer_methods("LSODA"), ours=False),
+    Method("scipy-events-RK45", "tol", event_peer_methods("RK45"), ours=False),
 ):
     register_bench_method(_m)
 
@@ -354,7 +354,7 @@ def creep_table(ladders: Ladders, methods: Iterable[Method]) -> list[dict]:
                 elif method.kind == "tol":
                     solved = method.solve(held, {**setting, "grid_dt": 0.01}, ladders)()
                 else:
-                    solved = _scipy_solver(held, method.name.removeprefix("scipy-"),
+                    solved = scipy_solver(held, method.name.removeprefix("scipy-"),
                                            setting["eps"], setting["rtol"], setting["atol"],
                                            ladders.max_nfev, t_end, grid_dt=0.01)()
                 x = solved.x[:: max(1, int(round(0.01 / setting.get("dt", 0.01))))]

@@ -11,7 +11,7 @@ from pathlib import Path
 from .._validate import as_positive
 from ..plotting import have_matplotlib, plot_trajectory
 from ..scenarios import PAPER_DT, PAPER_METHODS, PAPER_SCENARIOS, PAPER_T_END, run_scenario
-from ..trajectory import StickSummary, _fmt, summarize
+from ..trajectory import StickSummary, fmt_number, summarize
 from .progress import Progress, progress_wanted
 
 __all__ = ["add_arguments", "format_summary", "run"]
@@ -76,8 +76,8 @@ def format_summary(rows: Sequence[tuple[str, StickSummary]]) -> str:
     """A fixed-width table: final x and v, last slip-to-stick time, rest position, stick time."""
     header = ("scenario", "final x", "final v", "last stick at", "rest x", "stick time")
     lines = [header] + [
-        (name, _fmt(s.final_x), _fmt(s.final_v), _fmt(s.last_stick_time),
-         _fmt(s.rest_position), _fmt(s.stick_time))
+        (name, fmt_number(s.final_x), fmt_number(s.final_v), fmt_number(s.last_stick_time),
+         fmt_number(s.rest_position), fmt_number(s.stick_time))
         for name, s in rows
     ]
     widths = [max(len(line[i]) for line in lines) for i in range(len(header))]

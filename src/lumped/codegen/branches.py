@@ -51,7 +51,7 @@ from dataclasses import dataclass
 import sympy as sp
 from sympy.core.parameters import distribute
 
-from .emit import _build, _Printer
+from .emit import KernelPrinter, build_kernel
 from .guards import compile_guards, feasible_path
 from .rewrite import magnitude_expression
 from .stage_forms import inverse_form, odd_continuation
@@ -209,8 +209,8 @@ class LawBranches:
                     exprs = ([info.residual, info.dR_dq, info.dR_dF] if odd is info.residual
                              else [odd, sp.diff(odd, _Q), sp.diff(odd, _F)])
             with distribute(False):
-                hit = _build("kernel", ["q", "F"], exprs, guard=guard)
-                hit.magnitude = _build(  # type: ignore[attr-defined]
+                hit = build_kernel("kernel", ["q", "F"], exprs, guard=guard)
+                hit.magnitude = build_kernel(  # type: ignore[attr-defined]
                     "magnitude", ["q", "F"], [magnitude_expression(exprs[0])], guard=guard)
             # the q a locking branch holds (q = L): radau5 holds it on the velocity level
             hit.lock_value = info.lock_value if info.locks else None  # type: ignore[attr-defined]
@@ -346,7 +346,7 @@ def _build_selector(tree, number: list[int]) -> Callable[[float, float], int]:
     """Compile the decision tree into ``branch(q, F) -> int``: the ``k``-th leaf (in the
     order :func:`_leaves` yields them) returns ``number[k]``; ``-1`` where no condition
     holds."""
-    printer = _Printer()
+    printer = KernelPrinter()
     lines = ["def branch(q, F):"]
     counter = itertools.count()
 
@@ -379,7 +379,7 @@ def _build_selector(tree, number: list[int]) -> Callable[[float, float], int]:
     return fn  # type: ignore[return-value]
 
 
-def _condition_code(cond: sp.Basic, printer: _Printer) -> str:
+def _condition_code(cond: sp.Basic, printer: KernelPrinter) -> str:
     if cond is sp.true:
         return "True"
     if cond is sp.false:

@@ -77,10 +77,10 @@ from sympy.core.parameters import distribute
 from sympy.printing.pycode import PythonCodePrinter
 
 from .rewrite import (
-    _constant,
-    _outer_piecewise,
     check_supported,
+    constant_of,
     magnitude_expression,
+    outer_piecewise,
     prepare,
     rewrite_kinks,
 )
@@ -91,7 +91,7 @@ __all__ = ["Kernel", "compile_function", "compile_kernel"]
 Kernel = Callable[[float, float], tuple[float, float, float]]
 
 
-class _Printer(PythonCodePrinter):
+class KernelPrinter(PythonCodePrinter):
     """Python printer whose numbers are exact float literals and powers stay real."""
 
     def __init__(self) -> None:
@@ -169,7 +169,7 @@ class _Scope:
 class _Emitter:
     def __init__(self) -> None:
         self.lines: list[str] = []
-        self.printer = _Printer()
+        self.printer = KernelPrinter()
         self._temps: Iterator[sp.Symbol] = sp.numbered_symbols("_t")
         self._count = 0
 
@@ -183,7 +183,7 @@ class _Emitter:
     def region(self, exprs: list[sp.Expr], indent: int, scope: _Scope) -> list[str]:
         """Emit straight-line code for ``exprs``; return one code string per expression."""
         exprs = [e.xreplace(scope.values) if scope.values else e for e in exprs]
-        found = _outer_piecewise(exprs)
+        found = outer_piecewise(exprs)
         # Piecewise with the same conditions (a value and its derivatives) share one chain
         groups: dict[tuple, list[sp.Piecewise]] = {}
         for pw in found:
@@ -337,8 +337,8 @@ def compile_kernel(
         return hit
     with distribute(False):  # keep gamma*(F - p) as written: no gamma*F - gamma*p
         exprs = prepare(residual, q, F, params)
-        kernel = _build("kernel", ["q", "F"], list(exprs), guard=guard)
-        magnitude = _build("magnitude", ["q", "F"], [magnitude_expression(exprs[0])],
+        kernel = build_kernel("kernel", ["q", "F"], list(exprs), guard=guard)
+        magnitude = build_kernel("magnitude", ["q", "F"], [magnitude_expression(exprs[0])],
                            guard=guard)
     kernel.expressions = exprs  # type: ignore[attr-defined]
     kernel.magnitude = magnitude  # type: ignore[attr-defined]
@@ -346,7 +346,7 @@ def compile_kernel(
     return kernel
 
 
-def _build(name: str, args: list[str], exprs: list[sp.Expr], *, guard: bool = True) -> Callable:
+def build_kernel(name: str, args: list[str], exprs: list[sp.Expr], *, guard: bool = True) -> Callable:
     """Generate, compile and return ``def name(*args): return exprs`` (see module doc)."""
     emitter = _Emitter()
     emitter.emit(0, f"def {name}({', '.join(args)}):")
@@ -410,7 +410,7 @@ def compile_function(
     if not isinstance(expr, sp.Expr):
         raise TypeError(f"`expr` must be a sympy expression, got {type(expr).__name__}")
     check_supported(expr)
-    values = {sym: _constant(sym, v) for sym, v in params.items()}
+    values = {sym: constant_of(sym, v) for sym, v in params.items()}
     names = [f"x{i}" for i in range(len(args))]
     plain = {a: sp.Symbol(n) for a, n in zip(args, names, strict=True)}
     with distribute(False):
@@ -421,6 +421,6 @@ def compile_function(
     if expr.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
         raise ValueError(f"expression is undefined with these parameters: {expr}")
     with distribute(False):
-        function = _build("function", names, [rewrite_kinks(expr)])
+        function = build_kernel("function", names, [rewrite_kinks(expr)])
     _FUNCTION_CACHE[key] = function
     return function

@@ -28,7 +28,7 @@ from collections.abc import Callable
 
 import sympy as sp
 
-from .emit import _Printer
+from .emit import KernelPrinter
 
 __all__ = ["compile_guards", "feasible_path"]
 
@@ -38,7 +38,7 @@ _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 _Path = tuple[tuple[sp.Basic, bool], ...]
 
 
-def _guard_codes(cond: sp.Basic, want: bool, printer: _Printer) -> list[str] | None:
+def _guard_codes(cond: sp.Basic, want: bool, printer: KernelPrinter) -> list[str] | None:
     """Guard code strings for ``cond == want``: all must be ``> 0``; ``None`` when it
     always holds, ``["-1.0"]`` when it never does."""
     if cond is sp.true or cond is sp.false:
@@ -67,7 +67,7 @@ def _guard_codes(cond: sp.Basic, want: bool, printer: _Printer) -> list[str] | N
     raise ValueError(f"unsupported condition {cond} ({type(cond).__name__})")
 
 
-def _root_guard(code: str, base: sp.Expr, w: sp.Expr, printer: _Printer) -> str:
+def _root_guard(code: str, base: sp.Expr, w: sp.Expr, printer: KernelPrinter) -> str:
     """``code`` (a guard), or the code of ``w`` when the guard is ``c * base``, ``c > 0``."""
     try:
         g = sp.sympify(code, locals={"q": _Q, "F": _F, "max": sp.Max, "min": sp.Min})
@@ -93,7 +93,7 @@ def compile_guards(path: _Path, root: tuple[sp.Expr, sp.Expr] | None = None
     """Compile ``guards(q, F) -> tuple`` for a branch's path (``nan`` where undefined);
     with ``root = (base, w)`` a guard that is a positive multiple of ``base`` becomes
     ``w`` (:meth:`~lumped.codegen.branches.LawBranches.stage_guards_for`)."""
-    printer = _Printer()
+    printer = KernelPrinter()
     codes: list[str] = []
     for cond, want in path:
         codes.extend(_guard_codes(cond, want, printer) or [])

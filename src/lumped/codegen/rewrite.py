@@ -136,7 +136,7 @@ def _as_clip(e: sp.Basic) -> tuple[sp.Expr, sp.Expr, sp.Expr] | None:
     return xs[0], lo, hi
 
 
-def _outer_piecewise(exprs: list[sp.Expr]) -> list[sp.Piecewise]:
+def outer_piecewise(exprs: list[sp.Expr]) -> list[sp.Piecewise]:
     """The outermost ``Piecewise`` nodes of ``exprs`` (not those nested inside another),
     each once, in order of first appearance."""
     found: list[sp.Piecewise] = []
@@ -161,7 +161,7 @@ def diff_branchwise(expr: sp.Expr, x: sp.Symbol) -> sp.Expr:
     conditions of the original (sympy merges neighbouring branches whose derivatives
     coincide), so a value and its derivatives can share one ``if`` chain.
     """
-    pieces = _outer_piecewise([expr])
+    pieces = outer_piecewise([expr])
     if not pieces:
         return sp.diff(expr, x)
     dummies = [sp.Dummy(f"pw{i}") for i in range(len(pieces))]
@@ -233,7 +233,7 @@ def rewrite_kinks(expr: sp.Basic) -> sp.Basic:
     return walk(expr)
 
 
-def _constant(sym: sp.Symbol, value: float) -> sp.Number:
+def constant_of(sym: sp.Symbol, value: float) -> sp.Number:
     x = float(value)
     if not math.isfinite(x):
         raise ValueError(f"parameter `{sym}` must be finite, got {x!r}")
@@ -254,7 +254,7 @@ def prepare(
     if not isinstance(q, sp.Symbol) or not isinstance(F, sp.Symbol) or q == F:
         raise TypeError("`q` and `F` must be two distinct sympy symbols")
     check_supported(residual)
-    values = {sym: _constant(sym, value) for sym, value in params.items()}
+    values = {sym: constant_of(sym, value) for sym, value in params.items()}
     qq, FF = sp.Symbol("q"), sp.Symbol("F")
     with distribute(False):
         expr = residual.xreplace(values).xreplace({q: qq, F: FF})

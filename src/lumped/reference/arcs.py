@@ -9,24 +9,24 @@ import math
 
 import numpy as np
 
-from .model import _Params
+from .model import Params
 
 __all__ = []
 
 
-_EPS = np.finfo(float).eps
+EPS = np.finfo(float).eps
 #: Samples per half period of the homogeneous motion / per forcing period used to bracket roots.
 _SAMPLES_PER_HALF_PERIOD = 16
 _SAMPLES_PER_FORCING_PERIOD = 32
-_CHUNK = 512
+CHUNK = 512
 #: Resonance magnification above which the forced response is written as a Duhamel integral.
 _NEAR_RESONANCE = 8.0
 
 
-class _SlipArc:
+class SlipArc:
     r"""Closed-form solution of ``m x'' + c x' + k x = F(t) - s tau`` from ``(t0, x0, v0)``."""
 
-    def __init__(self, p: _Params, s: int, forced: bool, t0: float, x0: float, v0: float):
+    def __init__(self, p: Params, s: int, forced: bool, t0: float, x0: float, v0: float):
         self.p, self.s, self.forced, self.t0, self.v0 = p, s, forced, t0, v0
         m, k, c = p.m, p.k, p.c
         self.x_eq = -s * p.tau / k
@@ -183,8 +183,8 @@ class _SlipArc:
             if ramp.size:
                 yield self.t0 + ramp
         n_uniform = int(math.ceil(span / h))
-        for start in range(0, n_uniform, _CHUNK):
-            stop = min(start + _CHUNK, n_uniform)
+        for start in range(0, n_uniform, CHUNK):
+            stop = min(start + CHUNK, n_uniform)
             rel = np.arange(start + 1, stop + 1) * h
             ts = self.t0 + rel[rel < span]
             if stop == n_uniform:

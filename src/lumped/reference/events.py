@@ -9,8 +9,8 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from .arcs import _CHUNK, _EPS, _SlipArc
-from .model import Event, Interval, TooManyEvents, _Params
+from .arcs import CHUNK, EPS, SlipArc
+from .model import Event, Interval, Params, TooManyEvents
 
 __all__ = []
 
@@ -19,12 +19,12 @@ __all__ = []
 # the event loop
 
 
-def _stick_or_slip(p: _Params, t: float, x: float) -> int:
+def _stick_or_slip(p: Params, t: float, x: float) -> int:
     """At rest at ``(t, x)``: 0 if the mass stays stuck, else the slip direction ``+-1``."""
     forced = p.forced_at(t)
     F = p.force(t, forced)
     G = F - p.k * x
-    tol = 8.0 * _EPS * (p.tau + abs(F) + abs(p.k * x))
+    tol = 8.0 * EPS * (p.tau + abs(F) + abs(p.k * x))
     excess = abs(G) - p.tau
     if excess > tol:
         return 1 if G > 0.0 else -1
@@ -32,7 +32,7 @@ def _stick_or_slip(p: _Params, t: float, x: float) -> int:
         return 0
     sigma = 1 if G > 0.0 else -1
     dG = p.dforce(t, forced)
-    dtol = 8.0 * _EPS * abs(p.A * p.w)
+    dtol = 8.0 * EPS * abs(p.A * p.w)
     if sigma * dG > dtol:
         return sigma
     if sigma * dG < -dtol:
@@ -41,9 +41,9 @@ def _stick_or_slip(p: _Params, t: float, x: float) -> int:
     return sigma if sigma * (-p.w * p.w * F) > 0.0 else 0
 
 
-def _phases(p: _Params, x0: float, v0: float, horizon: float, max_events: int):
+def phases(p: Params, x0: float, v0: float, horizon: float, max_events: int):
     intervals: list[Interval] = []
-    arcs: list[_SlipArc | None] = []
+    arcs: list[SlipArc | None] = []
     events: list[Event] = []
     t, x, v = 0.0, x0, v0
     if p.tau == 0.0:
@@ -75,7 +75,7 @@ def _phases(p: _Params, x0: float, v0: float, horizon: float, max_events: int):
             else:
                 break
         else:
-            arc = _SlipArc(p, s, forced, t, x, v)
+            arc = SlipArc(p, s, forced, t, x, v)
             ts = _zero_of_v(arc, t_stop) if s != 0 else None
             t_next = t_stop if ts is None else ts
             if t_next > t or not intervals:
@@ -113,12 +113,12 @@ def _with_end(iv: Interval, t_end: float) -> Interval:
     return Interval(iv.t_start, t_end, iv.phase, iv.direction, iv.x_start, iv.v_start, iv.forced)
 
 
-def _breakout(p: _Params, t0: float, x: float, t_stop: float, forced: bool):
+def _breakout(p: Params, t0: float, x: float, t_stop: float, forced: bool):
     """First time in ``(t0, t_stop]`` where ``|F(t) - k x|`` exceeds ``tau``, and ``sgn``."""
     if not forced or t_stop <= t0:
         return None, 0
     A, w, kx, tau = p.A, p.w, p.k * x, p.tau
-    tol = 8.0 * _EPS * (tau + abs(A) + abs(kx))
+    tol = 8.0 * EPS * (tau + abs(A) + abs(kx))
     # Extrema of sin(w t): w t = pi/2 + n pi.  G = A sin(w t) - k x is monotone between them.
     aw = abs(w)
     n_first = math.floor((aw * t0 - 0.5 * math.pi) / math.pi) + 1
@@ -126,7 +126,7 @@ def _breakout(p: _Params, t0: float, x: float, t_stop: float, forced: bool):
     n = n_first
     prev_t = t0
     while True:
-        hi = min(n + _CHUNK, n_last + 1)
+        hi = min(n + CHUNK, n_last + 1)
         ext = (0.5 * math.pi + np.arange(n, hi) * math.pi) / aw
         ext = ext[(ext > t0) & (ext < t_stop)]
         last = hi > n_last
@@ -149,7 +149,7 @@ def _breakout(p: _Params, t0: float, x: float, t_stop: float, forced: bool):
                 return lo_t, sigma
             if f_hi <= 0.0:  # cannot happen on a monotone piece, but be safe
                 return hi_t, sigma
-            root = brentq(f, lo_t, hi_t, xtol=1e-300, rtol=4.0 * _EPS, maxiter=200)
+            root = brentq(f, lo_t, hi_t, xtol=1e-300, rtol=4.0 * EPS, maxiter=200)
             return max(root, t0), sigma
         if last:
             return None, 0
@@ -158,7 +158,7 @@ def _breakout(p: _Params, t0: float, x: float, t_stop: float, forced: bool):
         n = hi
 
 
-def _zero_of_v(arc: _SlipArc, t_stop: float) -> float | None:
+def _zero_of_v(arc: SlipArc, t_stop: float) -> float | None:
     """First ``t`` in ``(t0, t_stop]`` with ``v(t) = 0`` on a slip arc, or ``None``.
 
     A sign change of ``s v`` between samples is refined by ``brentq``.  A sign change
@@ -168,7 +168,7 @@ def _zero_of_v(arc: _SlipArc, t_stop: float) -> float | None:
     """
     s = arc.s
     t0 = arc.t0
-    noise = 64.0 * _EPS * arc.v_scale
+    noise = 64.0 * EPS * arc.v_scale
     prev_t, prev_sv, prev_sa = t0, s * arc.v_scalar(t0), s * arc.accel_scalar(t0)
     started = prev_sv > noise  # starting from rest: v must first become clearly positive
     for ts in arc.sample_times(t_stop):
@@ -200,7 +200,7 @@ def _zero_of_v(arc: _SlipArc, t_stop: float) -> float | None:
     return None
 
 
-def _first_positive(arc: _SlipArc, t0: float, t1: float, noise: float) -> float | None:
+def _first_positive(arc: SlipArc, t0: float, t1: float, noise: float) -> float | None:
     """A time in ``(t0, t1)`` where ``s v > noise`` (dense and geometric sampling), or ``None``."""
     span = t1 - t0
     rel = np.unique(np.concatenate([np.geomspace(1e-12, 1.0, 49), np.linspace(0.0, 1.0, 257)]))
@@ -213,7 +213,7 @@ def _first_positive(arc: _SlipArc, t0: float, t1: float, noise: float) -> float 
     return float(ts[hits[0]]) if hits.size else None
 
 
-def _below_noise(arc: _SlipArc, t0: float, t1: float, noise: float) -> float:
+def _below_noise(arc: SlipArc, t0: float, t1: float, noise: float) -> float:
     s = arc.s
 
     def f(t):
@@ -221,17 +221,17 @@ def _below_noise(arc: _SlipArc, t0: float, t1: float, noise: float) -> float:
 
     if f(t1) >= 0.0:
         return t1
-    return brentq(f, t0, t1, xtol=1e-300, rtol=4.0 * _EPS, maxiter=200)
+    return brentq(f, t0, t1, xtol=1e-300, rtol=4.0 * EPS, maxiter=200)
 
 
-def _refine_root(arc: _SlipArc, lo: float, hi: float) -> float:
+def _refine_root(arc: SlipArc, lo: float, hi: float) -> float:
     f = arc.v_scalar
     if f(lo) * f(hi) > 0.0:
         return hi
-    return brentq(f, lo, hi, xtol=1e-300, rtol=4.0 * _EPS, maxiter=200)
+    return brentq(f, lo, hi, xtol=1e-300, rtol=4.0 * EPS, maxiter=200)
 
 
-def _graze(arc: _SlipArc, lo: float, hi: float, noise: float) -> float | None:
+def _graze(arc: SlipArc, lo: float, hi: float, noise: float) -> float | None:
     """Minimum of ``s v`` on ``[lo, hi]``: the first zero of ``v`` there, if any."""
     s = arc.s
 
@@ -241,7 +241,7 @@ def _graze(arc: _SlipArc, lo: float, hi: float, noise: float) -> float | None:
     a_lo, a_hi = sa(lo), sa(hi)
     if not (a_lo < 0.0 < a_hi):
         return None
-    t_min = brentq(sa, lo, hi, xtol=1e-300, rtol=4.0 * _EPS, maxiter=200)
+    t_min = brentq(sa, lo, hi, xtol=1e-300, rtol=4.0 * EPS, maxiter=200)
     v_min = s * arc.v_scalar(t_min)
     if v_min > noise:
         return None

@@ -70,7 +70,7 @@ class Event:
 
 
 @dataclass(frozen=True)
-class _Params:
+class Params:
     m: float
     k: float
     c: float  # 1 / gamma, 0 for Coulomb
@@ -94,7 +94,7 @@ class _Params:
 # input checking
 
 
-def _params_from(osc, m, k, gamma, tau, coulomb, forcing) -> _Params:
+def params_from(osc, m, k, gamma, tau, coulomb, forcing) -> Params:
     if not isinstance(coulomb, bool):
         raise TypeError(f"`coulomb` must be True or False, got {coulomb!r}")
     given = {"m": m, "k": k, "gamma": gamma, "tau": tau}
@@ -128,10 +128,10 @@ def _params_from(osc, m, k, gamma, tau, coulomb, forcing) -> _Params:
             "the exact reference covers only forcing=None, lumped.scene.zero_forcing or a "
             f"lumped.scene.SineBurst, got `forcing` = {forcing!r}"
         )
-    return _Params(m=m, k=k, c=c, tau=tau, A=A, w=w, t_off=t_off)
+    return Params(m=m, k=k, c=c, tau=tau, A=A, w=w, t_off=t_off)
 
 
-def _as_times(t, name: str) -> np.ndarray:
+def as_times(t, name: str) -> np.ndarray:
     try:
         arr = np.asarray(t, dtype=float)
     except (TypeError, ValueError):

@@ -54,9 +54,9 @@ import numpy as np
 from .._validate import as_finite, as_int_at_least, as_positive
 from ..solvers.closed.closed_form import BinghamOscillator, steps_for
 from ..trajectory import Trajectory
-from .arcs import _EPS, _SlipArc
-from .events import _phases
-from .model import Event, Interval, _as_times, _Params, _params_from
+from .arcs import EPS, SlipArc
+from .events import phases
+from .model import Event, Interval, Params, as_times, params_from
 
 __all__ = ["ExactSolution", "exact_solution", "reference_for_grid"]
 
@@ -81,8 +81,8 @@ class ExactSolution:
     intervals: list[Interval]
     events: list[Event]
     t_end: float
-    _params: _Params = field(repr=False)
-    _arcs: list[_SlipArc | None] = field(repr=False)
+    _params: Params = field(repr=False)
+    _arcs: list[SlipArc | None] = field(repr=False)
 
     def evaluate(self, t: Sequence[float] | np.ndarray) -> Trajectory:
         """``x, v, F_s, F_d`` at the times ``t`` (non-decreasing, within ``[0, t_end]``).
@@ -91,8 +91,8 @@ class ExactSolution:
         continuous; ``F_d`` may jump), except at ``t_off``, where, as in
         :class:`~lumped.scene.SineBurst`, the forcing is still on.
         """
-        t = _as_times(t, "t")
-        if t[-1] > self.t_end * (1.0 + 4.0 * _EPS):
+        t = as_times(t, "t")
+        if t[-1] > self.t_end * (1.0 + 4.0 * EPS):
             raise ValueError(f"`t` = {t[-1]!r} is beyond the solution's t_end = {self.t_end!r}")
         return _evaluate(self._params, self.intervals, self._arcs, t)
 
@@ -183,15 +183,15 @@ def exact_solution(
     amplification.  Event times are found to a relative accuracy of a few ulps of the
     residual (``v`` or ``|F - k x| - tau``) divided by its slope.
     """
-    p = _params_from(osc, m, k, gamma, tau, coulomb, forcing)
+    p = params_from(osc, m, k, gamma, tau, coulomb, forcing)
     x0 = as_finite("x0", x0)
     v0 = as_finite("v0", v0)
-    t_eval = _as_times(t_eval, "t_eval")
+    t_eval = as_times(t_eval, "t_eval")
     horizon = float(t_eval[-1])
     if t_end is not None:
         horizon = max(horizon, as_positive("t_end", t_end))
     max_events = as_int_at_least("max_events", max_events, 1)
-    intervals, arcs, events = _phases(p, x0, v0, horizon, max_events)
+    intervals, arcs, events = phases(p, x0, v0, horizon, max_events)
     traj = _evaluate(p, intervals, arcs, t_eval)
     return ExactSolution(
         trajectory=traj, intervals=intervals, events=events, t_end=horizon,
@@ -211,7 +211,7 @@ def reference_for_grid(
 ) -> Trajectory:
     """The exact solution on the grid ``t_n = n dt`` used by the numerical methods.
 
-    The grid is that of :func:`lumped.solvers.closed.closed_form.integrate` (``steps_for(dt, t_end)``
+    The grid is that of :func:`lumped.solvers.closed.integrate.integrate` (``steps_for(dt, t_end)``
     steps), so ``traj.to_csv(path)`` writes the same columns and rows as a numerical
     run.  ``stats`` holds the number of grid points, events and intervals.
     Raises :class:`ReferenceNotApplicable` (a ``ValueError``) for a forcing the
@@ -230,7 +230,7 @@ def reference_for_grid(
 # evaluation
 
 
-def _evaluate(p: _Params, intervals: list[Interval], arcs: list, t: np.ndarray) -> Trajectory:
+def _evaluate(p: Params, intervals: list[Interval], arcs: list, t: np.ndarray) -> Trajectory:
     starts = np.array([iv.t_start for iv in intervals])
     idx = np.searchsorted(starts, t, side="right") - 1
     idx = np.maximum(idx, 0)

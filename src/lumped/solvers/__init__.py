@@ -8,7 +8,8 @@ one implicit step), :mod:`.initial_state`, :mod:`.branch_check`, :mod:`.fixed_st
 """
 
 from .bdf.fixed_step import GENERIC_METHODS, RunResult, run_bdf
-from .closed.closed_form import BinghamOscillator, bdf1_step, bdf2_step, integrate, steps_for
+from .closed.closed_form import BinghamOscillator, bdf1_step, bdf2_step, steps_for
+from .closed.integrate import integrate
 from .implicit.initial_state import consistent_initial_state
 from .newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve
 from .registry import (

@@ -5,10 +5,16 @@ and :class:`RawRun` (what every method runner returns, see :mod:`lumped.solvers.
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..scene import Scene
+    from .newton.semismooth import NewtonOptions
 
 __all__ = [
     "Status",
@@ -108,3 +114,57 @@ class RawRun:
     events: list[Event] = field(default_factory=list)
     dense: Callable[[np.ndarray], np.ndarray] | None = None
     indeterminate: dict[str, list[tuple[float, float]]] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """What :func:`lumped.simulate` passes to a runner (validated there).
+
+    Attributes
+    ----------
+    t_end : float
+        Final time.
+    dt : float, optional
+        Step size of the fixed-step methods (required there).
+    rtol, atol : float, optional
+        Tolerances of the adaptive methods.
+    throw : bool
+        Raise :class:`~lumped.solvers.status.SolverError` on a failed step, or return the
+        run up to the last good step with its status and message.
+    options : NewtonOptions, optional
+        Newton tolerances and budgets.
+    extra : Mapping
+        Method-specific keywords.
+    """
+
+    t_end: float
+    dt: float | None = None
+    rtol: float | None = None
+    atol: float | None = None
+    throw: bool = True
+    options: NewtonOptions | None = None
+    extra: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+
+
+#: ``runner(scene, settings) -> RawRun``.
+Runner = Callable[["Scene", RunSettings], RawRun]
+
+
+def fixed_step_grid(method: str, settings: RunSettings,
+                     allowed: tuple[str, ...] = ()) -> tuple[float, int]:
+    """``(dt, n_steps)`` of a fixed-step method; refuses what it does not take (extra
+    keywords other than ``allowed``)."""
+    if settings.dt is None:
+        raise ValueError(f"`dt` is required for the fixed-step method {method!r}, got None")
+    for name in ("rtol", "atol"):
+        if getattr(settings, name) is not None:
+            raise ValueError(f"`{name}` applies to adaptive methods only; {method!r} is a "
+                             f"fixed-step method (give `dt`), got {name}="
+                             f"{getattr(settings, name)!r}")
+    unknown = sorted(k for k in settings.extra if k not in allowed)
+    if unknown:
+        raise TypeError(f"method {method!r} takes no keyword argument(s) "
+                        f"{', '.join(map(repr, unknown))}")
+    from .closed.closed_form import steps_for
+
+    return settings.dt, steps_for(settings.dt, settings.t_end)

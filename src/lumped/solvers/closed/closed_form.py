@@ -31,15 +31,10 @@ where the same formulas hold with ``1 / gamma = 0``.
 from __future__ import annotations
 
 import math
-import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import numpy as np
-
-from ..._validate import as_finite, as_int_at_least, as_nonnegative, as_positive
-from ...scene.forcing import zero_forcing
-from ...trajectory import Trajectory
+from ..._validate import as_finite, as_nonnegative, as_positive
 
 __all__ = [
     "BinghamOscillator",
@@ -47,23 +42,16 @@ __all__ = [
     "bdf1_step",
     "bdf2_step",
     "initial_dashpot_force",
-    "integrate",
     "steps_for",
     "CLOSED_METHODS",
-    "COMPILED_MIN_STEPS",
-    "ENGINES",
+    "run_bdf1_loop",
+    "run_bdf2_loop",
+    "checked_force",
 ]
 
 #: Step formulas of the closed form, by the name used on the command line.
 CLOSED_METHODS = ("bdf1", "bdf2")
 
-#: Values of ``integrate(engine=...)``.
-ENGINES = ("auto", "python", "compiled")
-
-#: ``engine="auto"`` compiles runs of at least this many steps (about 0.7 s of Python
-#: steps, the cost of loading the compiled loops from numba's disk cache), and any run once
-#: the compiled loops are loaded in this process.
-COMPILED_MIN_STEPS = 500_000
 
 
 @dataclass(frozen=True)
@@ -185,100 +173,6 @@ def steps_for(dt: float, t_end: float) -> int:
     return max(int(n), 1)
 
 
-def integrate(
-    osc: BinghamOscillator,
-    *,
-    x0: float,
-    v0: float = 0.0,
-    forcing: Callable[[float], float] = zero_forcing,
-    dt: float,
-    t_end: float | None = None,
-    n_steps: int | None = None,
-    method: str = "bdf1",
-    engine: str = "auto",
-) -> Trajectory:
-    """Run the closed-form BDF1 (Algorithm 1) or BDF2 steps on the grid ``t_n = n dt``.
-
-    Parameters
-    ----------
-    osc : BinghamOscillator
-        Mass, spring and dashpot parameters.
-    x0, v0 : float
-        Initial displacement and velocity; the initial forces are made consistent
-        (``F_s = k x0``, ``F_d`` from :func:`initial_dashpot_force`).
-    forcing : callable
-        ``F(t) -> float``.
-    dt : float
-        Step size.
-    t_end, n_steps
-        Give exactly one: the final time or the number of steps.
-    method : {"bdf1", "bdf2"}
-        BDF2 takes its first step with BDF1.
-    engine : {"auto", "python", "compiled"}
-        ``"python"``: the loops of this module on Python floats (the readable reference);
-        ``"compiled"``: their numba twin :mod:`lumped.solvers.closed.closed_form_jit` (the same
-        operations in the same order, hence the same numbers bit for bit; compiled once
-        per machine and cached on disk); ``"auto"``: compiled when numba is installed
-        and either the run has at least :data:`COMPILED_MIN_STEPS` steps or the compiled
-        loops are already loaded in this process, else Python (the results are the same;
-        only the speed differs).
-        A forcing the compiled loop does not evaluate natively (anything but zero, a
-        constant or a :class:`~lumped.scene.SineBurst`) is sampled on the grid first.
-
-    Returns
-    -------
-    Trajectory
-        With ``method`` ``"closed-bdf1"`` or ``"closed-bdf2"`` and the predictor
-        ``F~`` of each step in ``predictor`` (``nan``-free; row 0 holds ``F_d(0)``).
-    """
-    if not isinstance(osc, BinghamOscillator):
-        raise TypeError(f"`osc` must be a BinghamOscillator, got {type(osc).__name__}")
-    if method not in CLOSED_METHODS:
-        raise ValueError(f"`method` must be one of {CLOSED_METHODS}, got {method!r}")
-    x0 = as_finite("x0", x0)
-    v0 = as_finite("v0", v0)
-    dt = as_positive("dt", dt)
-    if (t_end is None) == (n_steps is None):
-        raise ValueError("give exactly one of `t_end` and `n_steps`")
-    n = steps_for(dt, t_end) if n_steps is None else as_int_at_least("n_steps", n_steps, 1)
-    if not callable(forcing):
-        raise TypeError(f"`forcing` must be callable, got {forcing!r}")
-    if engine not in ENGINES:
-        raise ValueError(f"`engine` must be one of {ENGINES}, got {engine!r}")
-
-    F0 = _checked_force(forcing, 0.0)
-    Fd0 = initial_dashpot_force(osc, x0, v0, F0)
-    if engine == "compiled" or (engine == "auto" and _have_numba() and (
-            n >= COMPILED_MIN_STEPS or "lumped.solvers.closed.closed_form_jit" in sys.modules)):
-        from .closed_form_jit import compiled_columns
-
-        xs, vs, Fds, Fts = compiled_columns(osc.m, osc.k, osc.gamma, osc.tau, forcing,
-                                            x0, v0, Fd0, dt, n, method)
-    else:
-        loop = _run_bdf1 if method == "bdf1" else _run_bdf2
-        xs, vs, Fds, Fts = loop(osc, forcing, x0, v0, Fd0, dt, n)
-    x_arr = np.array(xs)
-    with np.errstate(over="ignore", invalid="ignore"):  # Trajectory reports non-finite values
-        F_s = osc.k * x_arr
-    return Trajectory(
-        t=np.arange(n + 1, dtype=float) * dt, x=x_arr, v=np.array(vs), F_s=F_s,
-        F_d=np.array(Fds), method=f"closed-{method}", stats={"steps": n},
-        predictor=np.array(Fts),
-    )
-
-
-def _have_numba() -> bool:
-    """Whether numba can be imported (checked once)."""
-    global _NUMBA
-    if _NUMBA is None:
-        import importlib.util
-
-        _NUMBA = importlib.util.find_spec("numba") is not None
-    return _NUMBA
-
-
-_NUMBA: bool | None = None
-
 _Columns = tuple[list[float], list[float], list[float], list[float]]
 
 
@@ -287,7 +181,7 @@ def _columns(x0: float, v0: float, Fd0: float, n: int) -> _Columns:
     return [x0] * (n + 1), [v0] * (n + 1), [Fd0] * (n + 1), [Fd0] * (n + 1)
 
 
-def _run_bdf1(
+def run_bdf1_loop(
     osc: BinghamOscillator, forcing: Callable[[float], float],
     x: float, v: float, Fd0: float, dt: float, n: int,
 ) -> _Columns:
@@ -305,7 +199,7 @@ def _run_bdf1(
     return xs, vs, Fds, Fts
 
 
-def _run_bdf2(
+def run_bdf2_loop(
     osc: BinghamOscillator, forcing: Callable[[float], float],
     x: float, v: float, Fd0: float, dt: float, n: int,
 ) -> _Columns:
@@ -314,7 +208,7 @@ def _run_bdf2(
     xs, vs, Fds, Fts = _columns(x, v, Fd0, n)
     isfinite = math.isfinite
     x_prev, v_prev = x, v
-    x, v, Fds[1], Fts[1] = bdf1_step(m, k, inv_gamma, tau, dt, x, v, _checked_force(forcing, dt))
+    x, v, Fds[1], Fts[1] = bdf1_step(m, k, inv_gamma, tau, dt, x, v, checked_force(forcing, dt))
     xs[1], vs[1] = x, v
     for i in range(2, n + 1):
         F = forcing(i * dt)
@@ -329,7 +223,8 @@ def _run_bdf2(
     return xs, vs, Fds, Fts
 
 
-def _checked_force(forcing: Callable[[float], float], t: float) -> float:
+def checked_force(forcing: Callable[[float], float], t: float) -> float:
+    """``forcing(t)``, checked finite (the error names ``forcing`` and ``t``)."""
     F = forcing(t)
     try:
         return as_finite("forcing", F)

@@ -18,6 +18,7 @@ import numpy as np
 from ...codegen.function_types import branch_type, guards_type, law_type
 from ...scene import Scene
 from ..modes.mode_guess_jit import compiled_probe_modes, probe_workspace
+from ..modes.stuck_jit import compiled_breakout_root, compiled_breakout_scan
 from . import loop_jit as L
 
 __all__ = ["CompiledLoop", "compiled_loop"]
@@ -156,6 +157,9 @@ class CompiledLoop:
         self.js, self.law, self.guards, self.branch = js, law, guards, branch
         self._probe: tuple | None = None
         self.fn = L.compiled_advance()
+        # the break-out of a stuck interval, compiled (used by modes.stuck's StaticHold)
+        self.breakout_scan = compiled_breakout_scan()
+        self.breakout_root = compiled_breakout_root()
         self.fkind, self.fpar, self.checked = fkind, fpar, checked
         self.A, self.W = _butcher()
         self.N, self.E = len(js.masses), len(js.ea)

@@ -32,9 +32,12 @@ from collections.abc import Sequence
 import numpy as np
 
 from ...scene import Mass, Scene
-from .mode_guess_jit import REFUSED
 
-__all__ = ["try_modes"]
+__all__ = ["try_modes", "UNDECIDED", "REFUSED"]
+
+#: The probe's verdicts besides a mode: no mode decided yet, or the guess refused
+#: (shared with its compiled twin, :mod:`lumped.solvers.modes.mode_guess_jit`).
+UNDECIDED, REFUSED = -2, -1
 
 _MAX_ITERS = 30
 

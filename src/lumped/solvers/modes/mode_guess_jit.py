@@ -19,14 +19,14 @@ import numpy as np
 
 from ...codegen.function_types import branch_type, function_at, law_type
 from ...codegen.jit import njit, numba_enabled
+from .mode_guess import REFUSED, UNDECIDED
 
-__all__ = ["probe_modes", "branch_type", "compiled_probe_modes", "CONFIRMED", "UNDECIDED",
+__all__ = ["probe_modes", "compiled_probe_modes", "CONFIRMED", "UNDECIDED",
            "REFUSED"]
 
 _MAX_ITERS = 30
 #: :func:`probe_modes`'s answers besides a candidate's index: no candidate confirmed,
 #: one read as the current mode (undecided), or none of either.
-UNDECIDED, REFUSED = -2, -1
 CONFIRMED = 0  # (and above: the index of the confirmed candidate)
 
 
