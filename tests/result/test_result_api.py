@@ -4,7 +4,6 @@ helper and the deprecated front door."""
 from __future__ import annotations
 
 import sys
-import warnings
 
 import numpy as np
 import pytest
@@ -74,14 +73,13 @@ def test_oscillator_helper_is_the_papers_scene():
         bingham_oscillator(k=-1.0)
 
 
-def test_integrate_and_trajectory_are_deprecated():
-    with pytest.warns(DeprecationWarning, match="simulate"):
-        integrate = lumped.integrate
-    with pytest.warns(DeprecationWarning, match="Solution"):
-        lumped.Trajectory  # noqa: B018
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        osc = lumped.BinghamOscillator(m=1.0, k=100.0, gamma=1.0, tau=1.0)
+def test_the_closed_form_integrate_is_the_closed_methods_numbers():
+    """``lumped.solvers.closed.integrate.integrate`` (its ``Trajectory``) and
+    ``simulate(..., method="closed-bdf1")`` (a ``Solution``) give the same numbers."""
+    from lumped.solvers.closed.closed_form import BinghamOscillator
+    from lumped.solvers.closed.integrate import integrate
+
+    osc = BinghamOscillator(m=1.0, k=100.0, gamma=1.0, tau=1.0)
     traj = integrate(osc, x0=0.0, forcing=paper_F2, dt=1e-3, t_end=1.0, method="bdf1")
     sol = simulate(bingham_oscillator(forcing=paper_F2), method="closed-bdf1", dt=1e-3,
                    t_end=1.0)

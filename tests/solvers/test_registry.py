@@ -122,13 +122,13 @@ def test_top_level_is_small():
         assert getattr(lumped, name) is not None
 
 
-@pytest.mark.parametrize("name, home", sorted(lumped._MOVED.items()))
-def test_old_top_level_names_warn_and_name_their_new_home(name, home):
-    import importlib
-
-    with pytest.warns(DeprecationWarning, match=home.replace(".", r"\.")):
-        obj = lumped.__getattr__(name)
-    assert obj is getattr(importlib.import_module(home), name)
+@pytest.mark.parametrize("name", ["integrate", "BinghamOscillator", "Trajectory", "SineBurst",
+                                  "METHODS", "exact_solution"])
+def test_retired_top_level_names_are_gone(name):
+    """0.2 retired the names 0.1 served with a DeprecationWarning (see the CHANGELOG)."""
+    assert name not in lumped.__all__
+    with pytest.raises(AttributeError, match=name):
+        getattr(lumped, name)
 
 
 def test_unknown_top_level_name_is_an_attribute_error():
