@@ -18,7 +18,8 @@ from lumped.codegen.jit import numba_enabled
 from lumped.reference import exact_solution
 from lumped.scenarios import get_scenario, scenario_scene
 from lumped.solvers.radau.dense import DenseOutput, position_weights
-from lumped.solvers.radau.stage import A, C, StageSystem
+from lumped.solvers.radau.stage import StageSystem
+from lumped.solvers.radau.tableau import A, C
 
 
 def test_position_weights_meet_the_step_ends():

@@ -133,7 +133,7 @@ def test_the_illinois_root_is_found_to_round_off():
 def test_the_first_crossing_on_a_step_polynomial():
     # a guard g = q on q(s) = 1 - 2 s (linear through the nodes): root at s = 0.5; a second
     # guard crossing later (q + 0.5 at s = 0.75) is not the first
-    from lumped.solvers.radau.stage import C
+    from lumped.solvers.radau.tableau import C
 
     nodes = [(tuple(1.0 - 2.0 * s for s in (0.0, *C)), (0.0, 0.0, 0.0, 0.0))]
     got = first_root_py(nodes, [lambda q, F: (q + 0.5, q)])

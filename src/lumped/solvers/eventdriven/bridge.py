@@ -36,7 +36,7 @@ import math
 
 from ..bdf.fixed_step import RunResult, run_bdf
 from ..radau.dense import row_of
-from ..radau.stage import C
+from ..radau.tableau import C
 from ..status import SolverError
 
 __all__ = ["BRIDGE_STEPS", "MAX_BRIDGES", "MAX_STEPS", "RETRY_SCALES", "bridge_steps",

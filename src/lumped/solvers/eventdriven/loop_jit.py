@@ -52,9 +52,10 @@ import numpy as np
 from ...codegen.function_types import function_at, guards_type, law_type
 from ...codegen.jit import njit, numba_enabled
 from ..modes.crossing_root import first_root
-from ..radau.stage import DAMPED_AFTER, END_SLOPES, MAX_NEWTON, STALL_PASSES, C
+from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.stage_jit import stage_solve
 from ..radau.step_jit import crossed, finite, folded, forces, step_error
+from ..radau.tableau import END_SLOPES, C
 
 __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", "SINGULAR",
            "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "DAMPED", "REASONS"]

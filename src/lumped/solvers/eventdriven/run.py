@@ -16,8 +16,10 @@ import math
 from ...scene import Mass, Scene
 from ..implicit.initial_state import consistent_initial_state
 from ..modes.stuck import hold_interval
-from ..radau.dense import DenseOutput, Rows, initial_step, output_data, row_of
-from ..radau.stage import C, StageSystem
+from ..radau.dense import DenseOutput, Rows, output_data, row_of
+from ..radau.error import initial_step
+from ..radau.stage import StageSystem
+from ..radau.tableau import C
 from ..status import BranchError, RawRun, SolverError, Status
 from . import fast as adaptive_fast
 from .bridge import MAX_BRIDGES, take_bridge

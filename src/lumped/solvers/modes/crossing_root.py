@@ -20,8 +20,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ...codegen.jit import njit
-from ..radau.stage import C
 from ..radau.step_jit import element_nodes
+from ..radau.tableau import C
 from .events import SAMPLES
 
 __all__ = ["first_root", "first_root_py", "illinois"]

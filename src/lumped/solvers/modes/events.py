@@ -31,7 +31,7 @@ from ..implicit.branch_check import left_branch
 from ..implicit.globalize import solve_globalized
 from ..implicit.step_system import make_evaluate
 from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve, residual_ok
-from ..radau.stage import dense_weights
+from ..radau.tableau import dense_weights
 
 __all__ = ["SAMPLES", "first_crossing", "first_crossing_on", "select_modes", "hold_rate_locks",
            "snap_to_locks", "lock_cones", "apply_impacts", "guard_tolerance", "fold_crossed"]

@@ -1,5 +1,5 @@
-r"""Output of the adaptive method: the dense output of its accepted steps, the row layout
-of ``data``, and the first step size.
+r"""Output of the adaptive method: the dense output of its accepted steps and the row layout
+of ``data``.
 """
 
 from __future__ import annotations
@@ -9,10 +9,9 @@ import math
 import numpy as np
 
 from ...codegen.jit import njit, numba_enabled
-from .stage import C, dense_weights
+from .tableau import C, dense_weights
 
-__all__ = ["DenseOutput", "Rows", "row_of", "initial_step", "output_data",
-           "position_weights"]
+__all__ = ["DenseOutput", "Rows", "row_of", "output_data", "position_weights"]
 
 
 def position_weights(s):
@@ -397,25 +396,6 @@ def row_of(t: float, x: list[float], v: list[float], F: list[float]) -> list[flo
     for p in range(len(x)):
         row += [x[p], v[p]]
     return row + list(F)
-
-
-def initial_step(x, v, acc, is_mass, rtol, atol, span) -> float:
-    """A first step from the sizes of the state and its derivative (as scipy does)."""
-    d0 = d1 = 0.0
-    n = 0
-    for i in range(len(x)):
-        sc = atol + rtol * abs(x[i])
-        d0 += (x[i] / sc) ** 2
-        d1 += (v[i] / sc) ** 2
-        n += 1
-        if is_mass[i]:
-            sc = atol + rtol * abs(v[i])
-            d0 += (v[i] / sc) ** 2
-            d1 += (acc[i] / sc) ** 2
-            n += 1
-    d0, d1 = math.sqrt(d0 / n), math.sqrt(d1 / n)
-    h0 = 1e-6 * span if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-    return min(h0, 0.1 * span) * rtol ** 0.2 / 1e-6 ** 0.2 if h0 > 0 else 1e-6 * span
 
 
 def output_data(rows: Rows, dense: DenseOutput, dt: float | None, t_end: float,

@@ -2,11 +2,11 @@ r"""The compiled pieces of one Radau IIA step of ``radau5`` (for
 :mod:`lumped.solvers.eventdriven.loop_jit`): the error estimate and its norm, the guard test on
 the collocation polynomial, the fold test, the forcing.
 
-Ports, operation for operation, of :meth:`lumped.solvers.radau.stage.StageSystem.error`,
-:meth:`~lumped.solvers.radau.stage.StageSystem.error_norm`,
-:meth:`~lumped.solvers.radau.stage.StageSystem.element_nodes`,
-:func:`lumped.solvers.modes.events.first_crossing_on` (only the test that some sample is
-negative) and :func:`lumped.solvers.modes.events.fold_crossed`; the unknowns are laid out as in
+Ports, operation for operation, of :meth:`lumped.solvers.radau.error.ErrorEstimate.error`,
+:meth:`~lumped.solvers.radau.error.ErrorEstimate.error_norm`,
+:meth:`lumped.solvers.radau.stage.StageSystem.element_nodes`,
+:func:`lumped.solvers.modes.crossing_root.first_root_py` (only the test that some sample
+is negative) and :func:`lumped.solvers.modes.guards.fold_crossed`; the unknowns are laid out as in
 :mod:`lumped.solvers.radau.stage` (``U[k*n + i]`` a node's stage velocity, ``U[k*n + N + e]`` an
 element's stage force). The scene's kernels come in as numba first-class functions,
 ``branch_law(e, i, q, F)`` and ``branch_guards(e, i, q, F, out)`` of
@@ -24,7 +24,8 @@ from ...scene.forcing_jit import forcing_into
 from ..implicit.branch_check_jit import dead_band_sign, sign_bit
 from ..modes.events import SAMPLES
 from ..newton.semismooth_jit import lu_factor_into, lu_solve_into
-from .stage import E_ERR, FORCE_TOL_FACTOR, MU_REAL, C
+from .error import FORCE_TOL_FACTOR
+from .tableau import E_ERR, MU_REAL, C
 
 __all__ = ["element_nodes", "folded", "crossed", "error_norm", "step_error", "forces",
            "finite"]
