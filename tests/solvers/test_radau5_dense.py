@@ -138,7 +138,7 @@ def test_the_output_keeps_its_steps_in_order_as_it_grows():
     """Steps added one at a time (the Python loop), as blocks (``extend``) and written in
     place (``block``/``commit``, the compiled loop), well past the first capacity: the
     arrays hold them in their order, and the rows likewise."""
-    from lumped.solvers.radau.dense import Rows
+    from lumped.solvers.radau.rows import Rows
 
     rng = np.random.default_rng(3)
     N, E = 1, 2

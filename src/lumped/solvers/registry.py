@@ -39,11 +39,12 @@ from typing import Any
 
 import numpy as np
 
+from ..grid import steps_for
 from ..scene import GROUND, Mass, Scene
 from ..scene.forcing import zero_forcing
 from ..trajectory import Trajectory
 from .bdf.fixed_step import run_bdf
-from .closed.closed_form import BinghamOscillator, integrate, steps_for
+from .closed.closed_form import BinghamOscillator, integrate
 from .implicit.initial_state import consistent_initial_state
 from .newton.semismooth import NewtonOptions
 from .status import RawRun, Status

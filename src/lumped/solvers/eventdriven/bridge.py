@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 
 from ..bdf.fixed_step import RunResult, run_bdf
-from ..radau.dense import row_of
+from ..radau.rows import row_of
 from ..radau.tableau import C
 from ..status import SolverError
 
