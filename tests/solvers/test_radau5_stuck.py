@@ -154,7 +154,7 @@ def test_the_parts_of_a_mode_kept_per_plan_are_those_made_anew():
     from lumped import Element, Mass, Scene
     from lumped.laws import get_law
     from lumped.solvers.eventdriven.setup import read_options, scene_plan
-    from lumped.solvers.modes.events import lock_cones
+    from lumped.solvers.modes.lock_events import lock_cones
     from lumped.solvers.registry import RunSettings
 
     bingham = get_law("bingham")

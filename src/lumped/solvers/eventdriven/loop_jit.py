@@ -14,7 +14,7 @@ operation (the numbers agree bit for bit):
    masses' ``v`` and the guarded elements' forces;
 3. Gustafsson's predictive step control, ``h_new = h / max(quot, facgus)``;
 4. the guards of the watched elements on the step's collocation polynomial at the
-   samples ``s = k / 8`` of :data:`lumped.solvers.modes.events.SAMPLES` (only *detected*: the
+   samples ``s = k / 8`` of :data:`lumped.solvers.radau.tableau.SAMPLES` (only *detected*: the
    root and the landing are the reference's);
 5. the accepted step's dense-output record ``(t_n, h, y_n, Y_k - y_n)`` and its output row.
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from ..modes.events import fold_crossed
+from ..modes.guards import fold_crossed
 from ..radau.rows import row_of
 from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.tableau import A as _A
