@@ -45,7 +45,7 @@ def simulate(
         Final time (``> 0``).
     dt : float, optional
         Step size; required by the fixed-step methods (all built-in ones), whose grid is
-        ``t_n = n dt`` with :func:`lumped.solvers.closed.closed_form.steps_for` ``(dt, t_end)``
+        ``t_n = n dt`` with :func:`lumped.grid.steps_for` ``(dt, t_end)``
         steps.
     rtol, atol : float, optional
         Relative and absolute tolerances of an adaptive method (positive, finite).

@@ -18,7 +18,7 @@ from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
 from lumped.solvers.eventdriven.bridge import BRIDGE_STEPS, MAX_STEPS, bridge_steps, linear_stages
 from lumped.solvers.radau.dense_defect import dense_defect
-from lumped.solvers.radau.stage import C
+from lumped.solvers.radau.tableau import C
 from lumped.solvers.status import Status
 
 

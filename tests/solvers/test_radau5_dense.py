@@ -18,7 +18,8 @@ from lumped.codegen.jit import numba_enabled
 from lumped.reference import exact_solution
 from lumped.scenarios import get_scenario, scenario_scene
 from lumped.solvers.radau.dense import DenseOutput, position_weights
-from lumped.solvers.radau.stage import A, C, StageSystem
+from lumped.solvers.radau.stage import StageSystem
+from lumped.solvers.radau.tableau import A, C
 
 
 def test_position_weights_meet_the_step_ends():
@@ -137,7 +138,7 @@ def test_the_output_keeps_its_steps_in_order_as_it_grows():
     """Steps added one at a time (the Python loop), as blocks (``extend``) and written in
     place (``block``/``commit``, the compiled loop), well past the first capacity: the
     arrays hold them in their order, and the rows likewise."""
-    from lumped.solvers.radau.dense import Rows
+    from lumped.solvers.radau.rows import Rows
 
     rng = np.random.default_rng(3)
     N, E = 1, 2

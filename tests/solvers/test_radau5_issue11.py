@@ -230,7 +230,7 @@ def test_the_mode_probe_accepts_a_taut_string_held_to_round_off() -> None:
     # Newton cycled between neighbours whose residuals all met the test and stopped at
     # max_iters: "no motion continues". Such a point is an answer for the probe.
     from lumped.codegen.branches import law_branches
-    from lumped.solvers.modes.events import select_modes
+    from lumped.solvers.modes.choice import select_modes
 
     scene = _taut_string_network()
     lbs = [law_branches(el.law) for el in scene.elements]

@@ -687,7 +687,7 @@ def test_a_string_taut_at_rest_holds_in_tension_through_an_impact():
     # m0 and m1 left together at 0.89, the probe then held m0 with a force of 8e7 and
     # the step fell to its floor. A lock at rest holds the way its force acts (tension)
     from lumped.codegen.branches import law_branches
-    from lumped.solvers.modes.events import apply_impacts
+    from lumped.solvers.modes.lock_events import apply_impacts
 
     string = get_law("string_spring")
     scene = Scene([Mass("m0", m=0.3701008718306298, x0=0.07322297122476906, v0=0.0),

@@ -133,7 +133,7 @@ def test_the_illinois_root_is_found_to_round_off():
 def test_the_first_crossing_on_a_step_polynomial():
     # a guard g = q on q(s) = 1 - 2 s (linear through the nodes): root at s = 0.5; a second
     # guard crossing later (q + 0.5 at s = 0.75) is not the first
-    from lumped.solvers.radau.stage import C
+    from lumped.solvers.radau.tableau import C
 
     nodes = [(tuple(1.0 - 2.0 * s for s in (0.0, *C)), (0.0, 0.0, 0.0, 0.0))]
     got = first_root_py(nodes, [lambda q, F: (q + 0.5, q)])
@@ -154,7 +154,7 @@ def test_the_parts_of_a_mode_kept_per_plan_are_those_made_anew():
     from lumped import Element, Mass, Scene
     from lumped.laws import get_law
     from lumped.solvers.eventdriven.setup import read_options, scene_plan
-    from lumped.solvers.modes.events import lock_cones
+    from lumped.solvers.modes.lock_events import lock_cones
     from lumped.solvers.registry import RunSettings
 
     bingham = get_law("bingham")

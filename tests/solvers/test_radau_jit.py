@@ -18,6 +18,7 @@ from lumped.laws import get_law
 
 radau = pytest.importorskip("lumped.solvers.radau.stage")
 from lumped.codegen.jit import njit, numba_enabled  # noqa: E402
+from lumped.solvers.radau import tableau  # noqa: E402
 from lumped.solvers.radau.stage_jit import compiled_stage_solve, workspace  # noqa: E402
 from lumped.solvers.radau.stage_jit import stage_evaluate as _cached_stage_evaluate  # noqa: E402
 
@@ -67,7 +68,7 @@ def test_stage_system_bit_for_bit(setup, data, h, mode_d):
                for e, el in enumerate(scene.elements)]
     G_ref, J_ref = system.evaluate(list(U), h, list(x_n), list(v_n), f.tolist(), kernels)
     G, J, *_ = workspace(len(scene.nodes), len(scene.elements))
-    A, W = np.array(radau.A), np.array(radau.W)
+    A, W = np.array(tableau.A), np.array(tableau.W)
     stage_evaluate(js.module.branch_law, js.masses, js.ea, js.eb, js.spring, js.lock_q, modes,
                    A, W, U, h, x_n, v_n, f, G, J)
     assert G.tolist() == G_ref
@@ -90,7 +91,7 @@ def test_stage_solve_bit_for_bit(setup, mode_d):
                                            kernels, list(scale), tol=1e-6, max_iters=10)
     ws = workspace(N, E)
     ok = compiled_stage_solve()(js.module.branch_law, js.masses, js.ea, js.eb, js.spring,
-                                js.lock_q, modes, np.array(radau.A), np.array(radau.W), U,
+                                js.lock_q, modes, np.array(tableau.A), np.array(tableau.W), U,
                                 1e-2, x_n, v_n, f, scale, 1e-6, 10, *ws)
     assert ok == (U_ref is not None)
     assert tuple(ws[-1][:2]) == (it_ref, nfac_ref)
@@ -118,9 +119,9 @@ def test_a_taut_string_is_held_on_the_velocity_level_bit_for_bit() -> None:
     G_ref, J_ref = system.evaluate(list(U), h, list(x_n), list(v_n), f.tolist(), kernels)
     G, J, *_ = workspace(2, 2)
     stage_evaluate(js.module.branch_law, js.masses, js.ea, js.eb, js.spring, js.lock_q, modes,
-                   np.array(radau.A), np.array(radau.W), U, h, x_n, v_n, f, G, J)
+                   np.array(tableau.A), np.array(tableau.W), U, h, x_n, v_n, f, G, J)
     assert G.tolist() == G_ref and J.tolist() == J_ref
     # the lock's residual is h sum_l a_kl (V_l,2 - V_l,1): no rounding of x in it
     for k in range(3):
-        want = h * sum(radau.A[k][j] * (U[j * 4 + 1] - U[j * 4]) for j in range(3))
+        want = h * sum(tableau.A[k][j] * (U[j * 4 + 1] - U[j * 4]) for j in range(3))
         assert abs(G_ref[k * 4 + 2] - want) <= 4 * np.spacing(abs(want))

@@ -13,7 +13,7 @@ from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
 from lumped.solvers.modes.crossing_root import collocation_at
 from lumped.solvers.modes.split_kink import split_kink
-from lumped.solvers.radau.stage import C
+from lumped.solvers.radau.tableau import C
 
 TAU = 0.15900919888305598
 

@@ -52,7 +52,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._validate import as_finite, as_int_at_least, as_positive
-from ..solvers.closed.closed_form import BinghamOscillator, steps_for
+from ..grid import steps_for
+from ..solvers.closed.closed_form import BinghamOscillator
 from ..trajectory import Trajectory
 from .arcs import EPS, SlipArc
 from .events import phases
@@ -127,9 +128,9 @@ def exact_solution(
         omitted.
     x0, v0 : float
         Initial state.  ``v0 = 0``: the mass starts stuck if ``|F(0) - k x0| <= tau``
-        (``F_d(0) = F(0) - k x0``, as in :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`),
-        otherwise it slips in the direction of ``F(0) - k x0``.  ``v0 != 0``: slip
-        with ``sgn(v0)``.
+        (``F_d(0) = F(0) - k x0``, as in
+        :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`), otherwise it slips
+        in the direction of ``F(0) - k x0``.  ``v0 != 0``: slip with ``sgn(v0)``.
     forcing : None, zero_forcing or SineBurst
         The only forcings the reference covers; anything else raises
         :class:`ReferenceNotApplicable` (a ``ValueError``).
@@ -211,9 +212,10 @@ def reference_for_grid(
 ) -> Trajectory:
     """The exact solution on the grid ``t_n = n dt`` used by the numerical methods.
 
-    The grid is that of :func:`lumped.solvers.closed.integrate.integrate` (``steps_for(dt, t_end)``
-    steps), so ``traj.to_csv(path)`` writes the same columns and rows as a numerical
-    run.  ``stats`` holds the number of grid points, events and intervals.
+    The grid is that of :func:`lumped.solvers.closed.integrate.integrate`
+    (:func:`lumped.grid.steps_for` ``(dt, t_end)`` steps), so ``traj.to_csv(path)``
+    writes the same columns and rows as a numerical run.  ``stats`` holds the number of
+    grid points, events and intervals.
     Raises :class:`ReferenceNotApplicable` (a ``ValueError``) for a forcing the
     reference does not cover.
     """

@@ -7,8 +7,9 @@ one implicit step), :mod:`.initial_state`, :mod:`.branch_check`, :mod:`.fixed_st
 :mod:`.registry` (name -> runner).
 """
 
+from ..grid import steps_for
 from .bdf.fixed_step import GENERIC_METHODS, RunResult, run_bdf
-from .closed.closed_form import BinghamOscillator, bdf1_step, bdf2_step, steps_for
+from .closed.closed_form import BinghamOscillator, bdf1_step, bdf2_step
 from .closed.integrate import integrate
 from .implicit.initial_state import consistent_initial_state
 from .newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve

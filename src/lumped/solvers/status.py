@@ -165,6 +165,6 @@ def fixed_step_grid(method: str, settings: RunSettings,
     if unknown:
         raise TypeError(f"method {method!r} takes no keyword argument(s) "
                         f"{', '.join(map(repr, unknown))}")
-    from .closed.closed_form import steps_for
+    from ..grid import steps_for
 
     return settings.dt, steps_for(settings.dt, settings.t_end)

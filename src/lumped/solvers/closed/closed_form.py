@@ -35,6 +35,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from ..._validate import as_finite, as_nonnegative, as_positive
+from ...grid import steps_for  # (public here too: lumped.grid holds it)
 
 __all__ = [
     "BinghamOscillator",
@@ -157,20 +158,6 @@ def initial_dashpot_force(osc: BinghamOscillator, x0: float, v0: float, F0: floa
     if v0 != 0.0:
         return math.copysign(osc.tau, v0) + v0 / osc.gamma
     return min(max(F0 - osc.k * x0, -osc.tau), osc.tau)
-
-
-def steps_for(dt: float, t_end: float) -> int:
-    """Number of steps of size ``dt`` that reach ``t_end`` (rounding to the nearest when
-    ``t_end / dt`` is an integer up to round-off, upwards otherwise)."""
-    dt = as_positive("dt", dt)
-    t_end = as_positive("t_end", t_end)
-    ratio = t_end / dt
-    n = round(ratio)
-    if abs(n - ratio) > 1e-9 * max(1.0, ratio):
-        n = math.ceil(ratio)
-    if n > 500_000_000:
-        raise ValueError(f"`t_end / dt` = {ratio:.3g} steps is too many")
-    return max(int(n), 1)
 
 
 _Columns = tuple[list[float], list[float], list[float], list[float]]

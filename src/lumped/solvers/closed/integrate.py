@@ -11,6 +11,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..._validate import as_finite, as_int_at_least, as_positive
+from ...grid import steps_for
 from ...scene.forcing import zero_forcing
 from ...trajectory import Trajectory
 from .closed_form import (
@@ -20,7 +21,6 @@ from .closed_form import (
     initial_dashpot_force,
     run_bdf1_loop,
     run_bdf2_loop,
-    steps_for,
 )
 
 __all__ = ["integrate", "ENGINES", "COMPILED_MIN_STEPS"]

@@ -35,8 +35,8 @@ from __future__ import annotations
 import math
 
 from ..bdf.fixed_step import RunResult, run_bdf
-from ..radau.dense import row_of
-from ..radau.stage import C
+from ..radau.rows import row_of
+from ..radau.tableau import C
 from ..status import SolverError
 
 __all__ = ["BRIDGE_STEPS", "MAX_BRIDGES", "MAX_STEPS", "RETRY_SCALES", "bridge_steps",

@@ -13,10 +13,10 @@ from __future__ import annotations
 import math
 
 from ..modes.crossing_root import first_root_py
-from ..modes.events import guard_tolerance
+from ..modes.guards import guard_tolerance
 from ..modes.split_kink import split_kink
 from ..radau.dense_defect import dense_defect
-from ..radau.stage import START_WEIGHTS
+from ..radau.tableau import START_WEIGHTS
 
 __all__ = ["StepChecks"]
 

@@ -314,7 +314,7 @@ def _butcher() -> tuple[np.ndarray, np.ndarray]:
     """``A`` and ``W = A^-1`` of :mod:`lumped.solvers.radau.stage` as arrays, made once (the
     loop only reads them)."""
     if not _BUTCHER:
-        from ..radau.stage import A, W
+        from ..radau.tableau import A, W
 
         _BUTCHER.extend((np.array(A), np.array(W)))
     return _BUTCHER[0], _BUTCHER[1]

@@ -14,7 +14,7 @@ operation (the numbers agree bit for bit):
    masses' ``v`` and the guarded elements' forces;
 3. Gustafsson's predictive step control, ``h_new = h / max(quot, facgus)``;
 4. the guards of the watched elements on the step's collocation polynomial at the
-   samples ``s = k / 8`` of :data:`lumped.solvers.modes.events.SAMPLES` (only *detected*: the
+   samples ``s = k / 8`` of :data:`lumped.solvers.radau.tableau.SAMPLES` (only *detected*: the
    root and the landing are the reference's);
 5. the accepted step's dense-output record ``(t_n, h, y_n, Y_k - y_n)`` and its output row.
 
@@ -52,9 +52,10 @@ import numpy as np
 from ...codegen.function_types import function_at, guards_type, law_type
 from ...codegen.jit import njit, numba_enabled
 from ..modes.crossing_root import first_root
-from ..radau.stage import DAMPED_AFTER, END_SLOPES, MAX_NEWTON, STALL_PASSES, C
+from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.stage_jit import stage_solve
 from ..radau.step_jit import crossed, finite, folded, forces, step_error
+from ..radau.tableau import END_SLOPES, C
 
 __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", "SINGULAR",
            "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "DAMPED", "REASONS"]

@@ -6,7 +6,7 @@ and what happens at an event (a guard crossing, a time event, the start).
 (``modes``), their kernels and guards, the elements whose guards are watched, the
 force-split cones of locks in parallel, and the event record.
 :meth:`ModeState.at_event` chooses the mode after an event by a vanishing implicit step of
-the full laws (:func:`lumped.solvers.modes.events.select_modes`), applies impacts, records the
+the full laws (:func:`lumped.solvers.modes.choice.select_modes`), applies impacts, records the
 switches and tests for an accumulation of events.
 """
 
@@ -15,7 +15,8 @@ from __future__ import annotations
 from collections import deque
 
 from ...scene import Mass, Scene
-from ..modes.events import apply_impacts, hold_rate_locks, lock_cones, select_modes, snap_to_locks
+from ..modes.choice import select_modes
+from ..modes.lock_events import apply_impacts, hold_rate_locks, lock_cones, snap_to_locks
 from ..modes.mode_guess import try_modes
 from ..nonsmooth.locks import (
     IntervalLog,
@@ -223,7 +224,8 @@ class ModeState:
     def _locked(self, sel: tuple, h_probe: float) -> tuple[list[int], list[float], list[float]]:
         """The probe's ``(modes, v_p, F_p)`` with the dashpots that sit on a lock put on it
         (:func:`~lumped.solvers.nonsmooth.locks.prefer_locks`,
-        :func:`~lumped.solvers.nonsmooth.locks.lock_parallel_rates`; ``h_probe`` the probe's size)."""
+        :func:`~lumped.solvers.nonsmooth.locks.lock_parallel_rates`; ``h_probe`` the probe's
+        size)."""
         scene, lbs = self.scene, self.lbs
         new, v_p, F_p = sel
         new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked

@@ -1,4 +1,5 @@
-r"""One ``radau5`` run: its state and the loop of :func:`lumped.solvers.eventdriven.runner.run_radau5`.
+r"""One ``radau5`` run: its state and the loop of
+:func:`lumped.solvers.eventdriven.runner.run_radau5`.
 
 :class:`Radau5Run` holds what the loop carries from pass to pass (the state at ``t``, the
 step size and the controller's memory, the landing bracket of a guard, the flags of an
@@ -13,11 +14,15 @@ from __future__ import annotations
 
 import math
 
+from ...grid import steps_for
 from ...scene import Mass, Scene
 from ..implicit.initial_state import consistent_initial_state
 from ..modes.stuck import hold_interval
-from ..radau.dense import DenseOutput, Rows, initial_step, output_data, row_of
-from ..radau.stage import C, StageSystem
+from ..radau.dense import DenseOutput
+from ..radau.error import initial_step
+from ..radau.rows import Rows, output_data, row_of
+from ..radau.stage import StageSystem
+from ..radau.tableau import C
 from ..status import BranchError, RawRun, SolverError, Status
 from . import fast as adaptive_fast
 from .bridge import MAX_BRIDGES, take_bridge
@@ -73,8 +78,6 @@ class Radau5Run(StepPass, StepChecks):
     """
 
     def __init__(self, scene: Scene, settings) -> None:
-        from ..closed.closed_form import steps_for
-
         plan = scene_plan(scene)
         if plan.refused:
             raise ValueError(plan.refused)

@@ -100,8 +100,8 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
     operations as :meth:`StageSystem.solve`, bit for bit), on the scene's generated
     branch kernels; ``(U, h, x, v, f, scale, max_iters) -> (U or None, its, nfac)``."""
     from ...codegen.jit import jit_scene
-    from ..radau.stage import A, W
     from ..radau.stage_jit import compiled_stage_solve, workspace
+    from ..radau.tableau import A, W
 
     js = jit_scene(scene)
     solve = compiled_stage_solve()

@@ -15,10 +15,11 @@ from __future__ import annotations
 
 import math
 
-from ..modes.events import fold_crossed
-from ..radau.dense import row_of
-from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES, C
-from ..radau.stage import A as _A
+from ..modes.guards import fold_crossed
+from ..radau.rows import row_of
+from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
+from ..radau.tableau import A as _A
+from ..radau.tableau import C
 from ..status import Status
 from .landing import Landing
 

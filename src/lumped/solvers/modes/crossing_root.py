@@ -3,9 +3,9 @@ for both loops: :func:`first_root_py` (the pure-Python loop, the laws' Python gu
 :func:`first_root` (compiled, the generated guard kernels), with the same operations.
 
 The guards of the watched elements are sampled at ``s = k / 8``
-(:data:`lumped.solvers.modes.events.SAMPLES`) on the polynomial through the element's ``(q,
+(:data:`lumped.solvers.radau.tableau.SAMPLES`) on the polynomial through the element's ``(q,
 F)`` at the nodes ``s = 0, c_1, c_2, 1``; at the first sample where a guard, shifted by
-its round-off tolerance (:func:`lumped.solvers.modes.events.guard_tolerance`), is negative, the
+its round-off tolerance (:func:`lumped.solvers.modes.guards.guard_tolerance`), is negative, the
 smallest such guard is followed back to the previous sample and its root is found by the
 Illinois variant of regula falsi: the secant through the bracket, and the value kept at
 an end that stayed twice in a row halved, which gives superlinear convergence without
@@ -20,9 +20,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ...codegen.jit import njit
-from ..radau.stage import C
 from ..radau.step_jit import element_nodes
-from .events import SAMPLES
+from ..radau.tableau import SAMPLES, C
 
 __all__ = ["first_root", "first_root_py", "illinois"]
 

@@ -1,5 +1,5 @@
 r"""A cheap first try of the mode after an event: the vanishing implicit step of
-:func:`lumped.solvers.modes.events.select_modes` on a *guessed* mode, checked against the full
+:func:`lumped.solvers.modes.choice.select_modes` on a *guessed* mode, checked against the full
 laws.
 
 :func:`select_modes` solves one backward-Euler step of size ``h_p`` of the full,

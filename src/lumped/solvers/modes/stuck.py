@@ -39,8 +39,8 @@ from scipy.optimize import brentq
 
 from ...scene import Scene
 from ..nonsmooth.rest_balance import rest_inverse
-from ..radau.dense import row_of
-from .events import guard_tolerance
+from ..radau.rows import row_of
+from .guards import guard_tolerance
 
 __all__ = ["StaticHold", "static_hold", "forcing_kinds"]
 

@@ -118,7 +118,7 @@ def breakout_scan(guards_addr, free, modes, q, fkind, fpar, c, minv, F0, ts, out
     but the ``free`` elements', row ``r`` of those ``minv[r] @ (f(t) + c)``, the forcing
     by the scalar formulas of its kinds) written to ``out[r]``, then every guard of every
     free element (held on branch ``modes[e]`` at ``q[e]``) against its round-off
-    tolerance (:func:`lumped.solvers.modes.events.guard_tolerance`). Returns the index of the
+    tolerance (:func:`lumped.solvers.modes.guards.guard_tolerance`). Returns the index of the
     first sample where a guard is below its tolerance (the rows up to it written), or
     ``-1`` when none is (all rows written)."""
     guards = _guards_at(guards_addr)

@@ -1,5 +1,8 @@
-r"""Output of the adaptive method: the dense output of its accepted steps, the row layout
-of ``data``, and the first step size.
+r"""The dense output of the adaptive method's accepted steps: the collocation polynomial of
+each step (:class:`DenseOutput`, :func:`position_weights`), evaluated by numpy or in one
+compiled pass, and the static balance of the stuck intervals held without steps.
+
+The row layout of ``data`` and the rows of a run are in :mod:`lumped.solvers.radau.rows`.
 """
 
 from __future__ import annotations
@@ -9,15 +12,14 @@ import math
 import numpy as np
 
 from ...codegen.jit import njit, numba_enabled
-from .stage import C, dense_weights
+from .tableau import C, dense_weights
 
-__all__ = ["DenseOutput", "Rows", "row_of", "initial_step", "output_data",
-           "position_weights"]
+__all__ = ["DenseOutput", "position_weights"]
 
 
 def position_weights(s):
     r"""``L_k(s) = int_0^s l_k``, ``k = 1..3``: the integrals of the Lagrange weights of
-    :func:`~lumped.solvers.radau.stage.dense_weights` (``s`` a float or an array).
+    :func:`~lumped.solvers.radau.tableau.dense_weights` (``s`` a float or an array).
 
     The dense output of a position integrates the collocation cubic of its velocity,
     ``x(t_n + s h) = x_n + h (s v_n + sum_k L_k(s) (V_k - v_n))``: a quartic whose error
@@ -248,7 +250,7 @@ def _in_static(t, S0, S1, CL) -> bool:
 def _evaluate(T0, H, Y0, D, ts, N, out, S0, S1, CL, ordered) -> None:
     """:meth:`DenseOutput.__call__`'s numpy evaluation, operation for operation, in one
     loop: the step ``i`` with ``T0[i] <= t < T0[i+1]`` (the last one at the end), the
-    weights of :func:`~lumped.solvers.radau.stage.dense_weights`, ``y_n + sum_k l_k D_k``, and
+    weights of :func:`~lumped.solvers.radau.tableau.dense_weights`, ``y_n + sum_k l_k D_k``, and
     for the positions :func:`position_weights`, ``x_n + h (s v_n + sum_k L_k D_k^v)``.
 
     A row in a stuck interval ``[S0[k], S1[k])`` (closed at ``S1[k]`` where ``CL[k]``) is
@@ -344,93 +346,3 @@ def _static_fill(ts, s0, s1, closed, y0, fkind, fpar, c, minv, free, N, out) -> 
         out[r, 0] = t
         for j in range(1, width):
             out[r, j] = row[j]
-
-
-class Rows:
-    """The output rows of the accepted steps, one list at a time (:meth:`append`), as an
-    array block (:meth:`extend`) or written in place (:meth:`block`, :meth:`commit`), in
-    an array that grows by doubling."""
-
-    def __init__(self) -> None:
-        self._buf = np.empty((0, 0))
-        self._n = 0
-
-    def _reserve(self, k: int, width: int) -> None:
-        if self._n + k > self._buf.shape[0] or self._buf.shape[1] != width:
-            grown = np.empty((max(self._n + k, 2 * self._buf.shape[0], 64), width))
-            if self._n:
-                grown[:self._n] = self._buf[:self._n]
-            self._buf = grown
-
-    def append(self, row: list[float]) -> None:
-        self._reserve(1, len(row))
-        self._buf[self._n] = row
-        self._n += 1
-
-    def extend(self, block: np.ndarray) -> None:
-        k = len(block)
-        if k:
-            self.block(k, block.shape[1])[:] = block
-            self.commit(k)
-
-    def block(self, k: int, width: int) -> np.ndarray:
-        """A view of room for the next ``k`` rows of ``width`` values (kept by
-        :meth:`commit`)."""
-        self._reserve(k, width)
-        return self._buf[self._n:self._n + k]
-
-    def commit(self, k: int) -> None:
-        self._n += k
-
-    def first(self) -> list[float]:
-        return self._buf[0].tolist()
-
-    def set_first(self, row: list[float]) -> None:
-        self._buf[0] = row
-
-    def array(self) -> np.ndarray:
-        return self._buf[:self._n]
-
-
-def row_of(t: float, x: list[float], v: list[float], F: list[float]) -> list[float]:
-    row = [t]
-    for p in range(len(x)):
-        row += [x[p], v[p]]
-    return row + list(F)
-
-
-def initial_step(x, v, acc, is_mass, rtol, atol, span) -> float:
-    """A first step from the sizes of the state and its derivative (as scipy does)."""
-    d0 = d1 = 0.0
-    n = 0
-    for i in range(len(x)):
-        sc = atol + rtol * abs(x[i])
-        d0 += (x[i] / sc) ** 2
-        d1 += (v[i] / sc) ** 2
-        n += 1
-        if is_mass[i]:
-            sc = atol + rtol * abs(v[i])
-            d0 += (v[i] / sc) ** 2
-            d1 += (acc[i] / sc) ** 2
-            n += 1
-    d0, d1 = math.sqrt(d0 / n), math.sqrt(d1 / n)
-    h0 = 1e-6 * span if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-    return min(h0, 0.1 * span) * rtol ** 0.2 / 1e-6 ** 0.2 if h0 > 0 else 1e-6 * span
-
-
-def output_data(rows: Rows, dense: DenseOutput, dt: float | None, t_end: float,
-                t: float) -> np.ndarray:
-    """``data`` of a run that reached ``t``: the accepted step points, or with ``dt`` the
-    dense output on ``t_n = n dt`` (up to ``t``; the first row exactly the initial one)."""
-    data = rows.array()
-    if dt is not None and len(dense):
-        from ..closed.closed_form import steps_for
-
-
-        grid = np.arange(steps_for(dt, t_end) + 1) * dt
-        grid = grid[grid <= t + 1e-12 * max(1.0, t)]
-        # the last step ends at t_n + h, an ulp from t at times
-        grid[-1] = min(grid[-1], t, dense.span()[1])
-        data = dense(grid)
-        data[0] = rows.first()
-    return data

@@ -1,8 +1,8 @@
 r"""The defect of ``radau5``'s dense output against the held laws, in the first step after
 an event.
 
-Radau IIA's error estimate (:meth:`lumped.solvers.radau.stage.StageSystem.error_norm`) measures
-``x`` of every node and ``v`` of every mass at the end of a step. Right after an event the
+Radau IIA's error estimate (:meth:`lumped.solvers.radau.error.ErrorEstimate.error_norm`)
+measures ``x`` of every node and ``v`` of every mass at the end of a step. Right after an event the
 motion can start with a singularity in time that the estimate does not see: a massless
 junction whose Herschel-Bulkley ``n < 1`` dashpot breaks out has the rate
 ``q = gamma (F - tau)^n`` with ``F - tau ~ (t - t_*)``, so ``q ~ (t - t_*)^n`` and the
@@ -38,7 +38,8 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 
-from .stage import FORCE_TOL_FACTOR, dense_weights
+from .error import FORCE_TOL_FACTOR
+from .tableau import dense_weights
 
 __all__ = ["SAMPLES", "dense_defect"]
 

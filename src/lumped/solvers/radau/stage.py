@@ -17,8 +17,16 @@ collocation derivative ``V_k' ~ (1/h) sum_l w_kl (V_l - v_n)``, ``W = A^{-1}``::
 
 with ``q_e = X_b - X_a`` (springs) or ``V_b - V_a`` (dashpots), ground at 0. The step's
 result is stage 3 (``c_3 = 1``: stiffly accurate), and the stage values with ``y_n`` are
-the nodes of the collocation polynomial (the dense output, :func:`dense_weights`; the
-method's coefficients are in :mod:`lumped.solvers.radau.tableau`).
+the nodes of the collocation polynomial (the dense output,
+:func:`~lumped.solvers.radau.tableau.dense_weights`; the method's coefficients are in
+:mod:`lumped.solvers.radau.tableau`).
+
+This module owns the stage system (:class:`StageSystem`: its residual and Jacobian, its
+simplified Newton with the active set of the cone split, the damped fallback, the element
+values at the polynomial's nodes) and the limits of the ``radau5`` loop
+(:data:`STALL_PASSES`, :data:`MAX_NEWTON`, :data:`DAMPED_AFTER`). The linear solves,
+plain and split among locks in parallel, are in :mod:`lumped.solvers.radau.cone_split`;
+the error estimate and its norm in :mod:`lumped.solvers.radau.error`.
 
 Everything here runs on flat lists of Python floats with scalar loops (numba-friendly).
 The unknowns are laid out stage by stage: ``U[k*n + i]`` is ``V_k,i`` for a node ``i < N``
@@ -30,103 +38,15 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 
-from ..newton.linalg import lu_factor, lu_solve
-from ..newton.semismooth import min_norm_solver
-from .tableau import (
-    E_ERR,
-    END_SLOPES,
-    MU_REAL,
-    START_WEIGHTS,
-    A,
-    C,
-    W,
-    dense_slopes,
-    dense_weights,
-)
+from .cone_split import cone_solver, linear_solver, row_scale, solves
+from .error import ErrorEstimate
+from .tableau import END_SLOPES, A, W
 
-__all__ = ["C", "A", "W", "E_ERR", "MU_REAL", "START_WEIGHTS", "StageSystem", "dense_weights",
-           "dense_slopes"]
-
-
-def _solver(J: list[list[float]]) -> Callable[[list[float]], list[float]]:
-    """``solve(b)`` for ``J y = b``: the LU with pivoting, or the minimum-norm least-squares
-    solution when ``J`` is singular (:func:`lumped.solvers.newton.semismooth.min_norm_solver`)."""
-    fac = lu_factor(J)
-    if fac is not None:
-        return lambda b: lu_solve(fac, b)
-    if not all(math.isfinite(a) for row in J for a in row):  # a law undefined here
-        return lambda b: [math.nan] * len(b)
-    return min_norm_solver(J)
-
-
-def _row_scale(row: list[float], scale: list[float]) -> float:
-    """``sum_j |J_ij| scale_j``: how much row ``i`` of the stage system changes when every
-    unknown moves by its tolerance ``scale_j``."""
-    return sum(abs(a) * sc for a, sc in zip(row, scale, strict=True))
-
-
-def _solves(G: list[float], J: list[list[float]], scale: list[float], tol: float) -> bool:
-    """Whether the residual ``G`` is one a Newton correction within the convergence test
-    removes: ``|G_i| <= 10 tol sum_j |J_ij| scale_j`` on every row (a row that no
-    unknown enters must be zero to round-off)."""
-    for g, row in zip(G, J, strict=True):
-        if not abs(g) <= 10.0 * tol * _row_scale(row, scale) + 1e-300:
-            return False
-    return True
-
-
-def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[float, ...]],
-                 N: int, n: int, held: dict[int, float] | None = None
-                 ) -> Callable[[list[float]], list[float]]:
-    """``solve(b)`` for a singular ``J`` whose free directions split the force among locked
-    elements in parallel: of all the solutions, the one whose new forces minimise
-    ``sum (F_e - c_e)^2 / w_e`` over the elements of ``cones`` (``e -> (c_e, w_e, lo_e,
-    hi_e)``, the centre and half-width of the force interval ``[lo_e, hi_e]`` the
-    element's lock admits, :func:`lumped.solvers.modes.events.lock_cones`) and the
-    correction's norm over the other unknowns. Two stuck dashpots in parallel share a load
-    ``S`` in proportion to their capacities (each within its cone whenever ``|S|`` is within
-    the sum), a rigid lock (``w_e`` huge) takes what the others do not.
-
-    With ``du = D z + o`` (``D = sqrt(w_e)``, ``o = c_e - U_j`` on those forces; ``D = 1``,
-    ``o = 0`` elsewhere; ``U`` the iterate, read at every call): ``z`` is the minimum-norm
-    solution of ``J D z = b - J o``.
-    ``held`` (stage column -> force): forces held at a bound of their interval (centre
-    moved there, weight ``1e-12 w_e``), see :meth:`StageSystem.solve`."""
-    import numpy as np
-
-    size = len(U)
-    held = held or {}
-    cols = {k * n + N + e: (c, w) for k in range(3) for e, (c, w, *_) in cones.items()}
-    A = np.array(J, dtype=float)
-    D = np.ones(size)
-    for j, (_, w) in cols.items():
-        D[j] = math.sqrt(w * 1e-12 if j in held else w)
-    # rows equilibrated (the same solutions; a junction's row through a flat law, dq/dF
-    # ~ 1e-7, is not cut off as round-off beside the momentum rows' m / h)
-    AD = A * D
-    r = np.abs(AD).max(axis=1)
-    r[r == 0.0] = 1.0
-    pinv = np.linalg.pinv(AD / r[:, None], rcond=size * 2.220446049250313e-16) / r
-    # a row with one nonzero (a stuck dashpot to ground: ``V = 0``) fixes its unknown by
-    # one division, exactly, as the LU's singleton pivots do
-    single = [(i, int(nz[0]), float(A[i, nz[0]])) for i in range(size)
-              for nz in [np.flatnonzero(A[i])] if len(nz) == 1]
-
-    def solve(b: list[float]) -> list[float]:
-        o = np.zeros(size)
-        for j, (c, _) in cols.items():  # ``U`` is the caller's iterate, updated in place
-            o[j] = held.get(j, c) - U[j]
-        z = pinv @ (np.asarray(b, dtype=float) - A @ o)
-        du = (D * z + o).tolist()
-        for i, j, a in single:
-            du[j] = b[i] / a
-        return du
-
-    return solve
-
+__all__ = ["DAMPED_AFTER", "MAX_NEWTON", "STALL_PASSES", "StageSystem"]
 
 #: Passes of the ``radau5`` loop without an accepted step after which it stops (a guard
-#: against any cycle; backward Euler then bridges the point, :mod:`lumped.solvers.eventdriven.bridge`).
+#: against any cycle; backward Euler then bridges the point,
+#: :mod:`lumped.solvers.eventdriven.bridge`).
 STALL_PASSES = 1_000
 
 #: Newton iterations of a ``radau5`` stage solve, in both loops (a landing step retried
@@ -137,10 +57,8 @@ MAX_NEWTON = 10
 #: (:meth:`StageSystem.solve_damped`); the compiled loop hands that pass to Python.
 DAMPED_AFTER = 8
 
-#: How much looser the forces of guarded elements are held than ``x`` and ``v``.
-FORCE_TOL_FACTOR = 100.0
 
-class StageSystem:
+class StageSystem(ErrorEstimate):
     """The Radau IIA stage equations of one scene, for the branch kernels of one mode.
 
     Parameters
@@ -282,7 +200,8 @@ class StageSystem:
         (locked elements in parallel: the split of their forces is free) is solved by the
         minimum-norm correction, the rule of the fixed-step methods, or, when ``cones``
         names the locked elements in parallel (``e -> (centre, half-width)`` of the force
-        interval their lock admits), by the split of :func:`_cone_solver`. With ``cones``
+        interval their lock admits), by the split of
+        :func:`~lumped.solvers.radau.cone_split.cone_solver`. With ``cones``
         a stage is accepted only at a root (every residual within what a converged
         correction removes); a least-squares point of the split (the locks cannot carry
         the load together) sets :attr:`infeasible` and fails, unless ``least_squares``.
@@ -340,7 +259,8 @@ class StageSystem:
                 tol: float, max_iters: int, cones: dict[int, tuple[float, ...]] | None,
                 held: dict[int, float]) -> tuple[list[float] | None, int, int]:
         """One simplified Newton solve of :meth:`solve`, with the forces of ``held`` (stage
-        column -> force) held where the cone split puts them (:func:`_cone_solver`)."""
+        column -> force) held where the cone split puts them
+        (:func:`~lumped.solvers.radau.cone_split.cone_solver`)."""
         G, J = self.evaluate(U, h, x_n, v_n, f, kernels)
         solve = self._solver(J, U, cones, held)
         nfac = 1
@@ -360,7 +280,7 @@ class StageSystem:
             if worst <= tol:
                 # the pseudo-inverse of the cone split converges to a least-squares point
                 # when the locks cannot carry the load together: only a root is a solution
-                if cones and not self._least_squares and not _solves(G, J2, scale, tol):
+                if cones and not self._least_squares and not solves(G, J2, scale, tol):
                     self.infeasible = True
                     return None, it, nfac
                 return U, it, nfac
@@ -395,12 +315,12 @@ class StageSystem:
         its = 0
         for _ in range(4 * max_iters):
             G, J = self.evaluate(U, h, x_n, v_n, f, kernels)
-            S = [_row_scale(row, scale) + 1e-300 for row in J]
+            S = [row_scale(row, scale) + 1e-300 for row in J]
             phi = max(abs(g) / s for g, s in zip(G, S, strict=True))
             if not math.isfinite(phi):
                 return None, its, its
             its += 1
-            du = _solver(J)([-g for g in G])
+            du = linear_solver(J)([-g for g in G])
             if max(abs(d) / sc for d, sc in zip(du, scale, strict=True)) <= tol:
                 break
             lam = 1.0
@@ -425,102 +345,16 @@ class StageSystem:
         # locks in parallel make J singular, but only to round-off once the stage rows
         # mix: an LU would then pick the split from the round-off; the SVD does not
         if cones and all(math.isfinite(a) for row in J for a in row):
-            return _cone_solver(J, U, cones, self.N, self.n, held)
-        return _solver(J)
-
-    # -- the error estimate ---------------------------------------------------------------
-    def error(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
-              net_n: list[float], jac_n: list[tuple[float, float]]) -> list[float] | None:
-        r"""The filtered local error estimate of RADAU5, ``(e_x (N), e_v (N), e_F (E))``.
-
-        Solves ``(mu/h M - J) e = f(y_n) + M sum_k E_k Z_k / h`` with ``Z_k = Y_k - y_n``:
-        rows ``x' = v`` per node, momentum per mass (the junction balances and the laws
-        have ``M = 0`` and right side 0: ``y_n`` is consistent), with the laws
-        linearised at ``y_n`` (``jac_n[e] = (dR/dq, dR/dF)``); minimum norm if singular.
-        """
-        N, E, n = self.N, self.E, self.n
-        m, ea, eb, spring = self.m, self.ea, self.eb, self.spring
-        size = 2 * N + E
-        M = [[0.0] * size for _ in range(size)]
-        rhs = [0.0] * size
-        g = MU_REAL / h
-        for i in range(N):
-            zx = 0.0
-            zv = 0.0
-            for k in range(3):
-                s = 0.0
-                for j in range(3):
-                    s += A[k][j] * U[j * n + i]
-                zx += E_ERR[k] * s  # (X_k - x_n) / h
-                zv += E_ERR[k] * (U[k * n + i] - v_n[i])
-            M[i][i] = g
-            M[i][N + i] = -1.0
-            rhs[i] = v_n[i] + zx
-            if m[i] > 0.0:
-                M[N + i][N + i] = g * m[i]
-                rhs[N + i] = net_n[i] + m[i] * zv / h
-        for e in range(E):
-            col = 2 * N + e
-            a, b = ea[e], eb[e]
-            if a >= 0:
-                M[N + a][col] -= 1.0
-            if b >= 0:
-                M[N + b][col] += 1.0
-            Rq, RF = jac_n[e]
-            off = 0 if spring[e] else N
-            if b >= 0:
-                M[col][off + b] -= Rq
-            if a >= 0:
-                M[col][off + a] += Rq
-            M[col][col] = -RF
-        return _solver(M)(rhs)
-
-    def error_norm(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
-                   F_n: list[float], err: list[float], rtol: float, atol: float,
-                   dF_n: list[float] | None, watched: Sequence[int], F_ref: float) -> float:
-        r"""RMS of the scaled error: ``x`` of every node and ``v`` of every mass from ``err``
-        (:meth:`error`), and the forces of the ``watched`` elements (those whose guards
-        decide the events) when their slope ``dF_n`` at ``t_n`` is known (the previous
-        step's polynomial): ``gamma_0 (h F'_n + sum_k E_k (F_k - F_n))``, the embedded
-        estimate of their polynomial, unfiltered (a force is as smooth as the rates that
-        set it). Scales: ``atol + rtol max(|y_n|, |y_n+1|)``, for forces
-        ``rtol_F max(|F_n|, |F_n+1|, F_ref)`` with ``rtol_F = min(1e-3, 100 rtol)``: the
-        forces' polynomial only has to show a guard's sign change, whose time is then
-        found on exact end-of-step values."""
-        N, n, m = self.N, self.n, self.m
-        A3 = A[2]
-        acc = 0.0
-        cnt = 0
-        for i in range(N):
-            x_new = x_n[i] + h * (A3[0] * U[i] + A3[1] * U[n + i] + A3[2] * U[2 * n + i])
-            sc = atol + rtol * max(abs(x_n[i]), abs(x_new))
-            acc += (err[i] / sc) ** 2
-            cnt += 1
-            if m[i] > 0.0:
-                sc = atol + rtol * max(abs(v_n[i]), abs(U[2 * n + i]))
-                acc += (err[N + i] / sc) ** 2
-                cnt += 1
-        if dF_n is not None:
-            g0 = 1.0 / MU_REAL
-            rtol_F = min(1e-3, FORCE_TOL_FACTOR * rtol)
-            for e in watched:
-                k0 = N + e
-                Fe = F_n[e]
-                est = h * dF_n[e]
-                for k in range(3):
-                    est += E_ERR[k] * (U[k * n + k0] - Fe)
-                sc = rtol_F * max(abs(Fe), abs(U[2 * n + k0]), F_ref)
-                acc += (g0 * est / sc) ** 2
-                cnt += 1
-        return math.sqrt(acc / cnt)
+            return cone_solver(J, U, cones, self.N, self.n, held)
+        return linear_solver(J)
 
     def element_nodes(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
                       F_n: list[float], e: int) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """``(q, F)`` of element ``e`` at the polynomial's nodes ``s = 0, c_1, c_2, 1``.
 
         ``q`` is linear in the state, so its collocation polynomial has these nodes: the
-        guards along the step need no state vector (:func:`lumped.solvers.modes.events.
-        first_crossing_on`)."""
+        guards along the step need no state vector
+        (:func:`lumped.solvers.modes.crossing_root.first_root_py`)."""
         N, n = self.N, self.n
         a, b = self.ea[e], self.eb[e]
         if self.spring[e]:

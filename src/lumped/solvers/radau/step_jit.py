@@ -2,11 +2,11 @@ r"""The compiled pieces of one Radau IIA step of ``radau5`` (for
 :mod:`lumped.solvers.eventdriven.loop_jit`): the error estimate and its norm, the guard test on
 the collocation polynomial, the fold test, the forcing.
 
-Ports, operation for operation, of :meth:`lumped.solvers.radau.stage.StageSystem.error`,
-:meth:`~lumped.solvers.radau.stage.StageSystem.error_norm`,
-:meth:`~lumped.solvers.radau.stage.StageSystem.element_nodes`,
-:func:`lumped.solvers.modes.events.first_crossing_on` (only the test that some sample is
-negative) and :func:`lumped.solvers.modes.events.fold_crossed`; the unknowns are laid out as in
+Ports, operation for operation, of :meth:`lumped.solvers.radau.error.ErrorEstimate.error`,
+:meth:`~lumped.solvers.radau.error.ErrorEstimate.error_norm`,
+:meth:`lumped.solvers.radau.stage.StageSystem.element_nodes`,
+:func:`lumped.solvers.modes.crossing_root.first_root_py` (only the test that some sample
+is negative) and :func:`lumped.solvers.modes.guards.fold_crossed`; the unknowns are laid out as in
 :mod:`lumped.solvers.radau.stage` (``U[k*n + i]`` a node's stage velocity, ``U[k*n + N + e]`` an
 element's stage force). The scene's kernels come in as numba first-class functions,
 ``branch_law(e, i, q, F)`` and ``branch_guards(e, i, q, F, out)`` of
@@ -22,9 +22,9 @@ import numpy as np
 from ...codegen.jit import njit
 from ...scene.forcing_jit import forcing_into
 from ..implicit.branch_check_jit import dead_band_sign, sign_bit
-from ..modes.events import SAMPLES
 from ..newton.semismooth_jit import lu_factor_into, lu_solve_into
-from .stage import E_ERR, FORCE_TOL_FACTOR, MU_REAL, C
+from .error import FORCE_TOL_FACTOR
+from .tableau import E_ERR, MU_REAL, SAMPLES, C
 
 __all__ = ["element_nodes", "folded", "crossed", "error_norm", "step_error", "forces",
            "finite"]
@@ -67,7 +67,7 @@ def element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, e, q, F) -> None
 def folded(branch_law, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n, U, N, n, q,
             F) -> bool:
     """A checked element's law crosses a fold along the step
-    (:func:`lumped.solvers.modes.events.fold_crossed` on the held branch's kernel)."""
+    (:func:`lumped.solvers.modes.guards.fold_crossed` on the held branch's kernel)."""
     for c in range(checked.shape[0]):
         e = checked[c]
         element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, e, q, F)
@@ -116,7 +116,7 @@ def _left_branch(branch_law, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> boo
 def crossed(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, U, N, n,
              qn, Fn, gbuf) -> bool:
     """True when a watched guard (shifted by its round-off tolerance) is negative at a
-    sample of the step: :func:`lumped.solvers.modes.events.first_crossing_on`'s test."""
+    sample of the step: :func:`lumped.solvers.modes.crossing_root.first_root_py`'s test."""
     for w in range(watched.shape[0]):
         element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, watched[w], qn[w], Fn[w])
     for s in _SAMPLES:

@@ -1,5 +1,6 @@
 r"""The 3-stage Radau IIA method (order 5): its nodes, Butcher matrix, error weights and
-the collocation polynomial's weights (the dense output).
+the collocation polynomial's weights (the dense output), and the points of a step where
+the branch guards are sampled.
 
 The stage values ``Y_k`` at ``t_n + c_k h`` with ``y_n`` are the nodes ``0, c_1, c_2,
 c_3 = 1`` of the collocation polynomial of a step (Hairer & Wanner, *Solving Ordinary
@@ -12,8 +13,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-__all__ = ["A", "C", "E_ERR", "END_SLOPES", "MU_REAL", "START_WEIGHTS", "W", "dense_slopes",
-           "dense_weights"]
+__all__ = ["A", "C", "E_ERR", "END_SLOPES", "MU_REAL", "SAMPLES", "START_WEIGHTS", "W",
+           "dense_slopes", "dense_weights"]
 
 _S6 = math.sqrt(6.0)
 #: Collocation nodes of Radau IIA (3 stages).
@@ -90,3 +91,7 @@ def dense_slopes(s: float) -> tuple[float, float, float]:
 
 #: ``l_k'(1)``: the slope of the collocation polynomial at the end of a step.
 END_SLOPES = dense_slopes(1.0)
+
+#: Points ``s`` in ``(0, 1]`` of a step where the guards are sampled on its collocation
+#: polynomial (in order; :mod:`lumped.solvers.modes.crossing_root`).
+SAMPLES = tuple(k / 8.0 for k in range(1, 9))

@@ -1,0 +1,228 @@
+r"""What a new mode does to the state at an event of the adaptive method: the locks it
+enters and the impacts.
+
+A dashpot that enters a rate lock (``q = const``) gets its rate set exactly
+(:func:`hold_rate_locks`), so a stuck velocity is exactly zero; every element on a lock up
+to the step's tolerance is put exactly on it (:func:`snap_to_locks`); the force interval
+each lock admits weighs the split of the force among locks in parallel (:func:`lock_cones`,
+for :func:`lumped.solvers.radau.cone_split.cone_solver`); a spring that locks its
+elongation while its ends approach takes an impulse (:func:`apply_impacts`, by
+:mod:`lumped.solvers.nonsmooth.impacts`). The mode itself is chosen in
+:mod:`lumped.solvers.modes.choice`.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Sequence
+
+from ...scene import Mass, Scene
+
+__all__ = ["apply_impacts", "hold_rate_locks", "lock_cones", "snap_to_locks"]
+
+_EPS = sys.float_info.epsilon
+
+
+def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
+                    v: list[float]) -> list[int]:
+    """Set exactly the rate fixed by every dashpot on a rate-locking branch (``q = L``).
+
+    Only a dashpot between a mass and ground is set here (``v = +-L``, exactly); one
+    between two nodes is left as the probe step found it. Returns the elements set.
+    """
+    done = []
+    for e, el in enumerate(scene.elements):
+        if el.kind != "dashpot":
+            continue
+        info = branches[e].info[modes[e]]
+        if not info.locks or info.lock_value is None:
+            continue
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        L = float(info.lock_value)
+        if a < 0 and b >= 0 and isinstance(scene.nodes[b], Mass):
+            v[b] = L
+        elif b < 0 and a >= 0 and isinstance(scene.nodes[a], Mass):
+            v[a] = -L if L != 0.0 else 0.0
+        else:
+            continue
+        done.append(e)
+    return done
+
+
+def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[float],
+                  F: list[float], tol: float, tol_x: float = 0.0) -> list[int]:
+    r"""Put every element that sits on a lock, up to the step's tolerance, exactly on it.
+
+    An element is *on a lock* at an event when one of its law's locking branches with a
+    known value ``L`` (:attr:`BranchInfo.locks`, ``lock_value``; a stuck dashpot,
+    ``q' = 0``, or a taut string, ``q = L``) admits its force (every guard of that branch
+    at ``(L, F_e)`` above ``-sqrt(eps) (1 + |F_e|)``) and its rate is within ``tol`` of the
+    lock's rate (``|q - L| <= tol`` for a dashpot, ``|q'| <= tol`` for a spring, whose
+    elongation must also be within ``max(sqrt(eps) (1 + |L|), tol_x)`` of ``L``: a slow
+    mass whose string's length was located ``1.2e-7`` late, within the step's position
+    tolerance ``tol_x``, kept its rate of ``6e-5`` against the taut string, and every
+    step from there failed down to the step floor).
+
+    The velocities ``v`` are moved, in place, to the nearest ones in the kinetic-energy norm
+    that hold all those rates exactly (:func:`lumped.solvers.nonsmooth.impacts` with
+    targets: momentum conserved, a change of at most ``tol``). Why: where a slip branch ends
+    flat (``dq/dF = 0`` at the yield force, Herschel-Bulkley ``n > 1``) a force located on
+    its guard to round-off still leaves a rate of the order of the Newton tolerance, and the
+    vanishing probe step of :func:`lumped.solvers.modes.choice.select_modes` reads ``m q' /
+    h_p`` as a force far beyond the yield force: the element would be sent to the opposite
+    slip branch.
+
+    Returns
+    -------
+    list of int
+        The elements held (empty: ``v`` is unchanged).
+    """
+    from ..nonsmooth.impacts import impact_solve
+
+    slack = math.sqrt(_EPS)
+    held, target = [], []
+    q_x = scene.elongations(x, [0.0] * len(x))
+    for e, el in enumerate(scene.elements):
+        lb = branches[e]
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        for info in lb.info:
+            L = info.lock_value
+            if not info.locks or L is None:
+                continue
+            dashpot = el.kind == "dashpot"
+            off = rate - L if dashpot else rate
+            if abs(off) > tol or (not dashpot and abs(q_x[e] - L) > max(
+                    slack * (1.0 + abs(L)), tol_x)):
+                continue
+            gs = lb.guards_for(info.index)(L if dashpot else q_x[e], F[e])
+            if all(g >= -slack * (1.0 + abs(F[e])) for g in gs):
+                held.append(e)
+                target.append(float(L) if dashpot else 0.0)
+                break
+    if held and not _ground_locks(scene, held, target, v):
+        v_new, _, _ = impact_solve(scene, v, held, 0.0, target=target)
+        v[:] = v_new
+    return held
+
+
+def _ground_locks(scene: Scene, held: Sequence[int], target: Sequence[float],
+                  v: list[float]) -> bool:
+    """The rates ``target`` of ``held`` set in place when each held element joins its own
+    mass to ground: then the nearest velocities in the kinetic-energy norm move only
+    those masses, each onto its lock (``v_b = L`` or ``v_a = -L``); ``False`` (nothing
+    changed) otherwise."""
+    nodes, vals = [], []
+    for e, L in zip(held, target, strict=True):
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        node, val = (b, L) if a < 0 <= b else ((a, -L if L != 0.0 else 0.0) if b < 0 <= a
+                                              else (-1, 0.0))
+        if node < 0 or node in nodes or not isinstance(scene.nodes[node], Mass):
+            return False
+        nodes.append(node)
+        vals.append(val)
+    for node, val in zip(nodes, vals, strict=True):
+        v[node] = float(val)
+    return True
+
+
+def lock_cones(branches: Sequence, modes: Sequence[int], F: Sequence[float],
+               elements: Sequence[int]) -> dict[int, tuple[float, float, float, float]]:
+    r"""The force interval each locked element of ``elements`` admits, as ``e -> (centre,
+    half-width, lo, hi)``: where every guard of its locking branch (at ``q`` = the lock's
+    value) is non-negative, read off the guards' slopes in ``F`` at ``F_e`` (exact for the
+    affine guards of the built-in laws: Bingham, Coulomb, Herschel-Bulkley stuck,
+    ``|F| <= tau``). ``lo, hi`` are the interval's ends; the centre and half-width weigh
+    the split (:func:`lumped.solvers.radau.cone_split.cone_solver`). An interval open on a side (a
+    taut string, ``F >= k L``) gets the centre ``F_e`` and a half-width ``1e3`` times the
+    largest finite one or force, so that it takes the load the others do not, and keeps
+    its finite end as ``lo`` or ``hi``: a split below a taut string's ``k L`` (a string
+    pushing) is held there. Elements not on a lock with a known value are left out."""
+    out: dict[int, tuple[float, float, float, float]] = {}
+    open_: list[tuple[int, float, float]] = []
+    big = 1.0 + max((abs(f) for f in F), default=0.0)
+    for e in elements:
+        info = branches[e].info[modes[e]]
+        if not info.locks or info.lock_value is None:
+            continue
+        L, F0 = float(info.lock_value), float(F[e])
+        guards = branches[e].guards_for(modes[e])
+        d = 1.0 + abs(F0)
+        g0, g1 = guards(L, F0), guards(L, F0 + d)
+        lo, hi = -math.inf, math.inf
+        for a, b in zip(g0, g1, strict=True):
+            slope = (b - a) / d
+            if slope > 0.0:
+                lo = max(lo, F0 - a / slope)
+            elif slope < 0.0:
+                hi = min(hi, F0 - a / slope)
+        if math.isfinite(lo) and math.isfinite(hi) and hi > lo:
+            out[e] = (0.5 * (lo + hi), 0.5 * (hi - lo), lo, hi)
+            big = max(big, 0.5 * (hi - lo))
+        else:
+            open_.append((e, lo, hi))
+    for e, lo, hi in open_:
+        out[e] = (float(F[e]), 1e3 * big, lo, hi)
+    return out
+
+
+def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Sequence[int],
+                  x: list[float], v: list[float], threshold: float,
+                  restitution: float = 0.0, forces: Sequence[float] | None = None,
+                  ) -> tuple[list[tuple[int, float]], float] | str:
+    """Apply the impulse of every spring that enters a position lock while its ends approach.
+
+    A spring whose new branch locks ``q`` (:attr:`BranchInfo.locks`) with ``|q'| >
+    threshold`` is an impact: the velocities jump to those of
+    :func:`lumped.solvers.nonsmooth.impacts.impact_velocities` over all the locked springs (``v`` is
+    updated in place), and a lock with a known value between a mass and ground gets its
+    position set exactly (``x`` in place). ``forces`` (the element forces before the
+    event) say which way a lock at rest holds
+    (:func:`~lumped.solvers.nonsmooth.impacts.impact_velocities`): a string taut at rest holds in
+    tension, whatever the sign of its rate's round-off.
+
+    Returns
+    -------
+    (hits, energy_lost) or str
+        ``hits``: ``(element, impulse)`` of the impacting elements (empty if none), or a
+        message when impacts are needed and :mod:`lumped.solvers.nonsmooth.impacts` is missing.
+    """
+    ea, eb = scene.elem_a, scene.elem_b
+    locked = [e for e, el in enumerate(scene.elements)
+              if el.kind == "spring" and branches[e].info[new[e]].locks]
+    hits = []
+    for e in locked:
+        if new[e] == old[e]:
+            continue
+        a, b = ea[e], eb[e]
+        rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        if abs(rate) > threshold:
+            hits.append(e)
+    if not hits:
+        return [], 0.0
+    try:
+        from ..nonsmooth.impacts import impact_velocities
+    except ImportError:  # pragma: no cover - until the impact model is merged
+        el = scene.elements[hits[0]]
+        return (f"element {el.name!r} (law {el.law_name!r}) locks its elongation while its "
+                "ends approach: an impact, and lumped.solvers.nonsmooth.impacts is not available")
+    v_after, impulses, lost = impact_velocities(scene, x, v, locked, restitution, forces)
+    v[:] = v_after
+    inner, gaps = [], []
+    for e in hits:
+        L = branches[e].info[new[e]].lock_value
+        a, b = ea[e], eb[e]
+        if L is not None and a < 0 and b >= 0:  # the lock holds q = L and q' = 0 exactly
+            x[b], v[b] = float(L), 0.0
+        elif L is not None and b < 0 and a >= 0:
+            x[a], v[a] = -float(L), 0.0
+        elif L is not None and a >= 0 and b >= 0:
+            inner.append(e)
+            gaps.append(float(L) - (x[b] - x[a]))
+    if inner:  # between two nodes: the least move (kinetic-energy norm) onto q = L
+        from ..nonsmooth.impacts import impact_solve
+
+        dx, _, _ = impact_solve(scene, [0.0] * len(x), inner, 0.0, target=gaps)
+        x[:] = [xi + di for xi, di in zip(x, dx, strict=True)]
+    return [(e, impulses[locked.index(e)]) for e in hits], lost
