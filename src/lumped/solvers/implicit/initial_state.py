@@ -312,13 +312,16 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
     res = newton_solve(evaluate, u0, ic_options, min_norm=True, check_scaled=True)
     if res.code is not NewtonCode.SUCCESS:
         # restarts: the junctions' velocities from their balances solved one by one
-        # (lumped.solvers.implicit.globalize.balance_sweeps), then every junction
+        # (lumped.solvers.implicit.balance_sweeps.balance_sweeps), then every junction
         # moving with each dashpot neighbour in turn (see
-        # lumped.solvers.implicit.globalize.stuck_guesses), the masses' accelerations zero; each
-        # by plain Newton, then with every free force on its own law (nonlinear
-        # elimination, see lumped.solvers.implicit.globalize.force_projector: a law steep in F,
+        # lumped.solvers.implicit.globalize.stuck_guesses), the masses' accelerations
+        # zero; each by plain Newton, then with every free force on its own law
+        # (nonlinear elimination, see
+        # lumped.solvers.implicit.force_projection.force_projector: a law steep in F,
         # Herschel-Bulkley n < 1 near its yield force, is solved in its inverse form)
-        from .globalize import balance_sweeps, split_free_forces, stuck_guesses
+        from ..nonsmooth.locks import split_free_forces
+        from .balance_sweeps import balance_sweeps
+        from .globalize import stuck_guesses
 
         def elongation(u: list[float], e: int) -> float:
             a, b = ea[e], eb[e]
@@ -329,7 +332,7 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
 
         def project(u: list[float], free_out: list | None = None) -> list[float]:
             """Every free force on its own law where the law fixes it; with ``free_out``
-            (see :func:`lumped.solvers.implicit.globalize.split_free_forces`) the forces it leaves
+            (see :func:`lumped.solvers.nonsmooth.locks.split_free_forces`) the forces it leaves
             free are moved to one it admits if needed and listed with their ``q``."""
             out = list(u)
             for e in free:

@@ -2,7 +2,7 @@
 
 Used where a solver moves or holds several nodes as one: the junction clusters of the
 initial state's last restarts (:mod:`lumped.solvers.implicit.initial_state`) and the stuck
-clusters of the globalised fixed step (:mod:`lumped.solvers.implicit.globalize`).
+clusters of the balance sweeps (:mod:`lumped.solvers.implicit.balance_sweeps`).
 """
 
 from __future__ import annotations
