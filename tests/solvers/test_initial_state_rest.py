@@ -19,12 +19,12 @@ SPRINGS = ("linear_spring", "string_spring")
 
 def _with_newton(scene: Scene, time_scale: float):
     """The initial state by the limit system's Newton (the shortcut off)."""
-    keep = initial_state._rest_forces
-    initial_state._rest_forces = lambda *args: None
+    keep = initial_state.initial_rest_forces
+    initial_state.initial_rest_forces = lambda *args: None
     try:
         return consistent_initial_state(scene, time_scale=time_scale)
     finally:
-        initial_state._rest_forces = keep
+        initial_state.initial_rest_forces = keep
 
 
 def _same(a: list[float], b: list[float]) -> bool:

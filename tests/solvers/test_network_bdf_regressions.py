@@ -368,7 +368,7 @@ def test_projection_gives_up_at_once_on_a_string_past_its_length(monkeypatch):
     in a chain, five impacts in one step at ``t = 0.2``) spent 166 of its 169 s there,
     and the counter's 60 s alarm stopped it. Three kernel calls now tell that there is
     no root (a cost budget, counted, not timed)."""
-    import lumped.solvers.implicit.globalize as G
+    import lumped.solvers.implicit.force_projection as P
 
     L = 0.06809540547434552
     scene = Scene([Mass("m0", m=1.0, x0=math.nextafter(L, 1.0), v0=0.0)],
@@ -383,10 +383,10 @@ def test_projection_gives_up_at_once_on_a_string_past_its_length(monkeypatch):
             return fn(k, q, F)
         return wrapper
 
-    monkeypatch.setattr(G, "scalar_root", counted(G.scalar_root))
-    if hasattr(G, "_no_force_at"):
-        monkeypatch.setattr(G, "_no_force_at", counted(G._no_force_at))
-    project = G.force_projector(scene, 1e-3, [scene.nodes[0].x0])
+    monkeypatch.setattr(P, "scalar_root", counted(P.scalar_root))
+    if hasattr(P, "_no_force_at"):
+        monkeypatch.setattr(P, "_no_force_at", counted(P._no_force_at))
+    project = P.force_projector(scene, 1e-3, [scene.nodes[0].x0])
     out = project([0.0, 0.137])
     assert project.missing == [1]
     assert out[1] == 0.137  # left as it was, for Newton

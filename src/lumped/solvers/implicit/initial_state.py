@@ -5,8 +5,13 @@ The step system with a vanishing step ``h = eps`` and the masses' accelerations 
 unknowns (``v_i = v_i(0) + eps a_i``) selects the initial forces that the limit
 ``dt -> 0`` of the implicit steps selects: a stuck dashpot takes the force that keeps its
 mass at rest if its law admits it, else the nearest admissible one (for the paper's scene
-``clip(F(0) - k x0, -tau, tau)``, as :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`),
-and junction velocities follow from the laws.
+``clip(F(0) - k x0, -tau, tau)``, as
+:func:`lumped.solvers.closed.closed_form.initial_dashpot_force`), and junction velocities
+follow from the laws.
+
+This module owns :func:`consistent_initial_state` and its limit system solved by Newton
+with its restarts; the shortcut without Newton when every node is a mass and the cluster
+guesses of the last restarts are in :mod:`lumped.solvers.implicit.initial_rest`.
 """
 
 from __future__ import annotations
@@ -18,11 +23,9 @@ from functools import lru_cache
 from ...scene import Junction, Mass, Scene
 from ..newton.scalar_root import scalar_root
 from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve, residual_ok
-from ..nonsmooth.groups import connected_groups
 from ..nonsmooth.junction_balance import refuse_unbalanced_junctions
-from ..nonsmooth.rest_balance import rest_forces, rest_inverse
 from ..status import InconsistentInitialForce, SolverError
-from .branch_check import known_monotone
+from .initial_rest import cluster_guesses, initial_rest_forces
 from .step_system import EPS, law_scale, newton_failure
 
 __all__ = ["consistent_initial_state"]
@@ -41,94 +44,6 @@ def _ic_options(options: NewtonOptions) -> NewtonOptions:
 
 # ---------------------------------------------------------------------------------------
 # consistent initial state
-
-
-#: At most this many cluster guesses (:func:`_cluster_guesses`) per initial state.
-_MAX_CLUSTER_GUESSES = 64
-
-
-def _cluster_guesses(scene: Scene, v0: list[float]) -> list[list[float]]:
-    """Velocity guesses (``N`` entries) with every cluster of junctions (joined to each
-    other by dashpots) moving as one with one of its dashpot neighbours outside it (a
-    mass's ``v0``, or ground's rest), each combination of the clusters' choices (at most
-    :data:`_MAX_CLUSTER_GUESSES`). A chain of stuck elements from a moving mass (mass,
-    Coulomb, junction, Herschel-Bulkley, junction) moves so; the guesses of
-    :func:`lumped.solvers.implicit.globalize.stuck_guesses` move each junction with its own
-    neighbour only, as it was, and swept one junction at a time such a chain stays at
-    rest (each junction's balance holds on its own with the next element slipping)."""
-    N = len(scene.nodes)
-    junction = [isinstance(nd, Junction) for nd in scene.nodes]
-    links = [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
-             if el.kind == "dashpot"]
-    clusters = connected_groups([i for i in range(N) if junction[i]], links)
-    members, anchors = [], []
-    for group in clusters:
-        outside = []
-        for a, b in links:
-            for end, other in ((a, b), (b, a)):
-                if end in group and (other < 0 or not junction[other]):
-                    vel = 0.0 if other < 0 else v0[other]
-                    if vel not in outside:
-                        outside.append(vel)
-        if outside:
-            members.append(group)
-            anchors.append(outside)
-    out = []
-    for choice in itertools.islice(itertools.product(*anchors), _MAX_CLUSTER_GUESSES):
-        w = list(v0[:N])
-        for group, vel in zip(members, choice, strict=True):
-            for i in group:
-                w[i] = vel
-        out.append(w)
-    return out
-
-
-_MONOTONE: dict[int, tuple[object, bool]] = {}
-
-
-def _monotone(bound) -> bool:
-    """:func:`lumped.solvers.implicit.branch_check.known_monotone`, kept per bound law object."""
-    got = _MONOTONE.get(id(bound))
-    if got is None or got[0] is not bound:
-        if len(_MONOTONE) > 256:
-            _MONOTONE.clear()
-        got = _MONOTONE[id(bound)] = (bound, known_monotone(bound))
-    return got[1]
-
-
-def _rest_forces(scene: Scene, pinned: list[float | None], q0: list[float],
-                 f: list[float]) -> list[float] | None:
-    """The forces of the limit system when it needs no Newton (every node a mass), or
-    ``None``: every force fixed by its law (the accelerations, which the result does not
-    hold, are then the only unknowns), or the others held by the balance with every mass
-    at rest, one per node on a regular incidence matrix
-    (:func:`lumped.solvers.nonsmooth.rest_balance.rest_forces`, the held interval's formula), each
-    admitted by its law at its ``q0`` exactly (``R(q0, F) = 0``: with the accelerations
-    zero the limit system holds, its mass rows to round-off).
-
-    The forces so held are those of dashpots at rest (``q0 = 0``: their rows
-    ``R(eps (a_b - a_a), F) = 0`` then fix the accelerations) whose laws have no folds
-    (:func:`lumped.solvers.implicit.branch_check.known_monotone`): the limit system has one
-    solution, which Newton finds too. A force the law leaves free at ``q0 != 0`` (a taut
-    string, whose row sees ``q0 + eps^2 a``, which rounds to ``q0``) leaves the
-    accelerations to Newton's minimum-norm rule: not taken here."""
-    free = tuple(e for e, Fp in enumerate(pinned) if Fp is None)
-    F = [0.0 if Fp is None else Fp for Fp in pinned]
-    if not free:
-        return F
-    elements = scene.elements
-    for e in free:
-        if not (elements[e].kind == "dashpot" and q0[e] == 0.0 and _monotone(elements[e].law)):
-            return None
-    got = rest_inverse(len(scene.nodes), tuple(zip(scene.elem_a, scene.elem_b, strict=True)),
-                       free)
-    if got is None:
-        return None
-    F, _ = rest_forces(*got, free, f, F)
-    for e in free:
-        if not (math.isfinite(F[e]) and elements[e].law.kernel(q0[e], F[e])[0] == 0.0):
-            return None
-    return F
 
 
 def consistent_initial_state(
@@ -207,7 +122,7 @@ def consistent_initial_state(
             ) from None
         if fixed:
             pinned[e] = F_root
-    F_rest = _rest_forces(scene, pinned, q0, f) if all(is_mass) else None
+    F_rest = initial_rest_forces(scene, pinned, q0, f) if all(is_mass) else None
     if F_rest is not None:  # at rest, the load held by locks: no Newton
         v, F = list(v0), F_rest
         stats = {"newton_iterations": 0, "residual_evals": 0, "jacobian_evals": 0,
@@ -312,13 +227,16 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
     res = newton_solve(evaluate, u0, ic_options, min_norm=True, check_scaled=True)
     if res.code is not NewtonCode.SUCCESS:
         # restarts: the junctions' velocities from their balances solved one by one
-        # (lumped.solvers.implicit.globalize.balance_sweeps), then every junction
+        # (lumped.solvers.implicit.balance_sweeps.balance_sweeps), then every junction
         # moving with each dashpot neighbour in turn (see
-        # lumped.solvers.implicit.globalize.stuck_guesses), the masses' accelerations zero; each
-        # by plain Newton, then with every free force on its own law (nonlinear
-        # elimination, see lumped.solvers.implicit.globalize.force_projector: a law steep in F,
+        # lumped.solvers.implicit.globalize.stuck_guesses), the masses' accelerations
+        # zero; each by plain Newton, then with every free force on its own law
+        # (nonlinear elimination, see
+        # lumped.solvers.implicit.force_projection.force_projector: a law steep in F,
         # Herschel-Bulkley n < 1 near its yield force, is solved in its inverse form)
-        from .globalize import balance_sweeps, split_free_forces, stuck_guesses
+        from ..nonsmooth.locks import split_free_forces
+        from .balance_sweeps import balance_sweeps
+        from .globalize import stuck_guesses
 
         def elongation(u: list[float], e: int) -> float:
             a, b = ea[e], eb[e]
@@ -329,7 +247,7 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
 
         def project(u: list[float], free_out: list | None = None) -> list[float]:
             """Every free force on its own law where the law fixes it; with ``free_out``
-            (see :func:`lumped.solvers.implicit.globalize.split_free_forces`) the forces it leaves
+            (see :func:`lumped.solvers.nonsmooth.locks.split_free_forces`) the forces it leaves
             free are moved to one it admits if needed and listed with their ``q``."""
             out = list(u)
             for e in free:
@@ -399,7 +317,7 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
             # (a chain of stuck elements from a moving mass), each also settled as
             # above (also when the guess itself was among the stuck guesses); made only
             # once every start before has failed
-            for g in _cluster_guesses(scene, v0):
+            for g in cluster_guesses(scene, v0):
                 start = [0.0 if is_mass[i] else g[i] for i in range(N)] + u0[N:]
                 if start not in starts:  # (starts, as before: the ones tried so far)
                     starts.append(start)

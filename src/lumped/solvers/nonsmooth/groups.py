@@ -1,8 +1,8 @@
 """Connected groups of nodes: a union-find over index pairs.
 
 Used where a solver moves or holds several nodes as one: the junction clusters of the
-initial state's last restarts (:mod:`lumped.solvers.implicit.initial_state`) and the stuck
-clusters of the globalised fixed step (:mod:`lumped.solvers.implicit.globalize`).
+initial state's last restarts (:mod:`lumped.solvers.implicit.initial_rest`) and the stuck
+clusters of the balance sweeps (:mod:`lumped.solvers.implicit.balance_sweeps`).
 """
 
 from __future__ import annotations

@@ -16,15 +16,23 @@ picks the split by its documented rule (the minimum-norm Newton correction from 
 previous step's forces, see :func:`lumped.solvers.newton.semismooth.newton_solve`) and reports the
 elements and intervals here. Scenes without a cycle of elements skip the test
 (:func:`cyclic_elements`).
+
+Where a start point for Newton is built with the velocities fixed (the balance sweeps of
+the globalised step and of the initial state), :func:`split_free_forces` chooses the
+free forces among the locks by a bounded least-squares problem: within each law's
+interval, balancing the nodes, of least change where the balances leave the split free.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from functools import lru_cache
 
+from ...scene import Scene
+
 __all__ = ["cyclic_elements", "cycles_among", "indeterminate_elements", "IntervalLog",
-           "prefer_locks", "lock_parallel_rates"]
+           "prefer_locks", "lock_parallel_rates", "split_free_forces"]
 
 @lru_cache(maxsize=256)
 def on_cycles(n_nodes: int, edges: tuple[tuple[int, int, int], ...]) -> tuple[int, ...]:
@@ -222,3 +230,76 @@ def lock_parallel_rates(scene, branches: Sequence, modes: Sequence[int], v: Sequ
         if got is not None:
             out[e] = got
     return out
+
+
+def split_free_forces(scene: Scene, evaluate, project, u: list[float],
+                      rows: list[int] | None = None) -> list[float]:
+    r"""At fixed velocities, the forces the laws leave free (stuck dashpots, taut strings)
+    chosen to balance the nodes: the bounded least-squares problem
+
+    .. math:: \min_{dF} \sum_i \Bigl(\frac{G_i + \sum_k J_{ik}\, dF_k}{S_i}\Bigr)^2
+              + \mu \sum_k \Bigl(\frac{dF_k}{s}\Bigr)^2,
+              \quad lo_k \le F_k + dF_k \le hi_k,
+
+    with ``[lo_k, hi_k]`` the forces element ``k``'s law admits at its elongation (rate)
+    (:func:`lumped.solvers.nonsmooth.junction_balance.force_range`), the rows in units of their own
+    terms ``S_i`` and ``mu = 1e-12``: where the balances fix the forces this is their
+    solution, where they do not (locked elements in parallel) the small penalty picks the
+    change of least norm, the rule of the minimum-norm Newton step. Newton then polishes
+    from the result (the velocities, found by
+    :func:`lumped.solvers.implicit.balance_sweeps.balance_sweeps`, stay). ``rows``: the
+    balance rows to satisfy (default every node's; the initial state's masses have free
+    accelerations, so only its junctions' rows count there)."""
+    import numpy as np
+    from scipy.optimize import lsq_linear
+
+    from .junction_balance import force_range
+
+    N = len(scene.nodes)
+    free: list[tuple[int, float]] = []
+    u = project(u, free)
+    if not free:
+        return u
+    G, J, S = evaluate(u)
+    ks = [k for k, _ in free]
+    rows = list(range(N)) if rows is None else rows
+    if not rows:
+        return u
+    lo, hi = [], []
+    for k, q in free:
+        a, b = force_range(scene.elements[k - N].law.kernel, q, u[k])
+        lo.append(a - u[k])
+        hi.append(b - u[k])
+    # a row with no terms yet (a junction whose forces are all zero so far) in the units
+    # of the forces it may receive: a weight of 1e300 would swamp every other row
+    reach = [sum(abs(J[i][k]) * max((abs(u[k] + x) for x in (lo[j], hi[j]) if math.isfinite(x)),
+                                    default=0.0) for j, k in enumerate(ks)) for i in rows]
+    w = np.array([1.0 / (S[i] if S[i] > 0.0 else max(r, 1e-300))
+                  for i, r in zip(rows, reach, strict=True)])
+    with np.errstate(invalid="ignore", over="ignore"):  # (overflow: tested below)
+        A = np.array([[J[i][k] for k in ks] for i in rows]) * w[:, None]
+        rhs = -np.array([G[i] for i in rows]) * w
+    if not all(lo_k <= 0.0 <= hi_k for lo_k, hi_k in zip(lo, hi, strict=True)):
+        return u
+    # a law that admits a single force there (lo = hi: e.g. a regularised friction law
+    # at its kink) leaves nothing to choose: that force stays, out of the problem (the
+    # solver needs lo < hi)
+    cols = [j for j in range(len(ks)) if lo[j] < hi[j]]
+    if not cols:
+        return u
+    s = 1.0 + max(abs(u[k]) for k in ks)
+    mu = 1e-6  # sqrt of the penalty 1e-12
+    M = np.vstack([A[:, cols], (mu / s) * np.eye(len(cols))])
+    r = np.concatenate([rhs, np.zeros(len(cols))])
+    if not (np.all(np.isfinite(M)) and np.all(np.isfinite(r))):
+        return u  # (a weight from a subnormal scale overflows: no split is chosen)
+    try:
+        sol = lsq_linear(M, r, bounds=([lo[j] for j in cols], [hi[j] for j in cols]),
+                         method="bvls")
+    except np.linalg.LinAlgError:  # the SVD inside did not converge
+        return u
+    if not sol.success or not np.all(np.isfinite(sol.x)):
+        return u
+    for j, d in zip(cols, sol.x, strict=True):
+        u[ks[j]] += float(d)
+    return u
