@@ -10,7 +10,8 @@ one implicit step), :mod:`.initial_state`, :mod:`.branch_check`, :mod:`.fixed_st
 from .bdf.fixed_step import GENERIC_METHODS, RunResult, run_bdf
 from .closed.closed_form import BinghamOscillator, bdf1_step, bdf2_step, integrate, steps_for
 from .implicit.initial_state import consistent_initial_state
-from .newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve
+from .newton.options import NewtonCode, NewtonOptions, NewtonResult
+from .newton.semismooth import newton_solve
 from .registry import (
     FIXED_STEP_METHODS,
     METHOD_REGISTRY,

@@ -45,7 +45,7 @@ from ..trajectory import Trajectory
 from .bdf.fixed_step import run_bdf
 from .closed.closed_form import BinghamOscillator, integrate, steps_for
 from .implicit.initial_state import consistent_initial_state
-from .newton.semismooth import NewtonOptions
+from .newton.options import NewtonOptions
 from .status import RawRun, Status
 
 __all__ = [

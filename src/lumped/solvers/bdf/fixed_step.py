@@ -48,14 +48,10 @@ from ..implicit.branch_check import known_monotone, left_branch
 from ..implicit.globalize import laws_hold, solve_globalized
 from ..implicit.initial_state import consistent_initial_state
 from ..implicit.step_system import EPS, generate_evaluate, newton_failure
-from ..newton.semismooth import (
-    FactorCache,
-    NewtonCode,
-    NewtonOptions,
-    newton_solve,
-    residual_ok,
-    update_ok,
-)
+from ..newton.criteria import residual_ok, update_ok
+from ..newton.linalg import FactorCache
+from ..newton.options import NewtonCode, NewtonOptions
+from ..newton.semismooth import newton_solve
 from ..nonsmooth.impacts import lockable_elements, locking_elements
 from ..nonsmooth.locks import IntervalLog, cyclic_elements, indeterminate_elements
 from ..status import BranchError, Event, Status

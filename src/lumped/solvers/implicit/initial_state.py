@@ -16,8 +16,10 @@ import math
 from functools import lru_cache
 
 from ...scene import Junction, Mass, Scene
+from ..newton.criteria import residual_ok
+from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..newton.scalar_root import scalar_root
-from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve, residual_ok
+from ..newton.semismooth import newton_solve
 from ..nonsmooth.groups import connected_groups
 from ..nonsmooth.junction_balance import refuse_unbalanced_junctions
 from ..nonsmooth.rest_balance import rest_forces, rest_inverse

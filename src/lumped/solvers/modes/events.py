@@ -30,7 +30,9 @@ from ...scene import Mass, Scene
 from ..implicit.branch_check import left_branch
 from ..implicit.globalize import solve_globalized
 from ..implicit.step_system import make_evaluate
-from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve, residual_ok
+from ..newton.criteria import residual_ok
+from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
+from ..newton.semismooth import newton_solve
 from ..radau.stage import dense_weights
 
 __all__ = ["SAMPLES", "first_crossing", "first_crossing_on", "select_modes", "hold_rate_locks",

@@ -31,7 +31,7 @@ import math
 from collections.abc import Callable, Sequence
 
 from ..newton.linalg import lu_factor, lu_solve
-from ..newton.semismooth import min_norm_solver
+from ..newton.min_norm import min_norm_solver
 from .tableau import (
     E_ERR,
     END_SLOPES,
@@ -50,7 +50,7 @@ __all__ = ["C", "A", "W", "E_ERR", "MU_REAL", "START_WEIGHTS", "StageSystem", "d
 
 def _solver(J: list[list[float]]) -> Callable[[list[float]], list[float]]:
     """``solve(b)`` for ``J y = b``: the LU with pivoting, or the minimum-norm least-squares
-    solution when ``J`` is singular (:func:`lumped.solvers.newton.semismooth.min_norm_solver`)."""
+    solution when ``J`` is singular (:func:`lumped.solvers.newton.min_norm.min_norm_solver`)."""
     fac = lu_factor(J)
     if fac is not None:
         return lambda b: lu_solve(fac, b)
