@@ -23,7 +23,7 @@ from ...codegen.jit import njit
 from ...scene.forcing_jit import forcing_into
 from ..implicit.branch_check_jit import dead_band_sign, sign_bit
 from ..modes.events import SAMPLES
-from ..newton.semismooth_jit import lu_factor_into, lu_solve_into
+from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 from .stage import E_ERR, FORCE_TOL_FACTOR, MU_REAL, C
 
 __all__ = ["element_nodes", "folded", "crossed", "error_norm", "step_error", "forces",
