@@ -315,8 +315,8 @@ def _has_impacts() -> bool:
 def test_an_impact_is_applied_or_stops_cleanly():
     """Issue 11's impact scene: x = sin t until the string goes taut at t = pi/6, a perfectly
     inelastic impact, then x = 0.5 cos(t - pi/6). With the impact model
-    (``lumped.solvers.nonsmooth.impacts``) radau5 applies the impulse; without it, it stops there with
-    a message, never a silently wrong answer."""
+    (``lumped.solvers.nonsmooth.impacts``) radau5 applies the impulse; without it, it stops there
+    with a message, never a silently wrong answer."""
     string = get_law("string_spring").bind(k=1.0, L=0.5)
     scene = Scene([Mass("mass", m=1.0, v0=1.0)], [Element("s", string, "ground", "mass")])
     sol = simulate(scene, method="radau5", t_end=3.0, rtol=1e-8, throw=False)

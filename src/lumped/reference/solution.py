@@ -127,7 +127,8 @@ def exact_solution(
         omitted.
     x0, v0 : float
         Initial state.  ``v0 = 0``: the mass starts stuck if ``|F(0) - k x0| <= tau``
-        (``F_d(0) = F(0) - k x0``, as in :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`),
+        (``F_d(0) = F(0) - k x0``, as in
+        :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`),
         otherwise it slips in the direction of ``F(0) - k x0``.  ``v0 != 0``: slip
         with ``sgn(v0)``.
     forcing : None, zero_forcing or SineBurst
@@ -211,7 +212,8 @@ def reference_for_grid(
 ) -> Trajectory:
     """The exact solution on the grid ``t_n = n dt`` used by the numerical methods.
 
-    The grid is that of :func:`lumped.solvers.closed.closed_form.integrate` (``steps_for(dt, t_end)``
+    The grid is that of :func:`lumped.solvers.closed.closed_form.integrate`
+    (``steps_for(dt, t_end)``
     steps), so ``traj.to_csv(path)`` writes the same columns and rows as a numerical
     run.  ``stats`` holds the number of grid points, events and intervals.
     Raises :class:`ReferenceNotApplicable` (a ``ValueError``) for a forcing the

@@ -121,7 +121,8 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
     vs``: a run can be continued from any stored step (the fast path of
     :mod:`lumped.solvers.bdf.fast_codegen` hands single steps over this way).
 
-    ``wv, wm, wperm`` is Newton's workspace (:func:`lumped.solvers.newton.semismooth_jit.workspace`),
+    ``wv, wm, wperm`` is Newton's workspace
+    (:func:`lumped.solvers.newton.semismooth_jit.workspace`),
     ``P .. vec`` the loop's (:func:`loop_workspace`), both allocated by the caller.
     Compiled by :func:`compiled_run_bdf_core`."""
     N = x0.shape[0]

@@ -91,8 +91,8 @@ _BY_KEY: dict[tuple, ModuleType] = {}
 
 
 def _inline(source: str, name: str) -> str:
-    return rename_function(source, name).replace("@njit(cache=True)", '@njit(cache=True, inline="always")',
-                                         1)
+    return rename_function(source, name).replace(
+        "@njit(cache=True)", '@njit(cache=True, inline="always")', 1)
 
 
 def fast_source(scene) -> str:

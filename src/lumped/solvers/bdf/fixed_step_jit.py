@@ -39,7 +39,8 @@ from ..implicit.step_system import newton_failure
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..status import BranchError, RawRun, Status
 
-__all__ = ["JIT_METHODS", "FAST_MIN_STEPS", "run_bdf_jit", "loop_arguments", "refuse_position_locks"]
+__all__ = ["JIT_METHODS", "FAST_MIN_STEPS", "run_bdf_jit", "loop_arguments",
+           "refuse_position_locks"]
 
 #: Compiled method name -> step formula.
 JIT_METHODS = {"jit-bdf1": "bdf1", "jit-bdf2": "bdf2"}

@@ -223,7 +223,8 @@ class ModeState:
     def _locked(self, sel: tuple, h_probe: float) -> tuple[list[int], list[float], list[float]]:
         """The probe's ``(modes, v_p, F_p)`` with the dashpots that sit on a lock put on it
         (:func:`~lumped.solvers.nonsmooth.locks.prefer_locks`,
-        :func:`~lumped.solvers.nonsmooth.locks.lock_parallel_rates`; ``h_probe`` the probe's size)."""
+        :func:`~lumped.solvers.nonsmooth.locks.lock_parallel_rates`; ``h_probe`` the probe's
+        size)."""
         scene, lbs = self.scene, self.lbs
         new, v_p, F_p = sel
         new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked

@@ -1,4 +1,5 @@
-r"""One ``radau5`` run: its state and the loop of :func:`lumped.solvers.eventdriven.runner.run_radau5`.
+r"""One ``radau5`` run: its state and the loop of
+:func:`lumped.solvers.eventdriven.runner.run_radau5`.
 
 :class:`Radau5Run` holds what the loop carries from pass to pass (the state at ``t``, the
 step size and the controller's memory, the landing bracket of a guard, the flags of an

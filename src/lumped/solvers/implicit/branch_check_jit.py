@@ -14,7 +14,8 @@ from .branch_check import dead_band_sign as _dead_band_sign
 __all__ = ["dead_band_sign", "sign_bit", "left_branch"]
 
 
-#: The reference's sign with a dead band (:func:`lumped.solvers.implicit.branch_check.dead_band_sign`),
+#: The reference's sign with a dead band
+#: (:func:`lumped.solvers.implicit.branch_check.dead_band_sign`),
 #: compiled.
 dead_band_sign = njit(cache=True, inline="always")(_dead_band_sign)
 

@@ -5,7 +5,8 @@ The step system with a vanishing step ``h = eps`` and the masses' accelerations 
 unknowns (``v_i = v_i(0) + eps a_i``) selects the initial forces that the limit
 ``dt -> 0`` of the implicit steps selects: a stuck dashpot takes the force that keeps its
 mass at rest if its law admits it, else the nearest admissible one (for the paper's scene
-``clip(F(0) - k x0, -tau, tau)``, as :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`),
+``clip(F(0) - k x0, -tau, tau)``, as
+:func:`lumped.solvers.closed.closed_form.initial_dashpot_force`),
 and junction velocities follow from the laws.
 """
 

@@ -272,8 +272,8 @@ def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[floa
     step from there failed down to the step floor).
 
     The velocities ``v`` are moved, in place, to the nearest ones in the kinetic-energy norm
-    that hold all those rates exactly (:func:`lumped.solvers.nonsmooth.impacts` with targets: momentum
-    conserved, a change of at most ``tol``). Why: where a slip branch ends flat
+    that hold all those rates exactly (:func:`lumped.solvers.nonsmooth.impacts` with targets:
+    momentum conserved, a change of at most ``tol``). Why: where a slip branch ends flat
     (``dq/dF = 0`` at the yield force, Herschel-Bulkley ``n > 1``) a force located on its
     guard to round-off still leaves a rate of the order of the Newton tolerance, and the
     vanishing probe step of :func:`select_modes` reads ``m q' / h_p`` as a force far

@@ -126,7 +126,8 @@ def _cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[fl
 
 
 #: Passes of the ``radau5`` loop without an accepted step after which it stops (a guard
-#: against any cycle; backward Euler then bridges the point, :mod:`lumped.solvers.eventdriven.bridge`).
+#: against any cycle; backward Euler then bridges the point,
+#: :mod:`lumped.solvers.eventdriven.bridge`).
 STALL_PASSES = 1_000
 
 #: Newton iterations of a ``radau5`` stage solve, in both loops (a landing step retried
