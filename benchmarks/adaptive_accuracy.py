@@ -63,7 +63,7 @@ def main() -> None:
         scene = generic_scene(bs)
         peers = _peers(bs, grid, x_ref, unit)
         for rtol in RTOLS:
-            def run(rtol=rtol):
+            def run(rtol=rtol, scene=scene, bs=bs):
                 return simulate(scene, method="radau5", t_end=bs.t_end, rtol=rtol,
                                 atol=1e-3 * rtol)
 

@@ -46,7 +46,7 @@ from lumped.solvers.bdf.core_jit import compiled_run_bdf_core
 from lumped.solvers.bdf.fast_jit import run_fast_path
 from lumped.solvers.bdf.fixed_step import run_bdf
 from lumped.solvers.bdf.fixed_step_jit import loop_arguments
-from lumped.solvers.newton.semismooth import NewtonOptions
+from lumped.solvers.newton.options import NewtonOptions
 
 DT = 1e-4
 SCENE = "forcing-F2"

@@ -15,7 +15,7 @@ from ._validate import as_positive
 from .result import Solution
 from .scene import Scene
 from .solvers import registry
-from .solvers.newton.semismooth import NewtonOptions
+from .solvers.newton.options import NewtonOptions
 from .solvers.registry import RunSettings, resolve_method
 
 __all__ = ["simulate"]

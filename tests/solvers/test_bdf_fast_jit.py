@@ -23,7 +23,7 @@ from lumped import Element, Mass, Scene, simulate
 from lumped.io import load_scene
 from lumped.laws import ElementLaw, get_law
 from lumped.scenarios import scenario_scene
-from lumped.solvers.newton.semismooth import NewtonOptions
+from lumped.solvers.newton.options import NewtonOptions
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 DRAG = ElementLaw("quadratic_drag_fast", "dashpot", "F = c*q*Abs(q)", ["c"])

@@ -162,7 +162,7 @@ def test_newton_failure_reports_like_the_reference():
     The tolerance is tight too: with the default one, the globalised solve's restart from
     the nodes' balances solved by bisection (``balance_sweeps``, no Newton iterations)
     gives a start that one iteration takes to the solution, and nothing fails."""
-    from lumped.solvers.newton.semismooth import NewtonOptions
+    from lumped.solvers.newton.options import NewtonOptions
 
     opts = NewtonOptions(max_iters=1, free_steps=0, rtol=1e-16, atol=1e-300)
     scene = two_masses()

@@ -113,7 +113,8 @@ def test_generic_agrees_with_closed_form_on_extreme_parameters(method, problem):
 def test_forcing_below_yield_is_exact_eq19(method):
     """Paper eq. (19): forcing F1 = 0.5 sin(5 pi t) < tau from rest -> x = v = F_s = 0 and
     F_d = F1(t) exactly at every step (the stuck dashpot's row ``v = 0`` is a singleton
-    row of the step Jacobian and is pivoted first, see ``lumped.solvers.newton.linalg.lu_factor``)."""
+    row of the step Jacobian and is pivoted first, see
+    ``lumped.solvers.newton.linalg.lu_factor``)."""
     F = SineBurst(0.5, 5.0 * math.pi, 1.0)
     sol = simulate(scene_of(1.0, 100.0, 1.0, 1.0, 0.0, 0.0, F), method=method, dt=1e-4,
                    t_end=1.2)

@@ -75,7 +75,7 @@ ROUNDOFF = Tol(TOL, 0.0)
 def _newton_tol() -> Tol:
     """The generic solver: its Newton stops at ``|G_i| <= rtol S_i + atol`` (defaults
     ``1e-10, 1e-12``, rows in force units); we allow ten times that."""
-    from lumped.solvers.newton.semismooth import NewtonOptions
+    from lumped.solvers.newton.options import NewtonOptions
 
     opts = NewtonOptions()
     return Tol(10.0 * opts.rtol, 10.0 * opts.atol)

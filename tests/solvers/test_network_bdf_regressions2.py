@@ -13,7 +13,7 @@ from _yield_check import run_checked as _run_ok
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
 from lumped.solvers.bdf.impact_step import be_substep, impact_step
-from lumped.solvers.newton.semismooth import NewtonCode, NewtonOptions
+from lumped.solvers.newton.options import NewtonCode, NewtonOptions
 
 
 def _junction_stuck_to_a_mass_on_a_string() -> Scene:

@@ -14,7 +14,7 @@ from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
 from lumped.solvers.bdf.impact_step import impact_step, impulse_is_negligible
 from lumped.solvers.implicit.initial_state import consistent_initial_state
-from lumped.solvers.newton.semismooth import NewtonOptions
+from lumped.solvers.newton.options import NewtonOptions
 
 
 def _string_taut_beside_a_stuck_parallel_pair() -> Scene:

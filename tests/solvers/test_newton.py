@@ -9,14 +9,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from lumped.solvers.newton.semismooth import (
-    DENSE_PYTHON_MAX,
-    NewtonCode,
-    NewtonOptions,
-    lu_factor,
-    lu_solve,
-    newton_solve,
-)
+from lumped.solvers.newton.linalg import DENSE_PYTHON_MAX, lu_factor, lu_solve
+from lumped.solvers.newton.options import NewtonCode, NewtonOptions
+from lumped.solvers.newton.semismooth import newton_solve
 
 entries = st.floats(-10.0, 10.0, allow_nan=False)
 
@@ -95,7 +90,7 @@ def test_min_norm_solver_leaves_a_non_finite_step_to_newton_without_a_warning():
     encountered in matmul' reached the user (the LUMPED_LARGE radau5 run)."""
     import warnings
 
-    from lumped.solvers.newton.semismooth import min_norm_solver
+    from lumped.solvers.newton.min_norm import min_norm_solver
 
     solve = min_norm_solver([[1.0, 1.0], [1.0, 1.0]])
     with warnings.catch_warnings():

@@ -12,7 +12,8 @@ from .bdf.fixed_step import GENERIC_METHODS, RunResult, run_bdf
 from .closed.closed_form import BinghamOscillator, bdf1_step, bdf2_step
 from .closed.integrate import integrate
 from .implicit.initial_state import consistent_initial_state
-from .newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve
+from .newton.options import NewtonCode, NewtonOptions, NewtonResult
+from .newton.semismooth import newton_solve
 from .registry import (
     FIXED_STEP_METHODS,
     METHOD_REGISTRY,

@@ -14,7 +14,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from ..scene import Scene
-    from .newton.semismooth import NewtonOptions
+    from .newton.options import NewtonOptions
 
 __all__ = [
     "Status",

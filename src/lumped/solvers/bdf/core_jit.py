@@ -41,6 +41,8 @@ import numpy as np
 from ...codegen.jit import njit, numba_enabled, numba_module
 from ...scene.forcing_jit import forcing_into
 from ..implicit.branch_check_jit import left_branch
+from ..newton.criteria_jit import finite_sum, residual_ok, same, update_ok, worst_row
+from ..newton.linalg_jit import lu_solve_into
 from ..newton.semismooth_jit import (
     WS_D2,
     WS_DU,
@@ -51,13 +53,7 @@ from ..newton.semismooth_jit import (
     WS_S,
     WS_SN,
     WS_UN,
-    finite_sum,
-    lu_solve_into,
     newton,
-    residual_ok,
-    same,
-    update_ok,
-    worst_row,
 )
 
 __all__ = ["EVALUATE_TYPE", "ELEMENT_LAW_TYPE", "compiled_run_bdf_core",
@@ -125,7 +121,8 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
     vs``: a run can be continued from any stored step (the fast path of
     :mod:`lumped.solvers.bdf.fast_codegen` hands single steps over this way).
 
-    ``wv, wm, wperm`` is Newton's workspace (:func:`lumped.solvers.newton.semismooth_jit.workspace`),
+    ``wv, wm, wperm`` is Newton's workspace
+    (:func:`lumped.solvers.newton.semismooth_jit.workspace`),
     ``P .. vec`` the loop's (:func:`loop_workspace`), both allocated by the caller.
     Compiled by :func:`compiled_run_bdf_core`."""
     N = x0.shape[0]

@@ -18,8 +18,8 @@ and the equations (rows in that order)::
     junction i:                         - f_i(t) - sum_{a_e = i} F_e + sum_{b_e = i} F_e = 0
     element e:   R_e(q_e, F_e) = 0,   q_e = x_b - x_a (spring) or v_b - v_a (dashpot)
 
-solved by :func:`lumped.solvers.newton.semismooth.newton_solve` from the previous step's solution. The
-Jacobian is assembled from the kernels' ``dR/dq, dR/dF`` (``dq/dv = +-h`` for springs,
+solved by :func:`lumped.solvers.newton.semismooth.newton_solve` from the previous step's solution.
+The Jacobian is assembled from the kernels' ``dR/dq, dR/dF`` (``dq/dv = +-h`` for springs,
 ``+-1`` for dashpots). Everything runs on Python floats.
 
 **Consistent initial state.** The same system with a vanishing step ``h = eps`` and the
@@ -27,8 +27,8 @@ masses' accelerations as unknowns (``v_i = v_i(0) + eps a_i``) selects the initi
 forces that the limit ``dt -> 0`` of the implicit steps selects: a stuck dashpot takes
 the force that keeps its mass at rest if its law admits it, else the nearest admissible
 one (for the paper's scene ``clip(F(0) - k x0, -tau, tau)``, as
-:func:`lumped.solvers.closed.closed_form.initial_dashpot_force`), and junction velocities follow from the
-laws.
+:func:`lumped.solvers.closed.closed_form.initial_dashpot_force`), and junction velocities follow
+from the laws.
 
 **Branches of non-monotone laws.** After each step, every element whose law is not a
 known monotone built-in is checked for a jump between branches: if ``dR/dq`` or
@@ -48,14 +48,10 @@ from ..implicit.branch_check import known_monotone, left_branch
 from ..implicit.globalize import laws_hold, solve_globalized
 from ..implicit.initial_state import consistent_initial_state
 from ..implicit.step_system import EPS, generate_evaluate, newton_failure
-from ..newton.semismooth import (
-    FactorCache,
-    NewtonCode,
-    NewtonOptions,
-    newton_solve,
-    residual_ok,
-    update_ok,
-)
+from ..newton.criteria import residual_ok, update_ok
+from ..newton.linalg import FactorCache
+from ..newton.options import NewtonCode, NewtonOptions
+from ..newton.semismooth import newton_solve
 from ..nonsmooth.impacts import lockable_elements, locking_elements
 from ..nonsmooth.locks import IntervalLog, cyclic_elements, indeterminate_elements
 from ..status import BranchError, Event, Status
@@ -361,7 +357,8 @@ def run_bdf(
 
 def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,
                atol: float) -> list[float] | None:
-    """The common step of :func:`~lumped.solvers.newton.semismooth.newton_solve`, without its bookkeeping.
+    """The common step of :func:`~lumped.solvers.newton.semismooth.newton_solve`, without its
+    bookkeeping.
 
     When the Jacobian at ``u0`` equals the cached one (the laws stay on the same pieces),
     Newton's path is: accept ``u0`` (0 iterations) or take the full step and accept it

@@ -36,10 +36,11 @@ from ...scene import Scene
 from ..implicit.branch_check import known_monotone
 from ..implicit.initial_state import consistent_initial_state
 from ..implicit.step_system import newton_failure
-from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult
+from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..status import BranchError, RawRun, Status
 
-__all__ = ["JIT_METHODS", "FAST_MIN_STEPS", "run_bdf_jit", "loop_arguments", "refuse_position_locks"]
+__all__ = ["JIT_METHODS", "FAST_MIN_STEPS", "run_bdf_jit", "loop_arguments",
+           "refuse_position_locks"]
 
 #: Compiled method name -> step formula.
 JIT_METHODS = {"jit-bdf1": "bdf1", "jit-bdf2": "bdf2"}

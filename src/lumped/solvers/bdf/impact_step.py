@@ -48,8 +48,9 @@ from dataclasses import dataclass, field
 from ...scene import Mass, Scene
 from ..implicit.globalize import solve_globalized
 from ..implicit.step_system import make_evaluate
+from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..newton.scalar_root import scalar_root
-from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve
+from ..newton.semismooth import newton_solve
 from ..nonsmooth.impacts import impact_velocities, locking_elements, onto_locks
 from ..nonsmooth.lock_forces import forces_from_accelerations
 from ..status import Event

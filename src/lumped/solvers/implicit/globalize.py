@@ -24,7 +24,9 @@ from __future__ import annotations
 import math
 
 from ...scene import Junction, Scene
-from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve, residual_ok
+from ..newton.criteria import residual_ok
+from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
+from ..newton.semismooth import newton_solve
 from ..nonsmooth.impacts import lock_state, lockable_elements
 from ..nonsmooth.locks import split_free_forces
 from .balance_sweeps import balance_sweeps
@@ -97,7 +99,8 @@ def _motion_determined(evaluate, u: list[float], N: int, options: NewtonOptions)
     locks in parallel whose free split of the forces is pinned only by a law flat at its
     yield force (Herschel-Bulkley ``n > 1``: ``dR/dF -> 0`` there, so the step matrix is
     nearly, not exactly, singular and no minimum-norm step leaves the split alone)."""
-    from ..newton.semismooth import equilibrated_min_norm, update_ok
+    from ..newton.criteria import update_ok
+    from ..newton.min_norm import equilibrated_min_norm
 
     G, J, S = evaluate(u)
     if not (math.isfinite(sum(G)) and residual_ok(G, S, options.rtol, options.atol)):

@@ -21,8 +21,10 @@ import math
 from functools import lru_cache
 
 from ...scene import Junction, Mass, Scene
+from ..newton.criteria import residual_ok
+from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..newton.scalar_root import scalar_root
-from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve, residual_ok
+from ..newton.semismooth import newton_solve
 from ..nonsmooth.junction_balance import refuse_unbalanced_junctions
 from ..status import InconsistentInitialForce, SolverError
 from .initial_rest import cluster_guesses, initial_rest_forces

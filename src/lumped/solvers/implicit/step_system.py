@@ -12,7 +12,7 @@ import sys
 from collections.abc import Callable, Sequence
 
 from ...scene import Mass, Scene
-from ..newton.semismooth import NewtonCode, NewtonResult
+from ..newton.options import NewtonCode, NewtonResult
 from ..status import SolverError, Status
 
 # ---------------------------------------------------------------------------------------

@@ -21,7 +21,9 @@ from collections.abc import Sequence
 from ...scene import Mass, Scene
 from ..implicit.globalize import solve_globalized
 from ..implicit.step_system import make_evaluate
-from ..newton.semismooth import NewtonCode, NewtonOptions, NewtonResult, newton_solve, residual_ok
+from ..newton.criteria import residual_ok
+from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
+from ..newton.semismooth import newton_solve
 
 __all__ = ["select_modes"]
 

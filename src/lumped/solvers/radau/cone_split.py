@@ -14,7 +14,7 @@ import math
 from collections.abc import Callable
 
 from ..newton.linalg import lu_factor, lu_solve
-from ..newton.semismooth import min_norm_solver
+from ..newton.min_norm import min_norm_solver
 
 __all__ = ["cone_solver", "linear_solver", "row_scale", "solves"]
 

@@ -28,7 +28,7 @@ import numpy as np
 
 from ...codegen.function_types import BRANCH_LAW_TYPE
 from ...codegen.jit import njit, numba_enabled
-from ..newton.semismooth_jit import lu_factor_into, lu_solve_into
+from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 
 __all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_solve"]
 

@@ -22,7 +22,7 @@ import numpy as np
 from ...codegen.jit import njit
 from ...scene.forcing_jit import forcing_into
 from ..implicit.branch_check_jit import dead_band_sign, sign_bit
-from ..newton.semismooth_jit import lu_factor_into, lu_solve_into
+from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 from .error import FORCE_TOL_FACTOR
 from .tableau import E_ERR, MU_REAL, SAMPLES, C
 
