@@ -1,6 +1,6 @@
 """Every example in the documentation runs: the README's Python blocks, the Python blocks
-of every page in docs/, the docstring examples of every module (as doctests) and the
-scripts in examples/."""
+of every page in docs/ and its sections (docs/theory/), the docstring examples of every
+module (as doctests) and the scripts in examples/."""
 
 from __future__ import annotations
 
@@ -60,17 +60,25 @@ def test_readme_python_examples_run(quiet_plots, capsys):
     assert second["sol"].ok and second["sol"].x["mass"].shape == (5001,)
 
 
-DOC_PAGES = sorted(p for p in (ROOT / "docs").glob("*.md") if python_blocks(p.read_text()))
+DOCS = ROOT / "docs"
+# the pages of docs/ and of its sections (docs/theory/, ...), not the build output
+ALL_PAGES = sorted(p for p in [*DOCS.glob("*.md"), *DOCS.glob("[!_]*/*.md")])
+DOC_PAGES = [p for p in ALL_PAGES if python_blocks(p.read_text())]
+
+
+def _page_id(page: Path) -> str:
+    return page.relative_to(DOCS).as_posix()
 
 
 def test_the_pages_with_examples_are_found():
-    names = {p.name for p in DOC_PAGES}
+    assert "theory/index.md" in {_page_id(p) for p in ALL_PAGES}
+    names = {_page_id(p) for p in DOC_PAGES}
     assert {"laws.md", "scenes.md", "reference.md", "solution.md", "index.md"} <= names
 
 
-@pytest.mark.parametrize("page", DOC_PAGES, ids=lambda p: p.name)
+@pytest.mark.parametrize("page", DOC_PAGES, ids=_page_id)
 def test_docs_page_examples_run(page, quiet_plots):
-    _run_blocks(python_blocks(page.read_text()), f"docs/{page.name}")
+    _run_blocks(python_blocks(page.read_text()), f"docs/{_page_id(page)}")
 
 
 def _modules_with_examples() -> list[str]:

@@ -10,7 +10,7 @@ Sign convention: ``x`` and ``v`` are positive in the same direction as ``F``;
 that direction, so a stretched spring (``x > 0``) has ``F_s > 0``.
 
 One step of BDF1 (backward Euler) or BDF2 reduces to one piecewise-linear scalar
-equation in ``F_d`` (see ``docs/theory.md``).  Write ``h`` for the effective step
+equation in ``F_d`` (see ``docs/theory/bdf_steps.md``).  Write ``h`` for the effective step
 (``dt`` for BDF1, ``2 dt / 3`` for BDF2) and ``x_hat, v_hat`` for the history
 (``x_n, v_n`` for BDF1, ``(4 x_n - x_{n-1}) / 3`` etc. for BDF2).  Then::
 

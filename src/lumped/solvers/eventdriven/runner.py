@@ -2,7 +2,7 @@ r"""``radau5``: adaptive Radau IIA (order 5) with located switching and time eve
 
 The driver of the adaptive method (the step is :mod:`lumped.solvers.radau.stage`, the event
 logic :mod:`lumped.solvers.modes.choice` and :mod:`lumped.solvers.modes.lock_events`; the
-reasons are in ``docs/theory.md``):
+reasons are in ``docs/theory/radau.md`` and ``docs/theory/events.md``):
 
 1. the consistent initial state, and the initial mode by a vanishing implicit step;
 2. steps of Radau IIA with every law held on its mode's branch (a smooth DAE), the step

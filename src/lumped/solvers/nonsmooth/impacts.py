@@ -27,7 +27,7 @@ opposite to its approach rate (it would be pulled into the lock) is released and
 impulse is recomputed without it (a small active set, at most one pass per element).
 Where the impulses are not unique (two strings in parallel), or a junction's velocity
 is not fixed by the locks, the minimum-norm solution is taken (documented in
-``docs/theory.md``).
+``docs/theory/events.md``).
 
 All inputs and outputs are Python floats; the one linear solve per impact uses numpy.
 """
