@@ -346,7 +346,8 @@ def compile_kernel(
     return kernel
 
 
-def build_kernel(name: str, args: list[str], exprs: list[sp.Expr], *, guard: bool = True) -> Callable:
+def build_kernel(name: str, args: list[str], exprs: list[sp.Expr], *,
+                 guard: bool = True) -> Callable:
     """Generate, compile and return ``def name(*args): return exprs`` (see module doc)."""
     emitter = _Emitter()
     emitter.emit(0, f"def {name}({', '.join(args)}):")

@@ -1,10 +1,15 @@
-"""Solvers: one module per method family, a shared Newton solver and one registry.
+"""Solvers: the method families over a shared Newton, along the data flow.
 
-:mod:`.status` (outcomes, :class:`Event`, :class:`RawRun`), :mod:`.newton` and
-:mod:`.linalg` (semismooth Newton, small LU), :mod:`.step_system` (the discrete system of
-one implicit step), :mod:`.initial_state`, :mod:`.branch_check`, :mod:`.fixed_step`
-(generic BDF1/BDF2), :mod:`.closed_form` (Algorithm 1 and its BDF2 twin) and
-:mod:`.registry` (name -> runner).
+The sub-packages are layers, each importing only those below it (an import-linter
+contract in ``pyproject.toml``)::
+
+    registry -> eventdriven -> modes -> {closed, bdf, radau} -> implicit -> nonsmooth
+             -> newton -> status
+
+:mod:`.status` (outcomes, :class:`Event`, the runner contract :class:`RunSettings` ->
+:class:`RawRun`), :mod:`.newton`, :mod:`.nonsmooth`, :mod:`.implicit`, the families
+:mod:`.closed`, :mod:`.bdf` and :mod:`.radau`, :mod:`.modes`, :mod:`.eventdriven`
+(``radau5``) and :mod:`.registry` (name -> runner). See ``docs/architecture.md``.
 """
 
 from ..grid import steps_for

@@ -12,7 +12,7 @@ next time (1, 2, 4, ...), so a scene the fast loop cannot handle costs at most a
 twice the faithful port's time; after a step the fast loop took, the count starts again
 at 1.
 
-Agreement with ``bdf1``/``bdf2`` (tested in ``tests/solvers/test_bdf_fast_jit.py``):
+Agreement with ``bdf1``/``bdf2`` (tested in ``tests/solvers/bdf/test_bdf_fast_jit.py``):
 
 * both solve the same step system (the same unrolled residual, term for term) with the
   same convergence tests at the same point: an iterate ``u`` is converged when

@@ -64,7 +64,8 @@ def integrate(
     method : {"bdf1", "bdf2"}
         BDF2 takes its first step with BDF1.
     engine : {"auto", "python", "compiled"}
-        ``"python"``: the loops of :mod:`lumped.solvers.closed.closed_form` on Python floats (the readable reference);
+        ``"python"``: the loops of :mod:`lumped.solvers.closed.closed_form` on Python
+        floats (the readable reference);
         ``"compiled"``: their numba twin :mod:`lumped.solvers.closed.closed_form_jit` (the same
         operations in the same order, hence the same numbers bit for bit; compiled once
         per machine and cached on disk); ``"auto"``: compiled when numba is installed

@@ -51,7 +51,7 @@ class StepChecks:
 
     Reads, from the run: ``x, v, F`` (the state at ``t``), ``N, E, n`` (nodes, elements,
     ``N + E``), ``system`` (the :class:`~lumped.solvers.radau.stage.StageSystem`), ``ms`` (the
-    :class:`~lumped.solvers.eventdriven.modes.ModeState`) and its lists ``modes``,
+    :class:`~lumped.solvers.eventdriven.mode_state.ModeState`) and its lists ``modes``,
     ``kernels``, ``guards``, ``watched``, ``cones``, the plan's branches ``lbs``, the
     scene's ``spring`` and ``massless`` flags, ``tangent``, ``rtol``, ``atol`` and
     ``F_seen``.

@@ -29,7 +29,7 @@ from .bridge import MAX_BRIDGES, take_bridge
 from .checks import StepChecks
 from .fast import compiled_loop
 from .landing import Landing
-from .modes import ModeState
+from .mode_state import ModeState
 from .setup import breakpoints, compiled_stage_solver, read_options, scene_plan
 from .step import StepPass
 

@@ -51,7 +51,7 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
     of size ``h_p`` from ``t`` (see the module notes): ``(modes, v_p, F_p)``, or ``None``.
 
     With ``current`` (a guard event) a result that reads as ``current`` is undecided, as
-    in :func:`~lumped.solvers.eventdriven.modes.ModeState.change_mode`: if no candidate is
+    in :func:`~lumped.solvers.eventdriven.mode_state.ModeState.change_mode`: if no candidate is
     confirmed and one is undecided, the probe is tried ``1000`` times longer, up to
     ``longer`` sizes in all.
 

@@ -291,7 +291,7 @@ def test_example_files_are_the_bench_scenes(name):
     from lumped.bench.impact_scenes import IMPACT_SCENES
     from lumped.io.scenefile import load_scene
 
-    path = Path(__file__).resolve().parents[2] / "examples" / f"{name}.toml"
+    path = Path(__file__).resolve().parents[3] / "examples" / f"{name}.toml"
     scene, settings = load_scene(path)
     a = simulate(scene, method="bdf2", dt=settings["dt"], t_end=1.5)
     b = simulate(IMPACT_SCENES[name][0](), method="bdf2", dt=settings["dt"], t_end=1.5)

@@ -12,7 +12,7 @@ from lumped.bench.scenes import OWN_SCENES, PAPER_SCENES, generic_scene
 from lumped.codegen.jit import numba_enabled
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
-from lumped.solvers.eventdriven import modes as adaptive_modes
+from lumped.solvers.eventdriven import mode_state as adaptive_modes
 from lumped.solvers.modes import mode_guess
 
 pytestmark = pytest.mark.skipif(not numba_enabled(), reason="needs numba")

@@ -25,7 +25,7 @@ from lumped.laws import ElementLaw, get_law
 from lumped.scenarios import scenario_scene
 from lumped.solvers.newton.options import NewtonOptions
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
 DRAG = ElementLaw("quadratic_drag_fast", "dashpot", "F = c*q*Abs(q)", ["c"])
 
 

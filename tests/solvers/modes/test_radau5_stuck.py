@@ -21,7 +21,7 @@ from lumped.bench.scenes import SCENES, generic_scene
 from lumped.reference import exact_solution
 from lumped.scene.forcing import SineBurst
 from lumped.solvers.closed.closed_form import BinghamOscillator
-from lumped.solvers.eventdriven import modes as adaptive_modes
+from lumped.solvers.eventdriven import mode_state as adaptive_modes
 from lumped.solvers.modes.crossing_root import first_root_py, illinois
 
 
