@@ -187,8 +187,8 @@ def test_auto_engine_keeps_short_runs_in_python():
 
     code = (
         "import sys\n"
-        "from lumped.solvers.closed.closed_form import COMPILED_MIN_STEPS, BinghamOscillator, "
-        "integrate\n"
+        "from lumped.solvers.closed.closed_form import BinghamOscillator\n"
+        "from lumped.solvers.closed.integrate import COMPILED_MIN_STEPS, integrate\n"
         "osc = BinghamOscillator(1.0, 100.0, 1.0, 1.0)\n"
         "integrate(osc, x0=0.5, dt=1e-4, n_steps=1000)\n"
         "print('lumped.solvers.closed.closed_form_jit' in sys.modules)\n"

@@ -28,8 +28,11 @@ def _with_newton(scene: Scene, time_scale: float):
 
 
 def _same(a: list[float], b: list[float]) -> bool:
-    """Equal to 2 ulps of the larger value."""
-    return all(x == y or abs(x - y) <= 2.0 * math.ulp(max(abs(x), abs(y)))
+    """Equal to 2 ulps of the largest force of the two states: a force is a balance of
+    the others, so its round-off is that of the largest one (a stuck element's force is
+    0 from the shortcut and 7.5e-17 from Newton's balance of forces 0.75, in a draw)."""
+    scale = max((abs(x) for x in (*a, *b)), default=0.0)
+    return all(x == y or abs(x - y) <= 2.0 * math.ulp(scale)
                for x, y in zip(a, b, strict=True))
 
 

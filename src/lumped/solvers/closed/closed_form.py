@@ -61,6 +61,7 @@ class BinghamOscillator:
 
     Examples
     --------
+    >>> from lumped.solvers.closed.integrate import integrate
     >>> osc = BinghamOscillator(m=1.0, k=100.0, gamma=1.0, tau=1.0)
     >>> traj = integrate(osc, x0=0.5, dt=1e-4, t_end=5.0)
     >>> bool(traj.v[-1] == 0.0 and 0.0 < abs(traj.x[-1]) <= osc.tau / osc.k)
