@@ -159,3 +159,30 @@ def test_closed_form_entries_time_the_python_engine_even_once_compiled_code_is_l
         solved = entry.solve(scene, {"dt": 1e-2}, TINY)()
         assert solved.steps == round(scene.t_end / 1e-2)
         assert np.all(np.isfinite(solved.x))
+
+
+def test_plot_legend_names_a_method_missing_from_the_first_panel(report, tmp_path,
+                                                                monkeypatch):
+    """Every method with a run anywhere is in the legend, in the report's order, even with
+    no successful run on the first scene (the legend came from the first panel only)."""
+    import dataclasses
+
+    pytest.importorskip("matplotlib")
+    from matplotlib.figure import Figure
+
+    first = report.scenes[0]
+    runs = [dataclasses.replace(r, status="failed") if (r.scene == first and
+                                                        r.method == "scipy-LSODA") else r
+            for r in report.runs]
+    seen = {}
+    legend = Figure.legend
+
+    def spy(self, handles, labels, **kw):
+        seen["labels"] = list(labels)
+        return legend(self, handles, labels, **kw)
+
+    monkeypatch.setattr(Figure, "legend", spy)
+    bench.write_plot(dataclasses.replace(report, runs=runs), tmp_path / "wp.png")
+    assert seen["labels"] == [m for m in report.methods
+                              if any(r.method == m and r.ok for r in runs)]
+    assert "scipy-LSODA" in seen["labels"]

@@ -312,7 +312,8 @@ def write_plot(report: BenchReport, path: str | Path) -> str:
                     best_err = e
             if front:
                 ax.loglog(*zip(*front, strict=True), marker=markers[i % len(markers)],
-                          ms=3, lw=1, ls="-" if m in ours else "--", label=m)
+                          ms=3, lw=1, ls="-" if m in ours else "--", label=m,
+                          color=plt.cm.tab20(i % 20))
         for tgt in TARGETS:
             ax.axhline(tgt, color="0.85", lw=0.5, zorder=0)
         ax.set_title(scene, fontsize=9)
@@ -324,8 +325,15 @@ def write_plot(report: BenchReport, path: str | Path) -> str:
         ax.set_xlabel("CPU time / yardstick", fontsize=8)
     for ax in axes[:, 0]:
         ax.set_ylabel("max |x - x_ref|", fontsize=8)
-    handles, labels = axes.flat[0].get_legend_handles_labels()
-    ncol = min(len(labels), 5)
+    # one legend entry per method over every panel (a method may have no run on a scene);
+    # a method keeps its colour and marker in every panel
+    legend: dict[str, object] = {}
+    for ax in axes.flat:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            legend.setdefault(label, handle)
+    labels = [m for m in report.methods if m in legend]
+    handles = [legend[m] for m in labels]
+    ncol = max(1, min(len(labels), 5))
     fig.legend(handles, labels, loc="lower center", ncol=ncol, fontsize=8)
     fig.tight_layout(rect=(0, 0.025 * math.ceil(len(labels) / ncol) + 0.01, 1, 1))
     fig.savefig(path, dpi=70)
