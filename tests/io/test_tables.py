@@ -17,8 +17,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from lumped import Element, Mass, Scene, get_law, simulate
 from lumped.io import Table, TableError, detrend, read_at2, read_table
 from lumped.io.units import UNITS, G, unit_scale
+from lumped.scene import SineBurst
 
 ROOT = Path(__file__).resolve().parents[2]
 RECORDS = ROOT / "examples" / "records"
@@ -385,3 +387,33 @@ def test_the_record_recipe_reproduces_the_shipped_files(tmp_path, monkeypatch, c
     assert "peak 0.3 g" in capsys.readouterr().out
     new, shipped = (read_at2(d / "synthetic_ground.at2") for d in (tmp_path, RECORDS))
     np.testing.assert_allclose(new.values, shipped.values, rtol=0, atol=2e-7 * G)
+
+
+# -- a table as the forcing of a scene ---------------------------------------------------------
+def _pushed(force) -> Scene:
+    return Scene([Mass("mass", m=1.0)],
+                 [Element("spring", get_law("linear_spring").bind(k=100.0), "ground", "mass"),
+                  Element("dashpot", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground",
+                          "mass")],
+                 forces={"mass": force})
+
+
+def test_a_table_that_samples_a_sine_converges_to_the_sine_forcing():
+    sine = SineBurst(10.0, 5 * math.pi)
+    ref = simulate(_pushed(sine), method="bdf2", dt=1e-3, t_end=1.5).x["mass"]
+    errors = []
+    for h in (0.02, 0.01):
+        t = np.arange(0.0, 1.5 + h / 2, h)
+        table = Table(t, [sine(tk) for tk in t], quantity="force")
+        x = simulate(_pushed(table), method="bdf2", dt=1e-3, t_end=1.5).x["mass"]
+        errors.append(float(np.abs(x - ref).max()))
+    assert errors[0] < 2e-3 and 3.0 < errors[0] / errors[1] < 5.0, errors  # O(h^2)
+
+
+def test_the_adaptive_method_steps_onto_every_point():
+    t = np.linspace(0.0, 0.5, 26)
+    table = Table(t, 10.0 * np.sin(5 * math.pi * t), quantity="force")
+    sol = simulate(_pushed(table), method="radau5", rtol=1e-6, atol=1e-9, t_end=0.5)
+    assert sol.success
+    assert set(table.times[1:-1].tolist()) <= set(sol.t.tolist())
+    assert sorted(e.t for e in sol.events if e.kind == "time") == table.times[1:-1].tolist()
