@@ -379,6 +379,11 @@ def test_shipped_record_reads_the_same_from_at2_and_csv():
     assert at2.values[0] == 0.0 and at2.values[-1] == 0.0
     for name in ("synthetic_ground.at2", "synthetic_ground.csv"):
         assert (RECORDS / name).stat().st_size < 100_000
+    # no baseline correction in the file: it drifts; a least-squares line removes it
+    vel, disp = at2.integrated()
+    assert abs(vel.values[-1]) > 0.02 and abs(disp.values[-1]) > 0.5
+    vel, disp = detrend(at2, order=1).integrated()
+    assert abs(vel.values[-1]) < 1e-4 and abs(disp.values[-1]) < 1e-3
 
 
 def test_the_record_recipe_reproduces_the_shipped_files(tmp_path, monkeypatch, capsys):

@@ -220,9 +220,10 @@ class Table:
 
         Baseline drift is **not** corrected: a small offset or noise in a measured
         acceleration grows linearly in the velocity and quadratically in the
-        displacement. Correcting it is the user's choice; e.g. remove a mean offset with
-        ``detrend(table, order=0)``, or fit a polynomial ``P`` to the displacement and
-        subtract ``P''`` from the acceleration (see ``docs/records_and_loops.md``).
+        displacement. Correcting it is the user's choice, before integrating; e.g.
+        :func:`detrend` with ``order=1`` subtracts the least-squares line, after which
+        the final velocity and displacement nearly vanish (see :func:`detrend` and
+        ``docs/records_and_loops.md``).
 
         Parameters
         ----------
@@ -274,10 +275,17 @@ def detrend(table: Table, order: int = 1) -> Table:
     .. math::  \tilde y_k = y_k - P(t_k), \qquad
                P = \arg\min_{\deg P \le \text{order}} \sum_k (y_k - P(t_k))^2 .
 
-    ``order=0`` removes the mean (for an acceleration record, the constant offset that
-    makes the velocity drift linearly), ``order=1`` a linear trend. It is the simplest
-    baseline correction; it changes the record, and whether it is the right one is the
-    user's judgement.
+    The simplest baseline correction of an acceleration record: ``order=0`` removes the
+    mean (the constant offset that makes the velocity drift linearly). ``order=1``
+    makes ``sum_k a~_k = 0`` and ``sum_k t_k a~_k = 0``; since the final velocity and
+    displacement of a record on ``[0, T]`` are
+
+    .. math::  v(T) - v(0) = \int_0^T a\,dt, \qquad
+               x(T) - x(0) - T v(0) = \int_0^T (T - t)\,a\,dt,
+
+    both nearly vanish after it (the sums over equally spaced samples equal the
+    trapezoidal integrals up to the end terms of one step). It changes the record, and
+    whether it is the right correction is the user's judgement.
 
     Parameters
     ----------
