@@ -4,9 +4,7 @@ A table holds strictly increasing times ``t_0 < t_1 < ... < t_{n-1}`` and finite
 ``y_k`` of one quantity (force, acceleration, velocity or displacement, in SI units: see
 :mod:`lumped.io.units`). Files are read by :mod:`lumped.io.tables`.
 
-Interpolation and time events
------------------------------
-``table(t)`` is the linear interpolant of the points,
+**Interpolation and time events.** ``table(t)`` is the linear interpolant of the points,
 
 .. math::  y(t) = y_k + \frac{t - t_k}{t_{k+1} - t_k}\,(y_{k+1} - y_k),
            \qquad t_k \le t \le t_{k+1},

@@ -9,10 +9,8 @@ Several elements joining the same two nodes (in parallel, e.g. the spring and th
 friction slider of an isolator) form one loop: ``q`` of the first one's orientation and
 the sum of their forces, a reversed element's force counted with ``-1``.
 
-The work done on the element per cycle
---------------------------------------
-The power taken from the nodes is ``F qdot`` (:mod:`lumped.post.energy`), so over a
-cycle ``[t_0, t_0 + T]`` of the forcing
+**The work done on the element per cycle.** The power taken from the nodes is ``F qdot``
+(:mod:`lumped.post.energy`), so over a cycle ``[t_0, t_0 + T]`` of the forcing
 
 .. math::  E_d = \int_{t_0}^{t_0 + T} F\,\dot q\,dt = \oint F\,dq,
 
@@ -24,9 +22,8 @@ It is computed by the trapezoidal rule in ``q`` on the samples of the cycle, who
 are taken from the dense output ``sol.sol(t)`` (or on ``points_per_cycle`` equally
 spaced times of the dense output).
 
-Amplitude, effective stiffness and equivalent viscous damping
--------------------------------------------------------------
-Over a cycle, with the extremes of the elongation and the force,
+**Amplitude, effective stiffness and equivalent viscous damping.** Over a cycle, with
+the extremes of the elongation and the force,
 
 .. math::
 
@@ -41,7 +38,7 @@ peak ``E_s = k_eff u_0^2 / 2``, the equivalent viscous damping ratio is
 
 the damping ratio of the linear viscous oscillator of stiffness ``k_eff`` that
 dissipates ``E_d`` per cycle at amplitude ``u_0`` in resonance (Chopra, *Dynamics of
-Structures*, section 3.8). ``k_eff`` uses the largest force over the cycle, which is
+Structures*, section 3.9). ``k_eff`` uses the largest force over the cycle, which is
 the force at the peak elongation for a spring-and-friction (bilinear) isolator
 (``k_eff = k + tau / u_0``), as in ASCE 7 and AASHTO; where a viscous force makes the
 peak force lead the peak elongation, ``k_eff`` here is larger (a spring ``k`` in
@@ -51,10 +48,9 @@ dashpot: ``F_0 = c omega u_0``, so ``zeta_eq = 1/2`` whatever ``c``) is judged a
 the structure it damps: pass ``stiffness=k``, and ``zeta_eq = E_d / (2 pi k u_0^2)``
 (``c omega / (2 k)`` for the dashpot).
 
-The steady state
-----------------
-The cycles start at ``t_start`` (the forcing's phase origin, default 0) and follow each
-other every period. Cycle ``j`` *agrees* with cycle ``j - 1`` when
+**The steady state.** The cycles start at ``t_start`` (the forcing's phase origin,
+default 0) and follow each other every period. Cycle ``j`` *agrees* with cycle ``j - 1``
+when
 
 .. math::
 
