@@ -3,6 +3,7 @@ a forcing (interpolation, breakpoints) and its exact integration."""
 
 from __future__ import annotations
 
+import bisect
 import math
 import pickle
 import runpy
@@ -341,6 +342,21 @@ def test_interpolation_lies_between_its_neighbours(data, s):
     t = times[k] + s * (times[k + 1] - times[k])
     lo, hi = sorted(values[k:k + 2])
     assert lo - 1e-9 * abs(lo) <= table(t) <= hi + 1e-9 * abs(hi)
+
+
+@given(tables(), st.lists(st.floats(-2e6, 2e6, allow_nan=False), max_size=30))
+def test_any_call_order_gives_the_interpolant(data, queries):
+    """The segment hint of the previous call never changes a value."""
+    times, values = data
+    table = Table(times, values, quantity="force", outside="hold")
+    for t in [*queries, *times[::-1], *queries[::-1]]:
+        if t <= times[0] or t >= times[-1]:
+            expected = values[0] if t <= times[0] else values[-1]
+        else:
+            i = bisect.bisect_right(times, t)
+            t0, y0 = times[i - 1], values[i - 1]
+            expected = y0 if t == t0 else y0 + (t - t0) / (times[i] - t0) * (values[i] - y0)
+        assert table(t) == expected
 
 
 @given(tables(), finite, finite)

@@ -81,6 +81,7 @@ class Table:
     outside: str = "zero"
     _t: list[float] = field(init=False, repr=False)
     _y: list[float] = field(init=False, repr=False)
+    _segment: list[int] = field(init=False, repr=False)  # the last segment, a hint
 
     def __post_init__(self) -> None:
         check_quantity(self.quantity)
@@ -117,25 +118,31 @@ class Table:
         object.__setattr__(self, "values", values)
         object.__setattr__(self, "_t", times.tolist())
         object.__setattr__(self, "_y", values.tolist())
+        object.__setattr__(self, "_segment", [0])
 
     # -- as a forcing ----------------------------------------------------------------------
     def __call__(self, t: float) -> float:
-        """The linear interpolant at ``t`` (see the module notes); a Python float."""
-        tt = self._t
-        if tt[0] <= t <= tt[-1]:
-            i = bisect_right(tt, t)
-            if i == len(tt):
-                return self._y[-1]
-            t0 = tt[i - 1]
-            y0 = self._y[i - 1]
-            if t == t0:
-                return y0
-            return y0 + (t - t0) / (tt[i] - t0) * (self._y[i] - y0)
-        if t != t:
-            raise ValueError(f"{self.source}: a table was called at t = nan")
-        if self.outside == "zero":
-            return 0.0
-        return self._y[0] if t < tt[0] else self._y[-1]
+        """The linear interpolant at ``t`` (see the module notes); a Python float.
+
+        The segment of the previous call is tried first (a step loop calls at times
+        that mostly stay in one segment), then ``bisect``."""
+        tt, yy = self._t, self._y
+        k = self._segment[0]
+        if not tt[k] <= t < tt[k + 1]:
+            if not tt[0] <= t < tt[-1]:
+                if t == tt[-1]:
+                    return yy[-1]
+                if t != t:
+                    raise ValueError(f"{self.source}: a table was called at t = nan")
+                if self.outside == "zero":
+                    return 0.0
+                return yy[0] if t < tt[0] else yy[-1]
+            k = bisect_right(tt, t) - 1
+            self._segment[0] = k
+        t0, y0 = tt[k], yy[k]
+        if t == t0:
+            return y0
+        return y0 + (t - t0) / (tt[k + 1] - t0) * (yy[k + 1] - y0)
 
     def breakpoints(self, t0: float, t1: float) -> list[float]:
         """The table's times strictly inside ``(t0, t1)``, in order: where the interpolant
