@@ -172,7 +172,9 @@ def _template(template: object) -> tuple[Callable | None, dict | None, dict]:
     from lumped.io import read_scene_file, scene_from_dict
 
     if isinstance(template, (str, Path)):
-        data = read_scene_file(template)
+        from lumped.io.scene_inputs import resolve_files
+
+        data = resolve_files(read_scene_file(template), Path(template).parent)
         _, settings = scene_from_dict(data, source=str(template))
         return None, data, settings
     if isinstance(template, Mapping):
