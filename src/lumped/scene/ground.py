@@ -200,12 +200,28 @@ def _symbolic_motion(spec: object, quantity: str, v0: float, x0: float):
     expr = expr.subs({s: t for s in expr.free_symbols})
 
     def integral(e, start: float):
+        # rule-based antiderivatives (fast, fail fast), sympy.integrate for Piecewise
+        # only once each piece has one: never an open-ended Risch search
+        from sympy.integrals.manualintegrate import manualintegrate
+
         s = sympy.Symbol("s", real=True)
-        out = sympy.integrate(e.subs(t, s), (s, 0, t))
+        es = e.subs(t, s)
+        pieces = [p.expr for p in es.atoms(sympy.Piecewise) for p in p.args] or [es]
+        refused = sympy.Integral(e, t)
+        for piece in pieces:
+            if manualintegrate(piece, s).has(sympy.Integral):
+                raise ValueError(f"{where}: no closed-form integral of {refused.args[0]}; "
+                                 "give the motion as a velocity or displacement, or as a "
+                                 "table")
+        if es.has(sympy.Piecewise):
+            out = sympy.integrate(es, (s, 0, t))
+        else:
+            prim = manualintegrate(es, s)
+            out = prim.subs(s, t) - prim.subs(s, 0)
         if out.has(sympy.Integral):
-            raise ValueError(f"{where}: sympy cannot integrate {e} in closed form; give "
-                             "the motion as a velocity or displacement, or as a table")
-        return sympy.piecewise_fold(out + start)
+            raise ValueError(f"{where}: no closed-form integral of {e}; give the motion "
+                             "as a velocity or displacement, or as a table")
+        return sympy.piecewise_fold((out + start).rewrite(sympy.Piecewise))
 
     if quantity == "acceleration":
         a = expr
