@@ -55,6 +55,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import threading
 from bisect import bisect_right
 from collections.abc import Callable
 
@@ -64,6 +65,10 @@ from .._validate import as_finite
 from .forcing import SineBurst
 
 __all__ = ["GroundMotion", "QUANTITIES", "inertial_forcing", "combine_forcing"]
+
+#: sympy's rule-based integration keeps state of its own: one thread at a time (Dask
+#: workers in threads build scenes side by side).
+_SYMPY_LOCK = threading.Lock()
 
 #: The quantities a ground motion may be given as.
 QUANTITIES = ("acceleration", "velocity", "displacement")
@@ -121,7 +126,8 @@ class GroundMotion:
             self._exprs = None
             return
         self._pp = None
-        self._exprs = _symbolic_motion(spec, quantity, self.v0, self.x0)
+        with _SYMPY_LOCK:
+            self._exprs = _symbolic_motion(spec, quantity, self.v0, self.x0)
         if isinstance(spec, SineBurst):
             self.omega = float(spec.omega)
         self._accel = _acceleration_forcing(spec, quantity, self._exprs[2])
