@@ -321,7 +321,8 @@ class Scene:
             forcing[index[name]] = as_forcing(spec, where=f"force on node {name!r}")
         applied = tuple(forcing)
         if ground_motion is not None:
-            from .ground import GroundMotion, combine_forcing, inertial_forcing
+            from .ground import GroundMotion
+            from .inertial import combine_forcing, inertial_forcing
 
             if not isinstance(ground_motion, GroundMotion):
                 raise TypeError(f"`ground_motion` must be a GroundMotion, got {ground_motion!r}")
