@@ -22,6 +22,14 @@ import numpy as np
 from ._optional import require
 from .post.dense import check_times, hermite_dense
 from .post.energy import EnergyLedger, energy_ledger
+from .post.frames import (
+    Frame,
+    GroundTrace,
+    absolute_frame,
+    frame_columns,
+    ground_trace,
+    relative_frame,
+)
 from .post.switching import branch_history, lock_intervals, locking_branches, switch_events
 from .solvers.status import Event, Status
 
@@ -243,13 +251,47 @@ class Solution:
         return lock_intervals(self.t, self._history()[element],
                               locking_branches(scene, element))
 
-    def energy(self) -> EnergyLedger:
+    def energy(self, frame: str = "relative") -> EnergyLedger:
         """The energy ledger over time: kinetic energy per mass, stored energy per spring,
-        dissipated energy per dashpot, work of the forcing per node, energy lost at
-        impacts and the balance residual (see :mod:`lumped.post.energy`)."""
-        return self._cached("energy", lambda: energy_ledger(
+        dissipated energy per dashpot, work of the forcing per node, work of a moving
+        ground (``support``), energy lost at impacts and the balance residual (see
+        :mod:`lumped.post.energy`).
+
+        Parameters
+        ----------
+        frame : {"relative", "absolute"}
+            The frame of the kinetic energy and the work when the ground moves (the same
+            ledger otherwise)."""
+        return self._cached(f"energy-{frame}", lambda: energy_ledger(
             self._need_scene("energy()"), self.data, self.events if self.located_events
-            else ()))
+            else (), frame=frame))
+
+    # -- frames (a moving ground, lumped.post.frames) ----------------------------------
+    @property
+    def a(self) -> dict[str, np.ndarray]:
+        """Acceleration per mass (m/s^2), relative to the ground, from the momentum
+        balance at each sample (:mod:`lumped.post.frames`)."""
+        return self.relative.a
+
+    @property
+    def relative(self) -> Frame:
+        """The motion relative to the ground (the solver's states: ``x``, ``v`` per node
+        as :attr:`x`, :attr:`v`; ``a`` per mass from the balance)."""
+        return self._cached("relative", lambda: relative_frame(
+            self._need_scene("the relative frame"), self.data))
+
+    @property
+    def absolute(self) -> Frame:
+        """The absolute motion, ``x + x_g``, ``v + v_g``, ``a + a_g`` (equal to
+        :attr:`relative` when the ground does not move)."""
+        return self._cached("absolute", lambda: absolute_frame(
+            self._need_scene("the absolute frame"), self.data, self.relative))
+
+    @property
+    def ground(self) -> GroundTrace:
+        """The ground's prescribed ``x``, ``v``, ``a`` at the samples (zero if fixed)."""
+        return self._cached("ground", lambda: ground_trace(
+            self._need_scene("the ground motion"), self.t))
 
     # -- output ----------------------------------------------------------------------------
     def plot(self, ax=None, *, title: str = "", shade_sticks: bool = True):
@@ -273,11 +315,19 @@ class Solution:
         return plot_solution(self, ax, title=title, shade_sticks=shade_sticks)
 
     def to_csv(self, path: str | Path) -> Path:
-        """Write the columns with a header line, ``%.17g`` (round-trip precision)."""
+        """Write the columns with a header line, ``%.17g`` (round-trip precision).
+
+        When the ground moves, the columns of :func:`lumped.post.frames.frame_columns`
+        follow (``x_ground``, ``v_ground``, ``a_ground``, the relative ``a_<mass>``, the
+        absolute ``x_abs_<node>``, ``v_abs_<node>``, ``a_abs_<mass>``)."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        np.savetxt(path, self.data, fmt="%.17g", delimiter=",",
-                   header=",".join(self.columns), comments="")
+        names, data = list(self.columns), self.data
+        if getattr(self.scene, "ground_motion", None) is not None:
+            extra, cols = frame_columns(self.scene, self.data)
+            names, data = names + extra, np.hstack([data, cols])
+        np.savetxt(path, data, fmt="%.17g", delimiter=",", header=",".join(names),
+                   comments="")
         return path
 
     def to_pandas(self):

@@ -148,7 +148,7 @@ _DELETE = object()
         (("nodes", "mass", "force"), "__import__('os')", r"\[nodes.mass\] force: bad expression"),
         (("nodes", "mass", "force"), "t.real", r"\[nodes.mass\] force: bad expression"),
         (("nodes", "mass", "force"), "x + t", r"\[nodes.mass\] force: bad expression"),
-        (("nodes", "mass", "force"), {"kind": "square"}, r"force kind: the only forcing"),
+        (("nodes", "mass", "force"), {"kind": "square"}, r"force kind: must be one of .*square"),
         (("nodes", "mass", "force"), {"kind": "sine", "amplitude": 1.0}, r"force omega: missing"),
         (("elements", "spring", "law"), "hooke", r"\[elements.spring\] law: unknown law 'hooke'"),
         (("elements", "spring", "parameters"), {"q": 1.0}, r"\[elements.spring\] parameters"),

@@ -9,7 +9,12 @@ Runs the scene file for every point of a grid of parameters
 * ``sweep.nc`` -- the same as NetCDF3 over the grid's axes (when xarray is installed;
   :meth:`lumped.sweep.SweepResult.write_netcdf`);
 * ``<quantity>.png`` -- a heat map of ``--quantity`` over a grid of one or two paths
-  (when matplotlib is installed; otherwise a note says so).
+  (a line over one path; when matplotlib is installed; otherwise a note says so).
+
+``--steady-amplitude ELEMENT_OR_NODE`` adds the steady amplitude under the scene's sine
+forcing or sine ground motion (:mod:`lumped.sweep.steady`) and plots it by default: over
+a grid of ``ground.motion.omega`` (or ``nodes.<n>.force.omega``) it is the
+amplitude-frequency curve.
 
 A grid axis is ``PATH=START:STOP:NUM`` (NUM evenly spaced values, both ends included) or
 ``PATH=V1,V2,...``; PATH is a dotted key of the scene file, e.g.
@@ -35,8 +40,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="one grid axis, 'path=start:stop:num' or 'path=a,b,c' "
                         "(repeatable: the grid is the product)")
     parser.add_argument("--out", required=True, help="output directory")
-    parser.add_argument("--quantity", default="rest_position",
-                        help="column for the heat map (default: rest_position)")
+    parser.add_argument("--quantity", default=None,
+                        help="column for the heat map (default: rest_position, or "
+                        "steady_amplitude with --steady-amplitude)")
+    parser.add_argument("--steady-amplitude", dest="steady_amplitude", default=None,
+                        metavar="ELEMENT_OR_NODE",
+                        help="add the steady amplitude of this element ('a+b' for elements "
+                        "in parallel) or node under the scene's sine forcing or sine ground "
+                        "motion (columns steady_omega, steady_amplitude, steady_cycles, "
+                        "energy_per_cycle, zeta_eq); over a grid of its omega, the plot is "
+                        "the amplitude-frequency curve")
     parser.add_argument("--method", choices=METHODS, default=None,
                         help="solver (default: the file's [solver] method, else auto)")
     parser.add_argument("--dt", type=float, default=None, help="step size (overrides the file)")
@@ -60,8 +73,11 @@ def run(args: argparse.Namespace) -> int:
         grid[name] = values
     started = time.perf_counter()
     result = simulate_many(args.scene, grid, method=args.method, dt=args.dt, t_end=args.t_end,
-                           backend=args.backend, progress=None if not args.quiet else False)
-    column = result.column_for(args.quantity)
+                           backend=args.backend, progress=None if not args.quiet else False,
+                           steady_amplitude=args.steady_amplitude)
+    quantity = args.quantity or ("steady_amplitude" if args.steady_amplitude else
+                                 "rest_position")
+    column = result.column_for(quantity)
     written = result.write(args.out)
     suffixes = {path.suffix for path in written}
     notes = [f"no {kind} file: {pkg} is not installed (pip install 'lumped[sweep]')"

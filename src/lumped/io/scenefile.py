@@ -22,6 +22,12 @@ is documented in ``docs/scenes.md``; in short::
     between = ["ground", "mass"]   # a then b: q = x_b - x_a, +F on a, -F on b
     parameters = { k = 100.0 }
     # F0 = 50.0                    # optional initial force, checked against the law
+
+    [ground]                       # optional: a moving ground (states relative to it)
+    motion = { kind = "table", file = "record.at2", quantity = "acceleration", units = "g" }
+
+Inputs (``force``, ``[ground] motion``) are read by :mod:`lumped.io.scene_inputs`; a
+table's ``file`` is relative to the scene file's folder.
 """
 
 from __future__ import annotations
@@ -32,7 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from ..scene import Element, Junction, Mass, Scene
-from ..scene.forcing import SineBurst
+from .scene_inputs import forcing_input, ground_input
 
 __all__ = ["load_scene", "read_scene_file", "scene_from_dict", "SceneFileError",
            "SETTINGS_KEYS"]
@@ -42,7 +48,6 @@ SETTINGS_KEYS = ("method", "dt", "t_end", "rtol", "atol")
 
 _NODE_KEYS = {"mass", "x0", "v0", "force"}
 _ELEMENT_KEYS = {"law", "between", "parameters", "F0"}
-_SINE_KEYS = {"kind", "amplitude", "omega", "t_off"}
 
 
 class SceneFileError(ValueError):
@@ -64,7 +69,8 @@ def load_scene(path: str | Path) -> tuple[Scene, dict[str, Any]]:
     SceneFileError
         For unreadable TOML or bad content, naming the file, the key and the value.
     """
-    return scene_from_dict(read_scene_file(path), source=str(path))
+    return scene_from_dict(read_scene_file(path), source=str(path),
+                           base_dir=Path(path).parent)
 
 
 def read_scene_file(path: str | Path) -> dict[str, Any]:
@@ -86,15 +92,21 @@ def read_scene_file(path: str | Path) -> dict[str, Any]:
         raise SceneFileError(f"{path}: not valid TOML: {err}") from None
 
 
-def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>") -> tuple[Scene, dict]:
-    """Build ``(scene, settings)`` from the parsed TOML tables (see :func:`load_scene`)."""
+def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>",
+                    base_dir: str | Path | None = None) -> tuple[Scene, dict]:
+    """Build ``(scene, settings)`` from the parsed TOML tables (see :func:`load_scene`).
+
+    ``base_dir`` is the folder a table's relative ``file`` is read from (default: the
+    current directory; :func:`load_scene` passes the scene file's folder)."""
+    base = Path(base_dir) if base_dir is not None else Path()
 
     def fail(key: str, msg: str) -> SceneFileError:
         return SceneFileError(f"{source}: {key}: {msg}")
 
-    unknown = set(data) - {"solver", "nodes", "elements"}
+    unknown = set(data) - {"solver", "nodes", "elements", "ground"}
     if unknown:
-        raise fail(sorted(unknown)[0], "unknown top-level table (expected solver, nodes, elements)")
+        raise fail(sorted(unknown)[0],
+                   "unknown top-level table (expected solver, nodes, elements, ground)")
 
     settings = _settings(data.get("solver", {}), fail)
 
@@ -122,7 +134,7 @@ def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>") -> tuple[S
                 raise
             raise fail(key, str(err)) from None
         if "force" in spec:
-            forces[name] = _forcing(spec["force"], f"{key} force", fail)
+            forces[name] = forcing_input(spec["force"], f"{key} force", fail, base)
 
     elements_tbl = data.get("elements", {})
     if not isinstance(elements_tbl, dict):
@@ -143,8 +155,9 @@ def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>") -> tuple[S
             elements.append(Element(name, law, between[0], between[1], F0=F0))
         except (TypeError, ValueError) as err:
             raise fail(key, str(err)) from None
+    ground = ground_input(data["ground"], "[ground]", fail, base) if "ground" in data else None
     try:
-        scene = Scene(nodes, elements, forces)
+        scene = Scene(nodes, elements, forces, ground_motion=ground)
     except (TypeError, ValueError) as err:
         raise SceneFileError(f"{source}: {err}") from None
     return scene, settings
@@ -190,39 +203,6 @@ def _number(value: object, key: str, fail) -> float:
     if not math.isfinite(x):
         raise fail(key, f"must be finite, got {value!r}")
     return x
-
-
-def _forcing(spec: object, key: str, fail) -> object:
-    if isinstance(spec, (int, float)) and not isinstance(spec, bool):
-        return _number(spec, key, fail)
-    if isinstance(spec, str):
-        from ..laws.parser import parse_expression
-
-        try:
-            return parse_expression(spec, ["t"])
-        except (TypeError, ValueError, SyntaxError) as err:
-            raise fail(key, f"bad expression {spec!r}: {err}") from None
-    if isinstance(spec, dict):
-        extra = set(spec) - _SINE_KEYS
-        if extra:
-            raise fail(f"{key} {sorted(extra)[0]}",
-                       f"unknown key (allowed: {', '.join(sorted(_SINE_KEYS))})")
-        if spec.get("kind") != "sine":
-            raise fail(f"{key} kind", f"the only forcing table is kind = \"sine\", "
-                       f"got {spec.get('kind')!r}")
-        for k in ("amplitude", "omega"):
-            if k not in spec:
-                raise fail(f"{key} {k}", "missing")
-        amp = _number(spec["amplitude"], f"{key} amplitude", fail)
-        omega = _number(spec["omega"], f"{key} omega", fail)
-        t_off = spec.get("t_off", math.inf)
-        if t_off != math.inf:
-            t_off = _number(t_off, f"{key} t_off", fail)
-        try:
-            return SineBurst(amplitude=amp, omega=omega, t_off=t_off)
-        except (TypeError, ValueError) as err:
-            raise fail(key, str(err)) from None
-    raise fail(key, f"must be a number, an expression string or a sine table, got {spec!r}")
 
 
 def _law(spec: dict, key: str, fail):

@@ -23,6 +23,9 @@ Integrated from ``0`` to ``t`` this is the ledger, each entry a function of time
     (``>= 0`` for a dissipative law, e.g. Bingham: ``F q >= 0``).
 ``work[i]``
     ``W_i(t) = int_0^t f_i(t) v_i dt`` per node with a forcing (masses and junctions).
+``support``
+    the work of the moving ground (:mod:`lumped.scene.ground`), empty when it does not
+    move; see "Two frames" below.
 ``impacts``
     the kinetic energy lost at the impacts a method reported (``Event.energy_lost``),
     cumulated at the first sample at or after each impact. An impact event stands for a
@@ -34,12 +37,30 @@ Integrated from ``0`` to ``t`` this is the ledger, each entry a function of time
     exact motion. The integrals use the trapezoidal rule on the samples (exact for a
     linear spring), so the residual measures the method's error: ``O(dt)`` for BDF1
     (whose numerical dissipation is ``sum m (v_{n+1} - v_n)^2 / 2``), smaller for BDF2.
+
+**Two frames (a moving ground).** The run's states are relative to the ground and each
+mass is pushed by the inertial force ``-m_i a_g``. The element terms ``U_e`` and
+``D_e`` are the same in both frames (an elongation is a difference of displacements).
+
+* ``frame="relative"`` (default): ``kinetic`` is ``m_i v_i^2 / 2`` with the relative
+  velocity, ``work`` the work of the applied forces ``int f_i v_i dt``, and
+  ``support[i] = -int m_i a_g v_i dt`` per mass, the work of the inertial force:
+
+  .. math::  \sum_i \Delta T_i + \sum U_e + \sum D_e + E_{imp}
+             = \sum_i \int f_i v_i\,dt - \sum_i \int m_i a_g v_i\,dt .
+
+* ``frame="absolute"``: ``kinetic`` is ``m_i (v_i + v_g)^2 / 2``, ``work`` is
+  ``int f_i (v_i + v_g) dt``, and ``support["ground"]`` is the work the ground does
+  through the elements attached to it, ``int v_g (sum_{b_e = g} F_e - sum_{a_e = g}
+  F_e) dt`` (an element from ``a`` to ``b`` pulls its ends together with ``F``).
+
+Both close to the method's error (tested).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -70,7 +91,12 @@ class EnergyLedger:
     impacts : numpy.ndarray
         Cumulative kinetic energy lost at impacts.
     residual : numpy.ndarray
-        The balance ``dT + U + D + impacts - W``; zero for the exact motion.
+        The balance ``dT + U + D + impacts - W - S``; zero for the exact motion.
+    support : dict[str, numpy.ndarray]
+        The work ``S`` of the moving ground: per mass in the relative frame, one entry
+        ``"ground"`` in the absolute frame; empty when the ground does not move.
+    frame : str
+        ``"relative"`` or ``"absolute"``.
     """
 
     t: np.ndarray
@@ -80,19 +106,24 @@ class EnergyLedger:
     work: dict[str, np.ndarray]
     impacts: np.ndarray
     residual: np.ndarray
+    support: dict[str, np.ndarray] = field(default_factory=dict)
+    frame: str = "relative"
 
     def scale(self) -> float:
         """The largest magnitude of any entry (J): the yardstick for the residual."""
         entries = [*self.kinetic.values(), *self.stored.values(),
-                   *self.dissipated.values(), *self.work.values(), self.impacts]
+                   *self.dissipated.values(), *self.work.values(), *self.support.values(),
+                   self.impacts]
         return max((float(np.max(np.abs(a))) for a in entries if len(a)), default=0.0)
 
     def to_dict(self) -> dict[str, np.ndarray]:
         """Flat ``{column: array}``: ``t``, ``kinetic_<mass>``, ``stored_<element>``,
-        ``dissipated_<element>``, ``work_<node>``, ``impacts``, ``residual``."""
+        ``dissipated_<element>``, ``work_<node>``, ``support_<name>``, ``impacts``,
+        ``residual``."""
         out: dict[str, np.ndarray] = {"t": self.t}
         for prefix, table in (("kinetic", self.kinetic), ("stored", self.stored),
-                              ("dissipated", self.dissipated), ("work", self.work)):
+                              ("dissipated", self.dissipated), ("work", self.work),
+                              ("support", self.support)):
             out.update({f"{prefix}_{name}": arr for name, arr in table.items()})
         out["impacts"] = self.impacts
         out["residual"] = self.residual
@@ -119,7 +150,8 @@ def _cumulative_trapezoid(y: np.ndarray, x: np.ndarray) -> np.ndarray:
     return out
 
 
-def energy_ledger(scene: Scene, data: np.ndarray, events: Iterable = ()) -> EnergyLedger:
+def energy_ledger(scene: Scene, data: np.ndarray, events: Iterable = (), *,
+                  frame: str = "relative") -> EnergyLedger:
     """Build the :class:`EnergyLedger` of the samples ``data`` of ``scene``.
 
     Parameters
@@ -129,9 +161,19 @@ def energy_ledger(scene: Scene, data: np.ndarray, events: Iterable = ()) -> Ener
         ``(n_samples, len(scene.columns()))`` samples.
     events : iterable of Event
         The run's events; those of kind ``"impact"`` contribute their ``energy_lost``.
+    frame : {"relative", "absolute"}
+        The frame of the kinetic energy and of the work (see "Two frames" above).
     """
+    if frame not in ("relative", "absolute"):
+        raise ValueError(f"`frame` must be 'relative' or 'absolute', got {frame!r}")
     t = data[:, 0]
-    kinetic = {n.name: 0.5 * n.m * data[:, v_col(i)] ** 2
+    gm = getattr(scene, "ground_motion", None)
+    if gm is not None:
+        _, v_g, a_g = gm.motion(t)
+    else:
+        v_g = a_g = np.zeros(len(t))
+    shift = v_g if frame == "absolute" else 0.0
+    kinetic = {n.name: 0.5 * n.m * (data[:, v_col(i)] + shift) ** 2
                for i, n in enumerate(scene.nodes) if isinstance(n, Mass)}
     stored: dict[str, np.ndarray] = {}
     dissipated: dict[str, np.ndarray] = {}
@@ -142,8 +184,25 @@ def energy_ledger(scene: Scene, data: np.ndarray, events: Iterable = ()) -> Ener
         else:
             dissipated[el.name] = _cumulative_trapezoid(F * velocities(scene, data, e), t)
     f = external_forces(scene, t)
-    work = {n.name: _cumulative_trapezoid(f[:, i] * data[:, v_col(i)], t)
-            for i, n in enumerate(scene.nodes) if scene.forcing[i] is not None}
+    support: dict[str, np.ndarray] = {}
+    applied = getattr(scene, "applied_forcing", scene.forcing)
+    if gm is not None:
+        for i, n in enumerate(scene.nodes):
+            if isinstance(n, Mass):
+                f[:, i] += n.m * a_g  # the applied force alone
+                if frame == "relative":
+                    support[n.name] = _cumulative_trapezoid(
+                        -n.m * a_g * data[:, v_col(i)], t)
+        if frame == "absolute":
+            pull = np.zeros(len(t))
+            for e, (a, b) in enumerate(zip(scene.elem_a, scene.elem_b, strict=True)):
+                if b < 0:
+                    pull += data[:, F_col(scene, e)]
+                if a < 0:
+                    pull -= data[:, F_col(scene, e)]
+            support["ground"] = _cumulative_trapezoid(v_g * pull, t)
+    work = {n.name: _cumulative_trapezoid(f[:, i] * (data[:, v_col(i)] + shift), t)
+            for i, n in enumerate(scene.nodes) if applied[i] is not None}
     impacts = np.zeros(len(t))
     for ev in events:
         if getattr(ev, "kind", None) == "impact" and ev.energy_lost:
@@ -153,6 +212,7 @@ def energy_ledger(scene: Scene, data: np.ndarray, events: Iterable = ()) -> Ener
         residual += arr - arr[0]
     for arr in (*stored.values(), *dissipated.values()):
         residual += arr
-    for arr in work.values():
+    for arr in (*work.values(), *support.values()):
         residual -= arr
-    return EnergyLedger(t, kinetic, stored, dissipated, work, impacts, residual)
+    return EnergyLedger(t, kinetic, stored, dissipated, work, impacts, residual, support,
+                        frame)

@@ -1,12 +1,15 @@
-"""Scenes: nodes (masses, junctions), elements, forcing (:mod:`.network`, :mod:`.forcing`)."""
+"""Scenes: nodes (masses, junctions), elements, forcing (:mod:`.network`, :mod:`.forcing`),
+ground motion (:mod:`.ground`)."""
 
 from .forcing import SineBurst, paper_F1, paper_F2, zero_forcing
+from .ground import GroundMotion
 from .network import GROUND, Element, Junction, Mass, Scene, as_forcing
 from .oscillator import bingham_oscillator
 
 __all__ = [
     "GROUND",
     "Element",
+    "GroundMotion",
     "Junction",
     "Mass",
     "Scene",

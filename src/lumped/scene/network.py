@@ -235,6 +235,12 @@ class Scene:
         Each joins two distinct nodes, or a node and ground.
     forces : mapping, optional
         ``{node name: forcing}``, see :func:`as_forcing`. Positive forces push towards +x.
+        A table (:class:`lumped.io.Table`) must hold a force (``quantity="force"``).
+    ground_motion : GroundMotion, optional
+        A prescribed motion of the ground (:class:`lumped.scene.GroundMotion`). The
+        states are then relative to the ground and each mass ``i`` is also pushed by the
+        inertial force ``-m_i a_g(t)`` (:mod:`lumped.scene.ground`); :attr:`forcing`
+        holds the sum, :attr:`applied_forcing` the forces given in ``forces`` alone.
 
     Examples
     --------
@@ -254,6 +260,8 @@ class Scene:
         nodes: Sequence[Mass | Junction],
         elements: Sequence[Element],
         forces: Mapping[str, object] | None = None,
+        *,
+        ground_motion: object = None,
     ) -> None:
         nodes = tuple(nodes)
         elements = tuple(elements)
@@ -303,7 +311,25 @@ class Scene:
                 raise ValueError(
                     f"force on unknown node {name!r} (nodes: {sorted(index)})"
                 )
+            quantity = getattr(spec, "quantity", None)
+            if quantity is not None and quantity != "force" and hasattr(spec, "breakpoints"):
+                raise ValueError(
+                    f"`forces[{name!r}]` is a table of {quantity}, not of force: a "
+                    f"{quantity} record pushing on a mass would be a wrong load (give a "
+                    f"ground {quantity} as `ground_motion=GroundMotion({quantity}=...)`), "
+                    f"got {spec!r}")
             forcing[index[name]] = as_forcing(spec, where=f"force on node {name!r}")
+        applied = tuple(forcing)
+        if ground_motion is not None:
+            from .ground import GroundMotion
+            from .inertial import combine_forcing, inertial_forcing
+
+            if not isinstance(ground_motion, GroundMotion):
+                raise TypeError(f"`ground_motion` must be a GroundMotion, got {ground_motion!r}")
+            for i, node in enumerate(nodes):
+                if isinstance(node, Mass):
+                    forcing[i] = combine_forcing(forcing[i],
+                                                 inertial_forcing(node.m, ground_motion))
         self.nodes: tuple[Mass | Junction, ...] = nodes
         self.elements: tuple[Element, ...] = elements
         self.node_index: dict[str, int] = index
@@ -311,6 +337,8 @@ class Scene:
         self.elem_a: tuple[int, ...] = tuple(a_idx)
         self.elem_b: tuple[int, ...] = tuple(b_idx)
         self.forcing: tuple[Forcing | None, ...] = tuple(forcing)
+        self.applied_forcing: tuple[Forcing | None, ...] = applied
+        self.ground_motion = ground_motion
         self.force_specs: dict[str, object] = dict(forces or {})
 
     # -- structure -------------------------------------------------------------------------
@@ -406,7 +434,8 @@ class Scene:
         parts = [f"{n.name}(m={n.m})" if isinstance(n, Mass) else f"{n.name}(junction)"
                  for n in self.nodes]
         els = [f"{el.name}: {el.law_name} {el.a}->{el.b}" for el in self.elements]
-        return f"Scene(nodes=[{', '.join(parts)}], elements=[{'; '.join(els)}])"
+        ground = "" if self.ground_motion is None else f", ground_motion={self.ground_motion!r}"
+        return f"Scene(nodes=[{', '.join(parts)}], elements=[{'; '.join(els)}]{ground})"
 
 
 def _check_name(what: str, name: object) -> None:

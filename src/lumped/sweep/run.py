@@ -56,6 +56,7 @@ def simulate_many(
     client: Any = None,
     n_jobs: int | None = None,
     progress: bool | None = None,
+    steady_amplitude: str | None = None,
 ) -> SweepResult:
     """Simulate every scene of a sweep and tabulate what each did.
 
@@ -85,6 +86,13 @@ def simulate_many(
         stays in this process for fewer than 8 scenes or a builder that cannot be pickled.
     progress : bool, optional
         Show a progress bar (tqdm); default: only when stderr is a terminal.
+    steady_amplitude : str, optional
+        An element (``"a+b"`` for elements in parallel) or a node: add the columns of
+        :mod:`lumped.sweep.steady` (``steady_omega``, ``steady_amplitude``,
+        ``steady_cycles``, ``energy_per_cycle``, ``zeta_eq``), the steady amplitude
+        under the scene's one sine forcing or sine ground motion; over a grid of its
+        ``omega`` this is the amplitude-frequency curve (``res.heatmap(
+        "steady_amplitude", ...)`` plots it). Runs per scene.
 
     Returns
     -------
@@ -135,7 +143,11 @@ def simulate_many(
     show = sys.stderr.isatty() if progress is None else bool(progress)
 
     plan = None
-    if builder is None and method in CLOSED_METHODS and not keep_trajectories:
+    if steady_amplitude is not None and not isinstance(steady_amplitude, str):
+        raise TypeError(f"`steady_amplitude` must be an element or node name, "
+                        f"got {steady_amplitude!r}")
+    if (builder is None and method in CLOSED_METHODS and not keep_trajectories
+            and steady_amplitude is None):
         plan = plan_closed(data, sets.names)
     if plan is not None:
         params = closed_parameters(plan, data, sets)
@@ -153,7 +165,7 @@ def simulate_many(
         if builder is None:
             _validate_rows(data, sets)
         source = builder if builder is not None else data
-        job = (source, method, dt, t_end, keep_trajectories)
+        job = (source, method, dt, t_end, keep_trajectories, steady_amplitude)
         if backend == "dask":
             results = _with_cluster(client, lambda c: _generic_dask(c, job, sets, show))
             where = "dask/per-scene"
@@ -172,7 +184,9 @@ def _template(template: object) -> tuple[Callable | None, dict | None, dict]:
     from lumped.io import read_scene_file, scene_from_dict
 
     if isinstance(template, (str, Path)):
-        data = read_scene_file(template)
+        from lumped.io.scene_inputs import resolve_files
+
+        data = resolve_files(read_scene_file(template), Path(template).parent)
         _, settings = scene_from_dict(data, source=str(template))
         return None, data, settings
     if isinstance(template, Mapping):
@@ -248,17 +262,46 @@ def _closed_dask(client: Any, params: np.ndarray, dt: float, n: int, bdf2: bool,
 
 def _run_one(job: tuple, values: dict) -> tuple[dict, Any]:
     """Build and simulate one scene; a failed run is a record, not an exception."""
-    from lumped import InconsistentInitialForce, Scene, SolverError, simulate
+    source, method, dt, t_end, keep, steady = job
+    record, sol = _simulate_one(source, method, dt, t_end, keep or steady is not None, values)
+    if steady is not None:
+        from .steady import empty_steady, forcing_omega, steady_record
+
+        if sol is None:
+            try:
+                omega = forcing_omega(scene_of(source, values))
+            except ValueError:
+                omega = None
+            record |= empty_steady(omega)
+        else:
+            try:
+                record |= steady_record(sol, sol.scene, steady)
+            except ValueError as err:
+                record |= empty_steady()
+                record["message"] = (record["message"] + "; " if record["message"]
+                                     else "") + f"steady_amplitude: {err}"
+    return record, (sol if keep else None)
+
+
+def scene_of(source: Any, values: dict) -> Any:
+    """The scene of one parameter set (a builder's, or the template's with ``values``)."""
+    from lumped import Scene
     from lumped.io import scene_from_dict
 
-    source, method, dt, t_end, keep = job
     if callable(source):
         scene = source(dict(values))
         if not isinstance(scene, Scene):
             raise TypeError(f"the builder must return a Scene, got {type(scene).__name__} "
                             f"for {values!r}")
-    else:
-        scene, _ = scene_from_dict(apply(source, values), source="<template>")
+        return scene
+    return scene_from_dict(apply(source, values), source="<template>")[0]
+
+
+def _simulate_one(source: Any, method: str, dt: float, t_end: float, keep: bool,
+                  values: dict) -> tuple[dict, Any]:
+    from lumped import InconsistentInitialForce, SolverError, simulate
+
+    scene = scene_of(source, values)
     try:
         sol = simulate(scene, method=method, dt=dt, t_end=t_end, throw=False)
     except InconsistentInitialForce as err:
@@ -373,6 +416,7 @@ def _frame(sets: ParameterSets, records: list[dict]):
         [dict(zip(sets.names, row, strict=True)) | rec
          for row, rec in zip(sets.rows, records, strict=True)])
     for col in frame.columns:
-        if col.startswith("rest_position."):
+        if col.startswith("rest_position.") or col in ("steady_omega", "steady_amplitude",
+                                                       "energy_per_cycle", "zeta_eq"):
             frame[col] = frame[col].astype("Float64")
     return frame

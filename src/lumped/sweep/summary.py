@@ -51,7 +51,9 @@ QUANTITIES = ("stick_time", "stick_slip_cycles", "events", "dissipated_energy")
 
 #: Names of result columns (per-node ones as ``<name>.<node>``): no parameter may take them.
 RESULT_COLUMNS = frozenset({"status", "message", "method", "steps", "t_reached", "at_rest",
-                            "x_end", "v_end", "rest_position", *QUANTITIES})
+                            "x_end", "v_end", "rest_position", *QUANTITIES,
+                            "steady_omega", "steady_amplitude", "steady_cycles",
+                            "energy_per_cycle", "zeta_eq"})
 
 
 def _record(status: str, message: str, method: str, steps: int, dt: float,
