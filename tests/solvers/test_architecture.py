@@ -44,6 +44,35 @@ def test_the_solver_layers_hold():
                                          no_cache=True) == 0
 
 
+def test_no_import_cycle_among_the_solver_modules():
+    """No module of ``lumped.solvers`` reaches itself through its imports (function-level
+    imports count; the package's own ``__init__`` re-exports are left out)."""
+    grimp = pytest.importorskip("grimp")
+    graph = grimp.build_graph("lumped", cache_dir=None)
+    inside = {m for m in graph.modules if m.startswith("lumped.solvers.")}
+    packages = {m for m in inside if graph.find_children(m)}
+    state: dict[str, int] = {}
+    cycles: list[list[str]] = []
+
+    def visit(m: str, path: list[str]) -> None:
+        state[m] = 1
+        path.append(m)
+        for n in sorted(graph.find_modules_directly_imported_by(m)):
+            if n not in inside or n in packages:
+                continue
+            if state.get(n) == 1:
+                cycles.append(path[path.index(n):] + [n])
+            elif n not in state:
+                visit(n, path)
+        path.pop()
+        state[m] = 2
+
+    for m in sorted(inside - packages):
+        if m not in state:
+            visit(m, [])
+    assert not cycles, "import cycles:\n" + "\n".join(" -> ".join(c) for c in cycles)
+
+
 def test_no_module_imports_another_modules_private_name():
     bad = [f"{_module(p)[0]}: {target}.{name}"
            for p in sorted((SRC / "lumped").rglob("*.py"))
