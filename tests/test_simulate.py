@@ -73,12 +73,23 @@ def test_closed_methods_reproduce_integrate_and_flip_orientation():
     assert_columns_close(gen.data, sol.data)
 
 
-def test_auto_picks_closed_form_only_for_the_paper_scene():
-    assert simulate(paper_scene(x0=0.1), dt=1e-3, t_end=0.01).method == "closed-bdf2"
+def test_auto_runs_what_the_arguments_ask_for():
+    """``dt`` alone: a fixed-step method (the closed form only on the paper's scene);
+    ``rtol``/``atol``, or neither: ``radau5`` (issue 29: ``rtol`` was refused on the
+    paper's scene, which asked for ``dt``)."""
+    paper = paper_scene(x0=0.1)
+    assert simulate(paper, dt=1e-3, t_end=0.01).method == "closed-bdf2"
+    assert simulate(paper, rtol=1e-8, t_end=0.01).method == "radau5"
+    assert simulate(paper, atol=1e-9, t_end=0.01).method == "radau5"
+    assert simulate(paper, t_end=0.01).method == "radau5"
+    sampled = simulate(paper, rtol=1e-8, dt=1e-3, t_end=0.01)
+    assert sampled.method == "radau5" and len(sampled.t) == 11
     sc = Scene([Mass("mass", 1.0, x0=0.1)],
                [Element("spring", law("linear_spring", k=100.0), "ground", "mass"),
                 Element("dashpot", law("newtonian", c=1.0), "ground", "mass")])
-    assert simulate(sc, dt=1e-3, t_end=0.01).method == "radau5"
+    assert simulate(sc, dt=1e-3, t_end=0.01).method == "bdf2"
+    assert simulate(sc, rtol=1e-6, t_end=0.01).method == "radau5"
+    assert simulate(sc, t_end=0.01).method == "radau5"
     with pytest.raises(ValueError, match="closed-bdf1.*linear_spring"):
         simulate(sc, method="closed-bdf1", dt=1e-3, t_end=0.01)
 

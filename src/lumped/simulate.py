@@ -39,8 +39,10 @@ def simulate(
     ----------
     scene : Scene
     method : str
-        One of :data:`lumped.solvers.registry.METHODS`; default ``"auto"`` (the closed
-        form for the paper's oscillator, generic BDF2 otherwise).
+        One of :data:`lumped.solvers.registry.METHODS`; default ``"auto"``, which runs
+        what the arguments ask for (:func:`lumped.solvers.registry.resolve_method`):
+        ``rtol``/``atol`` or neither, the adaptive ``radau5``; ``dt`` alone, a fixed-step
+        method (``closed-bdf2`` on the paper's oscillator, else ``bdf2``).
     t_end : float
         Final time (``> 0``).
     dt : float, optional
@@ -76,15 +78,22 @@ def simulate(
     dt = None if dt is None else as_positive("dt", dt)
     rtol = None if rtol is None else as_positive("rtol", rtol)
     atol = None if atol is None else as_positive("atol", atol)
-    concrete = resolve_method(scene, method)
+    concrete = resolve_method(scene, method, dt=dt, rtol=rtol, atol=atol)
     if dt is None and concrete in registry.FIXED_STEP_METHODS:
         why = ""
         if method == "auto":  # say why auto chose a fixed-step method
             from .solvers.eventdriven.setup import scope_error
 
-            why = f" (`auto` runs it on this scene: {scope_error(scene) or 'the closed form'})"
+            why = f" (`auto` runs it on this scene: {scope_error(scene)})"
         raise ValueError(f"`dt` is required for the fixed-step method {concrete!r}{why}, "
                          "got None")
+    if method == "auto" and concrete in registry.FIXED_STEP_METHODS and (
+            rtol is not None or atol is not None):
+        from .solvers.eventdriven.setup import scope_error
+
+        raise ValueError(f"`auto` runs the fixed-step method {concrete!r} on this scene "
+                         f"({scope_error(scene)}): it takes `dt`, not `rtol`/`atol` (got "
+                         f"rtol={rtol!r}, atol={atol!r})")
     settings = RunSettings(t_end=t_end, dt=dt, rtol=rtol, atol=atol, throw=throw,
                            options=options, extra=MappingProxyType(dict(extra)))
     raw = registry.METHOD_REGISTRY[concrete](scene, settings)

@@ -51,7 +51,8 @@ def run(args: argparse.Namespace) -> int:
     t_end = args.t_end if args.t_end is not None else settings.get("t_end")
     rtol = args.rtol if args.rtol is not None else settings.get("rtol")
     atol = args.atol if args.atol is not None else settings.get("atol")
-    if dt is None and resolve_method(scene, method) in FIXED_STEP_METHODS:
+    if dt is None and resolve_method(scene, method, dt=dt, rtol=rtol,
+                                     atol=atol) in FIXED_STEP_METHODS:
         raise ValueError(f"{args.scene}: no step size: give --dt or [solver] dt")
     if t_end is None:
         raise ValueError(f"{args.scene}: no final time: give --t-end or [solver] t_end")

@@ -23,8 +23,9 @@ Built-in methods (the same names on the command line):
     The adaptive Radau IIA (order 5) method of :mod:`lumped.solvers.eventdriven.runner`, with
     events located inside the step (``rtol``/``atol``; no ``dt``).
 ``auto``
-    ``closed-bdf2`` for exactly that scene, else ``radau5``, else (a law ``radau5`` does
-    not take) ``bdf2`` (:func:`resolve_method`).
+    What the user gave decides (:func:`resolve_method`): ``rtol``/``atol`` or nothing,
+    ``radau5``; ``dt`` alone, ``closed-bdf2`` on the paper's scene, else ``bdf2``; a law
+    ``radau5`` does not take, ``bdf2``.
 
 All but ``radau5`` are fixed-step methods (they need ``dt``; the grid is ``t_n = n dt``).
 Each family hands its runners over (``RUNNERS`` of :mod:`lumped.solvers.bdf.runners`
@@ -90,17 +91,34 @@ def register_method(name: str, runner: Runner, *, fixed_step: bool = False) -> N
     METHODS = ("auto", *METHOD_REGISTRY)
 
 
-def resolve_method(scene: Scene, method: str) -> str:
-    """The concrete method ``auto`` stands for on ``scene`` (others unchanged):
-    ``closed-bdf2`` on the paper's scene, else ``radau5``, else (a law ``radau5`` does not
-    take, :func:`lumped.solvers.eventdriven.setup.scope_error`) ``bdf2``."""
-    if method == "auto":
-        if not isinstance(closed_form_oscillator(scene), str):
-            return "closed-bdf2"
-        from .eventdriven.setup import scope_error
+def resolve_method(scene: Scene, method: str, *, dt: float | None = None,
+                   rtol: float | None = None, atol: float | None = None) -> str:
+    """The concrete method ``auto`` stands for on ``scene`` (others unchanged): what the
+    user gave decides.
 
-        return "bdf2" if scope_error(scene) else "radau5"
-    return method
+    ======================  =========================================================
+    given                   ``auto`` runs
+    ======================  =========================================================
+    ``rtol`` and/or ``atol`` ``radau5`` (with ``dt`` too: its dense output sampled on
+                            ``t_n = n dt``)
+    ``dt`` alone            a fixed-step method at that step: ``closed-bdf2`` on the
+                            paper's oscillator (one mass, a ``linear_spring`` and a
+                            ``bingham`` dashpot to ground), else ``bdf2``
+    neither                 ``radau5`` at its default tolerances
+    ======================  =========================================================
+
+    A scene with a law ``radau5`` does not take
+    (:func:`lumped.solvers.eventdriven.setup.scope_error`) runs ``bdf2`` whatever was
+    given, and needs ``dt``."""
+    if method != "auto":
+        return method
+    from .eventdriven.setup import scope_error
+
+    if scope_error(scene):
+        return "bdf2"
+    if dt is not None and rtol is None and atol is None:
+        return "closed-bdf2" if not isinstance(closed_form_oscillator(scene), str) else "bdf2"
+    return "radau5"
 
 
 register_method("radau5", run_radau5)
