@@ -103,9 +103,9 @@ class BranchInfo:
         (Herschel-Bulkley ``n < 1``: ``F = tau + (q/gamma)^(1/n)``, ``dG/dq -> 0`` at
         ``q = 0``; Bingham: ``F = tau + q/gamma``), then the steep power's base ``s F +
         d`` and its value ``w(q)`` on the branch (``base = w^(1/p)``, continued oddly;
-        ``p = 1`` for an affine branch, ``base = |beta| (F - F_0)``, ``w = q`` for
-        Bingham). ``None`` otherwise; :meth:`LawBranches.stage_kernel_for` then uses the
-        residual itself.
+        ``p = 1`` for an affine branch, ``base = c (F - F_0)``, ``w = c (G(q) - F_0)``,
+        ``c = |beta| / |A'(0)|``: ``w = q`` for Bingham). ``None`` otherwise;
+        :meth:`LawBranches.stage_kernel_for` then uses the residual itself.
     """
 
     index: int

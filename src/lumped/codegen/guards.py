@@ -71,7 +71,7 @@ def _root_guard(code: str, base: sp.Expr, w: sp.Expr, printer: KernelPrinter) ->
     """``code`` (a guard), or the code of ``w`` when the guard is ``c * base``, ``c > 0``,
     and of ``-w`` when ``c < 0`` (``base`` and ``w`` have the same sign on the branch:
     ``base = w^(1/p)`` continued oddly; a Bingham dashpot slipping backwards, ``F < -tau``,
-    has the guard ``-(F + tau)`` and ``base = |beta| (F + tau) = w = q``)."""
+    has the guard ``-(F + tau)`` and ``base = gamma (F + tau) = w = q``)."""
     try:
         g = sp.sympify(code, locals={"q": _Q, "F": _F, "max": sp.Max, "min": sp.Min})
     except (sp.SympifyError, TypeError, SyntaxError):

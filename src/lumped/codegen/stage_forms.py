@@ -138,24 +138,28 @@ def affine_inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
     r"""A steep branch ``R = A(q) + beta F`` (:func:`affine_steepness` ``>=``
     :data:`STEEP_SPAN`) solved for ``F``: ``(F - G(q), -G'(q), 1, base, w)`` with
 
-    .. math:: G(q) = -A(q)/\beta,\qquad \text{base} = |\beta|\,(F - F_0),\qquad
-              w(q) = |\beta|\,(G(q) - F_0) = -\operatorname{sgn}(\beta)\,(A(q) - A(0)),
+    .. math:: G(q) = -A(q)/\beta,\qquad \text{base} = c\,(F - F_0),\qquad
+              w(q) = c\,(G(q) - F_0),\qquad c = |\beta| / |A'(0)|,
 
     ``F_0 = G(0)``: the shape of :func:`inverse_form` with ``p = 1``, and ``base = w`` on
     the branch. A guard that is a positive multiple of ``base`` (``F - tau`` of a Bingham
     dashpot slipping forward) is taken as ``w`` (``q``): the branch ends at ``q = 0``,
     where ``F - tau = q / gamma`` is ``1e-12 q`` flat, so a guard in ``F`` located to
-    round-off would leave a rate of ``gamma ulp(tau)``. ``w`` is scaled by ``|beta|`` to
-    be on the scale of ``q``, the scale of the guards' round-off tolerance. ``None`` when
-    the branch has another shape or is not steep."""
+    round-off would leave a rate of ``gamma ulp(tau)``. ``c`` puts ``w`` on the scale of
+    ``q`` (``dw/dq = 1`` at ``q = 0``), the scale of the guards' round-off tolerance,
+    whatever the residual's own scale (``q - gamma (F - tau)`` and ``q / gamma - (F -
+    tau)`` give ``w = q`` alike; ``c = |beta|`` where ``A'(0) = 0``). ``None`` when the
+    branch has another shape or is not steep."""
     parts = _affine_parts(expr)
     if parts is None or not affine_steepness(expr) >= STEEP_SPAN:
         return None
     A, beta = parts
     G = sp.expand(-A / beta)
     F0 = G.xreplace({_Q: sp.S.Zero})
-    scale = abs(beta)
-    w = sp.expand(-sp.sign(beta) * (A - A.xreplace({_Q: sp.S.Zero})))
+    slope = abs(sp.diff(A, _Q).xreplace({_Q: sp.S.Zero}))
+    scale = abs(beta) / slope if slope.is_number and slope.is_finite and slope != 0 \
+        else abs(beta)
+    w = sp.expand(scale * (G - F0))
     return _F - G, -sp.diff(G, _Q), sp.S.One, scale * (_F - F0), w
 
 

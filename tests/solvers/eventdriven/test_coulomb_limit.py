@@ -19,7 +19,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from lumped import Element, Mass, Scene, get_law, simulate
+from lumped import Element, ElementLaw, Mass, Scene, get_law, simulate
 from lumped.codegen.jit import numba_enabled
 from lumped.reference import reference_for_grid
 from lumped.scene import SineBurst, paper_F2
@@ -111,3 +111,20 @@ def test_radau5_agrees_with_the_exact_reference_across_the_coulomb_limit(log_gam
                        atol=1e-3 * rtol * scale, t_end=t_end)
         assert sol.ok and sol.stats.get("bridges", 0) == 0, sol.message
         assert _error(sol, osc, x0, forcing, t_end, dt, relative=True) <= bound
+
+
+@pytest.mark.parametrize("law", [
+    get_law("herschel_bulkley").bind(gamma=1e12, tau=1.0, n=1.0),
+    ElementLaw("my_fluid", "dashpot", "q/gamma - F + clip(F, -tau, tau)",
+               ["gamma", "tau"]).bind(gamma=1e12, tau=1.0)], ids=["herschel-bulkley", "user"])
+def test_a_law_of_the_same_shape_is_solved_alike(law):
+    # the shape is read from the law's expression: Herschel-Bulkley n = 1, and a user's
+    # Bingham scaled by 1/gamma, take the coulomb law's steps and error on forcing-F2
+    rtol = 1e-9
+    sol = simulate(_scene(law, 1.0, 100.0, 0.0, paper_F2), method="radau5", rtol=rtol,
+                   atol=1e-3 * rtol, t_end=5.0)
+    assert sol.ok and sol.stats.get("bridges", 0) == 0, sol.message
+    ref, ref_err = _paper_run("forcing-F2", None, rtol)
+    err = _error(sol, BinghamOscillator(1.0, 100.0, 1e12, 1.0), 0.0, paper_F2, 5.0, GRID_DT)
+    assert err <= 2.0 * ref_err + 1e-12
+    assert abs(sol.stats["steps"] - ref.stats["steps"]) <= 0.05 * ref.stats["steps"]
