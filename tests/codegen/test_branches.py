@@ -126,3 +126,46 @@ def test_fractional_powers_are_continued_oddly_beyond_the_branch() -> None:
     R, Rq, RF = k(0.0, 0.99)
     assert R == pytest.approx(0.01 ** 1.5, rel=1e-12) and Rq == 1.0
     assert RF == pytest.approx(-1.5 * 0.01 ** 0.5, rel=1e-12)
+
+
+@pytest.mark.parametrize(("gamma", "tau", "steep"), [
+    (1.0, 1.0, False), (10.0, 1.0, False), (20.0, 1.0, True), (1.0, 20.0, True),
+    (1e3, 1.0, True), (1e12, 1.0, True), (1e12, 0.0, False)])
+def test_an_affine_branch_is_steep_when_its_force_doubles_at_a_large_rate(gamma, tau, steep):
+    # Bingham slipping, q - gamma (F - tau): steepness S = gamma tau against 16; a
+    # Newtonian (tau = 0) loses nothing in its forward form
+    lb = law_branches(get_law("bingham").bind(gamma=gamma, tau=tau))
+    slips = [b for b in lb.info if not b.locks]  # slip-, slip+ (tau = 0: one, Newtonian)
+    assert slips and all(b.steep is steep and (b.stage is not None) is steep for b in slips)
+    assert not any(b.steep for b in lb.info if b.locks)
+
+
+def test_the_coulomb_limit_is_solved_for_its_force():
+    # gamma = 1e12: F = tau + q / gamma on the forward slip branch, its guard at the end
+    # of the slip is the rate itself (F - tau is 1e-12 q there), the other stays in F
+    lb = law_branches(get_law("bingham").bind(gamma=1e12, tau=1.0))
+    fwd, back = lb.branch(3.0, 1.0 + 3e-12), lb.branch(-3.0, -1.0 - 3e-12)
+    R, Rq, RF = lb.stage_kernel_for(fwd)(3.0, 1.5)
+    assert (R, Rq, RF) == (pytest.approx(0.5 - 3e-12, rel=1e-15), -1e-12, 1.0)
+    assert lb.stage_guards_for(fwd).codes[1] == "q"
+    assert lb.stage_guards_for(fwd)(2.0, 1.0)[0] == 2.0  # F + tau
+    assert lb.stage_guards_for(back).codes == ("-q",)
+    # the whole law in the form of the mode choice: the same zeros as the law
+    law = lb.stage_law_for(get_law("bingham").bind(gamma=1e12, tau=1.0).kernel)
+    assert law(0.0, 0.5) == (0.0, 1.0, 0.0) and law(2.0, 1.0 + 2e-12)[0] == 0.0
+
+
+def test_steepness_is_read_from_the_expression_not_the_name():
+    # the same law written as a user might: scaled by 1/gamma, the slip terms swapped;
+    # Herschel-Bulkley n = 1 is Bingham; the coulomb law's slip branch has no q
+    user = ElementLaw("my_fluid", "dashpot", "q/gamma - F + clip(F, -tau, tau)",
+                      ["gamma", "tau"])
+    for bound in (user.bind(gamma=1e9, tau=0.5),
+                  get_law("herschel_bulkley").bind(gamma=1e9, tau=0.5, n=1.0)):
+        lb = law_branches(bound)
+        assert [b.steep for b in lb.info].count(True) == 2
+        slip = lb.branch(1.0, 0.5 + 1e-9)
+        assert lb.stage_kernel_for(slip)(1.0, 0.5 + 1e-9)[0] == pytest.approx(0.0, abs=1e-16)
+        assert lb.stage_kernel_for(slip)(1.0, 0.5)[2] == 1.0
+    coulomb = law_branches(get_law("coulomb").bind(tau=1.0, r=1e12))
+    assert not any(b.steep for b in coulomb.info)

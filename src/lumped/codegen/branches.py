@@ -54,7 +54,7 @@ from sympy.core.parameters import distribute
 from .emit import KernelPrinter, build_kernel
 from .guards import compile_guards, feasible_path
 from .rewrite import magnitude_expression
-from .stage_forms import inverse_form, odd_continuation
+from .stage_forms import affine_inverse_form, inverse_form, odd_continuation
 
 __all__ = ["BranchInfo", "LawBranches", "law_branches"]
 
@@ -86,15 +86,25 @@ class BranchInfo:
     steep : bool
         ``dR_i/dF`` holds a negative power of an expression in ``F``: it is unbounded
         where that expression vanishes, e.g. Herschel-Bulkley with ``n < 1`` at its yield
-        force (``dq/dF -> infinity``), or a pole.
+        force (``dq/dF -> infinity``), or a pole. Or the branch is affine in ``F``,
+        ``R_i = A(q) + beta F``, with ``dR_i/dF`` large against ``dR_i/dq``: its
+        steepness ``S = |beta| |F_0| / |A'(0)|`` (``F_0 = -A(0)/beta``, the force at
+        ``q = 0``; :func:`~lumped.codegen.stage_forms.affine_steepness`) is at least
+        :data:`~lumped.codegen.stage_forms.STEEP_SPAN` ``= 16``, so that the forward
+        form resolves rates no finer than ``S`` ulps: Bingham slipping with ``gamma tau
+        >= 16`` (up to the Coulomb limit), a user's law of the same shape. Read from the
+        bound law's expression and numbers, never from its name.
     stage : tuple of sympy.Expr or None
         For a steep branch that can be solved for ``F``
-        (:func:`~lumped.codegen.stage_forms.inverse_form`), the residual in its
+        (:func:`~lumped.codegen.stage_forms.inverse_form`,
+        :func:`~lumped.codegen.stage_forms.affine_inverse_form`), the residual in its
         *inverse form* ``F - G(q)`` with its derivatives in ``q`` and ``F``: the same
         zero set on the branch, smooth where the forward form is steep
         (Herschel-Bulkley ``n < 1``: ``F = tau + (q/gamma)^(1/n)``, ``dG/dq -> 0`` at
-        ``q = 0``), then the steep power's base ``s F + d`` and its value ``w(q)`` on
-        the branch (``base = w^(1/p)``, continued oddly). ``None`` otherwise;
+        ``q = 0``; Bingham: ``F = tau + q/gamma``), then the steep power's base ``s F +
+        d`` and its value ``w(q)`` on the branch (``base = w^(1/p)``, continued oddly;
+        ``p = 1`` for an affine branch, ``base = c (F - F_0)``, ``w = c (G(q) - F_0)``,
+        ``c = |beta| / |A'(0)|``: ``w = q`` for Bingham). ``None`` otherwise;
         :meth:`LawBranches.stage_kernel_for` then uses the residual itself.
     """
 
@@ -136,9 +146,11 @@ class LawBranches:
             locks = sp.simplify(dF) == 0 and sp.simplify(dq) != 0
             steep = any(isinstance(p, sp.Pow) and p.exp.is_negative and p.base.has(_F)
                         for p in sp.preorder_traversal(dF))
+            stage = inverse_form(expr) if steep else (
+                None if locks else affine_inverse_form(expr))
             infos.append(BranchInfo(len(infos), expr, dq, dF, path, bool(locks),
-                                    _lock_value(expr) if locks else None, steep,
-                                    inverse_form(expr) if steep else None))
+                                    _lock_value(expr) if locks else None,
+                                    steep or stage is not None, stage))
         self.info: tuple[BranchInfo, ...] = tuple(infos)
         self.count = len(infos)
         self.branch: Callable[[float, float], int] = _build_selector(

@@ -68,7 +68,10 @@ def _guard_codes(cond: sp.Basic, want: bool, printer: KernelPrinter) -> list[str
 
 
 def _root_guard(code: str, base: sp.Expr, w: sp.Expr, printer: KernelPrinter) -> str:
-    """``code`` (a guard), or the code of ``w`` when the guard is ``c * base``, ``c > 0``."""
+    """``code`` (a guard), or the code of ``w`` when the guard is ``c * base``, ``c > 0``,
+    and of ``-w`` when ``c < 0`` (``base`` and ``w`` have the same sign on the branch:
+    ``base = w^(1/p)`` continued oddly; a Bingham dashpot slipping backwards, ``F < -tau``,
+    has the guard ``-(F + tau)`` and ``base = gamma (F + tau) = w = q``)."""
     try:
         g = sp.sympify(code, locals={"q": _Q, "F": _F, "max": sp.Max, "min": sp.Min})
     except (sp.SympifyError, TypeError, SyntaxError):
@@ -78,13 +81,15 @@ def _root_guard(code: str, base: sp.Expr, w: sp.Expr, printer: KernelPrinter) ->
         return printer.doprint(w)
     # the guard's numbers are read back from its code (17 digits), the base's are the
     # law's floats: the same numbers at two precisions, whose ratio sympy keeps symbolic
-    # (a yield force 0.024694132280711368 was not replaced: issue 11)
+    # (a yield force 0.024694132280711368 was not replaced: issue 11); the test is on the
+    # guard's scale (c d is its constant: an affine base |beta| (F - F_0) is 1e12 F_0)
     c = sp.diff(g, _F) / sp.diff(base, _F)
-    if c.is_number and c.is_positive:
+    if c.is_number and c != 0:
         rest = sp.expand(g - c * base)
         d = base.subs(_F, 0)
-        if rest.is_number and d.is_number and abs(float(rest)) <= 1e-12 * (1.0 + abs(float(d))):
-            return printer.doprint(w)
+        if rest.is_number and d.is_number and abs(float(rest)) <= 1e-12 * (
+                1.0 + abs(float(c * d))):
+            return printer.doprint(w if c.is_positive else -w)
     return code
 
 
