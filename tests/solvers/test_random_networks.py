@@ -19,7 +19,8 @@ silently) it asserts:
 
 Budget: ``ci`` runs :data:`CI_EXAMPLES` examples per method (:data:`COMPILED_EXAMPLES`
 for the methods that compile each scene); ``LUMPED_LARGE=1`` runs
-:data:`LARGE_EXAMPLES` (at least 10 000) for every method (see CHANGELOG). A method with
+:data:`LARGE_EXAMPLES` (10 000, or ``N`` with ``LUMPED_LARGE=N``) for every method (see
+CHANGELOG). A method with
 a compiled and a Python loop (:data:`LOOPED`: ``radau5``) runs its Python loop on that
 budget and both loops, which must agree, on :data:`LOOPED_BOTH_EXAMPLES` (the compiled
 loop compiles every new scene: 10 000 would take hours).
@@ -44,8 +45,10 @@ from lumped.solvers.registry import FIXED_STEP_METHODS, METHOD_REGISTRY
 from lumped.solvers.status import InconsistentInitialForce
 
 CI_EXAMPLES = 40
-LARGE_EXAMPLES = 10_000
-LARGE = os.environ.get("LUMPED_LARGE", "") not in ("", "0")
+_LARGE = os.environ.get("LUMPED_LARGE", "")
+LARGE = _LARGE not in ("", "0")
+#: ``LUMPED_LARGE=1``: 10 000 examples; ``LUMPED_LARGE=N`` (N > 1): N, a middle budget.
+LARGE_EXAMPLES = int(_LARGE) if _LARGE.isdigit() and int(_LARGE) > 1 else 10_000
 EXAMPLES = LARGE_EXAMPLES if LARGE else CI_EXAMPLES
 
 #: Registered methods that are not generic: they run only the paper's one scene.
@@ -243,7 +246,7 @@ COMPILED_EXAMPLES = LARGE_EXAMPLES if LARGE else 4
 #: each loop explicitly: the Python loop on the full budget, and on a few examples both
 #: loops, which must give the same numbers (the compiled loop compiles every new scene).
 LOOPED = ("radau5",)
-LOOPED_BOTH_EXAMPLES = 1_000 if LARGE else 4
+LOOPED_BOTH_EXAMPLES = min(1_000, LARGE_EXAMPLES) if LARGE else 4
 
 
 #: Two draws of the ``LUMPED_LARGE`` bdf1 run (session 13) against forces taken from a
