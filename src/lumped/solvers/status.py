@@ -1,5 +1,7 @@
-r"""Outcomes of a run, shared by every method: :class:`Status`, the errors, :class:`Event`
-and :class:`RawRun` (what every method runner returns, see :mod:`lumped.solvers.registry`).
+r"""The runner contract and the outcomes of a run, shared by every method: a runner is
+``runner(scene, settings: RunSettings) -> RawRun`` (see :mod:`lumped.solvers.registry`);
+:class:`Status`, the errors and :class:`Event` say how it went, and
+:func:`fixed_step_grid` checks a fixed-step method's settings.
 """
 
 from __future__ import annotations
@@ -12,6 +14,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..grid import steps_for
+
 if TYPE_CHECKING:
     from ..scene import Scene
     from .newton.options import NewtonOptions
@@ -23,6 +27,9 @@ __all__ = [
     "InconsistentInitialForce",
     "Event",
     "RawRun",
+    "RunSettings",
+    "Runner",
+    "fixed_step_grid",
 ]
 
 
@@ -165,6 +172,4 @@ def fixed_step_grid(method: str, settings: RunSettings,
     if unknown:
         raise TypeError(f"method {method!r} takes no keyword argument(s) "
                         f"{', '.join(map(repr, unknown))}")
-    from ..grid import steps_for
-
     return settings.dt, steps_for(settings.dt, settings.t_end)
