@@ -54,7 +54,9 @@ def forcing_code(forcing: Callable[[float], float] | None) -> tuple[int, float, 
 
 
 def forcing_arrays(scene: Scene, dt: float, n_steps: int):
-    """``(fkind, fpar, ftab)`` of :func:`forcing_into`."""
+    """``(fkind, fpar, ftab)`` of :func:`forcing_into` for the scene's nodes on the grid
+    ``t_n = n dt``, ``n <= n_steps`` (``ftab`` holds the sampled forcings' values by step,
+    one row when nothing is sampled)."""
     from .forcing import SineBurst
 
     N = len(scene.nodes)
@@ -67,13 +69,13 @@ def forcing_arrays(scene: Scene, dt: float, n_steps: int):
         if fn is None:
             continue
         if isinstance(fn, SineBurst):
-            fkind[i] = 2
+            fkind[i] = FORCE_SINE
             fpar[i] = (fn.amplitude, fn.omega, fn.t_off)
         elif _constant(fn):
-            fkind[i] = 1
+            fkind[i] = FORCE_CONSTANT
             fpar[i, 0] = fn.value
-        else:
-            fkind[i] = 3
+        else:  # any other callable, zero_forcing included: sampled on the step grid
+            fkind[i] = FORCE_TABLE
             col = ftab[:, i]
             for step in range(1, n_steps + 1):
                 # a non-finite value is reported by the loop when it reaches that step
