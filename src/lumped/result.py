@@ -30,7 +30,13 @@ from .post.frames import (
     ground_trace,
     relative_frame,
 )
-from .post.switching import branch_history, lock_intervals, locking_branches, switch_events
+from .post.switching import (
+    branch_history,
+    event_lock_intervals,
+    lock_intervals,
+    locking_branches,
+    switch_events,
+)
 from .solvers.status import Event, Status
 
 __all__ = ["Solution"]
@@ -224,7 +230,10 @@ class Solution:
 
     def stick_intervals(self, element: str | None = None):
         """Intervals on which a dashpot sticks (its law's active branch is a rate lock,
-        ``q = 0`` exactly), as ``[(t_start, t_end), ...]`` from sample to sample.
+        ``q = 0`` exactly), as ``[(t_start, t_end), ...]``: for a method that locates its
+        events (``radau5``), from the event into the lock to the event out of it (a
+        velocity reversal through ``q = 0`` is no stick); otherwise from sample to sample
+        (:mod:`lumped.post.switching`).
 
         Parameters
         ----------
@@ -248,8 +257,15 @@ class Solution:
         if element not in dashpots:
             raise ValueError(f"`element` must name a dashpot of the scene {dashpots}, "
                              f"got {element!r}")
-        return lock_intervals(self.t, self._history()[element],
-                              locking_branches(scene, element))
+        locking = locking_branches(scene, element)
+        if self.located_events is not None:  # the method located its events: use them
+            own = [e for e in self.located_events
+                   if e.element == element and e.kind == "switch"]
+            initial = (min(own, key=lambda e: e.t).from_branch if own
+                       else int(self._history()[element][-1]))
+            return event_lock_intervals(own, element, locking, float(self.t[0]),
+                                        float(self.t[-1]), initial)
+        return lock_intervals(self.t, self._history()[element], locking)
 
     def energy(self, frame: str = "relative") -> EnergyLedger:
         """The energy ledger over time: kinetic energy per mass, stored energy per spring,

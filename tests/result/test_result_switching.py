@@ -1,5 +1,5 @@
 """Solution.events and Solution.stick_intervals() of fixed-step runs, against the exact
-event-driven reference."""
+event-driven reference, and of radau5 (located events) against a fine fixed step."""
 
 from __future__ import annotations
 
@@ -90,3 +90,25 @@ def test_stick_intervals_agree_with_the_velocity_of_the_closed_form(m, k, gamma,
         stuck[(sol.t >= a) & (sol.t <= b)] = True
     v, F = sol.v["mass"], sol.F["dashpot"]
     assert np.array_equal(stuck, (v == 0.0) & (np.abs(F) <= tau))
+
+
+def test_radau5_stick_intervals_come_from_its_located_events():
+    """A Coulomb slider on a spring, pushed by a sine: it sticks from rest until the load
+    exceeds its yield force, then only reverses (slip to slip through v = 0). radau5's
+    intervals are the same on its step points and on an output grid, and agree with
+    bdf2 at a fine step; the reversals are no sticks (each came out as a zero-length
+    interval on the step points, and the first stick as (0, 0))."""
+    scene = Scene([Mass("m", m=1.0)],
+                  [Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m"),
+                   Element("f", get_law("coulomb").bind(tau=1.0, r=10.0), "ground", "m")],
+                  {"m": SineBurst(3.0, 3.0, 4.0)})
+    steps = simulate(scene, method="radau5", t_end=3.0, rtol=1e-8)
+    grid = simulate(scene, method="radau5", t_end=3.0, rtol=1e-8, dt=1e-3)
+    fine = simulate(scene, method="bdf2", t_end=3.0, dt=1e-4)
+    assert len([e for e in steps.events if e.element == "f"]) >= 3  # the reversals
+    got = steps.stick_intervals("f")
+    assert got == grid.stick_intervals("f")
+    want = [(a, b) for a, b in fine.stick_intervals("f") if b - a > 5e-4]
+    assert len(got) == len(want) == 1
+    (a, b), (a_f, b_f) = got[0], want[0]
+    assert a == a_f == 0.0 and abs(b - b_f) <= 2e-4 and b > 0.1

@@ -15,6 +15,12 @@ kernel, and
 * a **stick interval** of a dashpot is a maximal run of consecutive samples on a rate
   lock, reported as ``(t_first, t_last)`` of the run (a run of a single sample gives an
   interval of length zero: the discrete motion stopped at that sample only).
+
+For a method that locates its events (``radau5``), the stick intervals come from the
+events themselves (:func:`event_lock_intervals`): a stick starts at ``t = 0`` or at the
+event into a locking branch and ends at the event out of it, at the located times. A
+velocity reversal (slip to slip through ``q = 0``) is no stick, although the sample at
+its event has ``q = 0`` and a force within the lock's range.
 """
 
 from __future__ import annotations
@@ -26,7 +32,8 @@ from lumped.solvers import Event
 
 from .columns import F_col, elongations
 
-__all__ = ["branch_history", "switch_events", "lock_intervals", "locking_branches"]
+__all__ = ["branch_history", "switch_events", "lock_intervals", "locking_branches",
+           "event_lock_intervals"]
 
 
 def _branches(law):
@@ -78,3 +85,23 @@ def lock_intervals(t: np.ndarray, idx: np.ndarray,
     starts = np.flatnonzero(edges == 1)
     ends = np.flatnonzero(edges == -1) - 1
     return [(float(t[a]), float(t[b])) for a, b in zip(starts, ends, strict=True)]
+
+
+def event_lock_intervals(events, element: str, locking: frozenset[int], t0: float,
+                         t_end: float, initial: int) -> list[tuple[float, float]]:
+    """The intervals on which ``element`` is on a branch in ``locking``, from its located
+    switching events (``kind == "switch"``, in time order): ``initial`` is its branch at
+    ``t0``; a stick runs from ``t0`` or the event into a locking branch to the event out of
+    it, or to ``t_end``."""
+    out: list[tuple[float, float]] = []
+    start = t0 if initial in locking else None
+    for ev in sorted((e for e in events if e.element == element and e.kind == "switch"),
+                     key=lambda e: e.t):
+        if start is None and ev.to_branch in locking:
+            start = ev.t
+        elif start is not None and ev.to_branch not in locking:
+            out.append((start, ev.t))
+            start = None
+    if start is not None:
+        out.append((start, t_end))
+    return out
