@@ -96,16 +96,13 @@ def resolve_method(scene: Scene, method: str, *, dt: float | None = None,
     """The concrete method ``auto`` stands for on ``scene`` (others unchanged): what the
     user gave decides.
 
-    ======================  =========================================================
-    given                   ``auto`` runs
-    ======================  =========================================================
-    ``rtol`` and/or ``atol`` ``radau5`` (with ``dt`` too: its dense output sampled on
-                            ``t_n = n dt``)
-    ``dt`` alone            a fixed-step method at that step: ``closed-bdf2`` on the
-                            paper's oscillator (one mass, a ``linear_spring`` and a
-                            ``bingham`` dashpot to ground), else ``bdf2``
-    neither                 ``radau5`` at its default tolerances
-    ======================  =========================================================
+    ``rtol`` and/or ``atol`` (with or without ``dt``)
+        ``radau5``; with ``dt``, its dense output sampled on ``t_n = n dt``.
+    ``dt`` alone
+        A fixed-step method at that step: ``closed-bdf2`` on the paper's oscillator (one
+        mass, a ``linear_spring`` and a ``bingham`` dashpot to ground), else ``bdf2``.
+    neither
+        ``radau5`` at its default tolerances.
 
     A scene with a law ``radau5`` does not take
     (:func:`lumped.solvers.eventdriven.setup.scope_error`) runs ``bdf2`` whatever was
