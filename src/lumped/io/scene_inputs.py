@@ -26,7 +26,7 @@ from typing import Any
 
 from ..scene.forcing import SineBurst
 
-__all__ = ["forcing_input", "ground_input", "resolve_files", "GROUND_KEYS"]
+__all__ = ["forcing_input", "ground_input", "resolve_files", "checked_number", "GROUND_KEYS"]
 
 #: Keys of the ``[ground]`` table.
 GROUND_KEYS = ("motion", "v0", "x0")
@@ -40,7 +40,8 @@ _KEYS = {
 _MOTION = ("acceleration", "velocity", "displacement")
 
 
-def _number(value: object, key: str, fail) -> float:
+def checked_number(value: object, key: str, fail) -> float:
+    """``value`` as a finite float, else ``fail(key, why)`` raised (a bool is no number)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise fail(key, f"must be a number, got {value!r}")
     x = float(value)
@@ -64,7 +65,7 @@ def _input(spec: object, key: str, fail, base: Path, quantities: tuple[str, ...]
            default: str) -> tuple[str, Any]:
     """``(quantity, value)`` of one input (see the module notes)."""
     if isinstance(spec, (int, float)) and not isinstance(spec, bool):
-        return default, _number(spec, key, fail)
+        return default, checked_number(spec, key, fail)
     if isinstance(spec, str):
         return default, _expression(spec, key, fail)
     if not isinstance(spec, dict):
@@ -89,11 +90,11 @@ def _input(spec: object, key: str, fail, base: Path, quantities: tuple[str, ...]
         for k in ("amplitude", "omega"):
             if k not in spec:
                 raise fail(f"{key} {k}", "missing")
-        amp = _number(spec["amplitude"], f"{key} amplitude", fail)
-        omega = _number(spec["omega"], f"{key} omega", fail)
+        amp = checked_number(spec["amplitude"], f"{key} amplitude", fail)
+        omega = checked_number(spec["omega"], f"{key} omega", fail)
         t_off = spec.get("t_off", math.inf)
         if t_off != math.inf:
-            t_off = _number(t_off, f"{key} t_off", fail)
+            t_off = checked_number(t_off, f"{key} t_off", fail)
         try:
             return quantity, SineBurst(amplitude=amp, omega=omega, t_off=t_off)
         except (TypeError, ValueError) as err:
@@ -121,7 +122,7 @@ def _table(spec: dict, key: str, fail, base: Path, quantity: str):
             raise fail(f"{key} units", f"must be a unit name, got {spec['units']!r}")
         options["units"] = spec["units"]
     if "factor" in spec:
-        options["factor"] = _number(spec["factor"], f"{key} factor", fail)
+        options["factor"] = checked_number(spec["factor"], f"{key} factor", fail)
     if "outside" in spec:
         options["outside"] = spec["outside"]
     if fmt == "csv":
@@ -159,8 +160,8 @@ def ground_input(tbl: object, key: str, fail, base: Path):
         raise fail(f"{key} motion", "missing")
     quantity, value = _input(tbl["motion"], f"{key} motion", fail, base, _MOTION,
                              "acceleration")
-    v0 = _number(tbl.get("v0", 0.0), f"{key} v0", fail)
-    x0 = _number(tbl.get("x0", 0.0), f"{key} x0", fail)
+    v0 = checked_number(tbl.get("v0", 0.0), f"{key} v0", fail)
+    x0 = checked_number(tbl.get("x0", 0.0), f"{key} x0", fail)
     try:
         return GroundMotion(**{quantity: value}, v0=v0, x0=x0)
     except (TypeError, ValueError) as err:

@@ -32,13 +32,12 @@ table's ``file`` is relative to the scene file's folder.
 
 from __future__ import annotations
 
-import math
 import tomllib
 from pathlib import Path
 from typing import Any
 
 from ..scene import Element, Junction, Mass, Scene
-from .scene_inputs import forcing_input, ground_input
+from .scene_inputs import checked_number, forcing_input, ground_input
 
 __all__ = ["load_scene", "read_scene_file", "scene_from_dict", "SceneFileError",
            "SETTINGS_KEYS"]
@@ -119,10 +118,10 @@ def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>",
         key = f"[nodes.{name}]"
         _check_table(spec, key, _NODE_KEYS, fail)
         try:
-            x0 = _number(spec.get("x0", 0.0), f"{key} x0", fail)
+            x0 = checked_number(spec.get("x0", 0.0), f"{key} x0", fail)
             if "mass" in spec:
-                m = _number(spec["mass"], f"{key} mass", fail)
-                v0 = _number(spec.get("v0", 0.0), f"{key} v0", fail)
+                m = checked_number(spec["mass"], f"{key} mass", fail)
+                v0 = checked_number(spec.get("v0", 0.0), f"{key} v0", fail)
                 nodes.append(Mass(name, m=m, x0=x0, v0=v0))
             else:
                 if "v0" in spec:
@@ -150,7 +149,7 @@ def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>",
             raise fail(f"{key} between", f"must be a list of two node names, got {between!r}")
         F0 = spec.get("F0")
         if F0 is not None:
-            F0 = _number(F0, f"{key} F0", fail)
+            F0 = checked_number(F0, f"{key} F0", fail)
         try:
             elements.append(Element(name, law, between[0], between[1], F0=F0))
         except (TypeError, ValueError) as err:
@@ -189,20 +188,11 @@ def _settings(tbl: object, fail) -> dict[str, Any]:
         out["method"] = tbl["method"]
     for k in ("dt", "t_end", "rtol", "atol"):
         if k in tbl:
-            val = _number(tbl[k], f"[solver] {k}", fail)
+            val = checked_number(tbl[k], f"[solver] {k}", fail)
             if not val > 0.0:
                 raise fail(f"[solver] {k}", f"must be positive, got {val!r}")
             out[k] = val
     return out
-
-
-def _number(value: object, key: str, fail) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise fail(key, f"must be a number, got {value!r}")
-    x = float(value)
-    if not math.isfinite(x):
-        raise fail(key, f"must be finite, got {value!r}")
-    return x
 
 
 def _law(spec: dict, key: str, fail):
@@ -219,7 +209,7 @@ def _law(spec: dict, key: str, fail):
     params = spec.get("parameters", {})
     if not isinstance(params, dict):
         raise fail(f"{key} parameters", f"must be a table of numbers, got {params!r}")
-    values = {k: _number(v, f"{key} parameters.{k}", fail) for k, v in params.items()}
+    values = {k: checked_number(v, f"{key} parameters.{k}", fail) for k, v in params.items()}
     try:
         return law.bind(**values)
     except (TypeError, ValueError) as err:
