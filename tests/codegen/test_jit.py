@@ -63,14 +63,15 @@ def test_element_laws_and_branches_match_python(js, q, F):
     m = j.module
     out = np.empty(4)
     for e, el in enumerate(scene.elements):
-        _agree(m.element_law(e, q, F), el.law.kernel(q, F))
-        assert m.element_magnitude(e, q, F) == el.law.kernel.magnitude(q, F)
+        c = j.consts
+        _agree(m.element_law(e, q, F, c), el.law.kernel(q, F))
+        assert m.element_magnitude(e, q, F, c) == el.law.kernel.magnitude(q, F)
         lb = law_branches(el.law)
         assert m.branch_count(e) == lb.count
-        assert m.active_branch(e, q, F) == lb.branch(q, F)
+        assert m.active_branch(e, q, F, c) == lb.branch(q, F)
         for i in range(lb.count):
-            _agree(m.branch_law(e, i, q, F), lb.kernel_for(i)(q, F))
-            k = m.branch_guards(e, i, q, F, out)
+            _agree(m.branch_law(e, i, q, F, c), lb.kernel_for(i)(q, F))
+            k = m.branch_guards(e, i, q, F, out, c)
             assert tuple(out[:k]) == lb.guards_for(i)(q, F)
 
 
@@ -79,25 +80,62 @@ def test_scene_laws_all_elements_at_once(js):
     q = np.array([0.3, 0.7, -0.2, 0.0])
     F = np.array([1.5, 2.0, -0.4, 0.2])
     R, Rq, RF = np.empty(4), np.empty(4), np.empty(4)
-    j.module.scene_laws(q, F, R, Rq, RF)
+    j.module.scene_laws(q, F, R, Rq, RF, j.consts)
     for e, el in enumerate(scene.elements):
         assert (R[e], Rq[e], RF[e]) == el.law.kernel(q[e], F[e])
 
 
-def test_same_laws_same_module_and_parameters_are_baked_in(js):
+def test_one_module_per_structure_the_numbers_are_data(js):
     scene, j = js
     again = Scene([Mass("m", 5.0, x0=1.0), Mass("n", 1.0, v0=2.0)], scene.elements)
     assert jit_scene(again).module is j.module  # masses and state are data
-    other = Scene(scene.nodes, [Element("d", get_law("bingham").bind(gamma=2.0, tau=1.5),
-                                        "ground", "m")])
-    assert scene_source(other)[0] != scene_source(scene)[0]
+    # new numbers in every law: the same module, other constants
+    numbers = Scene(scene.nodes, [
+        Element("d", get_law("bingham").bind(gamma=2.5, tau=1.25), "ground", "m"),
+        Element("s", get_law("string_spring").bind(k=13.0, L=0.75), "m", "n"),
+        Element("c", CUBIC.bind(k=3.5, c=0.25), "ground", "n"),
+        Element("d2", get_law("bingham").bind(gamma=2.25, tau=0.5), "n", "ground")])
+    jn = jit_scene(numbers)
+    assert jn.module is j.module
+    assert scene_source(numbers).source == scene_source(scene).source
+    assert not np.array_equal(jn.consts, j.consts)
+    # another structure (one element less): another module
+    other = Scene(scene.nodes, scene.elements[:3])
+    assert scene_source(other).source != scene_source(scene).source
+
+
+@given(q=finite, F=finite, gamma=st.floats(1.5, 1e3), tau=st.floats(0.01, 10.0),
+       k=st.floats(0.1, 1e4), c=st.floats(0.01, 10.0))
+def test_new_numbers_reuse_the_module_and_match_python(js, q, F, gamma, tau, k, c):
+    # the compiled functions given another parameter set at run time compute what that
+    # set's own Python kernels compute
+    scene, j = js
+    numbers = Scene(scene.nodes, [
+        Element("d", get_law("bingham").bind(gamma=gamma, tau=tau), "ground", "m"),
+        Element("s", get_law("string_spring").bind(k=k, L=0.5), "m", "n"),
+        Element("c", CUBIC.bind(k=k, c=c), "ground", "n"),
+        Element("d2", get_law("bingham").bind(gamma=gamma, tau=tau), "n", "ground")])
+    source = scene_source(numbers)
+    if source.source != scene_source(scene).source:
+        return  # a value that changes the code (a steep branch's inverse form, say)
+    jn = jit_scene(numbers)
+    assert jn.module is j.module
+    out = np.empty(4)
+    for e, el in enumerate(numbers.elements):
+        _agree(j.module.element_law(e, q, F, jn.consts), el.law.kernel(q, F))
+        lb = law_branches(el.law)
+        assert j.module.active_branch(e, q, F, jn.consts) == lb.branch(q, F)
+        for i in range(lb.count):
+            _agree(j.module.branch_law(e, i, q, F, jn.consts), lb.stage_kernel_for(i)(q, F))
+            n = j.module.branch_guards(e, i, q, F, out, jn.consts)
+            assert tuple(out[:n]) == lb.stage_guards_for(i)(q, F)
 
 
 def test_module_file_is_named_by_its_source_hash(js):
     scene, j = js
     path = Path(j.module.__file__)
     assert path.parent == cache_dir() / "jit"
-    source = scene_source(scene)[0]
+    source = scene_source(scene).source
     assert path.read_text(encoding="utf-8") == source
     assert hashlib.sha256(source.encode()).hexdigest()[:24] in path.name
 
@@ -148,7 +186,7 @@ def test_unwritable_cache_falls_back_to_a_temporary_directory(monkeypatch, tmp_p
     with pytest.warns(UserWarning, match="cannot write the compiled-code cache"):
         j = jit_scene(scene)
     assert not Path(j.module.__file__).is_relative_to(blocker)
-    assert j.module.element_law(0, 0.5, 1.0) == scene.elements[0].law.kernel(0.5, 1.0)
+    assert j.module.element_law(0, 0.5, 1.0, j.consts) == scene.elements[0].law.kernel(0.5, 1.0)
 
 
 @pytest.mark.parametrize("n", [0.5, 2.0])
@@ -162,10 +200,12 @@ def test_square_roots_and_squares_give_pythons_numbers(n):
     law = get_law("herschel_bulkley").bind(gamma=0.11192851693127487,
                                            tau=0.01625835211236202, n=n)
     scene = Scene([Mass("m", 1.0)], [Element("d", law, "ground", "m")])
-    m = jit_scene(scene).module
+    js = jit_scene(scene)
+    m = js.module
     rng = np.random.default_rng(7)
     F = 0.01625835211236202 + rng.random(4000) * 10.0 ** rng.uniform(-12, 2, 4000)
     q = rng.standard_normal(4000)
     for qi, Fi in zip(q.tolist(), F.tolist(), strict=True):
         for sign in (1.0, -1.0):
-            assert m.element_law(0, sign * qi, sign * Fi) == law.kernel(sign * qi, sign * Fi)
+            assert (m.element_law(0, sign * qi, sign * Fi, js.consts)
+                    == law.kernel(sign * qi, sign * Fi))

@@ -4,11 +4,15 @@ The compiled loops are compiled once for every scene; a scene's generated kernel
 them as plain integers, the addresses of their C wrappers, and :func:`function_at` turns
 such an address back into a callable first-class function of a known type:
 
-* :data:`BRANCH_LAW_TYPE` (:func:`law_type`): ``branch_law(e, i, q, F) -> (R, dR/dq,
+* :data:`BRANCH_LAW_TYPE` (:func:`law_type`): ``branch_law(e, i, q, F, c) -> (R, dR/dq,
   dR/dF)``, element ``e`` held on branch ``i``;
-* :func:`guards_type`: ``branch_guards(e, i, q, F, out) -> count``, the guard values of
-  element ``e`` on branch ``i`` written into ``out``;
-* :func:`branch_type`: ``active_branch(e, q, F) -> int``.
+* :func:`guards_type`: ``branch_guards(e, i, q, F, out, c) -> count``, the guard values
+  of element ``e`` on branch ``i`` written into ``out``;
+* :func:`branch_type`: ``active_branch(e, q, F, c) -> int``.
+
+``c`` is the scene's array of law constants (:attr:`lumped.codegen.jit.JitScene.consts`):
+the laws' numbers reach the compiled code at run time, so one compiled module serves
+every value of them.
 """
 
 from __future__ import annotations
@@ -21,8 +25,9 @@ if numba_module is not None:
     from numba import types as _T
 
     _f8 = _T.float64
-    #: ``branch_law(e, i, q, F) -> (R, dR/dq, dR/dF)`` as a numba function type.
-    BRANCH_LAW_TYPE = _T.FunctionType(_T.UniTuple(_f8, 3)(_T.int64, _T.int64, _f8, _f8))
+    #: ``branch_law(e, i, q, F, c) -> (R, dR/dq, dR/dF)`` as a numba function type.
+    BRANCH_LAW_TYPE = _T.FunctionType(_T.UniTuple(_f8, 3)(_T.int64, _T.int64, _f8, _f8,
+                                                          _f8[::1]))
 else:  # pragma: no cover - without numba
     BRANCH_LAW_TYPE = None
 
@@ -52,17 +57,17 @@ def function_at(ftype):
 
 
 def law_type():
-    """The numba function type of ``branch_law(e, i, q, F) -> (R, dR/dq, dR/dF)``."""
+    """The numba function type of ``branch_law(e, i, q, F, c) -> (R, dR/dq, dR/dF)``."""
     return BRANCH_LAW_TYPE
 
 
 def guards_type():
-    """The numba function type of ``branch_guards(e, i, q, F, out) -> count``."""
+    """The numba function type of ``branch_guards(e, i, q, F, out, c) -> count``."""
     f8 = _T.float64
-    return _T.FunctionType(_T.int64(_T.int64, _T.int64, f8, f8, f8[::1]))
+    return _T.FunctionType(_T.int64(_T.int64, _T.int64, f8, f8, f8[::1], f8[::1]))
 
 
 def branch_type():
-    """The numba function type of ``active_branch(e, q, F) -> int``."""
+    """The numba function type of ``active_branch(e, q, F, c) -> int``."""
     f8 = _T.float64
-    return _T.FunctionType(_T.int64(_T.int64, f8, f8))
+    return _T.FunctionType(_T.int64(_T.int64, f8, f8, f8[::1]))

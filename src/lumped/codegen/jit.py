@@ -79,6 +79,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
+from typing import NamedTuple
 
 import numpy as np
 
@@ -165,6 +166,114 @@ def rename_function(source: str, name: str) -> str:
     return f"@njit(cache=True)\ndef {name}{args}\n{rest}"
 
 
+#: A float literal of the generated code (``repr`` of a float: a point or an exponent),
+#: not part of a name or an index.
+_FLOAT_LITERAL = re.compile(r"(?<![\w.])(?:\d+\.\d*(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])")
+
+
+def lift_constants(body: str) -> tuple[str, list[float]]:
+    """``body`` with its ``k``-th float literal replaced by the name ``_c<k>``, and the
+    literals' values in order.
+
+    A literal's text is ``repr`` of a float, so ``float(text)`` is the very double the
+    literal stood for: the code given the values at run time computes what the code with
+    the literals computed, bit for bit.
+    """
+    values: list[float] = []
+
+    def slot(m: re.Match) -> str:
+        values.append(float(m.group(0)))
+        return f"_c{len(values) - 1}"
+
+    return _FLOAT_LITERAL.sub(slot, body), values
+
+
+def lift_function(source: str, name: str, *, inline: bool = False) -> tuple[str, list[float]]:
+    """:func:`rename_function` with the body's float literals lifted
+    (:func:`lift_constants`) into trailing arguments ``_c0, _c1, ...``: the *template* of
+    the function (one text for every value of the law's parameters) and those values."""
+    head, rest = _exact_powers(source).split("\n", 1)
+    args = head[head.index("(") + 1:head.rindex(")")]
+    body, values = lift_constants(rest)
+    extra = "".join(f", _c{k}" for k in range(len(values)))
+    deco = '@njit(cache=True, inline="always")' if inline else "@njit(cache=True)"
+    return f"{deco}\ndef {name}({args}{extra}):\n{body}", values
+
+
+def slot_arguments(array: str, start: int, count: int) -> str:
+    """``", array[start], array[start + 1], ..."``: the lifted values of one call."""
+    return "".join(f", {array}[{start + k}]" for k in range(count))
+
+
+@dataclass(frozen=True)
+class LawTemplate:
+    """A bound law's generated functions with their float literals lifted
+    (:func:`lift_function`).
+
+    ``functions`` holds ``(stem, text, count)`` per function in the order ``law, mag,
+    select, branch_0, guards_0, branch_1, guards_1, ...``; each text defines its function
+    with ``@J@`` where the law's index in the module goes (``law_@J@``,
+    ``branch_@J@_0``). ``values`` are the lifted literals in that order: the run-time
+    constants of one element. Bound laws with equal ``functions`` share compiled code.
+    """
+
+    functions: tuple[tuple[str, str, int], ...]
+    values: tuple[float, ...]
+    branches: int
+
+    def offset(self, stem: str) -> int:
+        """Where function ``stem``'s values start in :attr:`values`."""
+        at = 0
+        for s, _, count in self.functions:
+            if s == stem:
+                return at
+            at += count
+        raise KeyError(stem)
+
+    def count(self, stem: str) -> int:
+        """How many values function ``stem`` takes."""
+        return next(c for s, _, c in self.functions if s == stem)
+
+    def call(self, stem: str, j: int, args: str, array: str, start: int) -> str:
+        """The call of function ``stem`` of law ``j`` on ``args``, its values read from
+        ``array`` where the element's values start at ``start``."""
+        name = f"{stem}_{j}" if "_" not in stem else stem.replace("_", f"_{j}_", 1)
+        return f"{name}({args}{slot_arguments(array, start + self.offset(stem), self.count(stem))})"
+
+    def source(self, j: int) -> list[str]:
+        """The definitions of law ``j``'s functions."""
+        return [text.replace("@J@", str(j)) for _, text, _ in self.functions]
+
+
+_TEMPLATES: dict[tuple, LawTemplate] = {}
+
+
+def law_template(bound) -> LawTemplate:
+    """The :class:`LawTemplate` of a bound law given as a sympy residual (memoised by
+    its generated sources)."""
+    ksrc, msrc = kernel_sources(bound)
+    selector, branches = _branches(bound)
+    key = (ksrc, msrc, selector, tuple(branches))
+    hit = _TEMPLATES.get(key)
+    if hit is not None:
+        return hit
+    parts = [("law", "law_@J@", ksrc), ("mag", "mag_@J@", msrc),
+             ("select", "select_@J@", selector)]
+    for i, (bsrc, codes) in enumerate(branches):
+        lines = ["def guards(q, F, out):"]
+        lines += [f"    out[{m}] = {code}" for m, code in enumerate(codes)]
+        lines += [f"    return {len(codes)}", ""]
+        parts += [(f"branch_{i}", f"branch_@J@_{i}", bsrc),
+                  (f"guards_{i}", f"guards_@J@_{i}", "\n".join(lines))]
+    functions, values = [], []
+    for stem, name, src in parts:
+        text, vals = lift_function(src, name)
+        functions.append((stem, text, len(vals)))
+        values += vals
+    hit = _TEMPLATES[key] = LawTemplate(tuple(functions), tuple(values), len(branches))
+    return hit
+
+
 def _branches(bound):
     """``(selector source, [(kernel source, guard codes), ...])`` of a law's smooth
     branches (:func:`lumped.codegen.branches.law_branches`; the kernels in the form the
@@ -176,35 +285,63 @@ def _branches(bound):
                                   for i in range(lb.count)]
 
 
-def scene_source(scene) -> tuple[str, list[int]]:
-    """The generated module's source for ``scene`` and the element -> law index map."""
-    E = len(scene.elements)
-    laws: list[tuple[str, str]] = []
-    bounds = []
+class SceneSource(NamedTuple):
+    """A scene's generated module: ``source`` (its text, the same for every value of the
+    scene's numbers), ``law_index`` (element -> law ``j`` of the module), ``consts`` (the
+    run-time constants of the laws, element after element) and ``offsets`` (where
+    element ``e``'s constants start in ``consts``; its law kernel's come first)."""
+
+    source: str
+    law_index: list[int]
+    consts: np.ndarray
+    offsets: list[int]
+
+
+def scene_templates(scene) -> tuple[list[LawTemplate], list[int], np.ndarray, list[int]]:
+    """The distinct law templates of ``scene``, the element -> template map, the run-time
+    constants and each element's offset into them (see :class:`SceneSource`)."""
+    templates: list[LawTemplate] = []
     law_index: list[int] = []
+    offsets: list[int] = []
+    values: list[float] = []
     for el in scene.elements:
-        srcs = kernel_sources(el.law)
-        if srcs not in laws:
-            laws.append(srcs)
-            bounds.append(el.law)
-        law_index.append(laws.index(srcs))
+        t = law_template(el.law)
+        keys = [u.functions for u in templates]
+        if t.functions not in keys:
+            templates.append(t)
+            keys.append(t.functions)
+        law_index.append(keys.index(t.functions))
+        offsets.append(len(values))
+        values += t.values
+    return templates, law_index, np.array(values + [0.0], dtype=float), offsets
+
+
+def scene_source(scene) -> SceneSource:
+    """The generated module of ``scene`` (see :class:`SceneSource`)."""
+    E = len(scene.elements)
+    templates, law_index, consts, offsets = scene_templates(scene)
     L = ['"""Generated by lumped.codegen.jit for one scene: do not edit."""',
          "import math", "", "from lumped.codegen.jit import njit", ""]
-    for j, (ksrc, msrc) in enumerate(laws):
-        L += ["", rename_function(ksrc, f"law_{j}"), "", rename_function(msrc, f"mag_{j}")]
-    for name, prefix, nan in (("element_law", "law", "math.nan, math.nan, math.nan"),
-                              ("element_magnitude", "mag", "math.nan")):
-        L += ["", "@njit(cache=True)", f"def {name}(e, q, F):"]
-        L += [f"    if e == {e}:\n        return {prefix}_{law_index[e]}(q, F)"
-              for e in range(E)]
+    for j, t in enumerate(templates):
+        for text in t.source(j):
+            L += ["", text]
+
+    def call(e: int, stem: str, args: str, array: str = "c", base: int = 0) -> str:
+        return templates[law_index[e]].call(stem, law_index[e], args, array,
+                                            base + offsets[e])
+
+    for name, stem, nan in (("element_law", "law", "math.nan, math.nan, math.nan"),
+                            ("element_magnitude", "mag", "math.nan")):
+        L += ["", "@njit(cache=True)", f"def {name}(e, q, F, c):"]
+        L += [f"    if e == {e}:\n        return {call(e, stem, 'q, F')}" for e in range(E)]
         L += [f"    return {nan}", ""]
-    L += ["@njit(cache=True)", "def scene_laws(q, F, out_R, out_Rq, out_RF):"]
+    L += ["@njit(cache=True)", "def scene_laws(q, F, out_R, out_Rq, out_RF, c):"]
     for e in range(E):
-        L += [f"    out_R[{e}], out_Rq[{e}], out_RF[{e}] = law_{law_index[e]}(q[{e}], F[{e}])"]
+        L += [f"    out_R[{e}], out_Rq[{e}], out_RF[{e}] = {call(e, 'law', f'q[{e}], F[{e}]')}"]
     L += ["    return None", ""]
-    L += _evaluate_source(scene, law_index)
-    L += _branch_section(bounds, law_index)
-    return "\n".join(L), law_index
+    L += _evaluate_source(scene, call)
+    L += _branch_section(templates, law_index, call)
+    return SceneSource("\n".join(L), law_index, consts, offsets)
 
 
 def end_values_source(kind: str, a: int, b: int, x: Callable[[int], str],
@@ -224,8 +361,9 @@ def end_values_source(kind: str, a: int, b: int, x: Callable[[int], str],
     return end(b), end(a), ("h" if kind == "spring" else "1.0")
 
 
-def _evaluate_source(scene, law_index: list[int]) -> list[str]:
-    """The unrolled step system (the twin of the reference's generated ``evaluate``)."""
+def _evaluate_source(scene, call: Callable[..., str]) -> list[str]:
+    """The unrolled step system (the twin of the reference's generated ``evaluate``); the
+    laws' constants are read from ``p`` after its ``1 + 4 N`` step parameters."""
     N = len(scene.nodes)
     masses = scene.masses
     xh = 1 + 2 * N
@@ -240,12 +378,11 @@ def _evaluate_source(scene, law_index: list[int]) -> list[str]:
             L += [f"    fi = {fi}", f"    G{i} = -fi", f"    S{i} = abs(fi)"]
     for e, el in enumerate(scene.elements):
         k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
-        j = law_index[e]
         qb, qa, dq = end_values_source(el.kind, a, b, lambda i: f"p[{xh + i}]",
                                        lambda i: f"u[{i}]")
-        L += [f"    q = {qb} - {qa}", f"    Fe = u[{k}]", f"    R, Rq, RF = law_{j}(q, Fe)",
+        L += [f"    q = {qb} - {qa}", f"    Fe = u[{k}]", f"    R, Rq, RF = {call(e, 'law', 'q, Fe', 'p', 1 + 4 * N)}",
               f"    G{k} = R", "    lin = abs(Rq * q) + abs(RF * Fe)", "    if roundoff:",
-              f"        M = mag_{j}(q, Fe)",
+              f"        M = {call(e, 'mag', 'q, Fe', 'p', 1 + 4 * N)}",
               f"        S{k} = M if (M > lin and M != math.inf) else lin", "    else:",
               f"        S{k} = lin", f"    g = Rq * {dq}", f"    J[{k}, {k}] = RF"]
         if a >= 0:
@@ -260,35 +397,26 @@ def _evaluate_source(scene, law_index: list[int]) -> list[str]:
     return L
 
 
-def _branch_section(bounds: list, law_index: list[int]) -> list[str]:
+def _branch_section(templates: list[LawTemplate], law_index: list[int],
+                    call: Callable[..., str]) -> list[str]:
     """``active_branch``, ``branch_count``, ``branch_law`` and ``branch_guards``."""
-    L: list[str] = []
-    counts = []
-    for j, bound in enumerate(bounds):
-        selector, branches = _branches(bound)
-        counts.append(len(branches))
-        L += ["", rename_function(selector, f"select_{j}")]
-        for i, (ksrc, codes) in enumerate(branches):
-            L += ["", rename_function(ksrc, f"branch_{j}_{i}"), "", "@njit(cache=True)",
-                  f"def guards_{j}_{i}(q, F, out):"]
-            L += [f"    out[{m}] = {code}" for m, code in enumerate(codes)]
-            L += [f"    return {len(codes)}"]
     E = len(law_index)
-    L += ["", "@njit(cache=True)", "def active_branch(e, q, F):"]
-    L += [f"    if e == {e}:\n        return select_{law_index[e]}(q, F)" for e in range(E)]
+    counts = [templates[law_index[e]].branches for e in range(E)]
+    L = ["", "@njit(cache=True)", "def active_branch(e, q, F, c):"]
+    L += [f"    if e == {e}:\n        return {call(e, 'select', 'q, F')}" for e in range(E)]
     L += ["    return -1", "", "@njit(cache=True)", "def branch_count(e):"]
-    L += [f"    if e == {e}:\n        return {counts[law_index[e]]}" for e in range(E)]
-    L += ["    return 0", "", "@njit(cache=True)", "def branch_law(e, i, q, F):"]
+    L += [f"    if e == {e}:\n        return {counts[e]}" for e in range(E)]
+    L += ["    return 0", "", "@njit(cache=True)", "def branch_law(e, i, q, F, c):"]
     for e in range(E):
-        j = law_index[e]
-        for i in range(counts[j]):
-            L += [f"    if e == {e} and i == {i}:", f"        return branch_{j}_{i}(q, F)"]
+        for i in range(counts[e]):
+            L += [f"    if e == {e} and i == {i}:",
+                  f"        return {call(e, f'branch_{i}', 'q, F')}"]
     L += ["    return math.nan, math.nan, math.nan", "", "@njit(cache=True)",
-          "def branch_guards(e, i, q, F, out):"]
+          "def branch_guards(e, i, q, F, out, c):"]
     for e in range(E):
-        j = law_index[e]
-        for i in range(counts[j]):
-            L += [f"    if e == {e} and i == {i}:", f"        return guards_{j}_{i}(q, F, out)"]
+        for i in range(counts[e]):
+            L += [f"    if e == {e} and i == {i}:",
+                  f"        return {call(e, f'guards_{i}', 'q, F, out')}"]
     L += ["    return 0", ""]
     return L
 
@@ -318,16 +446,28 @@ def _write_once(path: Path, text: str) -> None:
             os.unlink(tmp)
 
 
-def scene_module(scene) -> tuple[ModuleType, list[int]]:
+def module_name(source: str) -> str:
+    """The name of the generated module with text ``source``: a hash of the text."""
+    return f"lumped_jit_{hashlib.sha256(source.encode()).hexdigest()[:24]}"
+
+
+def module_cached(source: str) -> bool:
+    """The generated module with text ``source`` is loaded in this process, or its file
+    is in the disk cache (compiled by an earlier run on this machine)."""
+    name = module_name(source)
+    return name in LOADED_MODULES or (cache_dir() / "jit" / f"{name}.py").exists()
+
+
+def scene_module(scene) -> tuple[ModuleType, SceneSource]:
     """The generated module of ``scene`` (from the disk cache, imported once per process)
-    and its element -> law index map."""
-    source, law_index = scene_source(scene)
-    digest = hashlib.sha256(source.encode()).hexdigest()[:24]
+    and its :class:`SceneSource`."""
+    generated = scene_source(scene)
+    name = module_name(generated.source)
     with MODULE_LOCK:
-        module = LOADED_MODULES.get(digest)
+        module = LOADED_MODULES.get(name)
         if module is None:
-            module = LOADED_MODULES[digest] = import_generated(f"lumped_jit_{digest}", source)
-    return module, law_index
+            module = LOADED_MODULES[name] = import_generated(name, generated.source)
+    return module, generated
 
 
 def import_generated(name: str, source: str) -> ModuleType:
@@ -360,11 +500,14 @@ class JitScene:
     spring: np.ndarray
     law_index: np.ndarray
     lock_q: np.ndarray
+    consts: np.ndarray
+    offsets: np.ndarray
 
 
 def jit_scene(scene) -> JitScene:
     """Generate (or load) ``scene``'s compiled module and collect its arrays."""
-    module, law_index = scene_module(scene)
+    module, generated = scene_module(scene)
+    law_index = generated.law_index
     return JitScene(
         module=module,
         masses=np.array(scene.masses, dtype=float),
@@ -373,6 +516,8 @@ def jit_scene(scene) -> JitScene:
         spring=np.array([el.kind == "spring" for el in scene.elements], dtype=np.bool_),
         law_index=np.array(law_index, dtype=np.int64),
         lock_q=position_locks(scene),
+        consts=generated.consts,
+        offsets=np.array(generated.offsets, dtype=np.int64),
     )
 
 

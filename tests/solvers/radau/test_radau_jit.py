@@ -69,7 +69,7 @@ def test_stage_system_bit_for_bit(setup, data, h, mode_d):
     G_ref, J_ref = system.evaluate(list(U), h, list(x_n), list(v_n), f.tolist(), kernels)
     G, J, *_ = workspace(len(scene.nodes), len(scene.elements))
     A, W = np.array(tableau.A), np.array(tableau.W)
-    stage_evaluate(js.module.branch_law, js.masses, js.ea, js.eb, js.spring, js.lock_q, modes,
+    stage_evaluate(js.module.branch_law, js.consts, js.masses, js.ea, js.eb, js.spring, js.lock_q, modes,
                    A, W, U, h, x_n, v_n, f, G, J)
     assert G.tolist() == G_ref
     assert J.tolist() == J_ref
@@ -90,7 +90,7 @@ def test_stage_solve_bit_for_bit(setup, mode_d):
     U_ref, it_ref, nfac_ref = system.solve(list(U), 1e-2, list(x_n), list(v_n), f.tolist(),
                                            kernels, list(scale), tol=1e-6, max_iters=10)
     ws = workspace(N, E)
-    ok = compiled_stage_solve()(js.module.branch_law, js.masses, js.ea, js.eb, js.spring,
+    ok = compiled_stage_solve()(js.module.branch_law, js.consts, js.masses, js.ea, js.eb, js.spring,
                                 js.lock_q, modes, np.array(tableau.A), np.array(tableau.W), U,
                                 1e-2, x_n, v_n, f, scale, 1e-6, 10, *ws)
     assert ok == (U_ref is not None)
@@ -118,7 +118,7 @@ def test_a_taut_string_is_held_on_the_velocity_level_bit_for_bit() -> None:
     h = 1e-7
     G_ref, J_ref = system.evaluate(list(U), h, list(x_n), list(v_n), f.tolist(), kernels)
     G, J, *_ = workspace(2, 2)
-    stage_evaluate(js.module.branch_law, js.masses, js.ea, js.eb, js.spring, js.lock_q, modes,
+    stage_evaluate(js.module.branch_law, js.consts, js.masses, js.ea, js.eb, js.spring, js.lock_q, modes,
                    np.array(tableau.A), np.array(tableau.W), U, h, x_n, v_n, f, G, J)
     assert G.tolist() == G_ref and J.tolist() == J_ref
     # the lock's residual is h sum_l a_kl (V_l,2 - V_l,1): no rounding of x in it

@@ -16,11 +16,12 @@ operation for operation, on preallocated arrays:
 
 The scene enters through two compiled callbacks generated per scene by
 :mod:`lumped.codegen.jit`, ``evaluate(u, p, G, J, S, roundoff)`` (the step system, with
-``p = [h, m_i / h (N), v_hat (N), x_hat (N), f(t) (N)]``) and ``element_law(e, q, F)``
-(element ``e``'s kernel), passed as *function pointers* (numba's first-class function
+``p = [h, m_i / h (N), v_hat (N), x_hat (N), f(t) (N), c]``, ``c`` the scene's law
+constants) and ``element_law(e, q, F, c)`` (element ``e``'s kernel), passed as *function pointers* (numba's first-class function
 types, :data:`EVALUATE_TYPE`, :data:`ELEMENT_LAW_TYPE`): the loop is compiled once for
-every scene (:func:`compiled_run_bdf_core`, cached on disk), and a new scene compiles
-only its own small functions. Nothing else comes from the scene: the forcing is read
+every scene (:func:`compiled_run_bdf_core`, cached on disk), and a new structure
+compiles only its own small functions; the laws' numbers are data (``lawc``), so new
+numbers compile nothing. Nothing else comes from the scene: the forcing is read
 from ``fkind, fpar, ftab`` by :func:`forcing_into` (kinds: 0 none, 1 constant
 ``fpar[i, 0]``, 2 sine burst ``fpar[i] = (A, omega, t_off)``, 3 a table
 ``ftab[step, i]`` computed before the loop).
@@ -94,11 +95,11 @@ def fast_step(evaluate, p, u0, u, cJ, cLU, cperm, cvalid, wv, wm, rtol, atol) ->
     return 1
 
 
-def loop_workspace(N: int, E: int) -> tuple:
+def loop_workspace(N: int, E: int, K: int) -> tuple:
     """The arrays :func:`run_bdf_core` works in (``P, cJ, cLU, cperm, cvalid, counts,
-    vec``), for ``N`` nodes and ``E`` elements."""
+    vec``), for ``N`` nodes, ``E`` elements and ``K`` law constants."""
     n = N + E
-    return (np.zeros((2, 1 + 4 * N)), np.zeros((2, n, n)), np.zeros((2, n, n)),
+    return (np.zeros((2, 1 + 4 * N + K)), np.zeros((2, n, n)), np.zeros((2, n, n)),
             np.zeros((2, n), dtype=np.int64), np.zeros((2, 1), dtype=np.int64),
             np.zeros(4, dtype=np.int64), np.zeros((10, n)))
 
@@ -111,7 +112,7 @@ def _elongation(y, a, b) -> float:
 def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0, F0,
                  dt, n_steps, bdf2, rtol, atol, max_iters, max_backtracks, free_steps,
                  fkind, fpar, ftab, xs, vs, Fs, info, finfo, wv, wm, wperm, P, cJ, cLU,
-                 cperm, cvalid, counts, vec, step0=0, step_stop=-1) -> int:
+                 cperm, cvalid, counts, vec, lawc, step0=0, step_stop=-1) -> int:
     """Advance the fixed steps from ``step0 + 1`` to ``step_stop`` (to ``n_steps`` when
     ``step_stop < 0``) from ``(x0, v0, F0)`` at step ``step0``; fill rows ``step0`` to
     the last step taken of ``xs, vs, Fs`` and ``info, finfo`` (see the module notes);
@@ -123,7 +124,9 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
 
     ``wv, wm, wperm`` is Newton's workspace
     (:func:`lumped.solvers.newton.semismooth_jit.workspace`),
-    ``P .. vec`` the loop's (:func:`loop_workspace`), both allocated by the caller.
+    ``P .. vec`` the loop's (:func:`loop_workspace`), both allocated by the caller;
+    ``lawc`` the scene's law constants (:attr:`lumped.codegen.jit.JitScene.consts`),
+    copied into the tail of ``P`` for ``evaluate``.
     Compiled by :func:`compiled_run_bdf_core`."""
     N = x0.shape[0]
     E = F0.shape[0]
@@ -137,6 +140,8 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
         for i in range(N):
             P[k, 1 + i] = masses[i] / h if masses[i] != 0.0 else 0.0
         cvalid[k, 0] = 0
+        for j in range(lawc.shape[0]):
+            P[k, 1 + 4 * N + j] = lawc[j]
     u0, u, x, v, xp, vp = vec[0], vec[1], vec[2][:N], vec[3][:N], vec[4][:N], vec[5][:N]
     F, prev_q, prev_Rq, prev_RF = vec[6][:E], vec[7][:E], vec[8][:E], vec[9][:E]
     for i in range(N):
@@ -153,7 +158,7 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
     for c in range(checked.shape[0]):
         e = checked[c]
         q = _elongation(x if spring[e] else v, ea[e], eb[e])
-        _, Rq, RF = element_law(e, q, F[e])
+        _, Rq, RF = element_law(e, q, F[e], lawc)
         prev_q[e] = q
         prev_Rq[e] = Rq
         prev_RF[e] = RF
@@ -229,8 +234,8 @@ def run_bdf_core(evaluate, element_law, masses, ea, eb, spring, checked, x0, v0,
         for c in range(checked.shape[0]):
             e = checked[c]
             q1 = _elongation(x if spring[e] else v, ea[e], eb[e])
-            R1, Rq1, RF1 = element_law(e, q1, u[N + e])
-            if left_branch(element_law, e, prev_q[e], F[e], prev_Rq[e], prev_RF[e],
+            R1, Rq1, RF1 = element_law(e, q1, u[N + e], lawc)
+            if left_branch(element_law, lawc, e, prev_q[e], F[e], prev_Rq[e], prev_RF[e],
                            q1, u[N + e], Rq1, RF1):
                 lost = e
                 finfo[0] = R1
@@ -271,7 +276,7 @@ def _signature():
     iv, im = i8[::1], i8[:, ::1]
     return T.int64(EVALUATE_TYPE, ELEMENT_LAW_TYPE, v, iv, iv, b1[::1], iv, v, v, v, f8, i8,
                    b1, f8, f8, i8, i8, i8, iv, m, m, m, m, m, iv, v, m, c, iv, m, c, c, im,
-                   im, iv, m, i8, i8)
+                   im, iv, m, v, i8, i8)
 
 
 if numba_module is not None:
@@ -281,8 +286,8 @@ if numba_module is not None:
     #: ``evaluate(u, p, G, J, S, roundoff) -> None`` as a numba function type.
     EVALUATE_TYPE = _T.FunctionType(_T.none(_f8[::1], _f8[::1], _f8[::1], _f8[:, ::1],
                                             _f8[::1], _T.boolean))
-    #: ``element_law(e, q, F) -> (R, dR/dq, dR/dF)`` as a numba function type.
-    ELEMENT_LAW_TYPE = _T.FunctionType(_T.UniTuple(_f8, 3)(_T.int64, _f8, _f8))
+    #: ``element_law(e, q, F, c) -> (R, dR/dq, dR/dF)`` as a numba function type.
+    ELEMENT_LAW_TYPE = _T.FunctionType(_T.UniTuple(_f8, 3)(_T.int64, _f8, _f8, _f8[::1]))
 else:  # pragma: no cover - without numba
     EVALUATE_TYPE = ELEMENT_LAW_TYPE = None
 

@@ -56,7 +56,9 @@ reference's triangular solve round differently, so there a step may converge in 
 and not in the other.
 
 Signature of the generated ``run_fast(masses, dt, n_steps, bdf2, step0, rtol, atol,
-max_it, fkind, fpar, ftab, xs, vs, Fs, Jm, LU, P, Inv, b, y, counts) -> int``
+max_it, fkind, fpar, ftab, xs, vs, Fs, Jm, LU, P, Inv, b, y, counts, lawc) -> int``
+(``lawc``: the scene's law constants, :attr:`lumped.codegen.jit.JitScene.consts`, read
+into locals before the loop; the module is the same for every value of them)
 (``max_it``: Newton iterations per step before the hand-over; ``Jm .. y`` workspace): the
 state at step ``step0`` (and ``step0 - 1`` for BDF2) is read from rows of ``xs, vs,
 Fs``, and steps ``step0 + 1 ..`` are written to them; ``counts`` accumulates the Newton
@@ -67,6 +69,7 @@ iteration count of one step, and the steps taken.
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Callable
 from types import ModuleType
 
 from ...codegen.jit import (
@@ -74,8 +77,7 @@ from ...codegen.jit import (
     MODULE_LOCK,
     end_values_source,
     import_generated,
-    kernel_sources,
-    rename_function,
+    scene_templates,
 )
 
 __all__ = ["MAX_FAST_ITERATIONS", "MAX_FAST_UNKNOWNS", "fast_source", "fast_module"]
@@ -90,24 +92,20 @@ MAX_FAST_UNKNOWNS = 16
 _BY_KEY: dict[tuple, ModuleType] = {}
 
 
-def _inline(source: str, name: str) -> str:
-    return rename_function(source, name).replace(
-        "@njit(cache=True)", '@njit(cache=True, inline="always")', 1)
-
-
 def fast_source(scene) -> str:
     """The generated module's source for ``scene`` (see the module notes)."""
     from ..implicit.branch_check import known_monotone
 
     N, E = len(scene.nodes), len(scene.elements)
     n = N + E
-    laws: list[str] = []
-    law_index: list[int] = []
-    for el in scene.elements:
-        ksrc = kernel_sources(el.law)[0]
-        if ksrc not in laws:
-            laws.append(ksrc)
-        law_index.append(laws.index(ksrc))
+    templates, law_index, _, offsets = scene_templates(scene)
+    # element e's law constants: the first of its slots in the scene's constants, read
+    # into locals before the loop (lc<e>_<m>)
+    slots = [templates[law_index[e]].count("law") for e in range(E)]
+
+    def law_args(e: int) -> str:
+        return "".join(f", lc{e}_{m}" for m in range(slots[e]))
+
     checked = [e for e, el in enumerate(scene.elements) if not known_monotone(el.law)]
     mass = [m != 0.0 for m in scene.masses]
     spring = [el.kind == "spring" for el in scene.elements]
@@ -116,10 +114,13 @@ def fast_source(scene) -> str:
          "import math", "", "from lumped.codegen.jit import njit",
          "from lumped.solvers.implicit.branch_check_jit import left_branch",
          "from lumped.solvers.newton.linalg_jit import inverse_into, lu_factor_into", ""]
-    for j, ksrc in enumerate(laws):
-        L += ["", _inline(ksrc, f"law_{j}")]
-    L += ["", "@njit(cache=True)", "def element_law(e, q, F):"]
-    L += [f"    if e == {e}:\n        return law_{law_index[e]}(q, F)" for e in range(E)]
+    for j, t in enumerate(templates):
+        law_text = t.source(j)[0]
+        L += ["", law_text.replace("@njit(cache=True)", '@njit(cache=True, inline="always")', 1)]
+    L += ["", "@njit(cache=True)", "def element_law(e, q, F, c):"]
+    L += [f"    if e == {e}:\n        return "
+          f"{templates[law_index[e]].call('law', law_index[e], 'q, F', 'c', offsets[e])}"
+          for e in range(E)]
     L += ["    return math.nan, math.nan, math.nan", ""]
 
     def elong(e: int, xs: str, vs: str) -> str:
@@ -133,19 +134,20 @@ def fast_source(scene) -> str:
     LU = [[f"l{i}_{j}" for j in range(n)] for i in range(n)]
     L += ["@njit(cache=True)",
           "def run_fast(masses, dt, n_steps, bdf2, step0, rtol, atol, max_it, fkind, fpar, ftab,",
-          "             xs, vs, Fs, Jm, LU, P, Inv, b, y, counts):",
+          "             xs, vs, Fs, Jm, LU, P, Inv, b, y, counts, lawc):",
           "    h1 = dt", "    h2 = 2.0 * dt / 3.0", "    back = step0 - 1 if step0 >= 1 else 0"]
     for i in range(N):
         L += [f"    x{i} = xs[step0, {i}]", f"    v{i} = vs[step0, {i}]",
               f"    xp{i} = xs[back, {i}]", f"    vp{i} = vs[back, {i}]"]
     for e in range(E):
         L += [f"    F{e} = Fs[step0, {e}]", f"    kRF{e} = 0.0", f"    kg{e} = 0.0"]
+        L += [f"    lc{e}_{m} = lawc[{offsets[e] + m}]" for m in range(slots[e])]
     L += [f"    {LU[i][j]} = 0.0" for i in range(n) for j in range(n)]
     L += [f"    c{i}_0 = masses[{i}] / h1\n    c{i}_1 = masses[{i}] / h2"
           for i in range(N) if mass[i]]
     for e in checked:
         L += [f"    pq{e} = {elong(e, 'x', 'v')}",
-              f"    _, pRq{e}, pRF{e} = law_{law_index[e]}(pq{e}, F{e})"]
+              f"    _, pRq{e}, pRF{e} = law_{law_index[e]}(pq{e}, F{e}{law_args(e)})"]
     L += ["    n_it = 0", "    n_res = 0", "    n_fact = 0", "    most_it = 0", "    taken = 0",
           "    valid = False", "    kc = -1"]
     L += _forcing_setup_lines(N)
@@ -165,7 +167,7 @@ def fast_source(scene) -> str:
     L += [f"        u{N + e} = F{e}" for e in range(E)]
     L += ["        done = False", "        for it in range(max_it):"]
     ind = "            "
-    g_lines, s_lines = _evaluate_lines(scene, law_index, ind)
+    g_lines, s_lines = _evaluate_lines(scene, law_index, law_args, ind)
     gsum = " + ".join(f"G{r}" for r in range(n))
     zero = " and ".join(f"G{r} == 0.0" for r in range(n))
     res_ok = " and ".join(f"abs(G{r}) <= rtol * S{r} + atol" for r in range(n))
@@ -202,8 +204,8 @@ def fast_source(scene) -> str:
     L += [f"{ind}xn{i} = xh{i} + h * u{i}" for i in range(N)]
     for e in checked:
         q1 = elong(e, "xn", "u")
-        L += [f"{ind}q1 = {q1}", f"{ind}_, Rq1, RF1 = law_{law_index[e]}(q1, u{N + e})",
-              f"{ind}if left_branch(element_law, {e}, pq{e}, F{e}, pRq{e}, pRF{e}, q1, "
+        L += [f"{ind}q1 = {q1}", f"{ind}_, Rq1, RF1 = law_{law_index[e]}(q1, u{N + e}{law_args(e)})",
+              f"{ind}if left_branch(element_law, lawc, {e}, pq{e}, F{e}, pRq{e}, pRF{e}, q1, "
               f"u{N + e}, Rq1, RF1):", f"{ind}    break",
               f"{ind}pq{e} = q1", f"{ind}pRq{e} = Rq1", f"{ind}pRF{e} = RF1"]
     L += [f"{ind}n_it += it", f"{ind}if it > most_it:", f"{ind}    most_it = it",
@@ -242,7 +244,8 @@ def _forcing_lines(N: int, ind: str) -> list[str]:
     return L
 
 
-def _evaluate_lines(scene, law_index: list[int], ind: str) -> tuple[list[str], list[str]]:
+def _evaluate_lines(scene, law_index: list[int], law_args: Callable[[int], str],
+                    ind: str) -> tuple[list[str], list[str]]:
     """The step system in scalars, the arithmetic of :mod:`lumped.codegen.jit`'s
     ``evaluate`` (``roundoff=False``) term for term: the lines of the residual ``G`` and
     the Jacobian's variable entries, then those of the row scales ``S`` (emitted apart:
@@ -262,7 +265,7 @@ def _evaluate_lines(scene, law_index: list[int], ind: str) -> tuple[list[str], l
         k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
         qb, qa, dq = end_values_source(el.kind, a, b, lambda i: f"xh{i}", lambda i: f"u{i}")
         GL += [f"{ind}q{e} = {qb} - {qa}",
-               f"{ind}G{k}, Rq{e}, RF{e} = law_{law_index[e]}(q{e}, u{k})",
+               f"{ind}G{k}, Rq{e}, RF{e} = law_{law_index[e]}(q{e}, u{k}{law_args(e)})",
                f"{ind}g{e} = Rq{e} * {dq}"]
         SL += [f"{ind}S{k} = abs(Rq{e} * q{e}) + abs(RF{e} * u{k})"]
         if a >= 0:

@@ -77,7 +77,7 @@ def run_fast_path(scene, js, args: tuple) -> tuple[int, dict]:
     while True:
         nxt = fm.run_fast(masses, dt, n_steps, bdf2, step, rtol, atol, max_it, fkind, fpar, ftab,
                           xs, vs, Fs, Jm, LU, P, np.zeros((n, n)), b, np.zeros(n),
-                          counts)
+                          counts, js.consts)
         rows = nxt
         if nxt > n_steps:
             break

@@ -101,7 +101,7 @@ def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,
             options.free_steps, fkind, fpar, ftab,
             np.empty((n_steps + 1, N)), np.empty((n_steps + 1, N)), np.empty((n_steps + 1, E)),
             np.zeros(9, dtype=np.int64), np.zeros(6), *workspace(N + E),
-            *loop_workspace(N, E))
+            *loop_workspace(N, E, js.consts.shape[0]), js.consts)
     return js, args, ic_stats
 
 

@@ -66,7 +66,7 @@ def _loaded(scene: Scene, plan) -> bool:
 
     if getattr(plan, "module_loaded", None) is None:
         try:
-            source, _ = jit.scene_source(scene)
+            source = jit.scene_source(scene).source
         except ValueError:  # a hand-written kernel: _parts says why
             plan.module_loaded = True
         else:
@@ -203,7 +203,7 @@ class CompiledLoop:
         return x, v, F, dF
 
     def _call(self, x, v, F, dF, T0, HS, Y0, D, ROWS) -> None:
-        self.fn(self.law.addr, self.guards.addr, self.js.masses, self.js.ea, self.js.eb,
+        self.fn(self.law.addr, self.guards.addr, self.js.consts, self.js.masses, self.js.ea, self.js.eb,
                 self.js.spring, self.js.lock_q, self.modes_a, self.watched_a, self.checked,
                 self.A, self.W, self.fkind, self.fpar, x, v, F, dF, self.fst, self.ist,
                 T0, HS, Y0, D, ROWS, self.ws, self.wm, self.iw)
@@ -226,7 +226,7 @@ class CompiledLoop:
         js = self.js
         cands = np.array(candidates, dtype=np.int64).reshape(len(candidates), self.E)
         cur = _NO_MODE if current is None else np.array(current, dtype=np.int64)
-        k = fn(self.law.addr, self.branch.addr, js.masses, js.ea, js.eb, js.spring, cands,
+        k = fn(self.law.addr, self.branch.addr, js.consts, js.masses, js.ea, js.eb, js.spring, cands,
                cur, np.array(f, dtype=float), np.array(x, dtype=float),
                np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
         return k, out

@@ -79,7 +79,7 @@ _S1, _S2, _S3 = END_SLOPES
 _stage = njit(cache=True)(stage_solve)
 
 
-def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watched, checked,
+def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, watched, checked,
             A, W,
             fkind,
             fpar, x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
@@ -87,7 +87,7 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
 
     ``law_addr`` and ``guards_addr`` are the addresses of the scene's compiled
     ``branch_law`` and ``branch_guards`` (:func:`law_type`, :func:`guards_type`; the
-    caller keeps them alive): an integer is passed in a few nanoseconds, where numba
+    caller keeps them alive), ``lawc`` the scene's law constants they take: an integer is passed in a few nanoseconds, where numba
     passes a first-class function argument through two Python calls that unpickle its
     signature (about 3.5 us each, per call). ``ws`` (vectors), ``wm`` (matrices) and
     ``iw`` (ints) are :func:`loop_workspace`."""
@@ -158,7 +158,7 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
                 scale[k * n + i] = atol + rtol * abs(v[i])
             for e in range(E):
                 scale[k * n + N + e] = rtol * max(abs(F[e]), F_ref)
-        ok = _stage(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x, v, fk,
+        ok = _stage(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x, v, fk,
                     scale,
                     1e-3, MAX_NEWTON, G, J, LU, perm, b, du, out)
         its = out[0]
@@ -172,7 +172,7 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
             if ok or (out[2] == 1 and finite(J)):
                 ist[A_OK] = -1  # singular: Python's minimum-norm solve
             if ok:
-                fst[A_ERR] = step_error(branch_law, masses, ea, eb, spring, modes, watched,
+                fst[A_ERR] = step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched,
                                          A, U, h, t, prev_break, x, v, F, dF, ist[HAVE_DF],
                                          fkind, fpar, net, rtol, atol, F_ref, M, LUm, permm,
                                          rhs, err, fst[TWO])
@@ -180,7 +180,7 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
                     ist[A_OK] = 1
                     ist[A_HIT] = 0
                     if watched.shape[0] > 0:  # the crossing's root too (the landing's)
-                        fst[A_ROOT] = first_root(branch_guards, ea, eb, spring, modes,
+                        fst[A_ROOT] = first_root(branch_guards, lawc, ea, eb, spring, modes,
                                                  watched, A, h, x, v, F, U, N, n, qn, Fn,
                                                  gbuf, ist[A_W:A_J + 1])
                         ist[A_HIT] = fst[A_ROOT] >= 0.0
@@ -207,7 +207,7 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
             h *= 0.5
             ist[HAVE_ACC] = 0
             continue
-        err_norm = step_error(branch_law, masses, ea, eb, spring, modes, watched, A, U, h,
+        err_norm = step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h,
                                t, prev_break, x, v, F, dF, ist[HAVE_DF], fkind, fpar, net,
                                rtol, atol, F_ref, M, LUm, permm, rhs, err, fst[TWO])
         if err_norm == -1.0:  # singular: undo this pass's counters, Python redoes it
@@ -230,10 +230,10 @@ def advance(law_addr, guards_addr, masses, ea, eb, spring, lock_q, modes, watche
             h = h / quot
             ist[HAVE_ACC] = 0
             continue
-        hit = watched.shape[0] > 0 and crossed(branch_guards, ea, eb, spring, modes, watched,
+        hit = watched.shape[0] > 0 and crossed(branch_guards, lawc, ea, eb, spring, modes, watched,
                                                A, h, x, v, F, U, N, n, qn, Fn, gbuf)
         if hit or (checked.shape[0] > 0 and folded(
-                branch_law, ea, eb, spring, modes, checked, A, h, x, v, F, U, N, n, qn[0],
+                branch_law, lawc, ea, eb, spring, modes, checked, A, h, x, v, F, U, N, n, qn[0],
                 Fn[0])):
             # Python redoes this pass (and lands on the event, or stops at the fold)
             ist[STALLED] -= 1
@@ -320,7 +320,7 @@ def compiled_advance():
         f8 = T_.float64
         v, m, m3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
         iv = T_.int64[::1]
-        sig = T_.none(T_.int64, T_.int64, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
+        sig = T_.none(T_.int64, T_.int64, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
                       m,
                       iv, m, v, v, v, v, v, iv, v, v, m, m3, m, m, m3,
                       T_.int64[:, ::1])

@@ -111,7 +111,7 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
 
     def run(U, h, x, v, f, scale, max_iters):
         Ua = np.array(U, dtype=float)
-        ok = solve(law, js.masses, js.ea, js.eb, js.spring, js.lock_q,
+        ok = solve(law, js.consts, js.masses, js.ea, js.eb, js.spring, js.lock_q,
                    np.array(modes, dtype=np.int64),
                    A_np, W_np, Ua, h, np.array(x, dtype=float), np.array(v, dtype=float),
                    np.array(f, dtype=float), np.array(scale, dtype=float), 1e-3, max_iters,

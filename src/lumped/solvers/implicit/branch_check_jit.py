@@ -20,10 +20,11 @@ dead_band_sign = njit(cache=True, inline="always")(_dead_band_sign)
 
 
 @njit(cache=True, inline="always")
-def left_branch(element_law, e, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
+def left_branch(element_law, c, e, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
     """The fold test of :func:`lumped.solvers.implicit.branch_check.left_branch` for element ``e``:
     ``dR/dq`` or ``dR/dF`` of strictly opposite signs at the two ends, or at three
-    interior points when the step leaves the law's tangent."""
+    interior points when the step leaves the law's tangent. ``c``: the scene's law
+    constants (``element_law(e, q, F, c)``)."""
     s0 = abs(Rq0) + abs(RF0)
     s1 = abs(Rq1) + abs(RF1)
     # sign sets as bit masks: 1 for +1, 2 for -1 (0 adds nothing)
@@ -43,7 +44,7 @@ def left_branch(element_law, e, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
     if off <= 0.5:
         return False
     for s in (0.25, 0.5, 0.75):
-        _, Rq, RF = element_law(e, q0 + s * dq, F0 + s * dF)
+        _, Rq, RF = element_law(e, q0 + s * dq, F0 + s * dF, c)
         sc = abs(Rq) + abs(RF)
         mq |= sign_bit(dead_band_sign(Rq, sc))
         mf |= sign_bit(dead_band_sign(RF, sc))

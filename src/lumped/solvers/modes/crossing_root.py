@@ -101,14 +101,14 @@ def first_root_py(nodes: Sequence[tuple[Sequence[float], Sequence[float]]],
 
 
 @njit(cache=True)
-def _guard(branch_guards, e, mode, j, s, qw, Fw, gbuf) -> float:
+def _guard(branch_guards, lawc, e, mode, j, s, qw, Fw, gbuf) -> float:
     branch_guards(e, mode, collocation_at(s, qw[0], qw[1], qw[2], qw[3]),
-                  collocation_at(s, Fw[0], Fw[1], Fw[2], Fw[3]), gbuf)
+                  collocation_at(s, Fw[0], Fw[1], Fw[2], Fw[3]), gbuf, lawc)
     return gbuf[j]
 
 
 @njit(cache=True)
-def first_root(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, U, N, n,
+def first_root(branch_guards, lawc, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, U, N, n,
                qn, Fn, gbuf, which) -> float:
     """:func:`first_root_py` compiled: the root ``s`` (``which[0], which[1]`` = ``w, j``),
     or ``-1.0`` when no guard is negative at a sample."""
@@ -126,7 +126,7 @@ def first_root(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_
             qs = collocation_at(s, qn[w, 0], qn[w, 1], qn[w, 2], qn[w, 3])
             Fs = collocation_at(s, Fn[w, 0], Fn[w, 1], Fn[w, 2], Fn[w, 3])
             tol = _TOL * (1.0 + abs(qs) + abs(Fs))
-            count = branch_guards(e, modes[e], qs, Fs, gbuf)
+            count = branch_guards(e, modes[e], qs, Fs, gbuf, lawc)
             for j in range(count):
                 if gbuf[j] + tol < best:
                     best = gbuf[j] + tol
@@ -138,11 +138,11 @@ def first_root(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_
             e = watched[bw]
             qw, Fw = qn[bw], Fn[bw]
             a = prev
-            ga = _guard(branch_guards, e, modes[e], bj, a, qw, Fw, gbuf)
+            ga = _guard(branch_guards, lawc, e, modes[e], bj, a, qw, Fw, gbuf)
             if not ga > 0.0:
                 return a
             b = s
-            gb = _guard(branch_guards, e, modes[e], bj, b, qw, Fw, gbuf)
+            gb = _guard(branch_guards, lawc, e, modes[e], bj, b, qw, Fw, gbuf)
             side = 0
             for _ in range(_MAX_ITERS):
                 if b - a <= 4.0 * 2.220446049250313e-16 + 1e-15 * b:
@@ -150,7 +150,7 @@ def first_root(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_
                 c = b - gb * (b - a) / (gb - ga)
                 if not (a < c < b):
                     c = 0.5 * (a + b)
-                gc = _guard(branch_guards, e, modes[e], bj, c, qw, Fw, gbuf)
+                gc = _guard(branch_guards, lawc, e, modes[e], bj, c, qw, Fw, gbuf)
                 if gc == 0.0:
                     return c
                 if gc > 0.0:

@@ -30,13 +30,13 @@ _MAX_ITERS = 30
 CONFIRMED = 0  # (and above: the index of the confirmed candidate)
 
 
-def probe_modes(law_addr, branch_addr, masses, ea, eb, spring, cands, current, f, x, v, F,
+def probe_modes(law_addr, branch_addr, lawc, masses, ea, eb, spring, cands, current, f, x, v, F,
                 h_p, out, wm):
     """The first of the candidate modes (rows of ``cands``) that the full laws confirm
     after the probe step of size ``h_p`` (see :func:`lumped.solvers.modes.mode_guess.try_modes`):
     its index, with ``v_p`` and ``F_p`` in ``out[:N]`` and ``out[N:N + E]``; else
     :data:`UNDECIDED` when one candidate's result reads as ``current`` (an empty array:
-    no current mode), or :data:`REFUSED`. ``wm`` is work space, at least ``(n + 3, n)``
+    no current mode), or :data:`REFUSED`. ``lawc``: the scene's law constants. ``wm`` is work space, at least ``(n + 3, n)``
     with ``n = N + E``."""
     branch_law = _law_at(law_addr)
     active_branch = _branch_at(branch_addr)
@@ -50,13 +50,13 @@ def probe_modes(law_addr, branch_addr, masses, ea, eb, spring, cands, current, f
     undecided = False
     for c in range(cands.shape[0]):
         modes = cands[c]
-        ok = _probe(branch_law, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, G, u, q)
+        ok = _probe(branch_law, lawc, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, G, u, q)
         if not ok:
             continue
         same = True
         cur = current.shape[0] > 0
         for e in range(E):
-            b = active_branch(e, q[e], u[N + e])
+            b = active_branch(e, q[e], u[N + e], lawc)
             if b != modes[e]:
                 same = False
             if cur and b != current[e]:
@@ -70,7 +70,7 @@ def probe_modes(law_addr, branch_addr, masses, ea, eb, spring, cands, current, f
 
 
 @njit(cache=True, inline="always")
-def _probe(branch_law, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, G, u, q) -> bool:
+def _probe(branch_law, lawc, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, G, u, q) -> bool:
     """:func:`lumped.solvers.modes.mode_guess._probe` into ``u`` (``v_p, F_p``) and ``q``;
     whether it converged."""
     N = masses.shape[0]
@@ -106,7 +106,7 @@ def _probe(branch_law, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, G, u, 
             else:
                 qe = (u[b] if b >= 0 else 0.0) - (u[a] if a >= 0 else 0.0)
                 dq = 1.0
-            R, Rq, RF = branch_law(e, modes[e], qe, Fe)
+            R, Rq, RF = branch_law(e, modes[e], qe, Fe, lawc)
             G[N + e] = R
             if b >= 0:
                 J[N + e, b] += Rq * dq
@@ -186,7 +186,7 @@ def compiled_probe_modes():
         f8, i8 = T_.float64, T_.int64
         v, m = f8[::1], f8[:, ::1]
         iv = i8[::1]
-        sig = i8(i8, i8, v, iv, iv, T_.boolean[::1], i8[:, ::1], iv, v, v, v, v, f8, v, m)
+        sig = i8(i8, i8, v, v, iv, iv, T_.boolean[::1], i8[:, ::1], iv, v, v, v, v, f8, v, m)
         _COMPILED.append(njit(sig, cache=True)(probe_modes))
     return _COMPILED[0]
 

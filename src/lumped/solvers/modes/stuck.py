@@ -196,7 +196,7 @@ class StaticHold:
         y0, fkind, fpar, c, minv, free = self.arrays()
         ts = np.array(samples, dtype=float)
         out = np.empty((len(samples), len(self.F0)))
-        k = fast.breakout_scan(fast.guards.addr, free, np.array(modes, dtype=np.int64),
+        k = fast.breakout_scan(fast.guards.addr, fast.js.consts, free, np.array(modes, dtype=np.int64),
                              np.array(self.q, dtype=float), fkind, fpar, c, minv,
                              y0[len(y0) - len(self.F0):], ts, out, np.zeros(64))
         rows = out[:len(samples) if k < 0 else k + 1].tolist()
@@ -208,7 +208,7 @@ class StaticHold:
               modes: Sequence[int] | None = None, fast=None) -> float:
         if fast is not None:  # compiled, the same numbers (nan: the reference says why)
             _, fkind, fpar, c, minv, _ = self.arrays()
-            r = fast.breakout_root(fast.guards.addr, e, modes[e], j, self.q[e],
+            r = fast.breakout_root(fast.guards.addr, fast.js.consts, e, modes[e], j, self.q[e],
                                  self.free.index(e), fkind, fpar, c, minv, a, b,
                                  np.zeros(64))  # (the guard values)
             if r == r:

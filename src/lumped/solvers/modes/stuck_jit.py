@@ -30,7 +30,7 @@ _MAX_ITER = 100  # scipy's default
 
 
 @njit(cache=True, inline="always")
-def _guard(guards, e, mode, j, q, r, fkind, fpar, c, minv, t, gbuf) -> float:
+def _guard(guards, lawc, e, mode, j, q, r, fkind, fpar, c, minv, t, gbuf) -> float:
     """``g_j(q_e, F_e(t))`` with ``F_e`` the static balance's row ``r``."""
     N = fkind.shape[0]
     s = 0.0
@@ -42,20 +42,20 @@ def _guard(guards, e, mode, j, q, r, fkind, fpar, c, minv, t, gbuf) -> float:
         elif k == 2:
             f = 0.0 if t > fpar[i, 2] else fpar[i, 0] * math.sin(fpar[i, 1] * t)
         s += minv[r, i] * (f + c[i])
-    guards(e, mode, q, s, gbuf)
+    guards(e, mode, q, s, gbuf, lawc)
     return gbuf[j]
 
 
-def breakout_root(guards_addr, e, mode, j, q, r, fkind, fpar, c, minv, a, b, gbuf) -> float:
+def breakout_root(guards_addr, lawc, e, mode, j, q, r, fkind, fpar, c, minv, a, b, gbuf) -> float:
     """The break-out time of guard ``j`` of element ``e`` (held on branch ``mode`` at
     ``q``; its force the static balance's row ``r``: ``minv[r] @ (f(t) + c)``) in
     ``[a, b]``, as :meth:`lumped.solvers.modes.stuck.StaticHold._root` finds it; ``nan`` when
     a guard is not finite or Brent's method does not converge."""
     guards = _guards_at(guards_addr)
-    ga = _guard(guards, e, mode, j, q, r, fkind, fpar, c, minv, a, gbuf)
+    ga = _guard(guards, lawc, e, mode, j, q, r, fkind, fpar, c, minv, a, gbuf)
     if not ga > 0.0:
         return a if ga == ga else math.nan
-    gb = _guard(guards, e, mode, j, q, r, fkind, fpar, c, minv, b, gbuf)
+    gb = _guard(guards, lawc, e, mode, j, q, r, fkind, fpar, c, minv, b, gbuf)
     if gb >= 0.0:
         return b
     if gb != gb:
@@ -97,7 +97,7 @@ def breakout_root(guards_addr, e, mode, j, q, r, fkind, fpar, c, minv, a, b, gbu
             xcur += scur
         else:
             xcur += delta if sbis > 0 else -delta
-        fcur = _guard(guards, e, mode, j, q, r, fkind, fpar, c, minv, xcur, gbuf)
+        fcur = _guard(guards, lawc, e, mode, j, q, r, fkind, fpar, c, minv, xcur, gbuf)
         if fcur != fcur:
             return math.nan
     if not found:
@@ -105,13 +105,13 @@ def breakout_root(guards_addr, e, mode, j, q, r, fkind, fpar, c, minv, a, b, gbu
     # just past the crossing (the guard negative), as in the reference
     root = xcur
     step = np.nextafter(abs(root), math.inf) - abs(root)  # math.ulp
-    while (_guard(guards, e, mode, j, q, r, fkind, fpar, c, minv, root, gbuf) >= 0.0
+    while (_guard(guards, lawc, e, mode, j, q, r, fkind, fpar, c, minv, root, gbuf) >= 0.0
            and root + step < b):
         root, step = root + step, 2.0 * step
     return root
 
 
-def breakout_scan(guards_addr, free, modes, q, fkind, fpar, c, minv, F0, ts, out, gbuf
+def breakout_scan(guards_addr, lawc, free, modes, q, fkind, fpar, c, minv, F0, ts, out, gbuf
                   ) -> int:
     """The scan of :meth:`lumped.solvers.modes.stuck.StaticHold.breakout` over the sample times
     ``ts``, with the same numbers: at each sample the forces of the static balance (``F0``
@@ -146,7 +146,7 @@ def breakout_scan(guards_addr, free, modes, q, fkind, fpar, c, minv, F0, ts, out
         for k in range(free.shape[0]):
             e = free[k]
             Fe = out[r, e]
-            n = guards(e, modes[e], q[e], Fe, gbuf)
+            n = guards(e, modes[e], q[e], Fe, gbuf, lawc)
             tol = 64.0 * 2.220446049250313e-16 * (1.0 + abs(q[e]) + abs(Fe))
             for j in range(n):
                 if gbuf[j] + tol < 0.0:
@@ -225,12 +225,12 @@ def compiled_breakout_root():
     """:func:`breakout_root` compiled once for every scene (numba's disk cache after the
     first time on a machine), or ``None`` without numba."""
     return _compiled_once(_COMPILED, breakout_root, lambda f8, i8: f8(
-        i8, i8, i8, i8, f8, i8, i8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8, f8, f8[::1]))
+        i8, f8[::1], i8, i8, i8, f8, i8, i8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8, f8, f8[::1]))
 
 
 def compiled_breakout_scan():
     """:func:`breakout_scan` compiled once for every scene (numba's disk cache after the
     first time on a machine), or ``None`` without numba."""
     return _compiled_once(_SCAN, breakout_scan, lambda f8, i8: i8(
-        i8, i8[::1], i8[::1], f8[::1], i8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[::1],
+        i8, f8[::1], i8[::1], i8[::1], f8[::1], i8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[::1],
         f8[::1], f8[:, ::1], f8[::1]))

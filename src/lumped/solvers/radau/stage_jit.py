@@ -14,7 +14,7 @@ and simplified Newton on it (converged when ``max_j |dU_j| / scale_j <= tol``; t
 Jacobian refactored when the contraction rate exceeds 1/2). Same LU as the reference
 (singleton rows first), so the two give the same numbers bit for bit.
 
-The scene's branch kernels come in as a function pointer, ``branch_law(e, i, q, F)`` of
+The scene's branch kernels come in as a function pointer, ``branch_law(e, i, q, F, lawc)`` of
 the scene's generated module (:mod:`lumped.codegen.jit`), so the step is compiled once
 for every scene (:func:`compiled_stage_solve`, cached on disk). The Butcher matrix ``A``
 and ``W = A^{-1}`` are arguments (``numpy`` arrays of the reference's constants).
@@ -34,7 +34,7 @@ __all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_s
 
 
 @njit(cache=True, inline="always")
-def stage_evaluate(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n,
+def stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n,
                    f, G, J) -> None:
     """Residual ``G`` and Jacobian ``J`` of the stage system at ``U`` (``f[k, i]``: the
     external force on node ``i`` at stage ``k``; ``modes[e]``: element ``e``'s branch;
@@ -95,10 +95,10 @@ def stage_evaluate(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h
                 qb = U[base + b] if b >= 0 else 0.0
                 qa = U[base + a] if a >= 0 else 0.0
             if lock == lock:  # R(L + dq) = R(L) + dR/dq dq: an affine lock, exactly
-                R, Rq, RF = branch_law(e, modes[e], lock, Fe)
+                R, Rq, RF = branch_law(e, modes[e], lock, Fe, lawc)
                 R += Rq * (h * (qb - qa))
             else:
-                R, Rq, RF = branch_law(e, modes[e], qb - qa, Fe)
+                R, Rq, RF = branch_law(e, modes[e], qb - qa, Fe, lawc)
             G[col] = R
             J[col, col] = RF
             if spring[e]:
@@ -115,14 +115,14 @@ def stage_evaluate(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h
                     J[col, base + a] -= Rq
 
 
-def stage_solve(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n, f,
+def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n, f,
                 scale, tol, max_iters, G, J, LU, perm, b, du, out) -> bool:
     """Simplified Newton on the stage system from ``U`` (overwritten); ``out`` receives
     ``(iterations, factorisations, singular)`` (``out[2] = 1`` when a factorisation
     failed: a singular or non-finite Jacobian, left in ``J``). Returns False when Newton
     failed (singular, non-finite or no convergence): the caller shrinks the step."""
     out[2] = 0
-    stage_evaluate(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n, f,
+    stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n, f,
                    G, J)
     ok = lu_factor_into(J, LU, perm)
     nfac = 1
@@ -148,7 +148,7 @@ def stage_solve(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x
             return False
         if worst <= tol:
             return True
-        stage_evaluate(branch_law, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n,
+        stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n,
                        v_n, f, G, J)
         if worst > 0.5 * prev:
             ok = lu_factor_into(J, LU, perm)
@@ -172,7 +172,7 @@ def compiled_stage_solve():
 
         v, m = T.float64[::1], T.float64[:, ::1]
         iv = T.int64[::1]
-        sig = T.boolean(BRANCH_LAW_TYPE, v, iv, iv, T.boolean[::1], m, iv, m, m, v, T.float64,
+        sig = T.boolean(BRANCH_LAW_TYPE, v, v, iv, iv, T.boolean[::1], m, iv, m, m, v, T.float64,
                         v, v, m, v, T.float64, T.int64, v, m, m, iv, v, v, iv)
         _COMPILED.append(njit(sig, cache=True)(stage_solve))
     return _COMPILED[0]

@@ -9,7 +9,7 @@ Ports, operation for operation, of :meth:`lumped.solvers.radau.error.ErrorEstima
 is negative) and :func:`lumped.solvers.modes.guards.fold_crossed`; the unknowns are laid out as in
 :mod:`lumped.solvers.radau.stage` (``U[k*n + i]`` a node's stage velocity, ``U[k*n + N + e]`` an
 element's stage force). The scene's kernels come in as numba first-class functions,
-``branch_law(e, i, q, F)`` and ``branch_guards(e, i, q, F, out)`` of
+``branch_law(e, i, q, F, lawc)`` and ``branch_guards(e, i, q, F, out, lawc)`` of
 :mod:`lumped.codegen.jit`.
 """
 
@@ -64,17 +64,17 @@ def element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, e, q, F) -> None
 
 
 @njit(cache=True)
-def folded(branch_law, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n, U, N, n, q,
+def folded(branch_law, lawc, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n, U, N, n, q,
             F) -> bool:
     """A checked element's law crosses a fold along the step
     (:func:`lumped.solvers.modes.guards.fold_crossed` on the held branch's kernel)."""
     for c in range(checked.shape[0]):
         e = checked[c]
         element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, e, q, F)
-        _, Rq0, RF0 = branch_law(e, modes[e], q[0], F[0])
+        _, Rq0, RF0 = branch_law(e, modes[e], q[0], F[0], lawc)
         for k in range(3):
-            _, Rq1, RF1 = branch_law(e, modes[e], q[k + 1], F[k + 1])
-            if _left_branch(branch_law, e, modes[e], q[k], F[k], Rq0, RF0, q[k + 1],
+            _, Rq1, RF1 = branch_law(e, modes[e], q[k + 1], F[k + 1], lawc)
+            if _left_branch(branch_law, lawc, e, modes[e], q[k], F[k], Rq0, RF0, q[k + 1],
                             F[k + 1], Rq1, RF1):
                 return True
             Rq0, RF0 = Rq1, RF1
@@ -82,7 +82,7 @@ def folded(branch_law, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n, U, N
 
 
 @njit(cache=True, inline="always")
-def _left_branch(branch_law, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
+def _left_branch(branch_law, lawc, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
     """:func:`lumped.solvers.bdf.core_jit.left_branch` (the fold test of
     :mod:`lumped.solvers.implicit.branch_check`) on element ``e``'s branch ``mode``."""
     s0 = abs(Rq0) + abs(RF0)
@@ -103,7 +103,7 @@ def _left_branch(branch_law, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> boo
     if off <= 0.5:
         return False
     for s in (0.25, 0.5, 0.75):
-        _, Rq, RF = branch_law(e, mode, q0 + s * dq, F0 + s * dF)
+        _, Rq, RF = branch_law(e, mode, q0 + s * dq, F0 + s * dF, lawc)
         sc = abs(Rq) + abs(RF)
         mq |= sign_bit(dead_band_sign(Rq, sc))
         mf |= sign_bit(dead_band_sign(RF, sc))
@@ -113,7 +113,7 @@ def _left_branch(branch_law, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> boo
 
 
 @njit(cache=True)
-def crossed(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, U, N, n,
+def crossed(branch_guards, lawc, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, U, N, n,
              qn, Fn, gbuf) -> bool:
     """True when a watched guard (shifted by its round-off tolerance) is negative at a
     sample of the step: :func:`lumped.solvers.modes.crossing_root.first_root_py`'s test."""
@@ -130,7 +130,7 @@ def crossed(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, 
             qs = q0 + (l1 * (qn[w, 1] - q0) + l2 * (qn[w, 2] - q0) + l3 * (qn[w, 3] - q0))
             Fs = f0 + (l1 * (Fn[w, 1] - f0) + l2 * (Fn[w, 2] - f0) + l3 * (Fn[w, 3] - f0))
             tol = 64.0 * 2.220446049250313e-16 * (1.0 + abs(qs) + abs(Fs))
-            count = branch_guards(e, modes[e], qs, Fs, gbuf)
+            count = branch_guards(e, modes[e], qs, Fs, gbuf, lawc)
             for j in range(count):
                 if gbuf[j] + tol < 0.0:
                     return True
@@ -138,7 +138,7 @@ def crossed(branch_guards, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, 
 
 
 @njit(cache=True)
-def error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x_n, v_n, F_n,
+def error_norm(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h, x_n, v_n, F_n,
                 net_n, dF, have_dF, rtol, atol, F_ref, M, LU, perm, rhs, err, two) -> float:
     """The scaled RMS error of the step (``StageSystem.error`` then ``error_norm``);
     NaN for a non-finite system, -1.0 for a singular finite one (Python's minimum norm).
@@ -181,7 +181,7 @@ def error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x_n,
             M[N + b, col] += 1.0
         q_e = (_elem_at(spring[e], A, h, x_n, v_n, U, n, b, -1)
                - _elem_at(spring[e], A, h, x_n, v_n, U, n, a, -1))
-        _R, Rq, RF = branch_law(e, modes[e], q_e, F_n[e])
+        _R, Rq, RF = branch_law(e, modes[e], q_e, F_n[e], lawc)
         off = 0 if spring[e] else N
         if b >= 0:
             M[col, off + b] -= Rq
@@ -241,7 +241,7 @@ def finite(J) -> bool:
 
 
 @njit(cache=True)
-def step_error(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, t, prev_break,
+def step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h, t, prev_break,
                 x, v, F, dF, have_dF, fkind, fpar, net, rtol, atol, F_ref, M, LUm, permm, rhs,
                 err, two) -> float:
     """The error norm of the step from ``t`` (the forces right after a breakpoint)."""
@@ -252,5 +252,5 @@ def step_error(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, t, p
             net[ea[e]] += F[e]
         if eb[e] >= 0:
             net[eb[e]] -= F[e]
-    return error_norm(branch_law, masses, ea, eb, spring, modes, watched, A, U, h, x, v, F,
+    return error_norm(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h, x, v, F,
                        net, dF, have_dF == 1, rtol, atol, F_ref, M, LUm, permm, rhs, err, two)
