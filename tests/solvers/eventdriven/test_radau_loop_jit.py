@@ -164,29 +164,55 @@ def test_a_fold_stops_the_compiled_run_as_the_python_run():
     assert np.array_equal(fast.data, ref.data)
 
 
-def test_by_default_a_new_scene_compiles_once_a_run_is_long(monkeypatch):
-    """``compiled=None``: a scene not compiled yet in this process starts in the Python loop
-    and switches to the compiled loop after ``COMPILE_AFTER`` steps, seamlessly (the same
-    run as the Python loop's); a short run stays in Python; a compiled scene starts
-    compiled."""
+#: A law no other test uses: its structure is compiled only by the test below.
+_ONLY_HERE = ElementLaw("only_in_the_compile_test", "spring", "F = k*q + c*q**3", ["k", "c"])
+
+
+def test_by_default_a_new_structure_compiles_once_then_every_run_is_compiled(
+        monkeypatch, tmp_path):
+    """``compiled=None``: a structure with no compiled module yet (none loaded, an empty
+    disk cache) starts in the Python loop and switches to the compiled loop after
+    ``COMPILE_AFTER`` steps, seamlessly (the same run as the Python loop's); a short run
+    stays in Python; then every run of that structure, with any numbers, starts compiled,
+    and new numbers build no module."""
+    from lumped.codegen import jit
     from lumped.solvers.eventdriven import fast as adaptive_fast
 
     COMPILE_AFTER = 200  # a shorter run than the default's
     monkeypatch.setattr(adaptive_fast, "COMPILE_AFTER", COMPILE_AFTER)
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path))
 
-    lin, bing = get_law("linear_spring"), get_law("bingham")
-    scene = Scene([Mass("m", m=1.0, x0=0.5)],
-                  [Element("s", lin.bind(k=123.25), "ground", "m"),
-                   Element("d", bing.bind(gamma=0.75, tau=1.25), "ground", "m")])
-    short = simulate(scene, method="radau5", t_end=0.2, rtol=1e-6)
+    def scene(k, c, gamma, tau):
+        return Scene([Mass("m", m=1.0, x0=0.5)],
+                     [Element("s", _ONLY_HERE.bind(k=k, c=c), "ground", "m"),
+                      Element("d", get_law("bingham").bind(gamma=gamma, tau=tau), "ground",
+                              "m")])
+
+    first = scene(123.25, 0.5, 0.75, 1.25)
+    short = simulate(first, method="radau5", t_end=0.2, rtol=1e-6)
     assert short.stats["loop"] == "python: not compiled yet (a short run)"
     kw = dict(method="radau5", t_end=3.0, rtol=1e-9, atol=1e-12)
-    ref = simulate(scene, compiled=False, **kw)
-    lazy = simulate(scene, **kw)
+    ref = simulate(first, compiled=False, **kw)
+    modules = len(jit.LOADED_MODULES)
+    lazy = simulate(first, **kw)
+    assert len(jit.LOADED_MODULES) == modules + 1  # the structure's one module
     assert ref.stats["steps"] > COMPILE_AFTER + 50
     assert lazy.stats["loop"] == f"compiled from step {COMPILE_AFTER}"
     assert np.array_equal(lazy.data, ref.data) and lazy.stats["nfev"] == ref.stats["nfev"]
-    assert simulate(scene, **kw).stats["loop"] == "compiled"
+    assert simulate(first, **kw).stats["loop"] == "compiled"
+    # new numbers, never run before: compiled from step 0, no module built, and the
+    # compiled run is the Python loop's
+    module = jit.jit_scene(first).module
+    signatures = {name: len(getattr(module, name).signatures)
+                  for name in ("branch_law", "branch_guards", "active_branch")}
+    for numbers in [(97.5, 0.25, 0.8, 1.5), (140.0, 1.75, 0.6, 0.9)]:
+        other = scene(*numbers)
+        new = simulate(other, method="radau5", t_end=0.2, rtol=1e-6)
+        assert new.stats["loop"] == "compiled"
+        assert np.array_equal(new.data, simulate(other, method="radau5", t_end=0.2,
+                                                 rtol=1e-6, compiled=False).data)
+    assert len(jit.LOADED_MODULES) == modules + 1
+    assert {name: len(getattr(module, name).signatures) for name in signatures} == signatures
 
 
 def test_the_compiled_keyword_is_checked():

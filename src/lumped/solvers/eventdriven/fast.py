@@ -27,11 +27,14 @@ __all__ = ["CompiledLoop", "compiled_loop"]
 BLOCK = 256
 
 
-#: With ``compiled=None``, a scene whose compiled parts are not built yet in this process
-#: starts in the Python loop and is compiled once a run has taken this many steps (about
-#: 0.25 s of Python steps, the order of what a compile costs: about 0.8 s of CPU for a new
-#: scene's kernels, 0.3 s from numba's disk cache): a short run never pays for a
-#: compile, a long one soon does; the two loops give the same numbers.
+#: With ``compiled=None``, a scene whose structure has no compiled module yet (none
+#: loaded in this process, none in the disk cache: the laws' numbers are run-time data,
+#: so any earlier run of the same laws and topology, with any numbers, built it) starts
+#: in the Python loop and is compiled once a run has taken this many steps (about 0.25 s
+#: of Python steps, the order of what compiling a new structure's kernels costs, about
+#: 0.8 s of CPU): a short run of a new structure never pays for a compile, a long one
+#: soon does; a structure compiled once runs compiled from step 0 on every later run.
+#: The two loops give the same numbers.
 COMPILE_AFTER = 2000
 
 
@@ -42,8 +45,8 @@ def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
     ``plan`` is the scene's :class:`~lumped.solvers.eventdriven.setup.ScenePlan` (the
     compiled parts are kept on it); ``option`` is the ``compiled`` keyword: ``False``
     asks for the Python loop, ``True`` for the compiled loop now, ``None`` for it now if
-    the scene's parts are built, else once the run has taken :data:`COMPILE_AFTER`
-    ``steps``."""
+    the scene's structure has its compiled module (in this process or the disk cache),
+    else once the run has taken :data:`COMPILE_AFTER` ``steps``."""
     if option is False:
         return None, "python: compiled=False"
     with plan.lock:
@@ -57,11 +60,9 @@ def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
 
 
 def _loaded(scene: Scene, plan) -> bool:
-    """The scene's generated module is loaded in this process already (another scene
-    object with the same laws and structure compiled it): nothing left to compile.
-    Checked once per plan."""
-    import hashlib
-
+    """The scene's structure has its generated module already, loaded in this process or
+    in the disk cache (an earlier run of the same laws and topology, with any numbers,
+    compiled it): nothing left to compile. Checked once per plan."""
     from ...codegen import jit
 
     if getattr(plan, "module_loaded", None) is None:
@@ -70,8 +71,7 @@ def _loaded(scene: Scene, plan) -> bool:
         except ValueError:  # a hand-written kernel: _parts says why
             plan.module_loaded = True
         else:
-            digest = hashlib.sha256(source.encode()).hexdigest()[:24]
-            plan.module_loaded = digest in jit.LOADED_MODULES  # the key of jit.scene_module
+            plan.module_loaded = jit.module_cached(source)
     return plan.module_loaded
 
 
