@@ -335,8 +335,10 @@ def compile_kernel(
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
+    twin = _CACHE.get((*key[:4], not key[4]))
     with distribute(False):  # keep gamma*(F - p) as written: no gamma*F - gamma*p
-        exprs = prepare(residual, q, F, params)
+        # the other variant's prepared expressions when it is built (the same parameters)
+        exprs = twin.expressions if twin is not None else prepare(residual, q, F, params)
         kernel = build_kernel("kernel", ["q", "F"], list(exprs), guard=guard)
         magnitude = build_kernel("magnitude", ["q", "F"], [magnitude_expression(exprs[0])],
                            guard=guard)
@@ -346,23 +348,36 @@ def compile_kernel(
     return kernel
 
 
+#: :func:`build_kernel`'s emitted bodies: ``(name, args, exprs) -> (lines, result, nans)``,
+#: the body at indent 0, shared by the guarded and the bare variant.
+_BODIES: dict[tuple, tuple[list[str], str, str]] = {}
+
+
 def build_kernel(name: str, args: list[str], exprs: list[sp.Expr], *,
                  guard: bool = True) -> Callable:
-    """Generate, compile and return ``def name(*args): return exprs`` (see module doc)."""
-    emitter = _Emitter()
-    emitter.emit(0, f"def {name}({', '.join(args)}):")
-    depth = 1
+    """Generate, compile and return ``def name(*args): return exprs`` (see module doc).
+
+    The body is emitted once per ``(name, args, exprs)`` and shared by the guarded and
+    the bare variant (the same text, indented)."""
+    key = (name, tuple(args), tuple(exprs))
+    hit = _BODIES.get(key)
+    if hit is None:
+        emitter = _Emitter()
+        codes = emitter.region(exprs, 0, _Scope({}, {}))
+        result = codes[0] if len(codes) == 1 else f"({', '.join(codes)})"
+        nans = "math.nan" if len(codes) == 1 else f"({', '.join(['math.nan'] * len(codes))})"
+        hit = _BODIES[key] = (emitter.lines, result, nans)
+    body, result, nans = hit
+    depth = 2 if guard else 1
+    pad = "    " * depth
+    lines = [f"def {name}({', '.join(args)}):"]
     if guard:
-        emitter.emit(1, "try:")
-        depth = 2
-    codes = emitter.region(exprs, depth, _Scope({}, {}))
-    result = codes[0] if len(codes) == 1 else f"({', '.join(codes)})"
-    nans = "math.nan" if len(codes) == 1 else f"({', '.join(['math.nan'] * len(codes))})"
-    emitter.emit(depth, f"return {result}")
+        lines.append("    try:")
+    lines += [pad + line for line in body]
+    lines.append(f"{pad}return {result}")
     if guard:
-        emitter.emit(1, "except (ArithmeticError, ValueError):")
-        emitter.emit(2, f"return {nans}")
-    source = "\n".join(emitter.lines) + "\n"
+        lines += ["    except (ArithmeticError, ValueError):", f"        return {nans}"]
+    source = "\n".join(lines) + "\n"
     namespace: dict[str, object] = {"math": math, "__builtins__": dict(_NAMESPACE_BUILTINS)}
     exec(compile(source, f"<lumped {name}>", "exec"), namespace)  # noqa: S102 (our own source)
     function = namespace[name]
