@@ -104,18 +104,28 @@ def test_failures_are_reported_by_the_faithful_port():
         simulate(scene, method="jit-bdf1", dt=1e-3, t_end=1.0)
 
 
-def test_short_runs_skip_the_fast_path_unless_asked():
-    """``fast=None`` (the default) compiles the fast loop only for runs of at least
-    ``FAST_MIN_STEPS`` steps; ``fast=True`` forces it."""
+def test_short_runs_of_a_new_structure_skip_the_fast_path_unless_asked(monkeypatch, tmp_path):
+    """``fast=None`` (the default) compiles the fast loop of a new structure only for runs
+    of at least ``FAST_MIN_STEPS`` steps; ``fast=True`` forces it; once built, every run
+    of the structure, with any numbers, takes it."""
+    from lumped.solvers.bdf import fast_codegen
     from lumped.solvers.bdf.fixed_step_jit import FAST_MIN_STEPS
 
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path))  # an empty disk cache
+    monkeypatch.setattr(fast_codegen, "_BY_KEY", {})
+    monkeypatch.setattr(fast_codegen, "LOADED_MODULES", {})
     scene = scenario_scene("release-0.5")
-    short = simulate(scene, method="jit-bdf2", dt=1e-3, t_end=(FAST_MIN_STEPS - 1) * 1e-3)
+    t_end = (FAST_MIN_STEPS - 1) * 1e-3
+    short = simulate(scene, method="jit-bdf2", dt=1e-3, t_end=t_end)
     assert "fast_steps" not in short.stats
-    forced = simulate(scene, method="jit-bdf2", dt=1e-3, t_end=(FAST_MIN_STEPS - 1) * 1e-3,
-                      fast=True)
+    forced = simulate(scene, method="jit-bdf2", dt=1e-3, t_end=t_end, fast=True)
     assert forced.stats["fast_steps"] == FAST_MIN_STEPS - 1
     assert_close(forced, short)
+    other = Scene([Mass("mass", 2.5, x0=0.25)],
+                  [Element("spring", get_law("linear_spring").bind(k=37.0), "ground", "mass"),
+                   Element("dashpot", get_law("bingham").bind(gamma=1.0, tau=0.75), "ground",
+                           "mass")])
+    assert simulate(other, method="jit-bdf2", dt=1e-3, t_end=0.1).stats["fast_steps"] == 100
 
 
 def test_fast_keyword_is_checked():

@@ -80,7 +80,8 @@ from ...codegen.jit import (
     scene_templates,
 )
 
-__all__ = ["MAX_FAST_ITERATIONS", "MAX_FAST_UNKNOWNS", "fast_source", "fast_module"]
+__all__ = ["MAX_FAST_ITERATIONS", "MAX_FAST_UNKNOWNS", "fast_source", "fast_module",
+           "fast_module_cached"]
 
 #: Newton iterations the fast path tries before it hands the step over.
 MAX_FAST_ITERATIONS = 6
@@ -305,6 +306,23 @@ def _tree(terms: list[str]) -> str:
     return f"({_tree(terms[:mid])} + {_tree(terms[mid:])})"
 
 
+def _fast_name(source: str) -> str:
+    return "lumped_jitfast_" + hashlib.sha256(source.encode()).hexdigest()[:24]
+
+
+def fast_module_cached(scene, key: tuple | None = None) -> bool:
+    """The scene's fast-path module exists: loaded in this process (under ``key`` or its
+    source) or in the disk cache. Its source does not depend on the laws' numbers, so any
+    earlier run of the same structure built it."""
+    from ...codegen.jit import cache_dir
+
+    if key is not None and key in _BY_KEY:
+        return True
+    name = _fast_name(fast_source(scene))
+    return ("fast-" + name[len("lumped_jitfast_"):] in LOADED_MODULES
+            or (cache_dir() / "jit" / f"{name}.py").exists())
+
+
 def fast_module(scene, key: tuple | None = None) -> ModuleType:
     """The generated fast-path module of ``scene``, from the disk cache (as
     :func:`lumped.codegen.jit.scene_module`, under the prefix ``lumped_jitfast_``).
@@ -319,12 +337,12 @@ def fast_module(scene, key: tuple | None = None) -> ModuleType:
         if module is not None:
             return module
     source = fast_source(scene)
-    digest = "fast-" + hashlib.sha256(source.encode()).hexdigest()[:24]
+    name = _fast_name(source)
+    digest = "fast-" + name[len("lumped_jitfast_"):]
     with MODULE_LOCK:
         module = LOADED_MODULES.get(digest)
         if module is None:
-            module = LOADED_MODULES[digest] = import_generated(f"lumped_jitfast_{digest[5:]}",
-                                                         source)
+            module = LOADED_MODULES[digest] = import_generated(name, source)
         if key is not None:
             _BY_KEY[key] = module
     return module

@@ -118,9 +118,11 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
     ``fast=False``, or a step system of more than
     :data:`~lumped.solvers.bdf.fast_codegen.MAX_FAST_UNKNOWNS` unknowns, the faithful port alone
     runs: the reference's numbers and counters bit for bit. ``fast=None`` (the default)
-    is ``True`` for runs of at least :data:`FAST_MIN_STEPS` steps: the fast loop is
-    compiled per scene (a few seconds the first time on a machine, then from the disk
-    cache), which a short run does not pay back.
+    is ``True`` for runs of at least :data:`FAST_MIN_STEPS` steps, and for every run of a
+    structure whose fast loop exists (loaded, or in the disk cache): the fast loop is
+    compiled once per structure (the laws' expressions and the topology; a few seconds
+    the first time on a machine), which a short run of a new structure does not pay
+    back; the laws' numbers are run-time data, so new numbers compile nothing.
 
     Raises
     ------
@@ -138,10 +140,13 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
 
     if fast is not None and not isinstance(fast, bool):
         raise TypeError(f"`fast` must be True, False or None, got {fast!r}")
-    if fast is None:
-        fast = n_steps >= FAST_MIN_STEPS
     js, args, ic_stats = loop_arguments(scene, JIT_METHODS[method], dt, n_steps, options)
-    from .fast_codegen import MAX_FAST_UNKNOWNS
+    from .fast_codegen import MAX_FAST_UNKNOWNS, fast_module_cached
+
+    if fast is None:
+        fast = n_steps >= FAST_MIN_STEPS or (
+            len(scene.nodes) + len(scene.elements) <= MAX_FAST_UNKNOWNS
+            and fast_module_cached(scene))
 
     if fast and len(scene.nodes) + len(scene.elements) <= MAX_FAST_UNKNOWNS:
         from .fast_jit import run_fast_path
