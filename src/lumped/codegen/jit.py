@@ -12,44 +12,55 @@ unknowns of an implicit step are ``u = (v_0 .. v_{N-1}, F_0 .. F_{E-1})``. All s
 functions take and return floats; ``q`` is the element's elongation (spring) or its
 rate (dashpot), ``F`` its force (sign convention of :mod:`lumped.scene`).
 
-``law_<j>(q, F) -> (R, dR/dq, dR/dF)``, ``mag_<j>(q, F) -> M``
-    Kernel and term magnitude of the scene's ``j``-th distinct law (the code of
-    :func:`lumped.codegen.compile_kernel` with ``guard=False``, unchanged).
-``element_law(e, q, F) -> (R, dR/dq, dR/dF)``, ``element_magnitude(e, q, F) -> M``
+One module per *structure*. Every float literal of a law's generated functions (the code
+of :func:`lumped.codegen.compile_kernel` with ``guard=False``, and of the branch
+machinery) is lifted into a trailing argument (:func:`lift_constants`: the literal's
+text is the ``repr`` of a float, so the value passed is the very double it stood for and
+the compiled code computes the same numbers bit for bit). The module's text is then the
+same for every value of the laws' numbers; it is named by its hash, so new numbers load
+the module their structure compiled. The scene's values are the array ``c``
+(:attr:`JitScene.consts`, element after element, from :attr:`JitScene.offsets`), which
+every entry point below takes last:
+
+``law_<j>(q, F, c_0, ...) -> (R, dR/dq, dR/dF)``, ``mag_<j>(q, F, c_0, ...) -> M``
+    Kernel and term magnitude of the scene's ``j``-th distinct law template.
+``element_law(e, q, F, c) -> (R, dR/dq, dR/dF)``, ``element_magnitude(e, q, F, c) -> M``
     The same, by element index.
-``scene_laws(q, F, out_R, out_Rq, out_RF)``
+``scene_laws(q, F, out_R, out_Rq, out_RF, c)``
     All elements at once: ``q, F`` arrays of length ``E``, results written in place.
 ``evaluate(u, p, G, J, S, roundoff)``
     The residual ``G``, generalised Jacobian ``J`` (``n x n``, structural zeros left
     untouched) and row scales ``S`` of the BDF step system of
     :mod:`lumped.solvers.bdf.fixed_step` in ``u``, with ``p = [h, m_i / h (N), v_hat (N),
-    x_hat (N), f(t) (N)]``: momentum rows ``(m_i / h)(v_i - v_hat_i) - f_i - sum_{a_e = i}
-    F_e + sum_{b_e = i} F_e``, junction rows without the first term, law rows
-    ``R_e(q_e, F_e)`` with ``q_e = x_hat_b + h v_b - (x_hat_a + h v_a)`` (springs) or
-    ``v_b - v_a`` (dashpots). ``roundoff`` selects the law rows' scale
-    ``max(|R_q q| + |R_F F|, M)`` (else the first term alone).
-``active_branch(e, q, F) -> int``
+    x_hat (N), f(t) (N), c]`` (the constants after the ``1 + 4 N`` step parameters):
+    momentum rows ``(m_i / h)(v_i - v_hat_i) - f_i - sum_{a_e = i} F_e + sum_{b_e = i}
+    F_e``, junction rows without the first term, law rows ``R_e(q_e, F_e)`` with ``q_e =
+    x_hat_b + h v_b - (x_hat_a + h v_a)`` (springs) or ``v_b - v_a`` (dashpots).
+    ``roundoff`` selects the law rows' scale ``max(|R_q q| + |R_F F|, M)`` (else the
+    first term alone).
+``active_branch(e, q, F, c) -> int``
     The index of element ``e``'s active smooth branch at ``(q, F)``, by the kernel's own
     rules (:meth:`lumped.codegen.branches.LawBranches.branch`; -1 where none holds).
-``branch_count(e) -> int``, ``branch_law(e, i, q, F) -> (R, dR/dq, dR/dF)``
+``branch_count(e) -> int``, ``branch_law(e, i, q, F, c) -> (R, dR/dq, dR/dF)``
     Element ``e``'s law on its smooth branch ``i`` alone (``i < branch_count(e)``;
     :meth:`~lumped.codegen.branches.LawBranches.stage_kernel_for`: a steep branch in its
     inverse form ``F - G(q)``), smooth wherever defined.
-``branch_guards(e, i, q, F, out) -> int``
+``branch_guards(e, i, q, F, out, c) -> int``
     The branch's guard values (:meth:`~lumped.codegen.branches.LawBranches.stage_guards_for`:
     all ``> 0`` strictly inside branch ``i``, some ``< 0`` outside; an event is a sign
     change) written to ``out[0 .. k-1]``; returns ``k`` (0 for a smooth law).
 
 The solvers are compiled once for all scenes (:mod:`lumped.solvers.bdf.core_jit`) and
 take ``evaluate`` and ``element_law`` as function pointers (numba's first-class
-function types): a new scene compiles only its own small functions.
+function types): a new structure compiles only its own small functions, and new numbers
+compile nothing.
 
 The scene's structure (arrays, runtime data, not baked into the code) is on
 :class:`JitScene`: ``masses`` (``m_i``, 0 for a junction), ``ea, eb`` (element ends,
--1 for ground), ``spring`` (True for a spring-like law), ``law_index`` (element -> ``j``).
-Parameters of the laws are baked in (they are constants of the kernels); masses,
-initial state, step size and forcing are not, so scenes that differ only in those share
-one compiled module.
+-1 for ground), ``spring`` (True for a spring-like law), ``law_index`` (element -> ``j``),
+``consts`` and ``offsets``. A number changes the code only where it changes the
+generated source: a parameter equal to 0 or 1 (sympy drops the term or the factor), a
+sign, an exponent of 2 or 0.5 (a product, a square root), a steep branch's inverse form.
 
 The disk cache
 --------------
@@ -380,7 +391,8 @@ def _evaluate_source(scene, call: Callable[..., str]) -> list[str]:
         k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
         qb, qa, dq = end_values_source(el.kind, a, b, lambda i: f"p[{xh + i}]",
                                        lambda i: f"u[{i}]")
-        L += [f"    q = {qb} - {qa}", f"    Fe = u[{k}]", f"    R, Rq, RF = {call(e, 'law', 'q, Fe', 'p', 1 + 4 * N)}",
+        L += [f"    q = {qb} - {qa}", f"    Fe = u[{k}]",
+              f"    R, Rq, RF = {call(e, 'law', 'q, Fe', 'p', 1 + 4 * N)}",
               f"    G{k} = R", "    lin = abs(Rq * q) + abs(RF * Fe)", "    if roundoff:",
               f"        M = {call(e, 'mag', 'q, Fe', 'p', 1 + 4 * N)}",
               f"        S{k} = M if (M > lin and M != math.inf) else lin", "    else:",

@@ -319,11 +319,11 @@ def _run_rows(job: tuple, rows: list[dict]) -> list[tuple[dict, Any]]:
     return [_run_one(job, values) for values in rows]
 
 
-#: Parameter points a worker runs before it is replaced, for the ``jit-*`` methods: each
-#: new parameter set compiles a numba module that the process keeps for good (0.5 s and
-#: 6 MB, docs/benchmarks.md, "Memory per compiled scene"), so a worker holds at most
-#: about 1.2 GB of them; a new worker costs one import (about 2 s).
-JIT_TASKS_PER_WORKER = 200
+#: Parameter points a worker runs before it is replaced, for the ``jit-*`` methods. The
+#: compiled code is one module per structure (a new parameter set compiles nothing), but
+#: each new set keeps its generated Python kernels (about 0.1 MB, docs/benchmarks.md,
+#: "Memory and time per new parameter set"); a new worker costs one import (about 2 s).
+JIT_TASKS_PER_WORKER = 2000
 
 
 def _tasks_per_worker(method: str) -> int | None:

@@ -74,8 +74,8 @@ def test_compiled_breakout_root_agrees_with_the_reference():
     for hold, e, j, guard, a, b, modes, fast in calls:
         ref = keep(hold, e, j, guard, a, b)
         _, fkind, fpar, c, minv, _ = hold.arrays()
-        got = root(fast.guards.addr, fast.js.consts, e, modes[e], j, hold.q[e], hold.free.index(e), fkind,
-                   fpar, c, minv, a, b, np.zeros(64))
+        got = root(fast.guards.addr, fast.js.consts, e, modes[e], j, hold.q[e],
+                   hold.free.index(e), fkind, fpar, c, minv, a, b, np.zeros(64))
         assert got == ref  # (not the fallback: nan)
         assert a < ref <= b
 

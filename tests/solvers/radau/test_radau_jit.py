@@ -69,7 +69,8 @@ def test_stage_system_bit_for_bit(setup, data, h, mode_d):
     G_ref, J_ref = system.evaluate(list(U), h, list(x_n), list(v_n), f.tolist(), kernels)
     G, J, *_ = workspace(len(scene.nodes), len(scene.elements))
     A, W = np.array(tableau.A), np.array(tableau.W)
-    stage_evaluate(js.module.branch_law, js.consts, js.masses, js.ea, js.eb, js.spring, js.lock_q, modes,
+    stage_evaluate(js.module.branch_law, js.consts, js.masses, js.ea, js.eb, js.spring,
+                   js.lock_q, modes,
                    A, W, U, h, x_n, v_n, f, G, J)
     assert G.tolist() == G_ref
     assert J.tolist() == J_ref
@@ -118,7 +119,8 @@ def test_a_taut_string_is_held_on_the_velocity_level_bit_for_bit() -> None:
     h = 1e-7
     G_ref, J_ref = system.evaluate(list(U), h, list(x_n), list(v_n), f.tolist(), kernels)
     G, J, *_ = workspace(2, 2)
-    stage_evaluate(js.module.branch_law, js.consts, js.masses, js.ea, js.eb, js.spring, js.lock_q, modes,
+    stage_evaluate(js.module.branch_law, js.consts, js.masses, js.ea, js.eb, js.spring,
+                   js.lock_q, modes,
                    np.array(tableau.A), np.array(tableau.W), U, h, x_n, v_n, f, G, J)
     assert G.tolist() == G_ref and J.tolist() == J_ref
     # the lock's residual is h sum_l a_kl (V_l,2 - V_l,1): no rounding of x in it

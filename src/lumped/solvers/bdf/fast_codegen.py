@@ -205,7 +205,8 @@ def fast_source(scene) -> str:
     L += [f"{ind}xn{i} = xh{i} + h * u{i}" for i in range(N)]
     for e in checked:
         q1 = elong(e, "xn", "u")
-        L += [f"{ind}q1 = {q1}", f"{ind}_, Rq1, RF1 = law_{law_index[e]}(q1, u{N + e}{law_args(e)})",
+        L += [f"{ind}q1 = {q1}",
+              f"{ind}_, Rq1, RF1 = law_{law_index[e]}(q1, u{N + e}{law_args(e)})",
               f"{ind}if left_branch(element_law, lawc, {e}, pq{e}, F{e}, pRq{e}, pRF{e}, q1, "
               f"u{N + e}, Rq1, RF1):", f"{ind}    break",
               f"{ind}pq{e} = q1", f"{ind}pRq{e} = Rq1", f"{ind}pRF{e} = RF1"]

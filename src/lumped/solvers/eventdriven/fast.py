@@ -203,9 +203,9 @@ class CompiledLoop:
         return x, v, F, dF
 
     def _call(self, x, v, F, dF, T0, HS, Y0, D, ROWS) -> None:
-        self.fn(self.law.addr, self.guards.addr, self.js.consts, self.js.masses, self.js.ea, self.js.eb,
-                self.js.spring, self.js.lock_q, self.modes_a, self.watched_a, self.checked,
-                self.A, self.W, self.fkind, self.fpar, x, v, F, dF, self.fst, self.ist,
+        self.fn(self.law.addr, self.guards.addr, self.js.consts, self.js.masses, self.js.ea,
+                self.js.eb, self.js.spring, self.js.lock_q, self.modes_a, self.watched_a,
+                self.checked, self.A, self.W, self.fkind, self.fpar, x, v, F, dF, self.fst, self.ist,
                 T0, HS, Y0, D, ROWS, self.ws, self.wm, self.iw)
         self.calls += 1
 
@@ -226,8 +226,8 @@ class CompiledLoop:
         js = self.js
         cands = np.array(candidates, dtype=np.int64).reshape(len(candidates), self.E)
         cur = _NO_MODE if current is None else np.array(current, dtype=np.int64)
-        k = fn(self.law.addr, self.branch.addr, js.consts, js.masses, js.ea, js.eb, js.spring, cands,
-               cur, np.array(f, dtype=float), np.array(x, dtype=float),
+        k = fn(self.law.addr, self.branch.addr, js.consts, js.masses, js.ea, js.eb, js.spring,
+               cands, cur, np.array(f, dtype=float), np.array(x, dtype=float),
                np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
         return k, out
 

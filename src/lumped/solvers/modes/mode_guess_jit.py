@@ -36,8 +36,8 @@ def probe_modes(law_addr, branch_addr, lawc, masses, ea, eb, spring, cands, curr
     after the probe step of size ``h_p`` (see :func:`lumped.solvers.modes.mode_guess.try_modes`):
     its index, with ``v_p`` and ``F_p`` in ``out[:N]`` and ``out[N:N + E]``; else
     :data:`UNDECIDED` when one candidate's result reads as ``current`` (an empty array:
-    no current mode), or :data:`REFUSED`. ``lawc``: the scene's law constants. ``wm`` is work space, at least ``(n + 3, n)``
-    with ``n = N + E``."""
+    no current mode), or :data:`REFUSED`. ``lawc``: the scene's law constants. ``wm``
+    is work space, at least ``(n + 3, n)`` with ``n = N + E``."""
     branch_law = _law_at(law_addr)
     active_branch = _branch_at(branch_addr)
     N = masses.shape[0]

@@ -196,9 +196,10 @@ class StaticHold:
         y0, fkind, fpar, c, minv, free = self.arrays()
         ts = np.array(samples, dtype=float)
         out = np.empty((len(samples), len(self.F0)))
-        k = fast.breakout_scan(fast.guards.addr, fast.js.consts, free, np.array(modes, dtype=np.int64),
-                             np.array(self.q, dtype=float), fkind, fpar, c, minv,
-                             y0[len(y0) - len(self.F0):], ts, out, np.zeros(64))
+        k = fast.breakout_scan(fast.guards.addr, fast.js.consts, free,
+                               np.array(modes, dtype=np.int64),
+                               np.array(self.q, dtype=float), fkind, fpar, c, minv,
+                               y0[len(y0) - len(self.F0):], ts, out, np.zeros(64))
         rows = out[:len(samples) if k < 0 else k + 1].tolist()
         for s, row in zip(samples, rows, strict=False):  # (rows: up to the stop)
             self._seen[s] = row
