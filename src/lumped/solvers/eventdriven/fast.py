@@ -205,8 +205,8 @@ class CompiledLoop:
     def _call(self, x, v, F, dF, T0, HS, Y0, D, ROWS) -> None:
         self.fn(self.law.addr, self.guards.addr, self.js.consts, self.js.masses, self.js.ea,
                 self.js.eb, self.js.spring, self.js.lock_q, self.modes_a, self.watched_a,
-                self.checked, self.A, self.W, self.fkind, self.fpar, x, v, F, dF, self.fst, self.ist,
-                T0, HS, Y0, D, ROWS, self.ws, self.wm, self.iw)
+                self.checked, self.A, self.W, self.fkind, self.fpar, x, v, F, dF, self.fst,
+                self.ist, T0, HS, Y0, D, ROWS, self.ws, self.wm, self.iw)
         self.calls += 1
 
     def _workspace(self) -> None:

@@ -89,8 +89,8 @@ def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, 
     ``branch_law`` and ``branch_guards`` (:func:`law_type`, :func:`guards_type`; the
     caller keeps them alive), ``lawc`` the scene's law constants they take: an integer
     is passed in a few nanoseconds, where numba passes a first-class function argument
-    through two Python calls that unpickle its signature (about 3.5 us each, per call). ``ws`` (vectors), ``wm`` (matrices) and
-    ``iw`` (ints) are :func:`loop_workspace`."""
+    through two Python calls that unpickle its signature (about 3.5 us each, per call).
+    ``ws`` (vectors), ``wm`` (matrices) and ``iw`` (ints) are :func:`loop_workspace`."""
     branch_law = _law_at(law_addr)
     branch_guards = _guards_at(guards_addr)
     N = masses.shape[0]
