@@ -20,7 +20,8 @@ The scene enters through two compiled callbacks generated per scene by
 constants) and ``element_law(e, q, F, c)`` (element ``e``'s kernel), passed as
 *function pointers* (numba's first-class function types, :data:`EVALUATE_TYPE`,
 :data:`ELEMENT_LAW_TYPE`): the loop is compiled once for every scene
-(:func:`compiled_run_bdf_core`, cached on disk), and a new structure compiles only its own small functions; the laws' numbers are data (``lawc``), so new
+(:func:`compiled_run_bdf_core`, cached on disk), and a new structure compiles only its
+own small functions; the laws' numbers are data (``lawc``), so new
 numbers compile nothing. Nothing else comes from the scene: the forcing is read
 from ``fkind, fpar, ftab`` by :func:`forcing_into` (kinds: 0 none, 1 constant
 ``fpar[i, 0]``, 2 sine burst ``fpar[i] = (A, omega, t_off)``, 3 a table
