@@ -8,7 +8,15 @@ A node's forcing is a kind and three parameters:
 * :data:`FORCE_SINE` (2): the sine burst ``F = p0 sin(p1 t)`` for ``t <= p2``, ``0`` after
   (:class:`lumped.scene.SineBurst`);
 * :data:`FORCE_TABLE` (3): any other callable, sampled in Python on the step grid into a
-  table the loop reads by step.
+  table the loop reads by step;
+* :data:`FORCE_LINEAR` (4, only where :func:`forcing_arrays` is asked ``linear=True``: an
+  adaptive method's loop, which evaluates the forcing at any time): a linearly
+  interpolated table, a :class:`lumped.io.Table` of a force or the inertial force
+  ``-m a_g(t)`` of a ground acceleration read from a record
+  (:class:`lumped.scene.GroundMotion`), evaluated by :func:`linear_value` with the
+  Python callable's own arithmetic (the same numbers bit for bit). Its row of ``fpar``
+  holds ``(n, mode, scale, before, after, t_0 .. t_{n-1}, p .., r ..)`` (see
+  :func:`linear_row`), so ``fpar`` is as wide as the longest table needs.
 
 :func:`forcing_code` encodes one forcing, :func:`forcing_arrays` a scene's (``fkind,
 fpar, ftab``), and :func:`forcing_into` evaluates them in compiled code. Positive ``F``
@@ -28,10 +36,89 @@ from ..codegen.jit import njit
 if TYPE_CHECKING:
     from .network import Scene
 
-__all__ = ["FORCE_NONE", "FORCE_CONSTANT", "FORCE_SINE", "FORCE_TABLE", "forcing_code",
-           "forcing_arrays", "forcing_into"]
+__all__ = ["FORCE_NONE", "FORCE_CONSTANT", "FORCE_SINE", "FORCE_TABLE", "FORCE_LINEAR",
+           "forcing_code", "forcing_arrays", "forcing_into", "linear_row", "linear_value"]
 
-FORCE_NONE, FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE = 0, 1, 2, 3
+FORCE_NONE, FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE, FORCE_LINEAR = 0, 1, 2, 3, 4
+#: The two interpolants of :data:`FORCE_LINEAR`: :class:`lumped.io.Table`'s (``y_k +
+#: (t - t_k) / (t_{k+1} - t_k) (y_{k+1} - y_k)``, ``before``/``after`` outside, ``y_{n-1}``
+#: at ``t_{n-1}``), and the ground motion's acceleration (``a_k + s_k (t - t_k)`` on the
+#: segment of ``min(bisect_right(t) - 1, n - 2)``, ``before``/``after`` beyond the ends).
+LINEAR_TABLE, LINEAR_MOTION = 0, 1
+#: ``fpar`` columns before a :data:`FORCE_LINEAR` table's times.
+LINEAR_HEAD = 5
+
+
+def linear_row(forcing) -> np.ndarray | None:
+    """The :data:`FORCE_LINEAR` row of ``forcing``, or ``None`` when it is not a linearly
+    interpolated table: ``(n, mode, scale, before, after, t_0 .. t_{n-1}, p_0 .., r_0 ..)``
+    with ``p, r = y, y`` for a table (``mode`` :data:`LINEAR_TABLE`) and ``p, r = a, s``,
+    the segments' start values and slopes, for a ground motion (:data:`LINEAR_MOTION`).
+    ``scale`` multiplies the value (the ``-m`` of an inertial force, else 1)."""
+    from ..io.tabulated import Table
+    from .ground import _PiecewiseMotion
+    from .inertial import _Scaled
+
+    scale = 1.0
+    fn = forcing
+    if type(fn) is _Scaled:
+        scale, fn = float(fn.scale), fn.fn
+    if type(fn) is Table:
+        t, y = fn._t, fn._y
+        before = after = 0.0
+        if fn.outside != "zero":
+            before, after = y[0], y[-1]
+        mode, p, r = LINEAR_TABLE, y, y
+    elif type(fn) is _PiecewiseMotion:
+        t = fn._t
+        mode, before, after = LINEAR_MOTION, fn.a_before, fn.a_after
+        p = [a for a, _ in fn._a]
+        r = [sl for _, sl in fn._a]
+    else:
+        return None
+    return np.array([float(len(t)), float(mode), scale, before, after, *t, *p, *r])
+
+
+@njit(cache=True, inline="always")
+def linear_value(i, t, fpar) -> float:
+    """Node ``i``'s :data:`FORCE_LINEAR` forcing at ``t``: the arithmetic of the Python
+    callable (:func:`linear_row`), so the same double."""
+    n = int(fpar[i, 0])
+    h = LINEAR_HEAD
+    t0 = fpar[i, h]
+    tl = fpar[i, h + n - 1]
+    scale = fpar[i, 2]
+    if fpar[i, 1] == LINEAR_TABLE:
+        if not (t0 <= t and t < tl):
+            if t == tl:
+                return scale * fpar[i, h + 2 * n - 1]
+            return scale * (fpar[i, 3] if t < t0 else fpar[i, 4])
+        lo, hi = 0, n - 1  # the last k with t_k <= t (bisect_right - 1)
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if fpar[i, h + mid] <= t:
+                lo = mid
+            else:
+                hi = mid
+        tk = fpar[i, h + lo]
+        yk = fpar[i, h + n + lo]
+        if t == tk:
+            return scale * yk
+        return scale * (yk + (t - tk) / (fpar[i, h + lo + 1] - tk)
+                        * (fpar[i, h + n + lo + 1] - yk))
+    if t < t0:
+        return scale * fpar[i, 3]
+    if t > tl:
+        return scale * fpar[i, 4]
+    lo, hi = 0, n - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if fpar[i, h + mid] <= t:
+            lo = mid
+        else:
+            hi = mid
+    k = min(lo, n - 2) if t < tl else n - 2
+    return scale * (fpar[i, h + n + k] + fpar[i, h + 2 * n - 1 + k] * (t - fpar[i, h + k]))
 
 
 def forcing_code(forcing: Callable[[float], float] | None) -> tuple[int, float, float, float]:
@@ -53,20 +140,27 @@ def forcing_code(forcing: Callable[[float], float] | None) -> tuple[int, float, 
     return FORCE_TABLE, 0.0, 0.0, 0.0
 
 
-def forcing_arrays(scene: Scene, dt: float, n_steps: int):
+def forcing_arrays(scene: Scene, dt: float, n_steps: int, *, linear: bool = False):
     """``(fkind, fpar, ftab)`` of :func:`forcing_into` for the scene's nodes on the grid
     ``t_n = n dt``, ``n <= n_steps`` (``ftab`` holds the sampled forcings' values by step,
-    one row when nothing is sampled)."""
+    one row when nothing is sampled). With ``linear``, a linearly interpolated table
+    (:func:`linear_row`) is :data:`FORCE_LINEAR` instead of sampled."""
     from .forcing import SineBurst
 
     N = len(scene.nodes)
     fkind = np.zeros(N, dtype=np.int64)
-    fpar = np.zeros((N, 3))
+    rows = {i: linear_row(fn) for i, fn in enumerate(scene.forcing)} if linear else {}
+    rows = {i: row for i, row in rows.items() if row is not None}
+    fpar = np.zeros((N, max([3] + [len(row) for row in rows.values()])))
+    for i, row in rows.items():
+        fkind[i] = FORCE_LINEAR
+        fpar[i, :len(row)] = row
     tabulated = [i for i, fn in enumerate(scene.forcing)
-                 if fn is not None and not isinstance(fn, SineBurst) and not _constant(fn)]
+                 if fn is not None and not isinstance(fn, SineBurst) and not _constant(fn)
+                 and i not in rows]
     ftab = np.zeros((n_steps + 1 if tabulated else 1, N))
     for i, fn in enumerate(scene.forcing):
-        if fn is None:
+        if fn is None or i in rows:
             continue
         if isinstance(fn, SineBurst):
             fkind[i] = FORCE_SINE
@@ -101,6 +195,8 @@ def forcing_into(step, t, fkind, fpar, ftab, f) -> int:
             val = fpar[i, 0]
         elif k == FORCE_SINE:
             val = 0.0 if t > fpar[i, 2] else fpar[i, 0] * math.sin(fpar[i, 1] * t)
+        elif k == FORCE_LINEAR:
+            val = linear_value(i, t, fpar)
         else:
             val = ftab[step, i]
         if not math.isfinite(val):

@@ -6,7 +6,9 @@ r"""The bridge between the ``radau5`` driver and its compiled inner loop.
 accepted steps into the dense output and the output rows.
 
 The compiled loop takes a scene when numba is enabled, every forcing is absent, zero,
-constant or a :class:`~lumped.scene.forcing.SineBurst` (a tabulated forcing is fixed-grid only),
+constant, a :class:`~lumped.scene.forcing.SineBurst` or a linearly interpolated table (a
+:class:`lumped.io.Table` force, or the inertial force of a ground acceleration record;
+:data:`lumped.scene.forcing_jit.FORCE_LINEAR`; other callables of ``t`` run in Python),
 every law is a sympy residual (the generated kernels of :mod:`lumped.codegen.jit`), and
 no locked elements sit in parallel (their forces are the minimum-norm split, Python's).
 """
@@ -85,13 +87,14 @@ def _parts(scene: Scene, plan) -> tuple | str:
         return "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
     if _locks_in_parallel(scene, plan.branches, plan.cyclic):
         return "python: locked elements in parallel (minimum-norm forces)"
-    fkind, fpar, _ = forcing_arrays(scene, 1.0, 0)
+    fkind, fpar, _ = forcing_arrays(scene, 1.0, 0, linear=True)
     for i, fn in enumerate(scene.forcing):
         if fn is zero_forcing:  # f = 0.0, as no forcing
             fkind[i] = 0
     if (fkind == 3).any():
         node = scene.nodes[int(np.argmax(fkind == 3))].name
-        return f"python: the forcing on node {node!r} is tabulated (fixed-grid only)"
+        return (f"python: the forcing on node {node!r} is a function of t (compiled: "
+                f"constants, sine bursts and tables)")
     try:
         js = jit_scene(scene)
     except ValueError as err:  # a hand-written kernel: no generated code

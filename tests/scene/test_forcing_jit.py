@@ -1,0 +1,90 @@
+"""Tables in compiled code (:data:`lumped.scene.forcing_jit.FORCE_LINEAR`): a force read
+from a table and the inertial force of a ground motion read from a record evaluate in
+compiled code to the Python callable's numbers bit for bit, and ``radau5`` runs such
+scenes in its compiled loop with the Python loop's numbers."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from lumped import Element, Mass, Scene, get_law, simulate
+from lumped.codegen.jit import numba_enabled
+from lumped.io import Table
+from lumped.scene import GroundMotion
+from lumped.scene.forcing_jit import FORCE_LINEAR, forcing_arrays, forcing_into, linear_row
+
+
+def _table(seed: int, n: int, quantity: str, outside: str = "zero") -> Table:
+    rng = np.random.default_rng(seed)
+    t = np.cumsum(rng.uniform(0.01, 0.2, n)) - 0.05
+    return Table(t, rng.normal(0.0, 3.0, n), quantity=quantity, outside=outside)
+
+
+def _scene(forcing_table: Table | None, ground: GroundMotion | None) -> Scene:
+    forces = {"m": forcing_table} if forcing_table is not None else None
+    return Scene([Mass("m", 2.0), Mass("n", 1.0)],
+                 [Element("slider", get_law("coulomb").bind(tau=1.5, r=1e3), "ground", "m"),
+                  Element("k", get_law("linear_spring").bind(k=40.0), "ground", "m"),
+                  Element("link", get_law("linear_spring").bind(k=25.0), "m", "n"),
+                  Element("d", get_law("bingham").bind(gamma=2.0, tau=0.5), "m", "n")],
+                 forces, ground_motion=ground)
+
+
+def _check_compiled_values(scene: Scene, times: list[float]) -> None:
+    fkind, fpar, _ = forcing_arrays(scene, 1.0, 0, linear=True)
+    assert (fkind == FORCE_LINEAR).any()
+    f = np.zeros(len(scene.nodes))
+    for t in times:
+        assert forcing_into(0, t, fkind, fpar, fpar, f) == -1
+        for i, fn in enumerate(scene.forcing):
+            if fkind[i] == FORCE_LINEAR:
+                assert f[i] == fn(t), (i, t)
+
+
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 40),
+       outside=st.sampled_from(["zero", "hold"]),
+       quantity=st.sampled_from(["acceleration", "velocity", "displacement"]))
+def test_compiled_tables_give_the_python_numbers(seed, n, outside, quantity):
+    force = _table(seed, n, "force", outside)
+    ground = GroundMotion(**{quantity: _table(seed + 1, n, quantity, outside)})
+    rng = np.random.default_rng(seed)
+    knots = force.times.tolist() + ground.spec.times.tolist()
+    lo, hi = min(knots) - 1.0, max(knots) + 1.0
+    times = knots + rng.uniform(lo, hi, 200).tolist() + [lo, hi]
+    _check_compiled_values(_scene(force, None), times)
+    _check_compiled_values(_scene(None, ground), times)
+
+
+def test_only_interpolated_tables_are_encoded():
+    assert linear_row(lambda t: t) is None
+    row = linear_row(Table([0.0, 1.0, 3.0], [0.0, 2.0, -2.0], quantity="force"))
+    assert row[:5].tolist() == [3.0, 0.0, 1.0, 0.0, 0.0]
+    held = linear_row(dataclasses.replace(
+        Table([0.0, 1.0, 3.0], [0.5, 2.0, -2.0], quantity="force"), outside="hold"))
+    assert held[3:5].tolist() == [0.5, -2.0]
+    # the fixed-step methods still sample a table on their grid
+    fkind, _, ftab = forcing_arrays(_scene(_table(1, 5, "force"), None), 0.1, 10)
+    assert fkind[0] != FORCE_LINEAR and ftab.shape == (11, 2)
+
+
+@pytest.mark.skipif(not numba_enabled(), reason="needs numba")
+@pytest.mark.parametrize("case", ["force table", "ground record"])
+def test_radau5_runs_tables_in_its_compiled_loop_with_the_python_numbers(case):
+    ts = np.linspace(0.0, 2.0, 81)
+    if case == "force table":
+        scene = _scene(Table(ts, 6.0 * np.sin(3.0 * ts), quantity="force"), None)
+    else:
+        record = Table(ts, 4.0 * np.sin(5.0 * ts) * np.exp(-ts), quantity="acceleration")
+        scene = _scene(None, GroundMotion(acceleration=record))
+    kw = dict(method="radau5", t_end=2.5, rtol=1e-7)
+    ref = simulate(scene, compiled=False, **kw)
+    fast = simulate(scene, compiled=True, **kw)
+    assert fast.stats["loop"] == "compiled"
+    assert ref.stats["events"] >= 80  # the table's points are time events
+    assert np.array_equal(fast.data, ref.data)
+    assert fast.stats["steps"] == ref.stats["steps"] and fast.stats["nfev"] == ref.stats["nfev"]
