@@ -260,7 +260,7 @@ def new_numbers_tables(report: BenchReport, targets: Sequence[float] = TARGETS) 
     fresh = summarize_runs(report.runs, targets, new_numbers=True)
     lines = ["#### With new numbers (the user's columns)", "",
              "Each setting of these methods ran once more after its warm timing, with new "
-             "numbers: the scene's k times 1 + 1e-6 n (never run before in this process), "
+             "numbers: the scene's k times 1 + 1e-6 (n + r) (never run before), "
              "on a scene object no other run touched, timed once (no warm-up, no repeat): "
              "what a user who edits a number gets. Each cell: the fastest such run "
              "reaching the target (its error is the warm run's), as CPU time / yardstick "

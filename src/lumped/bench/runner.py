@@ -20,8 +20,9 @@ event-driven exact solution of :mod:`lumped.reference`:
   (:func:`yardstick`), measured in the same process: the benchmark's unit of time.
 * ``cpu_new_s``, ``ratio_new`` -- the user's columns, for the entries with
   ``Method.new_numbers`` (our compiled methods): after the warm timing, one run with
-  **new numbers** (the scene's ``k`` times ``1 + 1e-6 n``, ``n`` counting such runs in
-  the process, so a value never run before; :mod:`lumped.bench.new_numbers`) on a scene
+  **new numbers** (the scene's ``k`` times ``1 + 1e-6 (n + r)``, ``n`` counting such runs
+  in the process and ``r`` drawn once per process, so a value never run before;
+  :mod:`lumped.bench.new_numbers`) on a scene
   object no other run has touched, timed once, with no warm-up and no repeat: what a
   user who edits a number gets (the loops compiled for the scene's *structure* are
   loaded, nothing compiled for these numbers is). It is timed, not scored (its exact
