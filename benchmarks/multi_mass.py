@@ -17,7 +17,10 @@ For each scene of :data:`lumped.bench.network_scenes.NETWORK_SCENES`:
 Times are CPU seconds over the yardstick measured in the same process
 (:func:`lumped.bench.timing.measure_unit`), best of up to three calls; both sides are
 timed up to ``x`` of every node on the grid (radau5 through its dense output, LSODA through
-``solve_ivp``'s).
+``solve_ivp``'s). Beside each warm ``radau5`` time, the user's column: one run with new
+numbers (every spring's ``k`` never run before in the process, on a new scene object;
+:func:`lumped.bench.new_numbers.scene_with_new_numbers`), timed once, its ratio to the
+warm time, and its ratio to the same LSODA run.
 
 Run: ``PYTHONPATH=src python benchmarks/multi_mass.py [--out FILE.md]`` (about 1 min of
 CPU, 2.5 min wall on the shared 2-core machine; plus about 20 s of CPU once per chain to
@@ -36,6 +39,7 @@ from lumped import simulate
 from lumped.bench.network_peers import solve_tanh_network
 from lumped.bench.network_scenes import NETWORK_SCENES, NetworkScene, maxwell_exact
 from lumped.bench.network_study import bdf2_ladder, bdf2_limit, grid, node_x, richardson
+from lumped.bench.new_numbers import scene_with_new_numbers
 from lumped.bench.report import print_and_save
 from lumped.bench.timing import measure_unit, time_call
 
@@ -112,16 +116,31 @@ def ladder_rows(ns: NetworkScene, g, x_ref, unit, lines: list[str]) -> None:
         if not sol.ok:
             lines.append(f"| {ns.name} | {rtol:.0e} | stopped: {sol.status.value} at "
                          f"t = {float(sol.t[-1]):.6g} | {sol.stats['steps']} | "
-                         f"{len(sol.events)} | - | - | - |")
+                         f"{len(sol.events)} | - | - | - | - | - |")
             continue
+        new = new_numbers_time(scene, ns.t_end, rtol, g)
         err = float(np.max(np.abs(x - x_ref)))
         ok = [p for p in cands if p[0] <= err]
         best = min(ok, default=None, key=lambda p: p[1])
         peer = "none reaches it" if best is None else (
             f"{best[1]:.2f} (eps {best[2]:.0e}, rtol {best[3]:.0e}, err {best[0]:.1e})")
         ratio = "-" if best is None else f"{cpu / unit / best[1]:.2f}"
+        ratio_new = "-" if best is None else f"{new / unit / best[1]:.2f}"
         lines.append(f"| {ns.name} | {rtol:.0e} | {err:.2e} | {sol.stats['steps']} | "
-                     f"{len(sol.events)} | {cpu / unit:.2f} | {peer} | {ratio} |")
+                     f"{len(sol.events)} | {cpu / unit:.2f} | {new / unit:.2f} "
+                     f"({new / cpu:.3g}x) | {peer} | {ratio} | {ratio_new} |")
+
+
+def new_numbers_time(scene, t_end: float, rtol: float, g: np.ndarray) -> float:
+    """CPU seconds of one radau5 run with new numbers (every spring's ``k`` never run
+    before in the process, a new scene object), timed once, x on the grid included."""
+    fresh = scene_with_new_numbers(scene)
+
+    def run():
+        sol = radau(fresh, t_end, rtol, 1e-3 * rtol)
+        return node_x(sol, fresh, g) if sol.ok else None
+
+    return time_call(run, min_time=0.0, max_repeats=1)[1]
 
 
 def bdf_rows(ns: NetworkScene, x_ref_full, g_full, bdf_lines, summary) -> None:
@@ -162,8 +181,9 @@ def main() -> None:
     ref_lines = ["| scene | ref steps | ref events | vs radau5 rtol 1e-11 | vs exact |",
                  "|---|---|---|---|---|"]
     lad_lines = ["| scene | rtol | radau5 max err | steps | events | radau5 time (units) "
-                 "| best LSODA-tanh time at that error (units) | ratio |",
-                 "|---|---|---|---|---|---|---|---|"]
+                 "| with new numbers (units; / warm) "
+                 "| best LSODA-tanh time at that error (units) | ratio | ratio, new numbers |",
+                 "|---|---|---|---|---|---|---|---|---|---|"]
     bdf_lines = ["| scene | dt | steps | BDF2 err | observed order | Richardson p=2 err "
                  "| Richardson p=1 err |", "|---|---|---|---|---|---|---|"]
     summary = [f"| scene | span | BDF2 limit used | its error estimate | radau5 rtol "

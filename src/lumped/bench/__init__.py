@@ -4,16 +4,19 @@
 :func:`tolerance_method` for any ``simulate`` method driven by ``rtol``/``atol``),
 :mod:`.peers` (scipy on the tanh-regularised model), :mod:`.event_peer` (scipy on the
 exact law with terminal events), :mod:`.runner` (timing, runs, the method registry
-:func:`register_bench_method`), :mod:`.report` (tables, CSV, plot) and
-:mod:`.event_study`; the full description is in :mod:`.runner`.
+:func:`register_bench_method`), :mod:`.report` (tables, CSV, plot), :mod:`.event_study`
+and :mod:`.new_numbers` (scenes with numbers never run before: the user's columns); the
+full description is in :mod:`.runner`.
 """
 
 from .event_peer import MAX_EVENTS, event_driven_solver
 from .event_study import EVENT_SCENES, event_markdown, event_study
 from .methods import Method, Solved, tolerance_method, x_on_grid
+from .new_numbers import bench_scene_with_new_numbers, new_factor, scene_with_new_numbers
 from .peers import regularised_jacobian, regularised_rhs
 from .report import (
     markdown_tables,
+    new_numbers_tables,
     observed_orders,
     ratio_table,
     read_csv,
@@ -74,6 +77,7 @@ __all__ = [
     "TARGETS",
     "YARDSTICK_ITERATIONS",
     "available_methods",
+    "bench_scene_with_new_numbers",
     "check_ladders",
     "count_steps",
     "creep_table",
@@ -83,6 +87,8 @@ __all__ = [
     "generic_scene",
     "markdown_tables",
     "measure_unit",
+    "new_factor",
+    "new_numbers_tables",
     "observed_orders",
     "ratio_table",
     "read_csv",
@@ -92,6 +98,7 @@ __all__ = [
     "regularised_rhs",
     "run_benchmark",
     "run_one",
+    "scene_with_new_numbers",
     "summarize_runs",
     "time_call",
     "tolerance_method",

@@ -61,6 +61,14 @@ class Method:
     warmup : bool
         Call the solve once, untimed, before timing it (a JIT compile, or filling an
         on-disk cache, is not part of the measured time).
+    new_numbers : bool
+        After the warm timing, time one run with new numbers (the user's column): the
+        scene's ``k`` scaled by a factor never used before in the process
+        (:func:`lumped.bench.new_numbers.new_factor`), on a scene object no other run has
+        touched, timed once. For methods that compile per scene or keep caches.
+    default : bool
+        Run by default (``lumped bench`` without ``--methods``); ``False`` for an entry
+        that is run only when named.
     """
 
     name: str
@@ -70,6 +78,8 @@ class Method:
     slow: bool = False
     rtols: tuple[float, ...] | None = None
     warmup: bool = False
+    new_numbers: bool = False
+    default: bool = True
 
 
 def closed_form_method(method: str, engine: str = "python"
@@ -113,7 +123,7 @@ def generic_method(method: str) -> Callable[[BenchScene, dict, Ladders], Callabl
 
 def tolerance_method(
     name: str, simulate_method: str, rtols: Sequence[float] | None = None, *,
-    warmup: bool = True, **options: Any,
+    warmup: bool = True, new_numbers: bool = True, **options: Any,
 ) -> Method:
     """A bench entry for any :func:`lumped.simulate` method driven by ``rtol``/``atol``.
 
@@ -132,6 +142,9 @@ def tolerance_method(
         The ladder of ``rtol`` (default: ``Ladders.tol_rtols``).
     warmup : bool
         One untimed call first (default ``True``: a compiled method's first call compiles).
+    new_numbers : bool
+        Also time one run with new numbers per setting (default ``True``; see
+        :class:`Method`).
     **options
         Further keywords for ``simulate``.
 
@@ -161,7 +174,8 @@ def tolerance_method(
 
         return run
 
-    return Method(name, "tol", solve, ours=True, rtols=ladder, warmup=warmup)
+    return Method(name, "tol", solve, ours=True, rtols=ladder, warmup=warmup,
+                  new_numbers=new_numbers)
 
 
 def x_on_grid(sol: Any, t_grid: np.ndarray, node: str = "mass") -> np.ndarray:

@@ -21,6 +21,7 @@ __all__ = [
     "read_csv",
     "markdown_tables",
     "ratio_table",
+    "new_numbers_tables",
     "write_markdown",
     "write_plot",
     "write_outputs",
@@ -30,22 +31,31 @@ __all__ = [
 
 
 def summarize_runs(
-    runs: Sequence[RunResult], targets: Sequence[float] = TARGETS,
+    runs: Sequence[RunResult], targets: Sequence[float] = TARGETS, *,
+    new_numbers: bool = False,
 ) -> dict[tuple[str, float, str], RunResult | None]:
     """For each ``(scene, target, method)`` the fastest ok run with ``max_err <= target``.
 
     ``None`` means no run of that method reached the target ("unreachable").
+    ``new_numbers=True``: the user's view, only the runs timed with new numbers, the
+    fastest by ``cpu_new_s`` (the methods without that column are left out).
     """
     out: dict[tuple[str, float, str], RunResult | None] = {}
     for r in runs:
+        if new_numbers and not r.has_new_numbers:
+            continue
         for tgt in targets:
             key = (r.scene, tgt, r.method)
             out.setdefault(key, None)
             if r.ok and r.max_err <= tgt:
                 best = out[key]
-                if best is None or r.cpu_s < best.cpu_s:
+                if best is None or _time(r, new_numbers) < _time(best, new_numbers):
                     out[key] = r
     return out
+
+
+def _time(r: RunResult, new_numbers: bool) -> float:
+    return r.cpu_new_s if new_numbers else r.cpu_s
 
 
 def observed_orders(
@@ -151,6 +161,7 @@ def markdown_tables(report: BenchReport, targets: Sequence[float] = TARGETS) -> 
               "CPU time of our fastest run that reaches the target over the fastest scipy run "
               "(tanh-regularised or event-driven) that does; below 1: we are faster.", "",
               ratio_table(report, targets)]
+    lines += new_numbers_tables(report, targets)
     if report.reference_s:
         lines.append("For comparison, the exact event-driven reference on the same "
                      f"{GRID_DT:g} grid (error at round-off level) took, in yardstick units: "
@@ -187,17 +198,22 @@ def _ours(report: BenchReport) -> set[str]:
     return {m.name for m in BENCH_METHODS.values() if m.ours}
 
 
-def ratio_table(report: BenchReport, targets: Sequence[float] = TARGETS) -> str:
+def ratio_table(report: BenchReport, targets: Sequence[float] = TARGETS, *,
+                new_numbers: bool = False) -> str:
     """Per scene and target: our best method's time over the fastest scipy time.
 
     The scipy side is the fastest of every peer (tanh-regularised or event-driven) that
     reached the target; a ratio below 1 means we are faster. Each cell names the two
-    runs compared.
+    runs compared. ``new_numbers=True``: our side is the user's view, the fastest run
+    with new numbers (``cpu_new_s``) of the methods that have that column; each cell
+    adds that run's time with new numbers over its warm repeat.
     """
     best = summarize_runs(report.runs, targets)
     ours = _ours(report)
     mine = [m for m in report.methods if m in ours]
     peers = [m for m in report.methods if m not in ours]
+    if new_numbers:
+        return _new_numbers_ratio_table(report, targets, best, mine, peers)
     lines = ["| scene | " + " | ".join(f"{t:g}" for t in targets) + " |",
              "|---" * (len(targets) + 1) + "|"]
     for scene in report.scenes:
@@ -214,10 +230,61 @@ def ratio_table(report: BenchReport, targets: Sequence[float] = TARGETS) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _fastest(best, scene, tgt, names) -> RunResult | None:
+def _new_numbers_ratio_table(report, targets, best, mine, peers) -> str:
+    fresh = summarize_runs(report.runs, targets, new_numbers=True)
+    lines = ["| scene | " + " | ".join(f"{t:g}" for t in targets) + " |",
+             "|---" * (len(targets) + 1) + "|"]
+    for scene in report.scenes:
+        cells = []
+        for tgt in targets:
+            a = _fastest(fresh, scene, tgt, mine, new_numbers=True)
+            b = _fastest(best, scene, tgt, peers)
+            if a is None or b is None:
+                cells.append("-" if a is None and b is None else
+                             "ours unreachable" if a is None else "scipy unreachable")
+            else:
+                cells.append(f"{a.cpu_new_s / b.cpu_s:.3g} ({a.method} / {b.method}; "
+                             f"new/warm {a.new_over_warm:.3g})")
+        lines.append(f"| {scene} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def new_numbers_tables(report: BenchReport, targets: Sequence[float] = TARGETS) -> list[str]:
+    """The user's columns as markdown lines: per scene and target, each method's fastest
+    run with new numbers and its ratio to the warm repeat, then our best with new numbers
+    over the fastest scipy peer. No lines when no run has that column."""
+    names = [m for m in report.methods
+             if any(r.method == m and r.has_new_numbers for r in report.runs)]
+    if not names:
+        return []
+    fresh = summarize_runs(report.runs, targets, new_numbers=True)
+    lines = ["#### With new numbers (the user's columns)", "",
+             "Each setting of these methods ran once more after its warm timing, with new "
+             "numbers: the scene's k times 1 + 1e-6 (n + r) (never run before), "
+             "on a scene object no other run touched, timed once (no warm-up, no repeat): "
+             "what a user who edits a number gets. Each cell: the fastest such run "
+             "reaching the target (its error is the warm run's), as CPU time / yardstick "
+             "(setting; its time with new numbers / its warm time).", "",
+             "| scene | target | " + " | ".join(names) + " |",
+             "|---" * (len(names) + 2) + "|"]
+    for scene in report.scenes:
+        for tgt in targets:
+            cells = []
+            for m in names:
+                r = fresh.get((scene, tgt, m))
+                cells.append("unreachable" if r is None else
+                             f"{r.ratio_new:.3g} ({r.setting}; {r.new_over_warm:.3g}x)")
+            lines.append(f"| {scene} | {tgt:g} | " + " | ".join(cells) + " |")
+    lines += ["", "Our best method with new numbers / the fastest scipy peer (the peers "
+              "compile nothing per scene: their warm time):", "",
+              ratio_table(report, targets, new_numbers=True)]
+    return lines
+
+
+def _fastest(best, scene, tgt, names, *, new_numbers: bool = False) -> RunResult | None:
     cands = [best.get((scene, tgt, m)) for m in names]
     cands = [c for c in cands if c is not None]
-    return min(cands, key=lambda r: r.cpu_s) if cands else None
+    return min(cands, key=lambda r: _time(r, new_numbers)) if cands else None
 
 
 def _ours_vs_scipy(best, scene, tgt, methods, ours) -> str:

@@ -18,6 +18,17 @@ event-driven exact solution of :mod:`lumped.reference`:
   and the smallest time is kept.
 * ``ratio`` -- ``cpu_s`` divided by the CPU time of the *yardstick*
   (:func:`yardstick`), measured in the same process: the benchmark's unit of time.
+* ``cpu_new_s``, ``ratio_new`` -- the user's columns, for the entries with
+  ``Method.new_numbers`` (our compiled methods): after the warm timing, one run with
+  **new numbers** (the scene's ``k`` times ``1 + 1e-6 (n + r)``, ``n`` counting such runs
+  in the process and ``r`` drawn once per process, so a value never run before;
+  :mod:`lumped.bench.new_numbers`) on a scene
+  object no other run has touched, timed once, with no warm-up and no repeat: what a
+  user who edits a number gets (the loops compiled for the scene's *structure* are
+  loaded, nothing compiled for these numbers is). It is timed, not scored (its exact
+  solution is another). ``new_over_warm`` is ``cpu_new_s / cpu_s``. ``nan`` for the
+  other entries; a failed run with new numbers leaves ``nan`` and says why in
+  ``message``.
 
 Methods (see :data:`METHODS`, a registry: adding a method is one entry):
 
@@ -27,6 +38,12 @@ Methods (see :data:`METHODS`, a registry: adding a method is one entry):
   :func:`lumped.simulate.simulate` on the same scene built from the ``linear_spring`` and
   ``bingham`` laws (listed only when those modules import), over the ladder of ``dt``
   down to ``Ladders.slow_min_dt``;
+* ``jit-bdf1`` / ``jit-bdf2`` -- the same steps compiled (``simulate(method="jit-bdf1")``),
+  over the whole ladder of ``dt``, each setting after an untimed warm-up; run only when
+  named (``lumped bench --methods ...``): until the compiled code is one module per
+  structure, every run with new numbers compiles a module (seconds) and keeps it;
+* ``radau5`` -- :func:`lumped.simulate.simulate` with ``compiled=True`` over
+  ``Ladders.tol_rtols``, after an untimed warm-up;
 * ``scipy-Radau`` / ``scipy-BDF`` / ``scipy-LSODA`` -- :func:`scipy.integrate.solve_ivp` on
   the tanh-regularised model ``F_d = v / gamma + tau tanh(v / eps)`` over a ladder of
   ``eps`` and ``rtol`` (``atol = rtol * L`` with ``L`` the scene's displacement scale),
@@ -59,6 +76,7 @@ import numpy as np
 from .event_peer import event_peer_methods
 from .event_study import event_study
 from .methods import Method, Solved, closed_form_method, generic_method, tolerance_method
+from .new_numbers import bench_scene_with_new_numbers
 from .peers import scipy_method, scipy_solver
 from .scenes import FULL, GRID_DT, PAPER_SCENES, SCENES, BenchScene, Ladders, reference_grid
 from .timing import measure_unit, time_call
@@ -122,6 +140,11 @@ for _m in (
     Method("closed-bdf2", "step", closed_form_method("bdf2")),
     Method("generic-bdf1", "step", generic_method("bdf1"), slow=True),
     Method("generic-bdf2", "step", generic_method("bdf2"), slow=True),
+    # opt-in: today a run with new numbers compiles a module (seconds) and keeps it
+    Method("jit-bdf1", "step", generic_method("jit-bdf1"), warmup=True, new_numbers=True,
+           default=False),
+    Method("jit-bdf2", "step", generic_method("jit-bdf2"), warmup=True, new_numbers=True,
+           default=False),
     # compiled at once: the untimed warm-up call pays the compile, the timed calls run
     # the compiled loop (a short run of a new scene would otherwise stay in Python)
     tolerance_method("radau5", "radau5", compiled=True),
@@ -135,10 +158,13 @@ for _m in (
     register_bench_method(_m)
 
 
-def available_methods() -> tuple[Method, ...]:
-    """The registered methods minus the generic solver's entries when it is not installed."""
+def available_methods(*, every: bool = False) -> tuple[Method, ...]:
+    """The registered methods run by default (``every=True``: also those run only when
+    named, ``Method.default`` false), minus the generic solver's entries when it is not
+    installed."""
     return tuple(m for m in BENCH_METHODS.values()
-                 if not m.name.startswith("generic") or _generic_available())
+                 if (every or m.default)
+                 and (not m.name.startswith(("generic", "jit")) or _generic_available()))
 
 
 # --------------------------------------------------------------------------- runs
@@ -164,10 +190,18 @@ class RunResult:
     cpu_s: float
     ratio: float
     repeats: int
+    cpu_new_s: float = math.nan
+    ratio_new: float = math.nan
+    new_over_warm: float = math.nan
 
     @property
     def ok(self) -> bool:
         return self.status == "ok"
+
+    @property
+    def has_new_numbers(self) -> bool:
+        """Whether this row holds a time of a run with new numbers."""
+        return math.isfinite(self.cpu_new_s)
 
 
 def _settings(method: Method, scene: BenchScene, ladders: Ladders) -> list[dict]:
@@ -234,9 +268,29 @@ def run_one(
         return RunResult(**row, status="failed", message=f"{type(err).__name__}: {err}",
                          max_err=nan, end_err=nan, steps=0, nfev=0, cpu_s=spent,
                          ratio=spent / unit, repeats=1)
-    return RunResult(**row, status="ok", message="", max_err=max_err, end_err=end_err,
+    cpu_new, message = nan, ""
+    if method.new_numbers:
+        cpu_new, message = _time_new_numbers(scene, method, setting, ladders)
+    return RunResult(**row, status="ok", message=message, max_err=max_err, end_err=end_err,
                      steps=solved.steps, nfev=solved.nfev, cpu_s=cpu, ratio=cpu / unit,
-                     repeats=calls)
+                     repeats=calls, cpu_new_s=cpu_new, ratio_new=cpu_new / unit,
+                     new_over_warm=cpu_new / cpu if cpu > 0.0 else nan)
+
+
+def _time_new_numbers(scene: BenchScene, method: Method, setting: dict,
+                      ladders: Ladders) -> tuple[float, str]:
+    """CPU seconds of one run of ``setting`` with new numbers (see the module notes), timed
+    once; ``(nan, why)`` when it fails."""
+    fresh = bench_scene_with_new_numbers(scene)
+    try:
+        runner = method.solve(fresh, setting, ladders)
+        solved, cpu, _ = time_call(runner, min_time=0.0, max_repeats=1)
+        if not np.all(np.isfinite(solved.x)):
+            raise FloatingPointError("non-finite x in the solution")
+    except Exception as err:  # the warm row stands; say why this column is empty
+        return math.nan, f"new numbers (k x {fresh.osc.k / scene.osc.k!r}): " \
+                         f"{type(err).__name__}: {err}"
+    return cpu, ""
 
 
 @dataclass
@@ -321,6 +375,7 @@ def count_steps(
 def _rescale(row: RunResult, unit: float) -> RunResult:
     d = asdict(row)
     d["ratio"] = row.cpu_s / unit
+    d["ratio_new"] = row.cpu_new_s / unit
     return RunResult(**d)
 
 

@@ -4,9 +4,10 @@
 the paper: one CSV (and, with matplotlib, one PNG) per scenario, and a summary table
 on stdout.  ``lumped run SCENE.toml`` simulates a scene file, ``lumped compare SCENE``
 checks the generic solver against the closed form, ``lumped bench --out DIR`` measures
-speed against error, ``lumped sweep SCENE --grid ... --out DIR`` runs a parameter study.
-Usage errors (bad values, unknown
-names, bad files) exit with code 2 and a message naming the argument.
+speed against error, ``lumped sweep SCENE --grid ... --out DIR`` runs a parameter study,
+``lumped warm SCENE`` compiles a scene's code for the compiled methods ahead of time.
+Usage errors (bad values, unknown names, bad files) exit with code 2 and a message naming
+the argument.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ _SUBCOMMANDS = (
     ("compare", "compare", "compare the generic Newton solver with the closed form"),
     ("bench", "bench", "work-precision benchmark against the exact reference and scipy"),
     ("sweep", "sweep", "run a scene file over a grid of parameters: table and heat map"),
+    ("warm", "warm", "compile a scene file's structure ahead of time for the compiled methods"),
 )
 
 
