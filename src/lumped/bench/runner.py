@@ -40,8 +40,8 @@ Methods (see :data:`METHODS`, a registry: adding a method is one entry):
   down to ``Ladders.slow_min_dt``;
 * ``jit-bdf1`` / ``jit-bdf2`` -- the same steps compiled (``simulate(method="jit-bdf1")``),
   over the whole ladder of ``dt``, each setting after an untimed warm-up; run only when
-  named (``lumped bench --methods ...``): until the compiled code is one module per
-  structure, every run with new numbers compiles a module (seconds) and keeps it;
+  named (``lumped bench --methods ...``, to keep the default bench short; a run with new
+  numbers compiles nothing: the compiled code is one module per structure);
 * ``radau5`` -- :func:`lumped.simulate.simulate` with ``compiled=True`` over
   ``Ladders.tol_rtols``, after an untimed warm-up;
 * ``scipy-Radau`` / ``scipy-BDF`` / ``scipy-LSODA`` -- :func:`scipy.integrate.solve_ivp` on
@@ -140,7 +140,7 @@ for _m in (
     Method("closed-bdf2", "step", closed_form_method("bdf2")),
     Method("generic-bdf1", "step", generic_method("bdf1"), slow=True),
     Method("generic-bdf2", "step", generic_method("bdf2"), slow=True),
-    # opt-in: today a run with new numbers compiles a module (seconds) and keeps it
+    # opt-in, to keep the default bench short (new numbers compile nothing)
     Method("jit-bdf1", "step", generic_method("jit-bdf1"), warmup=True, new_numbers=True,
            default=False),
     Method("jit-bdf2", "step", generic_method("jit-bdf2"), warmup=True, new_numbers=True,
