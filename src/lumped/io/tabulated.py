@@ -144,6 +144,15 @@ class Table:
             return y0
         return y0 + (t - t0) / (tt[k + 1] - t0) * (yy[k + 1] - y0)
 
+    def interpolant(self) -> tuple:
+        """``("table", t, y, y, before, after, 1.0)``: what compiled code needs to compute
+        :meth:`__call__` with its arithmetic (:func:`lumped.scene.forcing_jit.linear_row`):
+        the times, the values, and the values before and after the table."""
+        before = after = 0.0
+        if self.outside != "zero":
+            before, after = self._y[0], self._y[-1]
+        return "table", self._t, self._y, self._y, before, after, 1.0
+
     def breakpoints(self, t0: float, t1: float) -> list[float]:
         """The table's times strictly inside ``(t0, t1)``, in order: where the interpolant
         kinks (time events for an adaptive method)."""

@@ -51,31 +51,17 @@ LINEAR_HEAD = 5
 
 def linear_row(forcing) -> np.ndarray | None:
     """The :data:`FORCE_LINEAR` row of ``forcing``, or ``None`` when it is not a linearly
-    interpolated table: ``(n, mode, scale, before, after, t_0 .. t_{n-1}, p_0 .., r_0 ..)``
+    interpolated table (it has no ``interpolant()``, :meth:`lumped.io.Table.interpolant`,
+    or that gives ``None``): ``(n, mode, scale, before, after, t_0 .. t_{n-1}, p_0 .., r_0 ..)``
     with ``p, r = y, y`` for a table (``mode`` :data:`LINEAR_TABLE`) and ``p, r = a, s``,
     the segments' start values and slopes, for a ground motion (:data:`LINEAR_MOTION`).
     ``scale`` multiplies the value (the ``-m`` of an inertial force, else 1)."""
-    from ..io.tabulated import Table
-    from .ground import _PiecewiseMotion
-    from .inertial import _Scaled
-
-    scale = 1.0
-    fn = forcing
-    if type(fn) is _Scaled:
-        scale, fn = float(fn.scale), fn.fn
-    if type(fn) is Table:
-        t, y = fn._t, fn._y
-        before = after = 0.0
-        if fn.outside != "zero":
-            before, after = y[0], y[-1]
-        mode, p, r = LINEAR_TABLE, y, y
-    elif type(fn) is _PiecewiseMotion:
-        t = fn._t
-        mode, before, after = LINEAR_MOTION, fn.a_before, fn.a_after
-        p = [a for a, _ in fn._a]
-        r = [sl for _, sl in fn._a]
-    else:
+    get = getattr(forcing, "interpolant", None)
+    parts = get() if callable(get) else None
+    if parts is None:
         return None
+    kind, t, p, r, before, after, scale = parts
+    mode = {"table": LINEAR_TABLE, "motion": LINEAR_MOTION}[kind]
     return np.array([float(len(t)), float(mode), scale, before, after, *t, *p, *r])
 
 

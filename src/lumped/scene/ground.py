@@ -292,6 +292,13 @@ class _PiecewiseMotion:
     def breakpoints(self, t0: float, t1: float) -> list[float]:
         return [tk for tk in self._t if t0 < tk < t1]
 
+    def interpolant(self) -> tuple:
+        """``("motion", t, a, s, a_before, a_after, 1.0)``: the knots, each segment's
+        start value and slope of ``a(t)``, and ``a`` beyond both ends, for compiled code
+        (:func:`lumped.scene.forcing_jit.linear_row`)."""
+        return ("motion", self._t, [a for a, _ in self._a], [s for _, s in self._a],
+                self.a_before, self.a_after, 1.0)
+
     def evaluate(self, t: np.ndarray, derivative: int) -> np.ndarray:
         """``x``, ``v`` or ``a`` (``derivative`` 0, 1, 2) at the times ``t``."""
         k = np.clip(np.searchsorted(self.knots, t, side="right") - 1, 0, len(self.coef) - 1)

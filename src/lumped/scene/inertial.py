@@ -35,6 +35,15 @@ class _Scaled:
         get = getattr(self.fn, "breakpoints", None)
         return list(get(t0, t1)) if get is not None else []
 
+    def interpolant(self) -> tuple | None:
+        """The scaled function's ``interpolant()`` with this scale (see
+        :func:`lumped.scene.forcing_jit.linear_row`), or ``None``."""
+        get = getattr(self.fn, "interpolant", None)
+        parts = get() if get is not None else None
+        if parts is None or parts[-1] != 1.0:
+            return None
+        return (*parts[:-1], float(self.scale))
+
     def __repr__(self) -> str:
         return f"{self.scale!r} * {self.fn!r}"
 
