@@ -90,22 +90,21 @@ def closed_record(out: np.ndarray, n: int, dt: float, method: str, node: str) ->
 
 def solution_record(sol: Any, scene: Any, dt: float) -> dict[str, Any]:
     """A row from a :class:`~lumped.Solution` of ``scene`` on steps of ``dt``."""
+    from lumped.post.columns import F_col, v_col, velocities, x_col
+
     nodes = scene.node_names
-    n_nodes = len(nodes)
     data = sol.data
-    V = data[:, 1 + n_nodes:1 + 2 * n_nodes]
-    X = data[:, 1:1 + n_nodes]
+    V = data[:, [v_col(i) for i in range(len(nodes))]]
+    X = data[:, [x_col(i) for i in range(len(nodes))]]
     rest = np.all(V == 0.0, axis=1)
     pattern = np.sign(V)
     changed = np.any(pattern[1:] != pattern[:-1], axis=1)
     work = 0.0
-    index = {name: i for i, name in enumerate(nodes)}
     for e, el in enumerate(scene.elements):
         if el.kind != "dashpot":
             continue
-        va = V[1:, index[el.a]] if el.a in index else 0.0
-        vb = V[1:, index[el.b]] if el.b in index else 0.0
-        work += float(np.sum(dt * data[1:, 1 + 2 * n_nodes + e] * (vb - va)))
+        rate = velocities(scene, data, e)
+        work += float(np.sum(dt * data[1:, F_col(scene, e)] * rate[1:]))
     status = sol.status.value if hasattr(sol.status, "value") else str(sol.status)
     return _record(status, sol.message, sol.method, len(data) - 1, dt, nodes, X[-1], V[-1],
                    int(np.count_nonzero(rest[1:])),
