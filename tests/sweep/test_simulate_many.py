@@ -282,3 +282,26 @@ def test_jit_sweep_workers_are_replaced(monkeypatch):
     assert pooled.backend == "processes"
     pd.testing.assert_frame_equal(serial.table, pooled.table)
     assert list(plain.table["status"]) == ["success"] * 3
+
+
+def _chain(values: dict) -> Scene:
+    """Two masses in a chain: ground -[spring k1 | bingham]- m1 -[spring k2]- m2."""
+    return Scene([Mass("m1", m=1.0, x0=0.0), Mass("m2", m=0.5, x0=values["x2"])],
+                 [Element("s1", get_law("linear_spring").bind(k=40.0), "ground", "m1"),
+                  Element("d1", get_law("bingham").bind(gamma=0.5, tau=1.0), "ground", "m1"),
+                  Element("s2", get_law("linear_spring").bind(k=20.0), "m1", "m2"),
+                  Element("d2", get_law("bingham").bind(gamma=1.0, tau=0.3), "m1", "m2")])
+
+
+def test_multi_node_rows_read_each_node_s_columns():
+    # the columns are t, x_m1, v_m1, x_m2, v_m2, F_...: a row reads each node's own pair
+    res = simulate_many(_chain, {"x2": [0.2, 0.6]}, method="bdf1", dt=1e-3, t_end=0.3,
+                        keep_trajectories=True)
+    for (_, row), sol in zip(res.table.iterrows(), res.trajectories, strict=True):
+        for node in ("m1", "m2"):
+            assert row[f"x_end.{node}"] == sol.x[node][-1]
+            assert row[f"v_end.{node}"] == sol.v[node][-1]
+        work = sum(float(np.sum(1e-3 * (sol.F[d] * (sol.v[b] - a_v))[1:]))
+                   for d, b, a_v in (("d1", "m1", 0.0), ("d2", "m2", sol.v["m1"])))
+        assert row["dissipated_energy"] == pytest.approx(work, rel=1e-12)
+        assert row["dissipated_energy"] > 0.0

@@ -20,6 +20,10 @@ A grid axis is ``PATH=START:STOP:NUM`` (NUM evenly spaced values, both ends incl
 ``PATH=V1,V2,...``; PATH is a dotted key of the scene file, e.g.
 ``nodes.mass.force.amplitude`` or ``elements.dashpot.parameters.tau``. The exit code is
 0 when every scene ran to the end, 1 when some stopped early (their rows say why).
+
+``--dt`` runs a fixed-step method; ``--rtol``/``--atol`` (or the file's ``[solver]``
+``rtol``/``atol``) run the adaptive ``radau5`` at that tolerance, on its output grid when
+there is a ``dt`` too, else on its step points (a fixed-step ``--method`` refuses them).
 """
 
 from __future__ import annotations
@@ -55,6 +59,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--dt", type=float, default=None, help="step size (overrides the file)")
     parser.add_argument("--t-end", dest="t_end", type=float, default=None,
                         help="final time (overrides the file)")
+    parser.add_argument("--rtol", type=float, default=None,
+                        help="relative tolerance of the adaptive radau5 (overrides the file; "
+                        "with --method auto it runs radau5; refused by a fixed-step method)")
+    parser.add_argument("--atol", type=float, default=None,
+                        help="absolute tolerance of the adaptive radau5 (overrides the file)")
     parser.add_argument("--backend", choices=("local", "dask"), default="local",
                         help="local: compiled batch or process pool; dask: a LocalCluster")
     parser.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
@@ -73,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
         grid[name] = values
     started = time.perf_counter()
     result = simulate_many(args.scene, grid, method=args.method, dt=args.dt, t_end=args.t_end,
-                           backend=args.backend, progress=None if not args.quiet else False,
+                           rtol=args.rtol, atol=args.atol, backend=args.backend,
+                           progress=None if not args.quiet else False,
                            steady_amplitude=args.steady_amplitude)
     quantity = args.quantity or ("steady_amplitude" if args.steady_amplitude else
                                  "rest_position")

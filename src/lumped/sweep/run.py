@@ -51,6 +51,8 @@ def simulate_many(
     method: str | None = None,
     dt: float | None = None,
     t_end: float | None = None,
+    rtol: float | None = None,
+    atol: float | None = None,
     keep_trajectories: bool = False,
     backend: str = "local",
     client: Any = None,
@@ -65,15 +67,24 @@ def simulate_many(
     template : path, dict or callable
         A scene file (``.toml`` path), the dict of its parsed tables, or a *builder*
         ``builder(values: dict) -> Scene`` called with each parameter set. A file or
-        dict's ``[solver]`` table gives defaults for ``method``, ``dt``, ``t_end``.
+        dict's ``[solver]`` table gives defaults for ``method``, ``dt``, ``t_end``,
+        ``rtol``, ``atol`` (its ``rtol``/``atol`` serve an adaptive method only: a
+        fixed-step ``method`` given here ignores them).
     parameters : dict or list of dict
         A grid ``{path: values}`` (Cartesian product; the first path varies slowest) or
         one ``{path: value}`` per scene. Paths are dotted keys into the scene file, e.g.
         ``"nodes.mass.force.amplitude"``, ``"elements.dashpot.parameters.tau"``; with a
         builder they are whatever the builder reads.
-    method, dt, t_end
-        As for :func:`lumped.simulate` (``dt``, ``t_end`` required here or in
-        the template's ``[solver]`` table; ``method`` defaults to it, else ``"auto"``).
+    method, dt, t_end, rtol, atol
+        As for :func:`lumped.simulate`, here or in the template's ``[solver]`` table
+        (``method`` defaults to it, else ``"auto"``); ``t_end`` is required. A
+        fixed-step method needs ``dt`` and refuses ``rtol``/``atol``. ``rtol`` and/or
+        ``atol`` run the adaptive ``radau5`` (``method="radau5"``, or ``"auto"``: then
+        every scene runs per scene, never on the batched closed form), with ``dt`` its
+        output grid, without ``dt`` its step points; ``radau5`` with neither runs at its
+        default tolerances. ``"auto"`` needs ``dt`` or a tolerance. The rows of an
+        adaptive run are summarised on the intervals between its samples
+        (:mod:`lumped.sweep.summary`).
     keep_trajectories : bool
         Also return every :class:`~lumped.Solution` (runs per scene).
     backend : {"local", "dask"}
@@ -112,8 +123,11 @@ def simulate_many(
     >>> res = simulate_many("examples/forcing-F2.toml",
     ...                     {"nodes.mass.force.amplitude": [0.5, 10.0]}, t_end=2.0)
     ... # doctest: +SKIP
+    >>> res = simulate_many("examples/bingham-chain-3.toml",   # [solver]: radau5, rtol
+    ...                     {"elements.s2.parameters.k": [15.0, 20.0, 25.0]},
+    ...                     rtol=1e-6)  # doctest: +SKIP
     """
-    from lumped._validate import as_int_at_least, as_positive
+    from lumped._validate import as_int_at_least
     from lumped.solvers import registry, steps_for
 
     try:
@@ -128,12 +142,10 @@ def simulate_many(
     method = method if method is not None else settings.get("method", "auto")
     if not isinstance(method, str) or method not in registry.METHODS:
         raise ValueError(f"`method` must be one of {registry.METHODS}, got {method!r}")
-    dt = dt if dt is not None else settings.get("dt")
-    t_end = t_end if t_end is not None else settings.get("t_end")
-    if dt is None or t_end is None:
-        raise ValueError("give `dt` and `t_end` (or a [solver] table in the template)")
-    dt, t_end = as_positive("dt", dt), as_positive("t_end", t_end)
-    n = steps_for(dt, t_end)
+    dt, t_end, rtol, atol = _steps_and_tolerances(method, dt, t_end, rtol, atol, settings)
+    adaptive = rtol is not None or atol is not None or method not in (
+        "auto", *registry.FIXED_STEP_METHODS)
+    n = steps_for(dt, t_end) if dt is not None else 0
     if backend not in BACKENDS:
         raise ValueError(f"`backend` must be one of {BACKENDS}, got {backend!r}")
     if n_jobs is not None:
@@ -146,7 +158,7 @@ def simulate_many(
     if steady_amplitude is not None and not isinstance(steady_amplitude, str):
         raise TypeError(f"`steady_amplitude` must be an element or node name, "
                         f"got {steady_amplitude!r}")
-    if (builder is None and method in CLOSED_METHODS and not keep_trajectories
+    if (builder is None and method in CLOSED_METHODS and not adaptive and not keep_trajectories
             and steady_amplitude is None):
         plan = plan_closed(data, sets.names)
     if plan is not None:
@@ -165,7 +177,7 @@ def simulate_many(
         if builder is None:
             _validate_rows(data, sets)
         source = builder if builder is not None else data
-        job = (source, method, dt, t_end, keep_trajectories, steady_amplitude)
+        job = (source, method, dt, t_end, rtol, atol, keep_trajectories, steady_amplitude)
         if backend == "dask":
             results = _with_cluster(client, lambda c: _generic_dask(c, job, sets, show))
             where = "dask/per-scene"
@@ -196,6 +208,40 @@ def _template(template: object) -> tuple[Callable | None, dict | None, dict]:
         return template, None, {}
     raise TypeError("`template` must be a scene file path, a scene-file dict or a builder "
                     f"callable, got {type(template).__name__}")
+
+
+def _steps_and_tolerances(method: str, dt: Any, t_end: Any, rtol: Any, atol: Any,
+                          settings: Mapping[str, Any]) -> tuple:
+    """``(dt, t_end, rtol, atol)`` of a sweep: the arguments over the template's
+    ``[solver]`` table, checked against ``method`` (see :func:`simulate_many`)."""
+    from lumped._validate import as_positive
+    from lumped.solvers.registry import FIXED_STEP_METHODS
+
+    given = {name: value for name, value in (("rtol", rtol), ("atol", atol))
+             if value is not None}
+    if method in FIXED_STEP_METHODS and given:
+        name, value = next(iter(given.items()))
+        raise ValueError(f"`{name}` is a tolerance of the adaptive method 'radau5'; the "
+                         f"fixed-step method {method!r} takes `dt`, got {name}={value!r}")
+    if method not in FIXED_STEP_METHODS:  # the file's tolerances serve an adaptive method
+        rtol = rtol if rtol is not None else settings.get("rtol")
+        atol = atol if atol is not None else settings.get("atol")
+    dt = dt if dt is not None else settings.get("dt")
+    t_end = t_end if t_end is not None else settings.get("t_end")
+    if t_end is None:
+        raise ValueError("give `t_end` (or a [solver] table in the template), got None")
+    t_end = as_positive("t_end", t_end)
+    dt = None if dt is None else as_positive("dt", dt)
+    rtol = None if rtol is None else as_positive("rtol", rtol)
+    atol = None if atol is None else as_positive("atol", atol)
+    if dt is None and method in FIXED_STEP_METHODS:
+        raise ValueError(f"`dt` is required for the fixed-step method {method!r} (here or "
+                         "in the template's [solver] table), got None")
+    if dt is None and rtol is None and atol is None and method == "auto":
+        raise ValueError("give `dt` (a fixed-step method) or `rtol`/`atol` (the adaptive "
+                         "method 'radau5'), here or in the template's [solver] table; "
+                         "got neither")
+    return dt, t_end, rtol, atol
 
 
 def _validate_rows(data: dict, sets: ParameterSets) -> None:
@@ -262,8 +308,9 @@ def _closed_dask(client: Any, params: np.ndarray, dt: float, n: int, bdf2: bool,
 
 def _run_one(job: tuple, values: dict) -> tuple[dict, Any]:
     """Build and simulate one scene; a failed run is a record, not an exception."""
-    source, method, dt, t_end, keep, steady = job
-    record, sol = _simulate_one(source, method, dt, t_end, keep or steady is not None, values)
+    source, method, dt, t_end, rtol, atol, keep, steady = job
+    record, sol = _simulate_one(source, method, dt, t_end, rtol, atol,
+                                keep or steady is not None, values)
     if steady is not None:
         from .steady import empty_steady, forcing_omega, steady_record
 
@@ -297,13 +344,15 @@ def scene_of(source: Any, values: dict) -> Any:
     return scene_from_dict(apply(source, values), source="<template>")[0]
 
 
-def _simulate_one(source: Any, method: str, dt: float, t_end: float, keep: bool,
+def _simulate_one(source: Any, method: str, dt: float | None, t_end: float,
+                  rtol: float | None, atol: float | None, keep: bool,
                   values: dict) -> tuple[dict, Any]:
     from lumped import InconsistentInitialForce, SolverError, simulate
 
     scene = scene_of(source, values)
     try:
-        sol = simulate(scene, method=method, dt=dt, t_end=t_end, throw=False)
+        sol = simulate(scene, method=method, dt=dt, t_end=t_end, rtol=rtol, atol=atol,
+                       throw=False)
     except InconsistentInitialForce as err:
         return failed_record(scene, method, dt, "inconsistent", str(err)), None
     except SolverError as err:
