@@ -183,6 +183,10 @@ def rename_function(source: str, name: str) -> str:
 _FLOAT_LITERAL = re.compile(r"(?<![\w.])(?:\d+\.\d*(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])")
 
 
+#: A lifted name alone in parentheses that are not a call's or an index's.
+_LONE_NAME = re.compile(r"(?<![\w\])\]])\((_c\d+)\)")
+
+
 def lift_constants(body: str) -> tuple[str, list[float]]:
     """``body`` with its ``k``-th float literal replaced by the name ``_c<k>``, and the
     literals' values in order.
@@ -197,7 +201,11 @@ def lift_constants(body: str) -> tuple[str, list[float]]:
         values.append(float(m.group(0)))
         return f"_c{len(values) - 1}"
 
-    return _FLOAT_LITERAL.sub(slot, body), values
+    lifted = _FLOAT_LITERAL.sub(slot, body)
+    # sympy prints a Rational parameter (1/k of an integral k) as "(0.1)": the same
+    # arithmetic as 0.1, but another text; a lone name in parentheses (not a call's) is
+    # written bare, so integral and other values of a number give one template
+    return _LONE_NAME.sub(r"\1", lifted), values
 
 
 def lift_function(source: str, name: str, *, inline: bool = False) -> tuple[str, list[float]]:
