@@ -461,7 +461,8 @@ def _branch_section(templates: list[LawTemplate], law_index: list[int],
     return L
 
 
-LOADED_MODULES: dict[str, ModuleType] = {}
+#: The generated modules imported in this process, by :func:`loaded_key`.
+LOADED_MODULES: dict[tuple[str, str], ModuleType] = {}
 MODULE_LOCK = threading.Lock()
 
 
@@ -491,11 +492,19 @@ def module_name(source: str) -> str:
     return f"lumped_jit_{hashlib.sha256(source.encode()).hexdigest()[:24]}"
 
 
+def loaded_key(name: str) -> tuple[str, str]:
+    """The key of module ``name`` in :data:`LOADED_MODULES`: with the cache directory it
+    was imported from, so that a module compiled into another cache (a test's temporary
+    one, a changed ``LUMPED_CACHE_DIR``) is not taken for this cache's."""
+    return str(cache_dir()), name
+
+
 def module_cached(source: str) -> bool:
     """The generated module with text ``source`` is loaded in this process, or its file
     is in the disk cache (compiled by an earlier run on this machine)."""
     name = module_name(source)
-    return name in LOADED_MODULES or (cache_dir() / "jit" / f"{name}.py").exists()
+    return (loaded_key(name) in LOADED_MODULES
+            or (cache_dir() / "jit" / f"{name}.py").exists())
 
 
 def scene_module(scene) -> tuple[ModuleType, SceneSource]:
@@ -504,9 +513,10 @@ def scene_module(scene) -> tuple[ModuleType, SceneSource]:
     generated = scene_source(scene)
     name = module_name(generated.source)
     with MODULE_LOCK:
-        module = LOADED_MODULES.get(name)
+        key = loaded_key(name)
+        module = LOADED_MODULES.get(key)
         if module is None:
-            module = LOADED_MODULES[name] = import_generated(name, generated.source)
+            module = LOADED_MODULES[key] = import_generated(name, generated.source)
     return module, generated
 
 

@@ -77,6 +77,7 @@ from ...codegen.jit import (
     MODULE_LOCK,
     end_values_source,
     import_generated,
+    loaded_key,
     scene_templates,
 )
 
@@ -317,10 +318,10 @@ def fast_module_cached(scene, key: tuple | None = None) -> bool:
     earlier run of the same structure built it."""
     from ...codegen.jit import cache_dir
 
-    if key is not None and key in _BY_KEY:
+    if key is not None and (str(cache_dir()), key) in _BY_KEY:
         return True
     name = _fast_name(fast_source(scene))
-    return ("fast-" + name[len("lumped_jitfast_"):] in LOADED_MODULES
+    return (loaded_key(name) in LOADED_MODULES
             or (cache_dir() / "jit" / f"{name}.py").exists())
 
 
@@ -333,17 +334,19 @@ def fast_module(scene, key: tuple | None = None) -> ModuleType:
     topology, and the structure arrays); a later call with an equal key returns the
     module without generating the source again (about 0.4 ms of sympy printing, 8 ns a
     step on a run of 50 000 steps)."""
+    from ...codegen.jit import cache_dir
+
     if key is not None:
+        key = (str(cache_dir()), key)  # (as the modules: per cache directory)
         module = _BY_KEY.get(key)
         if module is not None:
             return module
     source = fast_source(scene)
     name = _fast_name(source)
-    digest = "fast-" + name[len("lumped_jitfast_"):]
     with MODULE_LOCK:
-        module = LOADED_MODULES.get(digest)
+        module = LOADED_MODULES.get(loaded_key(name))
         if module is None:
-            module = LOADED_MODULES[digest] = import_generated(name, source)
+            module = LOADED_MODULES[loaded_key(name)] = import_generated(name, source)
         if key is not None:
             _BY_KEY[key] = module
     return module
