@@ -16,7 +16,9 @@ the exact reference -- a new method is picked up, never skipped silently) it ass
 * the other methods create no energy beyond the loads' work and their error (measured
   against the same run at half the step);
 * the runs converge as ``dt`` halves;
-* a stuck dashpot (rate zero) never carries more than its yield force.
+* a stuck dashpot (rate zero) never carries more than its yield force;
+* the adaptive method at a tight tolerance (``rtol = 1e-10``, :func:`check_tight`) runs
+  through and agrees with ``bdf2`` within ``bdf2``'s own error as ``dt`` halves.
 
 Budget: ``ci`` runs :data:`CI_EXAMPLES` examples per method (:data:`COMPILED_EXAMPLES`
 for the methods that compile each scene); ``LUMPED_LARGE=1`` runs
@@ -24,7 +26,8 @@ for the methods that compile each scene); ``LUMPED_LARGE=1`` runs
 CHANGELOG). A method with
 a compiled and a Python loop (:data:`LOOPED`: ``radau5``) runs its Python loop on that
 budget and both loops, which must agree, on :data:`LOOPED_BOTH_EXAMPLES` (the compiled
-loop compiles every new scene: 10 000 would take hours).
+loop compiles every new scene: 10 000 would take hours); its tight-tolerance check runs
+:data:`TIGHT_EXAMPLES` in ``ci`` (its Python loop, 0.3-1 s an example).
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ import os
 
 import numpy as np
 import pytest
-from _convergence import assert_converges
+from _convergence import EXTRA_LEVELS, assert_converges
 from _yield_check import check_yield
 from hypothesis import HealthCheck, assume, event, example, given, settings
 from hypothesis import strategies as st
@@ -298,6 +301,45 @@ def check_network(scene: Scene, method: str, **extra) -> list:
     return sols
 
 
+#: The adaptive method at a tight tolerance (issue 29): ``rtol``, and ``atol = 1e-3 rtol``.
+TIGHT_RTOL = 1e-10
+TIGHT_ATOL = 1e-13
+
+
+def check_tight(scene: Scene, method: str, **extra):
+    """Run ``scene`` with the adaptive ``method`` at :data:`TIGHT_RTOL` and check it against
+    ``bdf2`` as ``dt`` halves: it completes, every value is finite, a stuck dashpot holds
+    within its yield force, and the displacements of the finest ``bdf2`` run lie within
+    that run's own error of it (twice the distance to the run at twice the step, the
+    first-order Richardson estimate, which bounds the second-order one too; or ``1e-7``
+    of the values' scale, the tight run's own error). A grazing impact that the coarse
+    runs miss (:func:`~_convergence.assert_converges`) gets up to
+    :data:`~_convergence.EXTRA_LEVELS` more halvings. Returns the tight run."""
+    dt, t_end = grid(scene)
+    tight = _run_or_reject(scene, method, dt / 4, t_end, rtol=TIGHT_RTOL, atol=TIGHT_ATOL,
+                           **extra)
+    assert tight.ok, tight.message
+    assert np.all(np.isfinite(tight.data))
+    v_max = float(np.abs(tight.data[:, 2:1 + 2 * len(scene.nodes):2]).max())
+    check_yield(scene, tight, 100.0 * TIGHT_RTOL, TIGHT_ATOL + TIGHT_RTOL * v_max, TIGHT_RTOL)
+    xcols = slice(1, 1 + 2 * len(scene.nodes), 2)
+    x_tight = tight.data[::4, xcols]  # on the coarse grid
+    scale = 1.0 + float(np.abs(tight.data).max())
+    sols = [_run_or_reject(scene, "bdf2", dt / 2**k, t_end) for k in range(3)]
+    for k in range(3, 3 + EXTRA_LEVELS + 1):
+        coarse, fine = sols[-2].data, sols[-1].data
+        own = float(np.abs(coarse[:, xcols] - fine[::2, xcols]).max())
+        dist = float(np.abs(fine[::2 ** (k - 1), xcols] - x_tight).max())
+        if dist <= max(2.0 * own, 1e-7 * scale):
+            return tight
+        if k < 3 + EXTRA_LEVELS:
+            finer = _run_or_reject(scene, "bdf2", dt / 2**k, t_end)
+            assert finer.ok, finer.message
+            sols.append(finer)
+    raise AssertionError(f"{method} at rtol {TIGHT_RTOL} is {dist!r} from bdf2 at dt "
+                         f"{dt / 2 ** (k - 1)!r}, beyond bdf2's own error {2.0 * own!r}")
+
+
 _SETTINGS = settings(max_examples=EXAMPLES, deadline=None,
                      suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 
@@ -386,6 +428,18 @@ _UNDAMPED_BESIDE_STUCK = Scene(
 @example(scene=_UNDAMPED_BESIDE_STUCK)
 def test_random_passive_network_python_loop(method: str, scene: Scene) -> None:
     check_network(scene, method, compiled=False)
+
+
+#: Examples of the tight-tolerance agreement (:func:`check_tight`): a few in ``ci``, the
+#: full budget under ``LUMPED_LARGE``.
+TIGHT_EXAMPLES = LARGE_EXAMPLES if LARGE else 10
+
+
+@pytest.mark.parametrize("method", LOOPED)
+@settings(_SETTINGS, max_examples=TIGHT_EXAMPLES)
+@given(scene=networks())
+def test_random_network_tight_tolerance(method: str, scene: Scene) -> None:
+    check_tight(scene, method, compiled=False)
 
 
 #: A draw of the ``LUMPED_LARGE`` both-loops run: a mass released at ``0.90`` N of spring
