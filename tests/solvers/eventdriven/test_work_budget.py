@@ -9,6 +9,8 @@ import pytest
 from lumped import Element, Mass, Scene, SolverError, Status, get_law, simulate
 from lumped.scenarios import scenario_scene
 from lumped.solvers.eventdriven import budget
+from lumped.solvers.eventdriven.run import Radau5Run
+from lumped.solvers.status import RunSettings
 
 LOOPS = [False, True]
 
@@ -61,6 +63,23 @@ def test_rejected_steps_count_against_the_budget():
                    max_steps=steps + 1, throw=False)
     assert sol.status is Status.MAX_ITERS and sol.stats["steps"] < steps
     assert f"{sol.stats['rejected']} rejected" in sol.message
+
+
+def test_bridged_steps_count_against_the_budget():
+    # an "accumulation" of 3 events within 1 s (by the keywords) is bridged by backward
+    # Euler: its steps are work too
+    scene = scenario_scene("forcing-F2")
+    extra = {"zeno_events": 3, "zeno_window": 1.0, "compiled": False}
+    run = Radau5Run(scene, RunSettings(t_end=5.0, rtol=1e-8, atol=1e-10, extra=extra))
+    raw = run.run()
+    bridged = raw.stats["bridged_steps"]
+    assert raw.status is Status.SUCCESS and bridged >= 32
+    own = run.budget.tries(raw.stats) - bridged
+    kw = {"t_end": 5.0, "rtol": 1e-8, "atol": 1e-10, **extra}
+    assert simulate(scene, method="radau5", max_steps=own + bridged + 1, **kw).ok
+    sol = simulate(scene, method="radau5", max_steps=own + bridged // 2, throw=False, **kw)
+    assert sol.status is Status.MAX_ITERS and "max_steps" in sol.message
+    assert "backward-Euler steps of bridges" in sol.message
 
 
 @pytest.mark.parametrize("compiled", LOOPS)

@@ -1,5 +1,5 @@
-r"""``radau5``'s work budget: ``max_steps`` bounds the work of a run, never its wall time
-alone, so that a run that cannot make progress ends with a clear stop.
+r"""``radau5``'s work budget: ``max_steps`` bounds the work of a run (not its wall time), so
+that a run that cannot make progress ends with a clear stop.
 
 The work is every step the run tries: accepted, rejected (error test, Newton failure, a
 kink of the force split, the defect after an event), redone to land on an event, and the
@@ -8,9 +8,10 @@ on it, at every pass of the driver's loop (:class:`lumped.solvers.eventdriven.ru
 Radau5Run`), which is where the compiled loop returns to:
 
 * the budget is spent: ``work >= max_steps``;
-* the pace: over the last :func:`window` tries (at least :data:`PACE_WINDOW`, or
-  ``max_steps / 100``) ``t`` moved by ``dt_w``; when the time left at that pace needs more
-  tries than the budget has left, ``(t_end - t) / dt_w * window > max_steps - work``, the
+* the pace: over the last :func:`window` tries of ``radau5`` itself (at least
+  :data:`PACE_WINDOW`, or ``max_steps / 100``; the steps of bridges, which a bridge sizes
+  and bounds, not counted) ``t`` moved by ``dt_w``; when the time left at that pace needs
+  more tries than the budget has left, ``(t_end - t) / dt_w * window > max_steps - work``, the
   run stops at once rather than spend the rest of it (a loaded network whose Newton
   failed at every step longer than 1e-9 s moved 3.2e-6 s in 10 000 tries with 0.7 s to
   go, 2.2e9 tries; a budget of 1e6 tries would take 2 hours of its Python loop).
@@ -53,7 +54,7 @@ class WorkBudget:
         #: passes of the Python loop that neither accepted nor rejected a step (a step
         #: redone shorter to land on an event, a mode chosen again at ``t``)
         self.redone = 0
-        self.mark = (0, 0.0)  # (tries, t) at the start of the current window
+        self.mark = (0, 0.0)  # (tries but bridges', t) at the start of the current window
 
     def tries(self, stats: dict) -> int:
         """The steps tried so far (see the module notes)."""
@@ -75,20 +76,23 @@ class WorkBudget:
                 f"radau5 stopped at t = {t!r} of t_end = {self.t_final!r}: its work budget "
                 f"max_steps = {self.max_steps} is spent ({self._count(stats)}); give a "
                 "larger max_steps to go on")
-        tries0, t0 = self.mark
-        if tries - tries0 < self.window:
+        # the pace of radau5's own tries (a bridge's steps are sized by the bridge,
+        # :mod:`lumped.solvers.eventdriven.bridge`, and its count bounded there)
+        own = tries - stats.get("bridged_steps", 0)
+        own0, t0 = self.mark
+        if own - own0 < self.window:
             return None
-        left, moved = self.max_steps - tries, t - t0
-        if moved * left < (tries - tries0) * (self.t_final - t):
-            need = (f"about {(tries - tries0) * (self.t_final - t) / moved:.2g} tries"
-                    if moved > 0 else "tries without end")
+        left, moved, n = self.max_steps - tries, t - t0, own - own0
+        if moved * left < n * (self.t_final - t):
+            need = (f"about {n * (self.t_final - t) / moved:.2g} tries" if moved > 0
+                    else "tries without end")
             return Status.MAX_ITERS, (
                 f"radau5 stopped at t = {t!r} of t_end = {self.t_final!r}: its work budget "
-                f"cannot reach t_end: its last {tries - tries0} tries moved t by {moved!r} "
+                f"cannot reach t_end: its last {n} tries moved t by {moved!r} "
                 f"s, at which pace the {self.t_final - t!r} s left need {need}, more than "
                 f"the {left} left of max_steps = {self.max_steps} ({self._count(stats)}); "
                 "give a larger max_steps to go on")
-        self.mark = (tries, t)
+        self.mark = (own, t)
         return None
 
     def _count(self, stats: dict) -> str:
