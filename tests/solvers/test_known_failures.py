@@ -7,7 +7,7 @@ import pytest
 
 from lumped import SolverError, simulate
 from lumped.laws import get_law
-from lumped.scene import Element, Junction, Mass, Scene
+from lumped.scene import Element, Junction, Mass, Scene, SineBurst
 
 
 def _string_to_a_held_junction() -> Scene:
@@ -67,4 +67,41 @@ def _string_between_two_herschel_bulkley_links() -> Scene:
 def test_a_string_locking_beside_a_shear_thinning_link_runs(method, dt):
     sol = simulate(_string_between_two_herschel_bulkley_links(), method=method, dt=dt,
                    t_end=0.5)
+    assert sol.ok
+
+
+def _loaded_string_chain() -> Scene:
+    # a draw of the random-network suite's tight-tolerance check at LUMPED_LARGE=300
+    # (issue 29): a chain of strings (ground - m0 - m1) and a string from ground to m3,
+    # m1 tied to m2 by a spring and a Herschel-Bulkley n = 0.8 link, a sine burst on m1.
+    # Unloaded, or at rtol 1e-10 with atol 1e-12, or at rtol 1e-9 it runs through; bdf1
+    # and bdf2 pass the suite's checks on it
+    string = get_law("string_spring")
+    return Scene(
+        [Mass("m0", m=0.4201702417518112, x0=-3.141099492883003e-250,
+              v0=0.026714769789581094),
+         Mass("m1", m=0.18571427732261467, x0=4.859632342139496e-263,
+              v0=0.07226945714490585),
+         Mass("m2", m=1.706516750708603, x0=0.001, v0=1.8244802830876417),
+         Mass("m3", m=9.671948270867205, x0=-0.27078910260744926, v0=0.001)],
+        [Element("e0", string.bind(k=15.862217459807617, L=0.18922035336843843), "ground",
+                 "m0"),
+         Element("e1", string.bind(k=5.166956371383977, L=0.01), "m0", "m1"),
+         Element("e2", get_law("linear_spring").bind(k=0.4400038037639899), "m1", "m2"),
+         Element("e3", string.bind(k=1.0, L=0.05506977693959426), "ground", "m3"),
+         Element("e4", get_law("herschel_bulkley").bind(gamma=0.14617915919865815, tau=0.1,
+                                                        n=0.8), "m2", "m1")],
+        {"m1": SineBurst(amplitude=1.936983360451386, omega=1.6104068096704158,
+                         t_off=0.313764147268767)})
+
+
+@pytest.mark.xfail(strict=True, raises=SolverError, reason=(
+    "radau5 at rtol 1e-10, atol 1e-13: both strings of the chain go taut at t = 0.19476 "
+    "(impacts of e0 and e1), the step falls below its floor there, and the backward-Euler "
+    "bridge's Newton cannot bring e1's lock row below 8.7e-18 in 300 iterations, under "
+    "one ulp (2.8e-17) of the positions it is computed from: the lock row's round-off "
+    "scale, as for the taut string on a stuck junction above (issue 29)"))
+def test_radau5_at_a_tight_tolerance_on_a_loaded_string_chain_runs():
+    sol = simulate(_loaded_string_chain(), method="radau5", t_end=0.2, rtol=1e-10,
+                   atol=1e-13, compiled=False)
     assert sol.ok

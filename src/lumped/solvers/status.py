@@ -37,7 +37,7 @@ class Status(enum.Enum):
     """Outcome of a run."""
 
     SUCCESS = "success"
-    MAX_ITERS = "max_iters"  #: Newton's iteration budget ran out
+    MAX_ITERS = "max_iters"  #: Newton's iteration budget, or radau5's work budget, ran out
     DIVERGED = "diverged"  #: Newton's line search found no decrease
     SINGULAR = "singular"  #: singular step Jacobian
     NON_FINITE = "non_finite"  #: NaN or infinity met

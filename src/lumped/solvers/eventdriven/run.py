@@ -26,6 +26,7 @@ from ..radau.tableau import C
 from ..status import BranchError, RawRun, SolverError, Status
 from . import fast as adaptive_fast
 from .bridge import MAX_BRIDGES, take_bridge
+from .budget import WorkBudget
 from .checks import StepChecks
 from .fast import compiled_loop
 from .landing import Landing
@@ -44,7 +45,8 @@ _EPS = 2.220446049250313e-16
 #: loop passes, up to :data:`~lumped.solvers.radau.stage.STALL_PASSES` (4 s a stall).
 _KEPT_AT_T = 4
 #: The stops that backward Euler bridges (:mod:`lumped.solvers.eventdriven.bridge`, the keyword
-#: ``bridge``); a fold of a law (``BRANCH_LOST``), ``max_steps`` and ``max_events`` end
+#: ``bridge``); a fold of a law (``BRANCH_LOST``), the work budget ``max_steps``
+#: (``MAX_ITERS``, :mod:`lumped.solvers.eventdriven.budget`) and ``max_events`` end
 #: the run.
 _BRIDGED = frozenset({Status.STEP_TOO_SMALL, Status.TOO_MANY_EVENTS, Status.INCONSISTENT})
 
@@ -108,6 +110,7 @@ class Radau5Run(StepPass, StepChecks):
             "nfev": 0, "njev": 0, "events": 0, "max_newton_iterations": 0,
             "initial_newton_iterations": ic["newton_iterations"], "held_intervals": 0}
         self.status, self.message = Status.SUCCESS, ""
+        self.budget = WorkBudget(opts["max_steps"], t_final)  # (lumped.solvers.eventdriven.budget)
         self.fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"])
 
         self.ms = ms = ModeState(scene, plan, settings, opts, rtol, atol, stats, zeno_window)
@@ -251,7 +254,8 @@ class Radau5Run(StepPass, StepChecks):
                 "err_acc": self.err_acc, "h_good": self.h_good, "stalled": self.stalled,
                 "t_stop": self.t_stop(), "t_final": self.t_final,
                 "prev_break": breaks[bi - 1] if bi > 0 else math.nan, "rtol": self.rtol,
-                "atol": self.atol, "m_min": self.m_min, "max_steps": self.opts["max_steps"]}
+                "atol": self.atol, "m_min": self.m_min,
+                "max_steps": self.budget.compiled_cap(self.stats)}
 
     def bridge_over(self) -> bool:
         """Backward Euler over the stop (``status``, ``message``) from the last accepted
@@ -300,6 +304,8 @@ class Radau5Run(StepPass, StepChecks):
                         and len(self.ms.events) <= opts["max_events"] and self.bridge_over()):
                     break
                 continue
+            if self.stop(self.budget.check(self.t, self.stats)):
+                continue  # the work budget is spent: the run ends (never bridged)
             if self.hold_check and self.target is None and not self.kept:
                 self.hold_check = False
                 if self._hold():
@@ -316,7 +322,9 @@ class Radau5Run(StepPass, StepChecks):
             if self.fast is not None and self.target is None and not self.kept and \
                     not self.ms.forces_from_probe and self._fast_steps():
                 continue
+            tried = stats["steps"] + stats["rejected"]
             self._step()
+            self.budget.redone += tried == stats["steps"] + stats["rejected"]
         return self._result()
 
     def _hold(self) -> bool:

@@ -14,7 +14,11 @@ reasons are in ``docs/theory/radau.md`` and ``docs/theory/events.md``):
    forcing object) is stepped to exactly and is a time event;
 4. more than ``max_events`` events, or ``zeno_events`` events within ``zeno_window``
    seconds, stop the run with :attr:`Status.TOO_MANY_EVENTS`; a step below its floor stops
-   it with :attr:`Status.STEP_TOO_SMALL`.
+   it with :attr:`Status.STEP_TOO_SMALL`;
+5. the work budget ``max_steps`` (default 1 000 000) counts every step tried (accepted,
+   rejected, redone to land on an event, and the backward-Euler steps of bridges): spent,
+   or at a pace that cannot reach ``t_end`` within what is left of it, it stops the run
+   with :attr:`Status.MAX_ITERS` (:mod:`lumped.solvers.eventdriven.budget`).
 
 The output holds the accepted step points, or (with ``dt``) the dense output on
 ``t_n = n dt``; ``RawRun.dense(t)`` evaluates the collocation polynomials anywhere.

@@ -51,16 +51,14 @@ class StepPass:
     def _step(self) -> None:
         """One pass of the Python loop: a step from ``t`` solved, checked and accepted,
         or the step size (the mode, the landing bracket) changed for the next pass."""
-        stats, opts, t = self.stats, self.opts, self.t
+        stats, t = self.stats, self.t
         self.stalled += 1
         if self.stalled > STALL_PASSES:
             self.status, self.message = Status.STEP_TOO_SMALL, (
                 f"radau5 stopped at t = {t!r}: {STALL_PASSES} attempts without an accepted "
                 f"step (step size {self.h!r})")
             return
-        if stats["steps"] >= opts["max_steps"]:
-            self.status, self.message = Status.MAX_ITERS, (
-                f"radau5 stopped at t = {t!r}: max_steps = {opts['max_steps']} reached")
+        if self.stop(self.budget.check(t, stats)):  # (also after the compiled loop's return)
             return
         t_stop = self.t_stop()
         room = t_stop - t

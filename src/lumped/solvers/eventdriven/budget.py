@@ -1,0 +1,102 @@
+r"""``radau5``'s work budget: ``max_steps`` bounds the work of a run (not its wall time), so
+that a run that cannot make progress ends with a clear stop.
+
+The work is every step the run tries: accepted, rejected (error test, Newton failure, a
+kink of the force split, the defect after an event), redone to land on an event, and the
+backward-Euler steps of its bridges (:mod:`lumped.solvers.eventdriven.bridge`). Two tests
+on it, at every pass of the driver's loop (:class:`lumped.solvers.eventdriven.run.
+Radau5Run`), which is where the compiled loop returns to:
+
+* the budget is spent: ``work >= max_steps``;
+* the pace: over the last :func:`window` tries of ``radau5`` itself (at least
+  :data:`PACE_WINDOW`, or ``max_steps / 100``; the steps of bridges, which a bridge sizes
+  and bounds, not counted) ``t`` moved by ``dt_w``; when the time left at that pace needs
+  more tries than the budget has left, ``(t_end - t) / dt_w * window > max_steps - work``, the
+  run stops at once rather than spend the rest of it (a loaded network whose Newton
+  failed at every step longer than 1e-9 s moved 3.2e-6 s in 10 000 tries with 0.7 s to
+  go, 2.2e9 tries; a budget of 1e6 tries would take 2 hours of its Python loop).
+
+Both stop the run with :attr:`~lumped.solvers.status.Status.MAX_ITERS` (SciML's return
+code for a step budget; a ``SolverError`` with ``throw=True``), never bridged, with the
+time reached, the tries of each kind and how to raise the budget.
+
+The compiled loop (:mod:`lumped.solvers.eventdriven.loop_jit`) counts accepted steps only
+and returns at ``max_steps`` of them: :meth:`WorkBudget.compiled_cap` hands it the
+accepted steps it may take before it returns, at most a window's worth, so that the tests
+above run at least once a window. Its rejected steps between two returns are counted
+when it returns (at most the stall limit,
+:data:`~lumped.solvers.radau.stage.STALL_PASSES`, in a row).
+"""
+
+from __future__ import annotations
+
+from ..status import Status
+
+__all__ = ["PACE_WINDOW", "WorkBudget", "window"]
+
+#: Tries in the shortest window of the pace test.
+PACE_WINDOW = 10_000
+
+
+def window(max_steps: int) -> int:
+    """Tries per window of the pace test: :data:`PACE_WINDOW`, or ``max_steps / 100`` if
+    more (a budget below :data:`PACE_WINDOW` is spent before a window ends: then the
+    pace test never stops the run)."""
+    return max(PACE_WINDOW, max_steps // 100)
+
+
+class WorkBudget:
+    """The work budget of one run: ``max_steps`` tries over ``[0, t_final]``."""
+
+    def __init__(self, max_steps: int, t_final: float) -> None:
+        self.max_steps, self.t_final = max_steps, t_final
+        self.window = window(max_steps)
+        #: passes of the Python loop that neither accepted nor rejected a step (a step
+        #: redone shorter to land on an event, a mode chosen again at ``t``)
+        self.redone = 0
+        self.mark = (0, 0.0)  # (tries but bridges', t) at the start of the current window
+
+    def tries(self, stats: dict) -> int:
+        """The steps tried so far (see the module notes)."""
+        return (stats["steps"] + stats["rejected"] + stats.get("bridged_steps", 0)
+                + self.redone)
+
+    def compiled_cap(self, stats: dict) -> int:
+        """The ``max_steps`` of the compiled loop: the accepted steps it may reach before
+        it returns (the budget left, at most a window of it, at least one step)."""
+        left = self.max_steps - self.tries(stats)
+        return stats["steps"] + max(1, min(left, self.window))
+
+    def check(self, t: float, stats: dict) -> tuple[Status, str] | None:
+        """``(Status.MAX_ITERS, message)`` when the budget is spent, or when the run's pace
+        over the last window cannot reach ``t_final`` within what is left of it."""
+        tries = self.tries(stats)
+        if tries >= self.max_steps:
+            return Status.MAX_ITERS, (
+                f"radau5 stopped at t = {t!r} of t_end = {self.t_final!r}: its work budget "
+                f"max_steps = {self.max_steps} is spent ({self._count(stats)}); give a "
+                "larger max_steps to go on")
+        # the pace of radau5's own tries (a bridge's steps are sized by the bridge,
+        # :mod:`lumped.solvers.eventdriven.bridge`, and its count bounded there)
+        own = tries - stats.get("bridged_steps", 0)
+        own0, t0 = self.mark
+        if own - own0 < self.window:
+            return None
+        left, moved, n = self.max_steps - tries, t - t0, own - own0
+        if moved * left < n * (self.t_final - t):
+            need = (f"about {n * (self.t_final - t) / moved:.2g} tries" if moved > 0
+                    else "tries without end")
+            return Status.MAX_ITERS, (
+                f"radau5 stopped at t = {t!r} of t_end = {self.t_final!r}: its work budget "
+                f"cannot reach t_end: its last {n} tries moved t by {moved!r} "
+                f"s, at which pace the {self.t_final - t!r} s left need {need}, more than "
+                f"the {left} left of max_steps = {self.max_steps} ({self._count(stats)}); "
+                "give a larger max_steps to go on")
+        self.mark = (own, t)
+        return None
+
+    def _count(self, stats: dict) -> str:
+        bridged = stats.get("bridged_steps", 0)
+        return (f"{stats['steps']} accepted steps, {stats['rejected']} rejected, "
+                f"{self.redone} other passes (landings on events, modes chosen again)"
+                + (f", {bridged} backward-Euler steps of bridges" if bridged else ""))

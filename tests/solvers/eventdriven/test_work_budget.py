@@ -1,0 +1,111 @@
+"""``radau5``'s work budget ``max_steps`` (issue 29, :mod:`lumped.solvers.eventdriven.budget`):
+every step tried counts, a run whose pace cannot reach ``t_end`` within the budget stops
+at once, and the stop is a clear ``Status.MAX_ITERS`` in both loops, never bridged."""
+
+from __future__ import annotations
+
+import pytest
+
+from lumped import Element, Mass, Scene, SolverError, Status, get_law, simulate
+from lumped.scenarios import scenario_scene
+from lumped.solvers.eventdriven import budget
+from lumped.solvers.eventdriven.run import Radau5Run
+from lumped.solvers.status import RunSettings
+
+LOOPS = [False, True]
+
+
+def _oscillator() -> Scene:
+    # undamped: about 40 steps a period at rtol 1e-8, the same pace throughout
+    return Scene([Mass("m", m=1.0, x0=0.1)],
+                 [Element("k", get_law("linear_spring").bind(k=100.0), "ground", "m")])
+
+
+@pytest.mark.parametrize("compiled", LOOPS)
+def test_max_steps_ends_the_run_with_a_clear_status(compiled):
+    scene = scenario_scene("forcing-F2")
+    full = simulate(scene, method="radau5", t_end=2.0, rtol=1e-8, compiled=compiled)
+    assert full.ok and full.stats["steps"] > 100
+    sol = simulate(scene, method="radau5", t_end=2.0, rtol=1e-8, compiled=compiled,
+                   max_steps=60, throw=False)
+    assert sol.status is Status.MAX_ITERS  # (not bridged, though bridge=True)
+    assert sol.stats["steps"] + sol.stats["rejected"] <= 60 and sol.t[-1] < 0.2
+    assert "bridge" not in sol.message
+    for part in ("radau5 stopped at t = ", "of t_end = 2.0", "max_steps = 60 is spent",
+                 f"{sol.stats['steps']} accepted steps", "give a larger max_steps"):
+        assert part in sol.message
+    with pytest.raises(SolverError, match="max_steps = 60 is spent") as err:
+        simulate(scene, method="radau5", t_end=2.0, rtol=1e-8, compiled=compiled,
+                 max_steps=60)
+    assert err.value.status is Status.MAX_ITERS and err.value.t == sol.t[-1]
+
+
+def test_both_loops_stop_at_the_same_step():
+    scene = scenario_scene("forcing-F2")
+    a, b = (simulate(scene, method="radau5", t_end=2.0, rtol=1e-8, compiled=c,
+                     max_steps=137, throw=False) for c in LOOPS)
+    assert a.status is b.status is Status.MAX_ITERS
+    assert a.t[-1] == b.t[-1] and a.stats["steps"] == b.stats["steps"]
+
+
+def test_rejected_steps_count_against_the_budget():
+    # a Herschel-Bulkley n = 2 dashpot released at 0.90 N of spring force (yield 0.53 N):
+    # the simplified Newton misses its flat start again and again (rejected steps)
+    hb = get_law("herschel_bulkley").bind(gamma=1.0, tau=0.5286419768660505, n=2.0)
+    scene = Scene([Mass("m0", m=1.0, x0=-0.45170628585923367)],
+                  [Element("e0", get_law("linear_spring").bind(k=2.0), "ground", "m0"),
+                   Element("e4", hb, "ground", "m0")])
+    full = simulate(scene, method="radau5", t_end=0.5, rtol=1e-6, compiled=False)
+    steps, rejected = full.stats["steps"], full.stats["rejected"]
+    assert full.ok and rejected >= 2
+    # enough for the accepted steps, not for the steps tried
+    sol = simulate(scene, method="radau5", t_end=0.5, rtol=1e-6, compiled=False,
+                   max_steps=steps + 1, throw=False)
+    assert sol.status is Status.MAX_ITERS and sol.stats["steps"] < steps
+    assert f"{sol.stats['rejected']} rejected" in sol.message
+
+
+def test_bridged_steps_count_against_the_budget():
+    # an "accumulation" of 3 events within 1 s (by the keywords) is bridged by backward
+    # Euler: its steps are work too
+    scene = scenario_scene("forcing-F2")
+    extra = {"zeno_events": 3, "zeno_window": 1.0, "compiled": False}
+    run = Radau5Run(scene, RunSettings(t_end=5.0, rtol=1e-8, atol=1e-10, extra=extra))
+    raw = run.run()
+    bridged = raw.stats["bridged_steps"]
+    assert raw.status is Status.SUCCESS and bridged >= 32
+    own = run.budget.tries(raw.stats) - bridged
+    kw = {"t_end": 5.0, "rtol": 1e-8, "atol": 1e-10, **extra}
+    assert simulate(scene, method="radau5", max_steps=own + bridged + 1, **kw).ok
+    sol = simulate(scene, method="radau5", max_steps=own + bridged // 2, throw=False, **kw)
+    assert sol.status is Status.MAX_ITERS and "max_steps" in sol.message
+    assert "backward-Euler steps of bridges" in sol.message
+
+
+@pytest.mark.parametrize("compiled", LOOPS)
+def test_a_pace_that_cannot_reach_t_end_stops_at_once(compiled, monkeypatch):
+    # 1000 s of a 0.63 s period need about 64 000 steps: with max_steps = 2000 the run
+    # stops after its first window of tries (200 here), not after 2000 (the compiled loop
+    # returns to the driver at least once a window)
+    monkeypatch.setattr(budget, "PACE_WINDOW", 200)
+    sol = simulate(_oscillator(), method="radau5", t_end=1000.0, rtol=1e-8, atol=1e-11,
+                   compiled=compiled, max_steps=2000, throw=False)
+    assert sol.status is Status.MAX_ITERS
+    assert 200 <= sol.stats["steps"] + sol.stats["rejected"] <= 210
+    assert "cannot reach t_end: its last 20" in sol.message
+
+
+@pytest.mark.parametrize("compiled", LOOPS)
+def test_a_steady_pace_within_the_budget_runs_to_the_end(compiled, monkeypatch):
+    monkeypatch.setattr(budget, "PACE_WINDOW", 200)
+    full = simulate(_oscillator(), method="radau5", t_end=20.0, rtol=1e-8, atol=1e-11,
+                    compiled=compiled)
+    tried = full.stats["steps"] + full.stats["rejected"]
+    sol = simulate(_oscillator(), method="radau5", t_end=20.0, rtol=1e-8, atol=1e-11,
+                   compiled=compiled, max_steps=int(1.2 * tried))
+    assert sol.ok and sol.stats["steps"] == full.stats["steps"]
+
+
+def test_the_pace_window_scales_with_the_budget():
+    assert budget.window(1_000) == budget.window(1_000_000) == budget.PACE_WINDOW == 10_000
+    assert budget.window(10**8) == 10**6
