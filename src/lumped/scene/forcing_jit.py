@@ -15,7 +15,7 @@ A node's forcing is a kind and three parameters:
   ``-m a_g(t)`` of a ground acceleration read from a record
   (:class:`lumped.scene.GroundMotion`), evaluated by :func:`linear_value` with the
   Python callable's own arithmetic (the same numbers bit for bit). Its row of ``fpar``
-  holds ``(n, mode, scale, before, after, t_0 .. t_{n-1}, p .., r ..)`` (see
+  holds ``n, mode, scale, before, after``, the times and two arrays of values (see
   :func:`linear_row`), so ``fpar`` is as wide as the longest table needs.
 
 :func:`forcing_code` encodes one forcing, :func:`forcing_arrays` a scene's (``fkind,
@@ -50,12 +50,15 @@ LINEAR_HEAD = 5
 
 
 def linear_row(forcing) -> np.ndarray | None:
-    """The :data:`FORCE_LINEAR` row of ``forcing``, or ``None`` when it is not a linearly
-    interpolated table (it has no ``interpolant()``, :meth:`lumped.io.Table.interpolant`,
-    or that gives ``None``): ``(n, mode, scale, before, after, t_0 .. t_{n-1}, p_0 .., r_0 ..)``
-    with ``p, r = y, y`` for a table (``mode`` :data:`LINEAR_TABLE`) and ``p, r = a, s``,
-    the segments' start values and slopes, for a ground motion (:data:`LINEAR_MOTION`).
-    ``scale`` multiplies the value (the ``-m`` of an inertial force, else 1)."""
+    """The :data:`FORCE_LINEAR` row of ``forcing``, or ``None`` for a forcing that is not
+    a linearly interpolated table.
+
+    A table describes itself by ``interpolant()`` (:meth:`lumped.io.Table.interpolant`);
+    a forcing without one, or whose ``interpolant()`` gives ``None``, is not a table. The
+    row is ``n, mode, scale, before, after``, then the ``n`` times, then ``p`` and ``r``:
+    ``p = r = y`` for a table (``mode`` :data:`LINEAR_TABLE`), the segments' start values
+    ``a`` and slopes ``s`` for a ground motion (:data:`LINEAR_MOTION`); ``scale``
+    multiplies the value (the ``-m`` of an inertial force, else 1)."""
     get = getattr(forcing, "interpolant", None)
     parts = get() if callable(get) else None
     if parts is None:
