@@ -69,6 +69,20 @@ def linear_row(forcing) -> np.ndarray | None:
 
 
 @njit(cache=True, inline="always")
+def _segment(i, t, fpar, n) -> int:
+    """The last ``k < n - 1`` with ``t_k <= t`` of node ``i``'s table (``bisect_right - 1``
+    for ``t_0 <= t < t_{n-1}``)."""
+    lo, hi = 0, n - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if fpar[i, LINEAR_HEAD + mid] <= t:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, inline="always")
 def linear_value(i, t, fpar) -> float:
     """Node ``i``'s :data:`FORCE_LINEAR` forcing at ``t``: the arithmetic of the Python
     callable (:func:`linear_row`), so the same double."""
@@ -82,13 +96,7 @@ def linear_value(i, t, fpar) -> float:
             if t == tl:
                 return scale * fpar[i, h + 2 * n - 1]
             return scale * (fpar[i, 3] if t < t0 else fpar[i, 4])
-        lo, hi = 0, n - 1  # the last k with t_k <= t (bisect_right - 1)
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if fpar[i, h + mid] <= t:
-                lo = mid
-            else:
-                hi = mid
+        lo = _segment(i, t, fpar, n)
         tk = fpar[i, h + lo]
         yk = fpar[i, h + n + lo]
         if t == tk:
@@ -99,14 +107,7 @@ def linear_value(i, t, fpar) -> float:
         return scale * fpar[i, 3]
     if t > tl:
         return scale * fpar[i, 4]
-    lo, hi = 0, n - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if fpar[i, h + mid] <= t:
-            lo = mid
-        else:
-            hi = mid
-    k = min(lo, n - 2) if t < tl else n - 2
+    k = min(_segment(i, t, fpar, n), n - 2) if t < tl else n - 2
     return scale * (fpar[i, h + n + k] + fpar[i, h + 2 * n - 1 + k] * (t - fpar[i, h + k]))
 
 
