@@ -172,12 +172,6 @@ def _exact_powers(source: str) -> str:
         out = f"{out[:j]}math.pow({out[j:i]}, {m.group(1)}.0){out[m.end():]}"
 
 
-def rename_function(source: str, name: str) -> str:
-    head, rest = _exact_powers(source).split("\n", 1)
-    args = head[head.index("("):]
-    return f"@njit(cache=True)\ndef {name}{args}\n{rest}"
-
-
 #: A float literal of the generated code (``repr`` of a float: a point or an exponent),
 #: not part of a name or an index.
 _FLOAT_LITERAL = re.compile(r"(?<![\w.])(?:\d+\.\d*(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])")
@@ -208,16 +202,16 @@ def lift_constants(body: str) -> tuple[str, list[float]]:
     return _LONE_NAME.sub(r"\1", lifted), values
 
 
-def lift_function(source: str, name: str, *, inline: bool = False) -> tuple[str, list[float]]:
-    """:func:`rename_function` with the body's float literals lifted
+def lift_function(source: str, name: str) -> tuple[str, list[float]]:
+    """``source`` (a generated kernel) as the numba function ``name``, its powers exact
+    (:func:`_exact_powers`) and its body's float literals lifted
     (:func:`lift_constants`) into trailing arguments ``_c0, _c1, ...``: the *template* of
     the function (one text for every value of the law's parameters) and those values."""
     head, rest = _exact_powers(source).split("\n", 1)
     args = head[head.index("(") + 1:head.rindex(")")]
     body, values = lift_constants(rest)
     extra = "".join(f", _c{k}" for k in range(len(values)))
-    deco = '@njit(cache=True, inline="always")' if inline else "@njit(cache=True)"
-    return f"{deco}\ndef {name}({args}{extra}):\n{body}", values
+    return f"@njit(cache=True)\ndef {name}({args}{extra}):\n{body}", values
 
 
 def slot_arguments(array: str, start: int, count: int) -> str:
