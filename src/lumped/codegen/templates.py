@@ -1,0 +1,191 @@
+r"""The template of a law's compiled functions: its generated code with every float
+literal lifted into a trailing argument.
+
+:func:`law_template` turns a bound law (a sympy residual with its parameters' values)
+into a :class:`LawTemplate`: the text of its kernel, term magnitude, branch selector,
+branch kernels (in the stage form of ``radau5``) and branch guards as numba functions,
+each float literal replaced by a name ``_c<k>`` (:func:`lift_constants`), and the
+literals' values in order. A literal's text is ``repr`` of a float, so passing
+``float(text)`` at run time computes what the literal computed, bit for bit; the text is
+the same for every value of the law's numbers, except where a number changes the
+generated source itself (0 or 1, a sign, an exponent of 2 or 0.5, a steep branch's
+inverse form). :mod:`lumped.codegen.jit` writes a scene's templates into one module per
+structure; :mod:`lumped.solvers.bdf.fast_codegen` inlines them into a per-structure loop.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+__all__ = ["kernel_sources", "lift_constants", "lift_function", "slot_arguments",
+           "LawTemplate", "law_template"]
+
+
+def kernel_sources(bound) -> tuple[str, str]:
+    """``(kernel, magnitude)`` source of a bound law, unguarded (numba-ready)."""
+    from lumped.codegen import compile_kernel
+    from lumped.laws import BoundLaw
+
+    if not (isinstance(bound, BoundLaw) and type(bound).kernel is BoundLaw.kernel):
+        raise ValueError(
+            f"compiled methods need laws given as sympy residuals (ElementLaw.bind); got "
+            f"{bound!r}, whose kernel is hand-written")
+    law = bound.law
+    params = {law.symbols[p]: v for p, v in bound.params.items()}
+    kernel = compile_kernel(law.residual, law.q, law.F, params, guard=False)
+    return kernel.__source__, kernel.magnitude.__source__
+
+
+def _exact_powers(source: str) -> str:
+    """Rewrite ``base**n`` (an integer literal ``n``) as ``math.pow(base, n.0)``.
+
+    CPython evaluates ``x**3`` with the C library's ``pow``; numba expands an integer
+    power into multiplications, which can differ in the last bit. ``math.pow`` is the C
+    ``pow`` in both, so the compiled kernels give the Python kernels' numbers bit for bit.
+    ``base`` is a name or a parenthesised group, with the call it belongs to if any.
+    """
+    out = source
+    while True:
+        m = re.search(r"\*\*(\d+)", out)
+        if m is None:
+            return out
+        i = m.start()  # the operand ends just before i
+        j = i
+        if out[j - 1] == ")":
+            depth = 0
+            while True:
+                j -= 1
+                depth += {")": 1, "(": -1}.get(out[j], 0)
+                if depth == 0:
+                    break
+        while j > 0 and (out[j - 1].isalnum() or out[j - 1] in "_."):
+            j -= 1
+        out = f"{out[:j]}math.pow({out[j:i]}, {m.group(1)}.0){out[m.end():]}"
+
+
+#: A float literal of the generated code (``repr`` of a float: a point or an exponent),
+#: not part of a name or an index.
+_FLOAT_LITERAL = re.compile(r"(?<![\w.])(?:\d+\.\d*(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])")
+
+
+#: A lifted name alone in parentheses that are not a call's or an index's.
+_LONE_NAME = re.compile(r"(?<![\w\])\]])\((_c\d+)\)")
+
+
+def lift_constants(body: str) -> tuple[str, list[float]]:
+    """``body`` with its ``k``-th float literal replaced by the name ``_c<k>``, and the
+    literals' values in order.
+
+    A literal's text is ``repr`` of a float, so ``float(text)`` is the very double the
+    literal stood for: the code given the values at run time computes what the code with
+    the literals computed, bit for bit.
+    """
+    values: list[float] = []
+
+    def slot(m: re.Match) -> str:
+        values.append(float(m.group(0)))
+        return f"_c{len(values) - 1}"
+
+    lifted = _FLOAT_LITERAL.sub(slot, body)
+    # sympy prints a Rational parameter (1/k of an integral k) as "(0.1)": the same
+    # arithmetic as 0.1, but another text; a lone name in parentheses (not a call's) is
+    # written bare, so integral and other values of a number give one template
+    return _LONE_NAME.sub(r"\1", lifted), values
+
+
+def lift_function(source: str, name: str) -> tuple[str, list[float]]:
+    """``source`` (a generated kernel) as the numba function ``name``, its powers exact
+    (:func:`_exact_powers`) and its body's float literals lifted
+    (:func:`lift_constants`) into trailing arguments ``_c0, _c1, ...``: the *template* of
+    the function (one text for every value of the law's parameters) and those values."""
+    head, rest = _exact_powers(source).split("\n", 1)
+    args = head[head.index("(") + 1:head.rindex(")")]
+    body, values = lift_constants(rest)
+    extra = "".join(f", _c{k}" for k in range(len(values)))
+    return f"@njit(cache=True)\ndef {name}({args}{extra}):\n{body}", values
+
+
+def slot_arguments(array: str, start: int, count: int) -> str:
+    """``", array[start], array[start + 1], ..."``: the lifted values of one call."""
+    return "".join(f", {array}[{start + k}]" for k in range(count))
+
+
+@dataclass(frozen=True)
+class LawTemplate:
+    """A bound law's generated functions with their float literals lifted
+    (:func:`lift_function`).
+
+    ``functions`` holds ``(stem, text, count)`` per function in the order ``law, mag,
+    select, branch_0, guards_0, branch_1, guards_1, ...``; each text defines its function
+    with ``@J@`` where the law's index in the module goes (``law_@J@``,
+    ``branch_@J@_0``). ``values`` are the lifted literals in that order: the run-time
+    constants of one element. Bound laws with equal ``functions`` share compiled code.
+    """
+
+    functions: tuple[tuple[str, str, int], ...]
+    values: tuple[float, ...]
+    branches: int
+
+    def offset(self, stem: str) -> int:
+        """Where function ``stem``'s values start in :attr:`values`."""
+        at = 0
+        for s, _, count in self.functions:
+            if s == stem:
+                return at
+            at += count
+        raise KeyError(stem)
+
+    def count(self, stem: str) -> int:
+        """How many values function ``stem`` takes."""
+        return next(c for s, _, c in self.functions if s == stem)
+
+    def call(self, stem: str, j: int, args: str, array: str, start: int) -> str:
+        """The call of function ``stem`` of law ``j`` on ``args``, its values read from
+        ``array`` where the element's values start at ``start``."""
+        name = f"{stem}_{j}" if "_" not in stem else stem.replace("_", f"_{j}_", 1)
+        return f"{name}({args}{slot_arguments(array, start + self.offset(stem), self.count(stem))})"
+
+    def source(self, j: int) -> list[str]:
+        """The definitions of law ``j``'s functions."""
+        return [text.replace("@J@", str(j)) for _, text, _ in self.functions]
+
+
+_TEMPLATES: dict[tuple, LawTemplate] = {}
+
+
+def law_template(bound) -> LawTemplate:
+    """The :class:`LawTemplate` of a bound law given as a sympy residual (memoised by
+    its generated sources)."""
+    ksrc, msrc = kernel_sources(bound)
+    selector, branches = _branches(bound)
+    key = (ksrc, msrc, selector, tuple(branches))
+    hit = _TEMPLATES.get(key)
+    if hit is not None:
+        return hit
+    parts = [("law", "law_@J@", ksrc), ("mag", "mag_@J@", msrc),
+             ("select", "select_@J@", selector)]
+    for i, (bsrc, codes) in enumerate(branches):
+        lines = ["def guards(q, F, out):"]
+        lines += [f"    out[{m}] = {code}" for m, code in enumerate(codes)]
+        lines += [f"    return {len(codes)}", ""]
+        parts += [(f"branch_{i}", f"branch_@J@_{i}", bsrc),
+                  (f"guards_{i}", f"guards_@J@_{i}", "\n".join(lines))]
+    functions, values = [], []
+    for stem, name, src in parts:
+        text, vals = lift_function(src, name)
+        functions.append((stem, text, len(vals)))
+        values += vals
+    hit = _TEMPLATES[key] = LawTemplate(tuple(functions), tuple(values), len(branches))
+    return hit
+
+
+def _branches(bound):
+    """``(selector source, [(kernel source, guard codes), ...])`` of a law's smooth
+    branches (:func:`lumped.codegen.branches.law_branches`; the kernels in the form the
+    stage solve of ``radau5`` takes, ``stage_source_for``)."""
+    from lumped.codegen.branches import law_branches
+
+    lb = law_branches(bound)
+    return lb.branch.__source__, [(lb.stage_source_for(i), tuple(lb.stage_guards_for(i).codes))
+                                  for i in range(lb.count)]
