@@ -263,7 +263,7 @@ def test_netcdf_round_trip_keeps_every_value_and_string(tmp_path):
 def test_jit_sweep_workers_are_replaced(monkeypatch):
     # each new parameter set of a jit-* method compiles a numba module that its process
     # keeps for good (6 MB): the pool replaces a worker after JIT_TASKS_PER_WORKER points
-    import lumped.sweep.run as run
+    import lumped.sweep.per_scene as run
 
     seen = []
 

@@ -14,6 +14,7 @@ reader refuses is refused here with the reader's message.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -21,8 +22,17 @@ from typing import Any
 import numpy as np
 
 from .params import ParameterSets, apply
+from .progress import progress_bar
 
-__all__ = ["ClosedPlan", "plan_closed", "closed_parameters", "run_chunk", "CLOSED_METHODS"]
+__all__ = ["ClosedPlan", "plan_closed", "closed_parameters", "run_chunk", "CLOSED_METHODS",
+           "closed_local", "closed_dask"]
+
+#: Scenes per compiled chunk (one progress-bar update, one Dask task).
+_MIN_CHUNK = 64
+
+#: Scenario-steps below which the compiled batch runs on one thread (starting numba's
+#: thread pool costs more than such a batch).
+_MIN_PARALLEL_WORK = 1_000_000
 
 #: Sweep methods the batched closed form serves, with their BDF2 flag.
 CLOSED_METHODS = {"auto": True, "closed-bdf2": True, "closed-bdf1": False}
@@ -126,3 +136,53 @@ def run_chunk(params: np.ndarray, dt: float, n: int, bdf2: bool, parallel: bool)
     kernel = summary_batch if parallel else summary_batch_serial
     kernel(np.ascontiguousarray(params, dtype=float), float(dt), int(n), bool(bdf2), out)
     return out
+
+
+def _chunks(n_rows: int, parts: int) -> list[slice]:
+    size = max(_MIN_CHUNK, math.ceil(n_rows / max(parts, 1)))
+    return [slice(i, min(i + size, n_rows)) for i in range(0, n_rows, size)]
+
+
+def closed_local(params: np.ndarray, dt: float, n: int, bdf2: bool,
+                 n_jobs: int | None, show: bool) -> np.ndarray:
+    """The summaries of the rows ``params`` (:func:`run_chunk`) in this process, on up to
+    ``n_jobs`` of numba's threads (all with ``None``), in parallel once the batch is
+    large enough (:data:`_MIN_PARALLEL_WORK`)."""
+    import numba
+
+    previous = numba.get_num_threads()
+    if n_jobs is not None:
+        numba.set_num_threads(min(n_jobs, numba.config.NUMBA_NUM_THREADS))
+    parallel = len(params) >= 2 and len(params) * n >= _MIN_PARALLEL_WORK
+    try:
+        if not show:
+            return run_chunk(params, dt, n, bdf2, parallel=parallel)
+        bar = progress_bar(len(params), show)
+        parts = []
+        for sl in _chunks(len(params), 50):
+            parts.append(run_chunk(params[sl], dt, n, bdf2, parallel=parallel))
+            bar.update(sl.stop - sl.start)
+        bar.close()
+        return np.concatenate(parts)
+    finally:
+        numba.set_num_threads(previous)
+
+
+def closed_dask(client: Any, params: np.ndarray, dt: float, n: int, bdf2: bool,
+                show: bool) -> np.ndarray:
+    """The summaries of the rows ``params`` in chunks on ``client``'s workers (four chunks
+    a worker), in the rows' order."""
+    from dask.distributed import as_completed as dask_completed
+
+    workers = max(len(client.scheduler_info().get("workers", {})), 1)
+    slices = _chunks(len(params), 4 * workers)
+    futures = {client.submit(run_chunk, params[sl], dt, n, bdf2, False, pure=False): k
+               for k, sl in enumerate(slices)}
+    parts: list = [None] * len(slices)
+    bar = progress_bar(len(params), show)
+    for fut in dask_completed(futures):
+        k = futures[fut]
+        parts[k] = fut.result()
+        bar.update(slices[k].stop - slices[k].start)
+    bar.close()
+    return np.concatenate(parts)

@@ -6,42 +6,30 @@ Two paths, chosen per sweep:
   is one of its numbers (:mod:`lumped.sweep.closed`); the closed-form method
   (``auto``, ``closed-bdf1``, ``closed-bdf2``) runs all scenes as rows of one array in
   compiled code, in parallel over the cores;
-* **per scene**: anything else runs :func:`lumped.simulate` once per scene, in
-  a pool of processes (or serially), and summarises each solution.
+* **per scene**: anything else runs :func:`lumped.simulate` once per scene, in a pool
+  of processes (or serially), and summarises each solution
+  (:mod:`lumped.sweep.per_scene`).
 
 Either runs on a Dask cluster instead with ``client=`` or ``backend="dask"``.
 """
 
 from __future__ import annotations
 
-import math
-import os
-import pickle
 import sys
 from collections.abc import Callable, Mapping
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from .closed import CLOSED_METHODS, closed_parameters, plan_closed, run_chunk
+from .closed import CLOSED_METHODS, closed_dask, closed_local, closed_parameters, plan_closed
 from .params import ParameterSets, apply, parameter_sets
+from .per_scene import scenes_dask, scenes_local
 from .result import SweepResult
-from .summary import RESULT_COLUMNS, closed_record, failed_record, solution_record
+from .summary import RESULT_COLUMNS, closed_record
 
 __all__ = ["simulate_many", "BACKENDS"]
 
 #: Values of ``backend``.
 BACKENDS = ("local", "dask")
-
-#: Scenes per compiled chunk (one progress-bar update, one Dask task).
-_MIN_CHUNK = 64
-
-#: Scenario-steps below which the compiled batch runs on one thread (starting numba's
-#: thread pool costs more than such a batch).
-_MIN_PARALLEL_WORK = 1_000_000
 
 
 def simulate_many(
@@ -166,10 +154,10 @@ def simulate_many(
         bdf2 = CLOSED_METHODS[method]
         name = "closed-bdf2" if bdf2 else "closed-bdf1"
         if backend == "dask":
-            out = _with_cluster(client, lambda c: _closed_dask(c, params, dt, n, bdf2, show))
+            out = _with_cluster(client, lambda c: closed_dask(c, params, dt, n, bdf2, show))
             where = "dask/compiled"
         else:
-            out = _closed_local(params, dt, n, bdf2, n_jobs, show)
+            out = closed_local(params, dt, n, bdf2, n_jobs, show)
             where = "compiled"
         records = [closed_record(row, n, dt, name, plan.node) for row in out]
         trajectories = None
@@ -179,10 +167,10 @@ def simulate_many(
         source = builder if builder is not None else data
         job = (source, method, dt, t_end, rtol, atol, keep_trajectories, steady_amplitude)
         if backend == "dask":
-            results = _with_cluster(client, lambda c: _generic_dask(c, job, sets, show))
+            results = _with_cluster(client, lambda c: scenes_dask(c, job, sets, show))
             where = "dask/per-scene"
         else:
-            results, where = _generic_local(job, sets, n_jobs, show)
+            results, where = scenes_local(job, sets, n_jobs, show)
         records = [r[0] for r in results]
         trajectories = [r[1] for r in results] if keep_trajectories else None
     return SweepResult(_frame(sets, records), sets.names, sets.grid, trajectories, where)
@@ -255,180 +243,6 @@ def _validate_rows(data: dict, sets: ParameterSets) -> None:
             raise ValueError(f"parameter set {i} {values!r}: {err}") from None
 
 
-# ------------------------------------------------------------------------ compiled path
-
-
-def _chunks(n_rows: int, parts: int) -> list[slice]:
-    size = max(_MIN_CHUNK, math.ceil(n_rows / max(parts, 1)))
-    return [slice(i, min(i + size, n_rows)) for i in range(0, n_rows, size)]
-
-
-def _closed_local(params: np.ndarray, dt: float, n: int, bdf2: bool,
-                  n_jobs: int | None, show: bool) -> np.ndarray:
-    import numba
-
-    previous = numba.get_num_threads()
-    if n_jobs is not None:
-        numba.set_num_threads(min(n_jobs, numba.config.NUMBA_NUM_THREADS))
-    parallel = len(params) >= 2 and len(params) * n >= _MIN_PARALLEL_WORK
-    try:
-        if not show:
-            return run_chunk(params, dt, n, bdf2, parallel=parallel)
-        bar = _bar(len(params), show)
-        parts = []
-        for sl in _chunks(len(params), 50):
-            parts.append(run_chunk(params[sl], dt, n, bdf2, parallel=parallel))
-            bar.update(sl.stop - sl.start)
-        bar.close()
-        return np.concatenate(parts)
-    finally:
-        numba.set_num_threads(previous)
-
-
-def _closed_dask(client: Any, params: np.ndarray, dt: float, n: int, bdf2: bool,
-                 show: bool) -> np.ndarray:
-    from dask.distributed import as_completed as dask_completed
-
-    workers = max(len(client.scheduler_info().get("workers", {})), 1)
-    slices = _chunks(len(params), 4 * workers)
-    futures = {client.submit(run_chunk, params[sl], dt, n, bdf2, False, pure=False): k
-               for k, sl in enumerate(slices)}
-    parts: list = [None] * len(slices)
-    bar = _bar(len(params), show)
-    for fut in dask_completed(futures):
-        k = futures[fut]
-        parts[k] = fut.result()
-        bar.update(slices[k].stop - slices[k].start)
-    bar.close()
-    return np.concatenate(parts)
-
-
-# ------------------------------------------------------------------------ per-scene path
-
-
-def _run_one(job: tuple, values: dict) -> tuple[dict, Any]:
-    """Build and simulate one scene; a failed run is a record, not an exception."""
-    source, method, dt, t_end, rtol, atol, keep, steady = job
-    record, sol = _simulate_one(source, method, dt, t_end, rtol, atol,
-                                keep or steady is not None, values)
-    if steady is not None:
-        from .steady import empty_steady, forcing_omega, steady_record
-
-        if sol is None:
-            try:
-                omega = forcing_omega(scene_of(source, values))
-            except ValueError:
-                omega = None
-            record |= empty_steady(omega)
-        else:
-            try:
-                record |= steady_record(sol, sol.scene, steady)
-            except ValueError as err:
-                record |= empty_steady()
-                record["message"] = (record["message"] + "; " if record["message"]
-                                     else "") + f"steady_amplitude: {err}"
-    return record, (sol if keep else None)
-
-
-def scene_of(source: Any, values: dict) -> Any:
-    """The scene of one parameter set (a builder's, or the template's with ``values``)."""
-    from lumped import Scene
-    from lumped.io import scene_from_dict
-
-    if callable(source):
-        scene = source(dict(values))
-        if not isinstance(scene, Scene):
-            raise TypeError(f"the builder must return a Scene, got {type(scene).__name__} "
-                            f"for {values!r}")
-        return scene
-    return scene_from_dict(apply(source, values), source="<template>")[0]
-
-
-def _simulate_one(source: Any, method: str, dt: float | None, t_end: float,
-                  rtol: float | None, atol: float | None, keep: bool,
-                  values: dict) -> tuple[dict, Any]:
-    from lumped import InconsistentInitialForce, SolverError, simulate
-
-    scene = scene_of(source, values)
-    try:
-        sol = simulate(scene, method=method, dt=dt, t_end=t_end, rtol=rtol, atol=atol,
-                       throw=False)
-    except InconsistentInitialForce as err:
-        return failed_record(scene, method, dt, "inconsistent", str(err)), None
-    except SolverError as err:
-        return failed_record(scene, method, dt, err.status.value, str(err)), None
-    except FloatingPointError as err:  # a method that raises rather than stopping early
-        return failed_record(scene, method, dt, "non_finite", str(err)), None
-    except (ArithmeticError, ValueError, RuntimeError) as err:
-        return failed_record(scene, method, dt, "error", f"{type(err).__name__}: {err}"), None
-    return solution_record(sol, scene, dt), (sol if keep else None)
-
-
-def _run_rows(job: tuple, rows: list[dict]) -> list[tuple[dict, Any]]:
-    return [_run_one(job, values) for values in rows]
-
-
-#: Parameter points a worker runs before it is replaced, for the ``jit-*`` methods. The
-#: compiled code is one module per structure (a new parameter set compiles nothing), but
-#: each new set keeps its generated Python kernels (about 0.1 MB, docs/benchmarks.md,
-#: "Memory and time per new parameter set"); a new worker costs one import (about 2 s).
-JIT_TASKS_PER_WORKER = 2000
-
-
-def _tasks_per_worker(method: str) -> int | None:
-    """``max_tasks_per_child`` of the sweep's process pool for ``method``."""
-    return JIT_TASKS_PER_WORKER if method.startswith("jit-") else None
-
-
-def _generic_local(job: tuple, sets: ParameterSets, n_jobs: int | None,
-                   show: bool) -> tuple[list, str]:
-    rows = sets.as_dicts()
-    workers = n_jobs if n_jobs is not None else (os.cpu_count() or 1)
-    if len(rows) < 8 and n_jobs is None:
-        workers = 1
-    if workers > 1:
-        try:
-            pickle.dumps(job)
-        except Exception:  # a lambda or local builder: stay in this process
-            workers = 1
-    bar = _bar(len(rows), show)
-    results: list = [None] * len(rows)
-    if workers == 1:
-        for i, values in enumerate(rows):
-            results[i] = _run_one(job, values)
-            bar.update(1)
-        bar.close()
-        return results, "serial"
-    # spawn, not fork: numba's threading layer is not fork-safe once it has run
-    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"),
-                             max_tasks_per_child=_tasks_per_worker(job[1])) as pool:
-        futures = {pool.submit(_run_one, job, values): i for i, values in enumerate(rows)}
-        for fut in as_completed(futures):
-            results[futures[fut]] = fut.result()
-            bar.update(1)
-    bar.close()
-    return results, "processes"
-
-
-def _generic_dask(client: Any, job: tuple, sets: ParameterSets, show: bool) -> list:
-    from dask.distributed import as_completed as dask_completed
-
-    rows = sets.as_dicts()
-    [job_future] = client.scatter([job], broadcast=True)
-    futures = {client.submit(_run_one, job_future, values, pure=False): i
-               for i, values in enumerate(rows)}
-    results: list = [None] * len(rows)
-    bar = _bar(len(rows), show)
-    for fut in dask_completed(futures):
-        results[futures[fut]] = fut.result()
-        bar.update(1)
-    bar.close()
-    return results
-
-
-# ------------------------------------------------------------------------ plumbing
-
-
 def _with_cluster(client: Any, work: Callable[[Any], Any]) -> Any:
     """Run ``work(client)`` on ``client``, or on a LocalCluster started for this call."""
     if client is not None:
@@ -438,24 +252,6 @@ def _with_cluster(client: Any, work: Callable[[Any], Any]) -> Any:
     with LocalCluster(processes=False, threads_per_worker=1, dashboard_address=":0") as cl, \
             Client(cl) as own:
         return work(own)
-
-
-class _NoBar:
-    def update(self, k: int) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
-
-
-def _bar(total: int, show: bool):
-    if not show:
-        return _NoBar()
-    try:
-        from tqdm import tqdm
-    except ImportError:
-        return _NoBar()
-    return tqdm(total=total, unit="scene", file=sys.stderr)
 
 
 def _frame(sets: ParameterSets, records: list[dict]):
