@@ -15,7 +15,9 @@ A node's forcing is a kind and three parameters:
   ``-m a_g(t)`` of a ground acceleration read from a record
   (:class:`lumped.scene.GroundMotion`), evaluated by :func:`linear_value` with the
   Python callable's own arithmetic (the same numbers bit for bit). Its row of ``fpar``
-  holds ``n, mode, scale, before, after``, the times and two arrays of values (see
+  holds ``n, mode, scale, before, after``, an added constant or sine burst (``kind, p0,
+  p1, p2``: the other part of a sum such as an applied force beside a ground record,
+  kind 0 where there is none), the times and two arrays of values (see
   :func:`linear_row`), so ``fpar`` is as wide as the longest table needs.
 
 :func:`forcing_code` encodes one forcing, :func:`forcing_arrays` a scene's (``fkind,
@@ -45,27 +47,46 @@ FORCE_NONE, FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE, FORCE_LINEAR = 0, 1, 2, 3, 
 #: at ``t_{n-1}``), and the ground motion's acceleration (``a_k + s_k (t - t_k)`` on the
 #: segment of ``min(bisect_right(t) - 1, n - 2)``, ``before``/``after`` beyond the ends).
 LINEAR_TABLE, LINEAR_MOTION = 0, 1
-#: ``fpar`` columns before a :data:`FORCE_LINEAR` table's times.
-LINEAR_HEAD = 5
+#: ``fpar`` columns before a :data:`FORCE_LINEAR` table's times: ``n, mode, scale, before,
+#: after`` and the added part's ``kind, p0, p1, p2`` (from :data:`LINEAR_ADD` on).
+LINEAR_HEAD = 9
+LINEAR_ADD = 5
 
 
 def linear_row(forcing) -> np.ndarray | None:
     """The :data:`FORCE_LINEAR` row of ``forcing``, or ``None`` for a forcing that is not
-    a linearly interpolated table.
+    a linearly interpolated table, or the sum of one and a constant or a sine burst.
 
     A table describes itself by ``interpolant()`` (:meth:`lumped.io.Table.interpolant`);
     a forcing without one, or whose ``interpolant()`` gives ``None``, is not a table. The
-    row is ``n, mode, scale, before, after``, then the ``n`` times, then ``p`` and ``r``:
-    ``p = r = y`` for a table (``mode`` :data:`LINEAR_TABLE`), the segments' start values
-    ``a`` and slopes ``s`` for a ground motion (:data:`LINEAR_MOTION`); ``scale``
-    multiplies the value (the ``-m`` of an inertial force, else 1)."""
+    row is ``n, mode, scale, before, after``, the added part ``kind, p0, p1, p2``
+    (:func:`forcing_code` of the sum's other part; kind 0 for a table alone), then the
+    ``n`` times, then ``p`` and ``r``: ``p = r = y`` for a table (``mode``
+    :data:`LINEAR_TABLE`), the segments' start values ``a`` and slopes ``s`` for a ground
+    motion (:data:`LINEAR_MOTION`); ``scale`` multiplies the value (the ``-m`` of an
+    inertial force, else 1). A sum of two parts (:func:`lumped.scene.combine_forcing`:
+    an applied force and the inertial force of a ground motion) adds them as the Python
+    sum does: ``f = g(t) + table(t)``, one addition, the same double."""
+    from .inertial import SumForcing
+
+    added: tuple[int, float, float, float] = (FORCE_NONE, 0.0, 0.0, 0.0)
+    if isinstance(forcing, SumForcing):
+        if len(forcing.parts) != 2:
+            return None
+        codes = [forcing_code(fn) for fn in forcing.parts]
+        simple = [k for k, code in enumerate(codes) if code[0] in (FORCE_CONSTANT, FORCE_SINE)]
+        if len(simple) != 1:
+            return None
+        added = codes[simple[0]]
+        forcing = forcing.parts[1 - simple[0]]
     get = getattr(forcing, "interpolant", None)
     parts = get() if callable(get) else None
     if parts is None:
         return None
     kind, t, p, r, before, after, scale = parts
     mode = {"table": LINEAR_TABLE, "motion": LINEAR_MOTION}[kind]
-    return np.array([float(len(t)), float(mode), scale, before, after, *t, *p, *r])
+    return np.array([float(len(t)), float(mode), scale, before, after, float(added[0]),
+                     *added[1:], *t, *p, *r])
 
 
 @njit(cache=True, inline="always")
@@ -86,6 +107,20 @@ def _segment(i, t, fpar, n) -> int:
 def linear_value(i, t, fpar) -> float:
     """Node ``i``'s :data:`FORCE_LINEAR` forcing at ``t``: the arithmetic of the Python
     callable (:func:`linear_row`), so the same double."""
+    value = _table_value(i, t, fpar)
+    k = fpar[i, LINEAR_ADD]
+    if k == FORCE_NONE:
+        return value
+    if k == FORCE_CONSTANT:
+        return fpar[i, LINEAR_ADD + 1] + value
+    added = (0.0 if t > fpar[i, LINEAR_ADD + 3]
+             else fpar[i, LINEAR_ADD + 1] * math.sin(fpar[i, LINEAR_ADD + 2] * t))
+    return added + value
+
+
+@njit(cache=True, inline="always")
+def _table_value(i, t, fpar) -> float:
+    """The table part of node ``i``'s :data:`FORCE_LINEAR` row at ``t``."""
     n = int(fpar[i, 0])
     h = LINEAR_HEAD
     t0 = fpar[i, h]
@@ -154,7 +189,7 @@ def forcing_arrays(scene: Scene, dt: float, n_steps: int, *, linear: bool = Fals
             continue
         if isinstance(fn, SineBurst):
             fkind[i] = FORCE_SINE
-            fpar[i] = (fn.amplitude, fn.omega, fn.t_off)
+            fpar[i, :3] = (fn.amplitude, fn.omega, fn.t_off)
         elif _constant(fn):
             fkind[i] = FORCE_CONSTANT
             fpar[i, 0] = fn.value

@@ -17,7 +17,7 @@ from .forcing import SineBurst
 if TYPE_CHECKING:
     from .ground import GroundMotion
 
-__all__ = ["inertial_forcing", "combine_forcing"]
+__all__ = ["inertial_forcing", "combine_forcing", "SumForcing"]
 
 
 class _Scaled:
@@ -48,8 +48,9 @@ class _Scaled:
         return f"{self.scale!r} * {self.fn!r}"
 
 
-class _Sum:
-    """``sum_k fn_k(t)``, with the union of the parts' breakpoints."""
+class SumForcing:
+    """``sum_k fn_k(t)`` (added in order, from ``0.0``), with the union of the parts'
+    breakpoints."""
 
     __slots__ = ("parts",)
 
@@ -103,4 +104,4 @@ def combine_forcing(applied: Callable[[float], float] | None,
                          omega=applied.omega, t_off=applied.t_off)
     if type(applied) is ConstantForce and type(inertial) is ConstantForce:
         return ConstantForce(applied.value + inertial.value)
-    return _Sum((applied, inertial))
+    return SumForcing((applied, inertial))

@@ -276,6 +276,8 @@ class Radau5Run(StepPass, StepChecks):
             return False
         t0 = t
         self.t, self.x, self.v, self.F, to_end, delta = got
+        while self.bi < len(self.breaks) and self.breaks[self.bi] <= self.t:
+            self.bi += 1  # the forcing's breakpoints the bridge passed (its steps took them)
         self.commit(self.t)
         bridges.append(f"[{t0!r}, {self.t!r}] over: {self.message}")
         self.stats["bridges"] = len(bridges)

@@ -17,6 +17,9 @@ from ...scene import Scene
 __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "compiled_stage_solver",
            "scope_error", "ScenePlan", "scene_plan", "accumulating", "too_many"]
 
+#: The double's machine epsilon (the step floor's unit).
+_EPS = 2.220446049250313e-16
+
 
 #: Method-specific keywords of ``radau5`` and their defaults.
 EXTRA_OPTIONS = {"max_events": 10_000, "zeno_events": 50, "zeno_window": None,
@@ -86,13 +89,29 @@ def scope_error(scene: Scene) -> str | None:
 
 def breakpoints(scene: Scene, t_end: float) -> list[float]:
     """The times in ``(0, t_end)`` where a forcing of ``scene`` jumps or kinks, from the
-    ``breakpoints(t0, t1)`` method of the forcing objects that have one (time events)."""
+    ``breakpoints(t0, t1)`` method of the forcing objects that have one (time events).
+
+    Times closer than the step floor ``16 eps max(|t|, 1e-3 t_end)`` to the one before
+    (or to ``0`` or ``t_end``) are one time event, at the first of them: no step fits
+    between them (two forcings' points an ulp apart, a sine switched off where a record
+    has a point), so each would be a step below the floor."""
     out: set[float] = set()
     for fn in scene.forcing:
         get = getattr(fn, "breakpoints", None)
         if get is not None:
             out.update(float(b) for b in get(0.0, t_end) if 0.0 < b < t_end)
-    return sorted(out)
+    kept: list[float] = []
+    last = 0.0
+    for b in sorted(out):
+        if b - last >= _floor(b, t_end) and t_end - b >= _floor(t_end, t_end):
+            kept.append(b)
+            last = b
+    return kept
+
+
+def _floor(t: float, t_end: float) -> float:
+    """The step floor at ``t`` (the loops' ``16 eps max(|t|, 1e-3 t_end)``)."""
+    return 16.0 * _EPS * max(abs(t), t_end * 1e-3)
 
 
 def compiled_stage_solver(scene: Scene, modes: list[int]):
