@@ -44,6 +44,7 @@ import math
 from dataclasses import dataclass, field
 
 from ...scene import Scene
+from ...scene.supports import supported_scene
 from ..implicit.branch_check import known_monotone, left_branch
 from ..implicit.globalize import laws_hold, solve_globalized
 from ..implicit.initial_state import consistent_initial_state
@@ -163,6 +164,11 @@ def run_bdf(
     if not (isinstance(restitution, (int, float)) and 0.0 <= restitution <= 1.0):
         raise ValueError(f"`restitution` must be in [0, 1], got {restitution!r}")
     options = options or NewtonOptions()
+    clock = None
+    if scene.support_ends:  # the laws of elements on supports read o_e(t): a view
+        frame = supported_scene(scene, method)
+        scene, clock = frame.scene, frame.at_time
+        clock(0.0 if start is None else float(start[0]))
     N, E = len(scene.nodes), len(scene.elements)
     if start is None:
         t0 = 0.0
@@ -210,6 +216,8 @@ def run_bdf(
     cyclic = cyclic_elements(scene)
     for step in range(1, n_steps + 1):
         t = t0 + step * dt
+        if clock is not None:  # support offsets at t_{n+1}
+            clock(t)
         for i, fn in forcing:
             val = fn(t)
             if not isfinite(val):
@@ -301,6 +309,8 @@ def run_bdf(
                 J_acc = None
                 now = set(locking_elements(scene, x_new, v_new, F_new, lockable))
             locked = now
+        if clock is not None and (halved is not None or restart):
+            clock(t)  # substeps moved the offsets
         F_prev, F = F, F_new
         q_new = scene.elongations(x_new, v_new) if checked else ()
         for e in checked:
