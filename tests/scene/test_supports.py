@@ -292,3 +292,40 @@ def test_a_string_on_a_support_is_refused():
                   supports={"belt": GroundMotion(velocity=0.1)})
     with pytest.raises(ValueError, match="position lock"):
         simulate(scene, method="bdf2", dt=1e-3, t_end=0.1)
+
+
+# ---------------------------------------------------------------- results
+
+
+def test_the_solution_carries_each_supports_motion_and_the_csv_its_columns(tmp_path):
+    sol = simulate(shaken(), method="bdf2", dt=1e-3, t_end=0.5)
+    tr = sol.supports["shaker"]
+    np.testing.assert_allclose(tr.x, D * np.sin(W * sol.t), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(tr.v, D * W * np.cos(W * sol.t), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(tr.a, -D * W**2 * np.sin(W * sol.t), rtol=0, atol=1e-13)
+    path = sol.to_csv(tmp_path / "run.csv")
+    header = path.read_text().splitlines()[0].split(",")
+    assert header == ["t", "x_m", "v_m", "F_wall", "F_drive", "F_damp", "x_shaker",
+                      "v_shaker", "a_shaker", "a_m"]
+    table = np.loadtxt(path, delimiter=",", skiprows=1)
+    assert np.array_equal(table[:, 7], tr.v)
+
+
+def test_the_stick_interval_of_the_belt_contact_is_the_exact_one():
+    dt = 5e-4
+    sol = simulate(belt(), method="bdf2", dt=dt, t_end=0.5)
+    (start, end), = sol.stick_intervals("contact")
+    t1, t2 = belt_phases()
+    assert abs(start - t1) <= dt and abs(end - t2) <= dt
+
+
+@pytest.mark.parametrize(("scene", "first"), [(shaken, 2e-7), (belt, 1e-5)])
+def test_the_energy_ledger_closes_with_the_supports_work(scene, first):
+    res = []
+    for dt in (1e-3, 5e-4):
+        ledger = simulate(scene(), method="bdf2", dt=dt, t_end=2.0).energy()
+        assert len(ledger.support) == 1
+        res.append(float(np.max(np.abs(ledger.residual))))
+    assert res[0] < first and res[1] < 0.75 * res[0], res
+    # without the support's work the ledger is off by O(1)
+    assert float(np.max(np.abs(next(iter(ledger.support.values()))))) > 1e3 * res[1]
