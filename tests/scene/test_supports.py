@@ -329,3 +329,18 @@ def test_the_energy_ledger_closes_with_the_supports_work(scene, first):
     assert res[0] < first and res[1] < 0.75 * res[0], res
     # without the support's work the ledger is off by O(1)
     assert float(np.max(np.abs(next(iter(ledger.support.values()))))) > 1e3 * res[1]
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_a_string_to_the_wall_stops_a_mass_driven_by_a_support(method):
+    L = 0.02
+    scene = Scene([Mass("m", 1.0)],
+                  [Element("rope", get_law("string_spring").bind(k=10.0, L=L), "ground", "m"),
+                   Element("drive", get_law("linear_spring").bind(k=100.0), "m", "shaker")],
+                  supports={"shaker": GroundMotion(displacement=SineBurst(amplitude=0.05,
+                                                                          omega=5.0))})
+    sol = simulate(scene, method=method, dt=1e-3, t_end=3.0)
+    assert sol.ok and sol.stats["impacts"] >= 3
+    assert sol.x["m"].max() <= L * (1 + 1e-12)
+    impacts = [ev for ev in sol.events if ev.kind == "impact"]
+    assert len(impacts) == sol.stats["impacts"]

@@ -110,18 +110,21 @@ def support_lock(scene: Scene) -> str | None:
 
 class _ShiftedKernel:
     """``kernel(q + offsets[e], F)``, with the ``magnitude`` of the residual's terms
-    shifted the same way where the kernel has one."""
+    shifted the same way where the kernel has one.
 
-    __slots__ = ("kernel", "offsets", "e", "magnitude", "expressions")
+    It has no sympy ``expressions``: the branch analysis
+    (:func:`lumped.codegen.branches.law_branches`) declines it, so whatever reads
+    branches off it falls back to the shifted kernel's values at the point (e.g.
+    :func:`lumped.solvers.nonsmooth.impacts.lock_state`), never to the law's branches in
+    the unshifted argument."""
+
+    __slots__ = ("kernel", "offsets", "e", "magnitude")
 
     def __init__(self, kernel: Any, offsets: list[float], e: int) -> None:
         self.kernel, self.offsets, self.e = kernel, offsets, e
         mag = getattr(kernel, "magnitude", None)
         if mag is not None:
             self.magnitude = lambda q, F: mag(q + offsets[e], F)
-        exprs = getattr(kernel, "expressions", None)
-        if exprs is not None:  # the branches' structure (which lock) is the law's
-            self.expressions = exprs
 
     def __call__(self, q: float, F: float) -> tuple[float, float, float]:
         return self.kernel(q + self.offsets[self.e], F)
