@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from lumped import Element, Mass, Scene, get_law, simulate
+from lumped.io import Table
 from lumped.io.scenefile import SceneFileError, scene_from_dict
 from lumped.scene import GroundMotion, Junction, SineBurst, paper_F1
 
@@ -398,3 +399,54 @@ def test_a_network_on_one_support_is_the_moving_ground_network_in_absolute_terms
     # measured: bdf1 1.6e-3, 7.9e-4; bdf2 6.1e-5, 2.0e-5 (Bingham's stick-slip kinks)
     assert err["bdf1", 1e-3] < 2e-3 and err["bdf1", 5e-4] < 0.55 * err["bdf1", 1e-3]
     assert err["bdf2", 1e-3] < 8e-5 and err["bdf2", 5e-4] < 0.4 * err["bdf2", 1e-3]
+
+
+# ---------------------------------------------------------------- the motion at one time
+
+
+@pytest.mark.parametrize("motion", [
+    GroundMotion(displacement=SineBurst(amplitude=0.02, omega=3.0)),
+    GroundMotion(velocity="0.1*t*exp(-t)", x0=0.01),
+    GroundMotion(acceleration=SineBurst(amplitude=1.0, omega=2.0, t_off=1.0), v0=0.2),
+    GroundMotion(velocity=Table(np.linspace(0.0, 2.0, 9), np.sin(np.linspace(0.0, 2.0, 9)),
+                                quantity="velocity")),
+    GroundMotion(displacement=Table(np.linspace(0.0, 2.0, 9),
+                                    np.cos(np.linspace(0.0, 2.0, 9)), quantity="displacement")),
+])
+def test_the_motion_at_one_time_is_the_motion_of_the_arrays(motion):
+    t = np.array([0.0, 0.37, 1.0, 1.5, 2.5])
+    arrays = np.array(motion.motion(t))
+    scalars = np.array([motion.at(float(tk)) for tk in t]).T
+    np.testing.assert_allclose(scalars, arrays, rtol=1e-14, atol=1e-15)
+    assert all(type(val) is float for val in motion.at(0.5))
+
+
+def test_a_velocity_record_drives_the_belt():
+    """A belt whose velocity is a table equal to the constant ``VB``: the run of the
+    constant belt, to round-off."""
+    record = Table([0.0, 0.5, 2.0], [VB, VB, VB], quantity="velocity")
+    scene = Scene([Mass("m", MB)],
+                  [Element("wall", get_law("linear_spring").bind(k=KB), "ground", "m"),
+                   Element("contact", get_law("coulomb").bind(tau=TAU, r=10.0), "m", "belt")],
+                  supports={"belt": GroundMotion(velocity=record)})
+    a = simulate(scene, method="bdf2", dt=1e-3, t_end=1.0)
+    b = simulate(belt(), method="bdf2", dt=1e-3, t_end=1.0)
+    np.testing.assert_allclose(a.data, b.data, rtol=0, atol=1e-12)
+
+
+def test_a_run_leaves_the_scene_as_it_was():
+    scene = belt()
+    laws = [el.law for el in scene.elements]
+    simulate(scene, method="bdf1", dt=1e-3, t_end=0.1)
+    assert [el.law for el in scene.elements] == laws
+    assert scene.support_clock is None and len(scene.support_ends) == 1
+
+
+def test_relative_table_files_of_supports_are_resolved(tmp_path):
+    from lumped.io.scene_inputs import resolve_files
+
+    data = {"supports": {"belt": {"motion": {"kind": "table", "file": "belt.csv",
+                                             "quantity": "velocity"}}}}
+    out = resolve_files(data, tmp_path)
+    assert out["supports"]["belt"]["motion"]["file"] == str((tmp_path / "belt.csv").resolve())
+    assert data["supports"]["belt"]["motion"]["file"] == "belt.csv"
