@@ -450,3 +450,24 @@ def test_relative_table_files_of_supports_are_resolved(tmp_path):
     out = resolve_files(data, tmp_path)
     assert out["supports"]["belt"]["motion"]["file"] == str((tmp_path / "belt.csv").resolve())
     assert data["supports"]["belt"]["motion"]["file"] == "belt.csv"
+
+
+def test_a_fold_reached_through_a_support_stops_as_through_a_moving_ground():
+    """An S-shaped spring to a shaker driven past its force maximum (``q = 2 q0``): the
+    run stops at the fold at the same step as the same motion as a moving ground, and
+    the message gives the law's own argument ``q = x_s - x``."""
+    from lumped.solvers.status import BranchError
+
+    motion = GroundMotion(displacement=SineBurst(amplitude=3.0, omega=2.0))
+
+    def scene(end: str, **kw) -> Scene:
+        return Scene([Mass("m", 1.0, v0=-6.0 if end == "ground" else 0.0)],
+                     [Element("s", get_law("s_shaped").bind(q0=1.0, F0=1.0), "m", end),
+                      Element("d", get_law("newtonian").bind(c=0.5), "m", end)], **kw)
+
+    stops = []
+    for s in (scene("base", supports={"base": motion}), scene("ground", ground_motion=motion)):
+        with pytest.raises(BranchError, match=r"from \(q, F\) = \(1\.999") as err:
+            simulate(s, method="bdf2", dt=1e-3, t_end=3.0)
+        stops.append(err.value.t)
+    assert stops[0] == stops[1] == pytest.approx(0.434)

@@ -164,10 +164,12 @@ def run_bdf(
     if not (isinstance(restitution, (int, float)) and 0.0 <= restitution <= 1.0):
         raise ValueError(f"`restitution` must be in [0, 1], got {restitution!r}")
     options = options or NewtonOptions()
-    clock = None
+    clock = offsets = None
+    # the laws in their own argument q_e (with a support's offset), for the branch check
+    law_kernels = [el.law.kernel for el in scene.elements]
     if scene.support_ends:  # the laws of elements on supports read o_e(t): a view
         frame = supported_scene(scene, method)
-        scene, clock = frame.scene, frame.at_time
+        scene, clock, offsets = frame.scene, frame.at_time, frame.offsets
         clock(0.0 if start is None else float(start[0]))
     N, E = len(scene.nodes), len(scene.elements)
     if start is None:
@@ -194,8 +196,8 @@ def run_bdf(
 
     # branch bookkeeping: q, dR/dq, dR/dF at the last accepted point of checked elements
     checked = [e for e, el in enumerate(scene.elements) if not known_monotone(el.law)]
-    prev_q = scene.elongations(x, v)
-    prev_d = [el.law.kernel(prev_q[e], F[e]) for e, el in enumerate(scene.elements)]
+    prev_q = _law_arguments(scene.elongations(x, v), offsets)
+    prev_d = [law_kernels[e](prev_q[e], F[e]) for e in range(E)]
 
     cache1, cache2 = FactorCache(), FactorCache()
     rtol, atol = options.rtol, options.atol
@@ -312,10 +314,10 @@ def run_bdf(
         if clock is not None and (halved is not None or restart):
             clock(t)  # substeps moved the offsets
         F_prev, F = F, F_new
-        q_new = scene.elongations(x_new, v_new) if checked else ()
+        q_new = _law_arguments(scene.elongations(x_new, v_new), offsets) if checked else ()
         for e in checked:
             q0, d0 = prev_q[e], prev_d[e]
-            kernel = scene.elements[e].law.kernel
+            kernel = law_kernels[e]
             d1 = kernel(q_new[e], F[e])  # at the accepted point
             if left_branch(kernel, q0, F_prev[e], d0[1], d0[2], q_new[e], F[e], d1[1], d1[2]):
                 el = scene.elements[e]
@@ -363,6 +365,12 @@ def run_bdf(
         stats["impacts"] = n_impacts
     return RunResult(dt, N, E, xs, vs, Fs, stats, status, message, events, log.result(),
                      knots)
+
+
+def _law_arguments(q: list[float], offsets: list[float] | None) -> list[float]:
+    """``q_e + o_e``: the argument of each element's own law, from the view's ``q_e``
+    and the support offsets at the same time (``None``: no supports)."""
+    return q if offsets is None else [qe + oe for qe, oe in zip(q, offsets, strict=True)]
 
 
 def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,
