@@ -66,7 +66,7 @@ class Mass:
     v0: float = 0.0
 
     def __post_init__(self) -> None:
-        _check_name("Mass name", self.name)
+        check_name("Mass name", self.name)
         object.__setattr__(self, "m", as_positive(f"mass of node {self.name!r}", self.m))
         object.__setattr__(self, "x0", as_finite(f"x0 of node {self.name!r}", self.x0))
         object.__setattr__(self, "v0", as_finite(f"v0 of node {self.name!r}", self.v0))
@@ -84,7 +84,7 @@ class Junction:
     x0: float = 0.0
 
     def __post_init__(self) -> None:
-        _check_name("Junction name", self.name)
+        check_name("Junction name", self.name)
         object.__setattr__(self, "x0", as_finite(f"x0 of node {self.name!r}", self.x0))
 
 
@@ -105,7 +105,7 @@ class Element:
     F0: float | None = None
 
     def __post_init__(self) -> None:
-        _check_name("Element name", self.name)
+        check_name("Element name", self.name)
         for attr in ("a", "b"):
             val = getattr(self, attr)
             if not isinstance(val, str):
@@ -491,7 +491,9 @@ class Scene:
         return f"Scene(nodes=[{', '.join(parts)}], elements=[{'; '.join(els)}]{ground})"
 
 
-def _check_name(what: str, name: object) -> None:
+def check_name(what: str, name: object) -> None:
+    """``TypeError`` unless ``name`` is a non-empty str, ``ValueError`` if it holds a
+    character other than letters, digits, ``_``, ``-``, ``.`` (``what`` names it)."""
     if not isinstance(name, str) or not name:
         raise TypeError(f"{what} must be a non-empty str, got {name!r}")
     if not all(c.isalnum() or c in "_-." for c in name):

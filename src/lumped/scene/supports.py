@@ -33,7 +33,7 @@ value set by :meth:`SupportFrame.at_time` (the time of the system being solved,
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -41,7 +41,7 @@ if TYPE_CHECKING:
     from .ground import GroundMotion
     from .network import Scene
 
-__all__ = ["SupportEnd", "check_supports", "SupportFrame", "supported_scene",
+__all__ = ["SupportEnd", "check_supports", "SupportFrame", "solver_view", "supported_scene",
            "support_lock"]
 
 
@@ -69,7 +69,7 @@ def check_supports(supports: object, node_names: Sequence[str],
         ground while the supports are absolute: give every moving support as a support).
     """
     from .ground import GroundMotion
-    from .network import GROUND, _check_name
+    from .network import GROUND, check_name
 
     if supports is None:
         return {}
@@ -77,7 +77,7 @@ def check_supports(supports: object, node_names: Sequence[str],
         raise TypeError(f"`supports` must be a mapping {{name: GroundMotion}}, got {supports!r}")
     out: dict[str, GroundMotion] = {}
     for name, motion in supports.items():
-        _check_name("Support name", name)
+        check_name("Support name", name)
         if name == GROUND:
             raise ValueError(f"support name {GROUND!r} is reserved for the fixed node")
         if name in node_names:
@@ -186,6 +186,31 @@ class SupportFrame:
             if got is None:
                 got = cache[id(motion)] = motion.at(t)
             self.offsets[e] = sign * (got[0] if spring else got[1])
+
+
+def _no_clock(t: float) -> None:
+    """The clock of a scene without supports: nothing reads the time."""
+
+
+def solver_view(scene: Scene, method: str, t0: float
+                ) -> tuple[Scene, Callable[[float], None], Callable[..., list[float]]]:
+    """``(scene, clock, law_q)`` for a time-stepping solver starting at ``t0``.
+
+    Without supports: ``scene`` itself, a clock that does nothing and
+    ``scene.elongations``. With supports: the view of :func:`supported_scene` with its
+    offsets at ``t0``, :meth:`SupportFrame.at_time`, and ``law_q(x, v)``, each law's own
+    argument ``q_e + o_e`` at the clock's time (the view's ``elongations`` leave
+    ``o_e`` out: its laws add it)."""
+    if not scene.support_ends:
+        return scene, _no_clock, scene.elongations
+    frame = supported_scene(scene, method)
+    frame.at_time(float(t0))
+
+    def law_q(x, v) -> list[float]:
+        q = frame.scene.elongations(x, v)
+        return [qe + oe for qe, oe in zip(q, frame.offsets, strict=True)]
+
+    return frame.scene, frame.at_time, law_q
 
 
 def supported_scene(scene: Scene, method: str) -> SupportFrame:

@@ -44,7 +44,7 @@ import math
 from dataclasses import dataclass, field
 
 from ...scene import Scene
-from ...scene.supports import supported_scene
+from ...scene.supports import solver_view
 from ..implicit.branch_check import known_monotone, left_branch
 from ..implicit.globalize import laws_hold, solve_globalized
 from ..implicit.initial_state import consistent_initial_state
@@ -164,13 +164,8 @@ def run_bdf(
     if not (isinstance(restitution, (int, float)) and 0.0 <= restitution <= 1.0):
         raise ValueError(f"`restitution` must be in [0, 1], got {restitution!r}")
     options = options or NewtonOptions()
-    clock = offsets = None
-    # the laws in their own argument q_e (with a support's offset), for the branch check
-    law_kernels = [el.law.kernel for el in scene.elements]
-    if scene.support_ends:  # the laws of elements on supports read o_e(t): a view
-        frame = supported_scene(scene, method)
-        scene, clock, offsets = frame.scene, frame.at_time, frame.offsets
-        clock(0.0 if start is None else float(start[0]))
+    source = scene  # with supports: a view whose laws read the offsets clock(t) sets
+    scene, clock, law_q = solver_view(source, method, 0.0 if start is None else start[0])
     N, E = len(scene.nodes), len(scene.elements)
     if start is None:
         t0 = 0.0
@@ -196,8 +191,8 @@ def run_bdf(
 
     # branch bookkeeping: q, dR/dq, dR/dF at the last accepted point of checked elements
     checked = [e for e, el in enumerate(scene.elements) if not known_monotone(el.law)]
-    prev_q = _law_arguments(scene.elongations(x, v), offsets)
-    prev_d = [law_kernels[e](prev_q[e], F[e]) for e in range(E)]
+    prev_q = law_q(x, v)  # each law's own argument, q_e + o_e(t)
+    prev_d = [el.law.kernel(prev_q[e], F[e]) for e, el in enumerate(source.elements)]
 
     cache1, cache2 = FactorCache(), FactorCache()
     rtol, atol = options.rtol, options.atol
@@ -218,8 +213,7 @@ def run_bdf(
     cyclic = cyclic_elements(scene)
     for step in range(1, n_steps + 1):
         t = t0 + step * dt
-        if clock is not None:  # support offsets at t_{n+1}
-            clock(t)
+        clock(t)  # support offsets at t_{n+1}
         for i, fn in forcing:
             val = fn(t)
             if not isfinite(val):
@@ -311,13 +305,12 @@ def run_bdf(
                 J_acc = None
                 now = set(locking_elements(scene, x_new, v_new, F_new, lockable))
             locked = now
-        if clock is not None and (halved is not None or restart):
-            clock(t)  # substeps moved the offsets
+        clock(t)  # (substeps move them)
         F_prev, F = F, F_new
-        q_new = _law_arguments(scene.elongations(x_new, v_new), offsets) if checked else ()
+        q_new = law_q(x_new, v_new) if checked else ()
         for e in checked:
             q0, d0 = prev_q[e], prev_d[e]
-            kernel = law_kernels[e]
+            kernel = source.elements[e].law.kernel
             d1 = kernel(q_new[e], F[e])  # at the accepted point
             if left_branch(kernel, q0, F_prev[e], d0[1], d0[2], q_new[e], F[e], d1[1], d1[2]):
                 el = scene.elements[e]
@@ -365,12 +358,6 @@ def run_bdf(
         stats["impacts"] = n_impacts
     return RunResult(dt, N, E, xs, vs, Fs, stats, status, message, events, log.result(),
                      knots)
-
-
-def _law_arguments(q: list[float], offsets: list[float] | None) -> list[float]:
-    """``q_e + o_e``: the argument of each element's own law, from the view's ``q_e``
-    and the support offsets at the same time (``None``: no supports)."""
-    return q if offsets is None else [qe + oe for qe, oe in zip(q, offsets, strict=True)]
 
 
 def _fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,
