@@ -471,3 +471,20 @@ def test_a_fold_reached_through_a_support_stops_as_through_a_moving_ground():
             simulate(s, method="bdf2", dt=1e-3, t_end=3.0)
         stops.append(err.value.t)
     assert stops[0] == stops[1] == pytest.approx(0.434)
+
+
+def test_the_belt_example_runs_from_the_command_line(tmp_path):
+    from pathlib import Path
+
+    from lumped.cli import main
+
+    example = Path(__file__).resolve().parents[2] / "examples" / "belt.toml"
+    out = tmp_path / "belt.csv"
+    assert main(["run", str(example), "--out", str(out)]) == 0
+    header = out.read_text().splitlines()[0].split(",")
+    assert header == ["t", "x_mass", "v_mass", "F_wall", "F_contact", "x_belt", "v_belt",
+                      "a_belt", "a_mass"]
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    t1, t2 = belt_phases()
+    stick = (data[:, 0] > t1 + 1e-3) & (data[:, 0] < t2 - 1e-3)
+    assert np.all(data[stick, 2] == VB) and np.all(data[:, 6] == VB)
