@@ -553,7 +553,7 @@ def jit_scene(scene) -> JitScene:
 
     A scene with moving supports is refused (``ValueError``): the compiled loops have no
     support offsets (the runners send such scenes to the Python loop)."""
-    if scene.support_ends:
+    if getattr(scene, "support_ends", ()):
         raise ValueError(f"compiled loops do not take moving supports (scene supports: "
                          f"{', '.join(sorted(scene.supports))}); use 'bdf1' or 'bdf2'")
     module, generated = scene_module(scene)

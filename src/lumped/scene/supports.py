@@ -201,7 +201,7 @@ def solver_view(scene: Scene, method: str, t0: float
     offsets at ``t0``, :meth:`SupportFrame.at_time`, and ``law_q(x, v)``, each law's own
     argument ``q_e + o_e`` at the clock's time (the view's ``elongations`` leave
     ``o_e`` out: its laws add it)."""
-    if not scene.support_ends:
+    if not getattr(scene, "support_ends", ()):
         return scene, _no_clock, scene.elongations
     frame = supported_scene(scene, method)
     frame.at_time(float(t0))

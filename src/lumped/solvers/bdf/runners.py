@@ -54,7 +54,7 @@ def _run_jit(method: str) -> Runner:
         dt, n_steps = fixed_step_grid(method, settings, ("fast",))
         fast = settings.extra.get("fast")
         locked = position_lock(scene, method)
-        if scene.support_ends:  # no compiled support offsets: the reference solver
+        if getattr(scene, "support_ends", ()):  # no compiled offsets: the reference solver
             locked = (f"method {method!r} does not take moving supports "
                       f"({', '.join(sorted(scene.supports))}) compiled")
         if locked is not None:

@@ -76,7 +76,7 @@ def scope_error(scene: Scene) -> str | None:
     """
     from ...codegen.branches import law_branches
 
-    if scene.support_ends:
+    if getattr(scene, "support_ends", ()):
         return (f"method 'radau5' does not take a scene with moving supports "
                 f"({', '.join(sorted(scene.supports))}): their time-dependent element "
                 "offsets are not in its stage system; use 'bdf1' or 'bdf2' (or 'auto', which "
