@@ -33,6 +33,7 @@ value set by :meth:`SupportFrame.at_time` (the time of the system being solved,
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -162,6 +163,7 @@ class SupportFrame:
 
         self.source = scene
         self.offsets = [0.0] * len(scene.elements)
+        self._t = math.nan  # the time of the offsets
         elements = list(scene.elements)
         for end in scene.support_ends:
             el = elements[end.element]
@@ -179,7 +181,11 @@ class SupportFrame:
         self.at_time(0.0)
 
     def at_time(self, t: float) -> None:
-        """Set every offset to ``o_e(t)`` (the shifted laws read them at their next call)."""
+        """Set every offset to ``o_e(t)`` (the shifted laws read them at their next call);
+        nothing to do when they are at ``t`` already."""
+        if t == self._t:
+            return
+        self._t = t
         cache: dict[int, tuple[float, float, float]] = {}
         for e, motion, sign, spring in self._ends:
             got = cache.get(id(motion))
