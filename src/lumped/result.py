@@ -29,6 +29,7 @@ from .post.frames import (
     frame_columns,
     ground_trace,
     relative_frame,
+    support_traces,
 )
 from .post.switching import (
     branch_history,
@@ -304,6 +305,13 @@ class Solution:
             self._need_scene("the absolute frame"), self.data, self.relative))
 
     @property
+    def supports(self) -> dict[str, GroundTrace]:
+        """Each support's prescribed absolute ``x``, ``v``, ``a`` at the samples
+        (:func:`lumped.post.frames.support_traces`; empty without supports)."""
+        return self._cached("supports", lambda: support_traces(
+            self._need_scene("the support motion"), self.t))
+
+    @property
     def ground(self) -> GroundTrace:
         """The ground's prescribed ``x``, ``v``, ``a`` at the samples (zero if fixed)."""
         return self._cached("ground", lambda: ground_trace(
@@ -335,11 +343,13 @@ class Solution:
 
         When the ground moves, the columns of :func:`lumped.post.frames.frame_columns`
         follow (``x_ground``, ``v_ground``, ``a_ground``, the relative ``a_<mass>``, the
-        absolute ``x_abs_<node>``, ``v_abs_<node>``, ``a_abs_<mass>``)."""
+        absolute ``x_abs_<node>``, ``v_abs_<node>``, ``a_abs_<mass>``); with supports,
+        ``x_<support>``, ``v_<support>``, ``a_<support>`` and ``a_<mass>``."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         names, data = list(self.columns), self.data
-        if getattr(self.scene, "ground_motion", None) is not None:
+        if (getattr(self.scene, "ground_motion", None) is not None
+                or getattr(self.scene, "supports", None)):
             extra, cols = frame_columns(self.scene, self.data)
             names, data = names + extra, np.hstack([data, cols])
         np.savetxt(path, data, fmt="%.17g", delimiter=",", header=",".join(names),

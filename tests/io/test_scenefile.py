@@ -45,7 +45,8 @@ def test_other_examples_load_and_run():
         if path.stem in PAPER:
             continue
         assert (any(isinstance(n, Junction) for n in scene.nodes) or len(scene.nodes) > 1
-                or path.stem in ("impact", "lock"))  # issue 11: one mass on a string
+                or path.stem in ("impact", "lock")  # issue 11: one mass on a string
+                or scene.supports)  # issue 28: one mass on a moving support
         from lumped.simulate import simulate
 
         sol = simulate(scene, method=settings["method"], dt=settings["dt"] * 10, t_end=1.0)

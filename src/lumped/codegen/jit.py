@@ -382,7 +382,13 @@ class JitScene:
 
 
 def jit_scene(scene) -> JitScene:
-    """Generate (or load) ``scene``'s compiled module and collect its arrays."""
+    """Generate (or load) ``scene``'s compiled module and collect its arrays.
+
+    A scene with moving supports is refused (``ValueError``): the compiled loops have no
+    support offsets (the runners send such scenes to the Python loop)."""
+    if getattr(scene, "support_ends", ()):
+        raise ValueError(f"compiled loops do not take moving supports (scene supports: "
+                         f"{', '.join(sorted(scene.supports))}); use 'bdf1' or 'bdf2'")
     module, generated = scene_module(scene)
     law_index = generated.law_index
     return JitScene(

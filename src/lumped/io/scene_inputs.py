@@ -1,5 +1,5 @@
-"""Forcing and ground motion in scene files: the inline tables of ``force`` and of
-``[ground] motion`` (``docs/scenes.md``).
+"""Forcing and ground motion in scene files: the inline tables of ``force``, of
+``[ground] motion`` and of ``[supports.<name>] motion`` (``docs/scenes.md``).
 
 An input is a number (a constant), an expression string in ``t`` (the allowlist parser
 :func:`lumped.laws.parser.parse_expression`, never ``eval``), or a table with ``kind``:
@@ -180,6 +180,9 @@ def resolve_files(data: dict[str, Any], base_dir: str | Path) -> dict[str, Any]:
     ground = out.get("ground")
     if isinstance(ground, dict):
         specs.append(ground.get("motion"))
+    supports = out.get("supports")
+    if isinstance(supports, dict):
+        specs += [tbl.get("motion") for tbl in supports.values() if isinstance(tbl, dict)]
     for spec in specs:
         if isinstance(spec, dict) and spec.get("kind") == "table" \
                 and isinstance(spec.get("file"), str) and not Path(spec["file"]).is_absolute():

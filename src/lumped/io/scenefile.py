@@ -26,8 +26,12 @@ is documented in ``docs/scenes.md``; in short::
     [ground]                       # optional: a moving ground (states relative to it)
     motion = { kind = "table", file = "record.at2", quantity = "acceleration", units = "g" }
 
-Inputs (``force``, ``[ground] motion``) are read by :mod:`lumped.io.scene_inputs`; a
-table's ``file`` is relative to the scene file's folder.
+    [supports.belt]                # optional: a named support with its own motion; an
+    motion = { kind = "expression", quantity = "velocity", expression = "0.3" }
+    # x0 = 0.0, v0 = 0.0           # element names it in `between` (not with [ground])
+
+Inputs (``force``, ``[ground] motion``, ``[supports.<name>] motion``) are read by
+:mod:`lumped.io.scene_inputs`; a table's ``file`` is relative to the scene file's folder.
 """
 
 from __future__ import annotations
@@ -102,10 +106,10 @@ def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>",
     def fail(key: str, msg: str) -> SceneFileError:
         return SceneFileError(f"{source}: {key}: {msg}")
 
-    unknown = set(data) - {"solver", "nodes", "elements", "ground"}
+    unknown = set(data) - {"solver", "nodes", "elements", "ground", "supports"}
     if unknown:
-        raise fail(sorted(unknown)[0],
-                   "unknown top-level table (expected solver, nodes, elements, ground)")
+        raise fail(sorted(unknown)[0], "unknown top-level table (expected solver, nodes, "
+                   "elements, ground, supports)")
 
     settings = _settings(data.get("solver", {}), fail)
 
@@ -155,8 +159,14 @@ def scene_from_dict(data: dict[str, Any], *, source: str = "<scene>",
         except (TypeError, ValueError) as err:
             raise fail(key, str(err)) from None
     ground = ground_input(data["ground"], "[ground]", fail, base) if "ground" in data else None
+    supports_tbl = data.get("supports", {})
+    if not isinstance(supports_tbl, dict):
+        raise fail("supports", f"must be a table of [supports.<name>] tables, got "
+                   f"{supports_tbl!r}")
+    supports = {name: ground_input(spec, f"[supports.{name}]", fail, base)
+                for name, spec in supports_tbl.items()}
     try:
-        scene = Scene(nodes, elements, forces, ground_motion=ground)
+        scene = Scene(nodes, elements, forces, ground_motion=ground, supports=supports)
     except (TypeError, ValueError) as err:
         raise SceneFileError(f"{source}: {err}") from None
     return scene, settings

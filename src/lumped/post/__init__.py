@@ -10,7 +10,7 @@ cycle and equivalent damping of a periodic steady state).
 
 from .dense import hermite_dense
 from .energy import EnergyLedger, energy_ledger
-from .frames import Frame, GroundTrace, absolute_frame, ground_trace, relative_frame
+from .frames import Frame, GroundTrace, absolute_frame, ground_trace, relative_frame, support_traces
 from .loops import Cycle, CycleReport, HysteresisLoop, cycles, hysteresis
 from .switching import branch_history, lock_intervals, switch_events
 
@@ -30,5 +30,6 @@ __all__ = [
     "hysteresis",
     "lock_intervals",
     "relative_frame",
+    "support_traces",
     "switch_events",
 ]

@@ -5,8 +5,8 @@ A run's ``data`` has the columns of :meth:`lumped.scene.Scene.columns`: ``t``, t
 samples at once (numpy arrays of length ``n_samples``):
 
 * the elongation ``q_e = x_b - x_a`` of a spring and the rate ``q_e = v_b - v_a`` of a
-  dashpot (ground contributes 0), and the elongation of either kind for the energy
-  ledger;
+  dashpot (ground contributes 0, a support its prescribed ``x_s(t)``, ``v_s(t)``), and
+  the elongation of either kind for the energy ledger;
 * the net force on each node, ``f_i(t) + sum_{a_e = i} F_e - sum_{b_e = i} F_e``
   (element forces positive in tension: ``+F`` on ``a``, ``-F`` on ``b``; external
   forces positive towards ``+x``).
@@ -46,14 +46,27 @@ def _difference(data: np.ndarray, a: int, b: int, col) -> np.ndarray:
     return out
 
 
+def _support_offset(scene: Scene, data: np.ndarray, e: int, derivative: int):
+    """``sign * x_s(t)`` (``derivative`` 0) or ``sign * v_s(t)`` (1) at every sample for
+    an element with an end on support ``s``, else 0 (:mod:`lumped.scene.supports`)."""
+    for end in getattr(scene, "support_ends", ()):
+        if end.element == e:
+            return end.sign * scene.supports[end.support].motion(data[:, 0])[derivative]
+    return 0.0
+
+
 def displacements(scene: Scene, data: np.ndarray, e: int) -> np.ndarray:
-    """``x_b - x_a`` of element ``e`` at every sample (its elongation, either kind)."""
-    return _difference(data, scene.elem_a[e], scene.elem_b[e], x_col)
+    """``x_b - x_a`` of element ``e`` at every sample (its elongation, either kind; a
+    support end moves with the support)."""
+    return (_difference(data, scene.elem_a[e], scene.elem_b[e], x_col)
+            + _support_offset(scene, data, e, 0))
 
 
 def velocities(scene: Scene, data: np.ndarray, e: int) -> np.ndarray:
-    """``v_b - v_a`` of element ``e`` at every sample (its elongation rate, either kind)."""
-    return _difference(data, scene.elem_a[e], scene.elem_b[e], v_col)
+    """``v_b - v_a`` of element ``e`` at every sample (its elongation rate, either kind; a
+    support end moves with the support)."""
+    return (_difference(data, scene.elem_a[e], scene.elem_b[e], v_col)
+            + _support_offset(scene, data, e, 1))
 
 
 def elongations(scene: Scene, data: np.ndarray, e: int) -> np.ndarray:

@@ -25,7 +25,11 @@ Integrated from ``0`` to ``t`` this is the ledger, each entry a function of time
     ``W_i(t) = int_0^t f_i(t) v_i dt`` per node with a forcing (masses and junctions).
 ``support``
     the work of the moving ground (:mod:`lumped.scene.ground`), empty when it does not
-    move; see "Two frames" below.
+    move; see "Two frames" below. For a scene with supports
+    (:mod:`lumped.scene.supports`; absolute states, one frame), ``support[s]`` is the
+    work support ``s`` does through the elements attached to it,
+    ``int v_s (sum_{b_e = s} F_e - sum_{a_e = s} F_e) dt``, and ``stored``/``dissipated``
+    use the elongations with the support's motion.
 ``impacts``
     the kinetic energy lost at the impacts a method reported (``Event.energy_lost``),
     cumulated at the first sample at or after each impact. An impact event stands for a
@@ -201,6 +205,10 @@ def energy_ledger(scene: Scene, data: np.ndarray, events: Iterable = (), *,
                 if a < 0:
                     pull -= data[:, F_col(scene, e)]
             support["ground"] = _cumulative_trapezoid(v_g * pull, t)
+    for end in getattr(scene, "support_ends", ()):
+        v_s = scene.supports[end.support].motion(t)[1]
+        work_s = _cumulative_trapezoid(end.sign * v_s * data[:, F_col(scene, end.element)], t)
+        support[end.support] = support.get(end.support, 0.0) + work_s
     work = {n.name: _cumulative_trapezoid(f[:, i] * (data[:, v_col(i)] + shift), t)
             for i, n in enumerate(scene.nodes) if applied[i] is not None}
     impacts = np.zeros(len(t))

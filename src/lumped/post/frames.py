@@ -17,6 +17,13 @@ ground motion,
 
 for every node (accelerations for the masses only: a junction has no balance that
 gives one). Without ground motion ``x_g = v_g = a_g = 0`` and both frames coincide.
+
+**Supports** (:mod:`lumped.scene.supports`) do not move the frame: a scene with supports
+has no ground motion, its states are absolute and both frames coincide. Each support's
+prescribed absolute motion ``x_s, v_s, a_s`` at the samples is :func:`support_traces`;
+its columns are ``x_<support>``, ``v_<support>``, ``a_<support>`` (a support's name is
+never a node's, so they cannot be confused with ``x_<node>``, ``v_<node>``; as the
+ground's are ``x_ground``, ...).
 """
 
 from __future__ import annotations
@@ -29,8 +36,8 @@ from lumped.scene import Mass, Scene
 
 from .columns import net_forces, v_col, x_col
 
-__all__ = ["Frame", "GroundTrace", "ground_trace", "relative_frame", "absolute_frame",
-           "frame_columns"]
+__all__ = ["Frame", "GroundTrace", "ground_trace", "support_traces", "relative_frame",
+           "absolute_frame", "frame_columns"]
 
 
 @dataclass(frozen=True)
@@ -77,6 +84,14 @@ def ground_trace(scene: Scene, t: np.ndarray) -> GroundTrace:
     return GroundTrace(t, x, v, a)
 
 
+def support_traces(scene: Scene, t: np.ndarray) -> dict[str, GroundTrace]:
+    """``{support: (x_s, v_s, a_s)}`` at the times ``t``, the prescribed absolute motion
+    of each support of ``scene`` (empty without supports)."""
+    t = np.asarray(t, dtype=float)
+    return {name: GroundTrace(t, *motion.motion(t))
+            for name, motion in getattr(scene, "supports", {}).items()}
+
+
 def relative_frame(scene: Scene, data: np.ndarray) -> Frame:
     """The solver's states and the masses' accelerations from the balance."""
     net = net_forces(scene, data)
@@ -101,8 +116,20 @@ def absolute_frame(scene: Scene, data: np.ndarray,
 def frame_columns(scene: Scene, data: np.ndarray) -> tuple[list[str], np.ndarray]:
     """The extra columns of a run on a moving ground, for tables: ``x_ground``,
     ``v_ground``, ``a_ground``, the relative ``a_<mass>``, then the absolute
-    ``x_abs_<node>``, ``v_abs_<node>``, ``a_abs_<mass>``."""
+    ``x_abs_<node>``, ``v_abs_<node>``, ``a_abs_<mass>``.
+
+    With supports (absolute states, no ground motion): ``x_<support>``,
+    ``v_<support>``, ``a_<support>`` per support, then ``a_<mass>``."""
     rel = relative_frame(scene, data)
+    supports = support_traces(scene, data[:, 0])
+    if supports:
+        names, cols = [], []
+        for name, tr in supports.items():
+            names += [f"x_{name}", f"v_{name}", f"a_{name}"]
+            cols += [tr.x, tr.v, tr.a]
+        names += [f"a_{n}" for n in rel.a]
+        cols += list(rel.a.values())
+        return names, np.column_stack(cols)
     ab = absolute_frame(scene, data, rel)
     g = ground_trace(scene, data[:, 0])
     names = ["x_ground", "v_ground", "a_ground"]

@@ -157,6 +157,19 @@ class GroundMotion:
         return tuple(np.broadcast_to(np.asarray(fn(t), dtype=float), t.shape).copy()
                      for fn in self._numeric())  # type: ignore[return-value]
 
+    def at(self, t: float) -> tuple[float, float, float]:
+        """``(x_g, v_g, a_g)`` at the one time ``t``, as Python floats (what a step loop
+        reads; :meth:`motion` for arrays)."""
+        if self._pp is not None:
+            tt = np.array([float(t)])
+            return tuple(float(self._pp.evaluate(tt, d)[0]) for d in (0, 1, 2))  # type: ignore[return-value]
+        if not hasattr(self, "_scalar"):
+            import sympy
+
+            s = sympy.Symbol("t")
+            self._scalar = [sympy.lambdify(s, e, modules="math") for e in self._exprs]
+        return tuple(float(fn(float(t))) for fn in self._scalar)  # type: ignore[return-value]
+
     def _numeric(self):
         if not hasattr(self, "_lambdas"):
             import sympy

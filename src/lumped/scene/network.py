@@ -66,7 +66,7 @@ class Mass:
     v0: float = 0.0
 
     def __post_init__(self) -> None:
-        _check_name("Mass name", self.name)
+        check_name("Mass name", self.name)
         object.__setattr__(self, "m", as_positive(f"mass of node {self.name!r}", self.m))
         object.__setattr__(self, "x0", as_finite(f"x0 of node {self.name!r}", self.x0))
         object.__setattr__(self, "v0", as_finite(f"v0 of node {self.name!r}", self.v0))
@@ -84,13 +84,14 @@ class Junction:
     x0: float = 0.0
 
     def __post_init__(self) -> None:
-        _check_name("Junction name", self.name)
+        check_name("Junction name", self.name)
         object.__setattr__(self, "x0", as_finite(f"x0 of node {self.name!r}", self.x0))
 
 
 @dataclass(frozen=True)
 class Element:
-    """A bound law between node ``a`` and node ``b`` (either may be ``"ground"``).
+    """A bound law between node ``a`` and node ``b`` (either may be ``"ground"`` or a
+    support of the scene, :mod:`lumped.scene.supports`).
 
     ``q = x_b - x_a`` (spring) or ``v_b - v_a`` (dashpot); ``+F`` acts on ``a`` and
     ``-F`` on ``b``. ``F0``, if given, is the user's initial force; it is checked
@@ -104,7 +105,7 @@ class Element:
     F0: float | None = None
 
     def __post_init__(self) -> None:
-        _check_name("Element name", self.name)
+        check_name("Element name", self.name)
         for attr in ("a", "b"):
             val = getattr(self, attr)
             if not isinstance(val, str):
@@ -241,6 +242,12 @@ class Scene:
         states are then relative to the ground and each mass ``i`` is also pushed by the
         inertial force ``-m_i a_g(t)`` (:mod:`lumped.scene.ground`); :attr:`forcing`
         holds the sum, :attr:`applied_forcing` the forces given in ``forces`` alone.
+    supports : mapping, optional
+        ``{name: GroundMotion}``: named supports, each with its own prescribed motion
+        ``x_s(t)`` (:mod:`lumped.scene.supports`). Elements name a support as an end,
+        like ``"ground"``; an element from node ``a`` to support ``s`` has
+        ``q = x_s(t) - x_a`` (spring) or ``v_s(t) - v_a`` (dashpot). The states stay
+        absolute. Not together with ``ground_motion``.
 
     Examples
     --------
@@ -262,7 +269,10 @@ class Scene:
         forces: Mapping[str, object] | None = None,
         *,
         ground_motion: object = None,
+        supports: Mapping[str, object] | None = None,
     ) -> None:
+        from .supports import SupportEnd, check_supports
+
         nodes = tuple(nodes)
         elements = tuple(elements)
         index: dict[str, int] = {}
@@ -276,6 +286,9 @@ class Scene:
             index[node.name] = len(index)
         if not any(isinstance(n, Mass) for n in nodes):
             raise ValueError("a scene needs at least one Mass (none of its nodes has a mass)")
+        support_motions = check_supports(supports, tuple(index), ground_motion)
+        support_ends: list[SupportEnd] = []
+        used: set[str] = set()
         seen: set[str] = set()
         a_idx: list[int] = []
         b_idx: list[int] = []
@@ -287,24 +300,36 @@ class Scene:
                 raise ValueError(f"duplicate element name {el.name!r}")
             seen.add(el.name)
             ends = []
-            for end in (el.a, el.b):
+            for sign, end in ((-1.0, el.a), (1.0, el.b)):
                 if end == GROUND:
                     ends.append(-1)
                 elif end in index:
                     ends.append(index[end])
                     touched.add(index[end])
+                elif end in support_motions:
+                    ends.append(-1)
+                    used.add(end)
+                    support_ends.append(SupportEnd(len(a_idx), end, sign))
                 else:
+                    known = f", supports: {sorted(support_motions)}" if support_motions else ""
                     raise ValueError(
                         f"element {el.name!r} joins unknown node {end!r} "
-                        f"(nodes: {sorted(index)}, or {GROUND!r})"
+                        f"(nodes: {sorted(index)}{known}, or {GROUND!r})"
                     )
             if el.a == el.b:
                 raise ValueError(f"element {el.name!r} joins node {el.a!r} to itself")
+            if ends == [-1, -1]:
+                raise ValueError(f"element {el.name!r} joins {el.a!r} to {el.b!r}: an element "
+                                 "on a support needs a node (a Mass or Junction) at its "
+                                 "other end")
             a_idx.append(ends[0])
             b_idx.append(ends[1])
         for i, node in enumerate(nodes):
             if isinstance(node, Junction) and i not in touched:
                 raise ValueError(f"junction {node.name!r} is not joined by any element")
+        for name in support_motions:
+            if name not in used:
+                raise ValueError(f"support {name!r} is not joined by any element")
         forcing: list[Forcing | None] = [None] * len(nodes)
         for name, spec in (forces or {}).items():
             if name not in index:
@@ -339,6 +364,14 @@ class Scene:
         self.forcing: tuple[Forcing | None, ...] = tuple(forcing)
         self.applied_forcing: tuple[Forcing | None, ...] = applied
         self.ground_motion = ground_motion
+        #: ``{name: GroundMotion}``, the prescribed motion of each support
+        #: (:mod:`lumped.scene.supports`); empty without supports.
+        self.supports: dict[str, Any] = support_motions
+        #: The element ends on supports, in element order.
+        self.support_ends: tuple[SupportEnd, ...] = tuple(support_ends)
+        #: ``clock(t)`` setting the support offsets the laws read, on the view a solver
+        #: runs (:class:`lumped.scene.supports.SupportFrame`); ``None`` on a user's scene.
+        self.support_clock: Callable[[float], None] | None = None
         self.force_specs: dict[str, object] = dict(forces or {})
 
     # -- structure -------------------------------------------------------------------------
@@ -391,12 +424,30 @@ class Scene:
         return out
 
     # -- the DAE ----------------------------------------------------------------------------
-    def elongations(self, x: Sequence[float], v: Sequence[float]) -> list[float]:
-        """``q_e``: ``x_b - x_a`` for springs, ``v_b - v_a`` for dashpots (ground = 0)."""
+    def elongations(self, x: Sequence[float], v: Sequence[float],
+                    t: float | None = None) -> list[float]:
+        """``q_e``: ``x_b - x_a`` for springs, ``v_b - v_a`` for dashpots (ground = 0), plus
+        the support offset ``o_e(t)`` of an element on a support (:mod:`.supports`), for
+        which ``t`` is required."""
         out = []
         for el, a, b in zip(self.elements, self.elem_a, self.elem_b, strict=True):
             y = x if el.kind == "spring" else v
             out.append((y[b] if b >= 0 else 0.0) - (y[a] if a >= 0 else 0.0))
+        if self.support_ends:
+            for e, o in enumerate(self.support_offsets(t)):
+                out[e] += o
+        return out
+
+    def support_offsets(self, t: float | None) -> list[float]:
+        """``o_e(t)`` per element: ``+-x_s(t)`` (spring) or ``+-v_s(t)`` (dashpot) for an
+        end on support ``s`` (``+`` at end ``b``, ``-`` at end ``a``), else ``0``."""
+        if t is None or not isinstance(t, numbers.Real) or not math.isfinite(t):
+            raise ValueError(f"`t` must be a finite time on a scene with supports, got {t!r}")
+        out = [0.0] * len(self.elements)
+        for end in self.support_ends:
+            x_s, v_s, _ = self.supports[end.support].at(t)
+            kind = self.elements[end.element].kind
+            out[end.element] = end.sign * (x_s if kind == "spring" else v_s)
         return out
 
     def net_forces(self, t: float, F: Sequence[float]) -> list[float]:
@@ -426,7 +477,7 @@ class Scene:
             for i, n in enumerate(self.nodes)
         ]
         out += [xdot[i] - v[i] for i in range(len(self.nodes))]
-        q = self.elongations(x, v)
+        q = self.elongations(x, v, t if self.support_ends else None)
         out += [el.law.kernel(q[e], F[e])[0] for e, el in enumerate(self.elements)]
         return out
 
@@ -435,10 +486,14 @@ class Scene:
                  for n in self.nodes]
         els = [f"{el.name}: {el.law_name} {el.a}->{el.b}" for el in self.elements]
         ground = "" if self.ground_motion is None else f", ground_motion={self.ground_motion!r}"
+        if self.supports:
+            ground += f", supports={self.supports!r}"
         return f"Scene(nodes=[{', '.join(parts)}], elements=[{'; '.join(els)}]{ground})"
 
 
-def _check_name(what: str, name: object) -> None:
+def check_name(what: str, name: object) -> None:
+    """``TypeError`` unless ``name`` is a non-empty str, ``ValueError`` if it holds a
+    character other than letters, digits, ``_``, ``-``, ``.`` (``what`` names it)."""
     if not isinstance(name, str) or not name:
         raise TypeError(f"{what} must be a non-empty str, got {name!r}")
     if not all(c.isalnum() or c in "_-." for c in name):

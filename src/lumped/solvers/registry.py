@@ -25,7 +25,7 @@ Built-in methods (the same names on the command line):
 ``auto``
     What the user gave decides (:func:`resolve_method`): ``rtol``/``atol`` or nothing,
     ``radau5``; ``dt`` alone, ``closed-bdf2`` on the paper's scene, else ``bdf2``; a law
-    ``radau5`` does not take, ``bdf2``.
+    ``radau5`` does not take, or moving supports (:mod:`lumped.scene.supports`), ``bdf2``.
 
 All but ``radau5`` are fixed-step methods (they need ``dt``; the grid is ``t_n = n dt``).
 Each family hands its runners over (``RUNNERS`` of :mod:`lumped.solvers.bdf.runners`
@@ -104,8 +104,8 @@ def resolve_method(scene: Scene, method: str, *, dt: float | None = None,
     neither
         ``radau5`` at its default tolerances.
 
-    A scene with a law ``radau5`` does not take
-    (:func:`lumped.solvers.eventdriven.setup.scope_error`) runs ``bdf2`` whatever was
+    A scene with a law ``radau5`` does not take, or with moving supports
+    (:func:`lumped.solvers.eventdriven.setup.scope_error`), runs ``bdf2`` whatever was
     given, and needs ``dt``."""
     if method != "auto":
         return method

@@ -44,6 +44,7 @@ import math
 from dataclasses import dataclass, field
 
 from ...scene import Scene
+from ...scene.supports import solver_view
 from ..implicit.branch_check import known_monotone, left_branch
 from ..implicit.globalize import laws_hold, solve_globalized
 from ..implicit.initial_state import consistent_initial_state
@@ -163,6 +164,8 @@ def run_bdf(
     if not (isinstance(restitution, (int, float)) and 0.0 <= restitution <= 1.0):
         raise ValueError(f"`restitution` must be in [0, 1], got {restitution!r}")
     options = options or NewtonOptions()
+    source = scene  # with supports: a view whose laws read the offsets clock(t) sets
+    scene, clock, law_q = solver_view(source, method, 0.0 if start is None else start[0])
     N, E = len(scene.nodes), len(scene.elements)
     if start is None:
         t0 = 0.0
@@ -188,8 +191,8 @@ def run_bdf(
 
     # branch bookkeeping: q, dR/dq, dR/dF at the last accepted point of checked elements
     checked = [e for e, el in enumerate(scene.elements) if not known_monotone(el.law)]
-    prev_q = scene.elongations(x, v)
-    prev_d = [el.law.kernel(prev_q[e], F[e]) for e, el in enumerate(scene.elements)]
+    prev_q = law_q(x, v)  # each law's own argument, q_e + o_e(t)
+    prev_d = [el.law.kernel(prev_q[e], F[e]) for e, el in enumerate(source.elements)]
 
     cache1, cache2 = FactorCache(), FactorCache()
     rtol, atol = options.rtol, options.atol
@@ -210,6 +213,7 @@ def run_bdf(
     cyclic = cyclic_elements(scene)
     for step in range(1, n_steps + 1):
         t = t0 + step * dt
+        clock(t)  # support offsets at t_{n+1}
         for i, fn in forcing:
             val = fn(t)
             if not isfinite(val):
@@ -301,11 +305,12 @@ def run_bdf(
                 J_acc = None
                 now = set(locking_elements(scene, x_new, v_new, F_new, lockable))
             locked = now
+        clock(t)  # (substeps move them)
         F_prev, F = F, F_new
-        q_new = scene.elongations(x_new, v_new) if checked else ()
+        q_new = law_q(x_new, v_new) if checked else ()
         for e in checked:
             q0, d0 = prev_q[e], prev_d[e]
-            kernel = scene.elements[e].law.kernel
+            kernel = source.elements[e].law.kernel
             d1 = kernel(q_new[e], F[e])  # at the accepted point
             if left_branch(kernel, q0, F_prev[e], d0[1], d0[2], q_new[e], F[e], d1[1], d1[2]):
                 el = scene.elements[e]

@@ -98,6 +98,9 @@ def be_substep(scene: Scene, t_end: float, h: float, x0: list[float], v0: list[f
     Newton started at ``(v0, F0)``; returns ``(x1, v1, F1, result)``."""
     N, E = len(scene.nodes), len(scene.elements)
     f = scene.external_forces(t_end)
+    clock = getattr(scene, "support_clock", None)
+    if clock is not None:  # support offsets at the substep's end
+        clock(t_end)
     cm = [nd.m / h if isinstance(nd, Mass) else 0.0 for nd in scene.nodes]
     qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
     ev = make_evaluate(scene, h, cm, [0.0] * N, [1.0] * N, list(v0), list(x0), f, qs, rq,

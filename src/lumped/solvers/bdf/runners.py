@@ -4,8 +4,9 @@ reference, :func:`lumped.solvers.bdf.fixed_step.run_bdf`) and ``jit-bdf1``, ``ji
 ``runner(scene, settings) -> RawRun`` (see :mod:`lumped.solvers.registry`).
 
 A compiled run hands the whole run to the reference where it cannot go on: a scene with
-a position lock (a taut string: impacts, indeterminate forces), or a step its Newton
-cannot take; ``stats["fallback"]`` says why.
+a position lock (a taut string: impacts, indeterminate forces) or with moving supports
+(:mod:`lumped.scene.supports`), or a step its Newton cannot take; ``stats["fallback"]``
+says why.
 """
 
 from __future__ import annotations
@@ -53,6 +54,9 @@ def _run_jit(method: str) -> Runner:
         dt, n_steps = fixed_step_grid(method, settings, ("fast",))
         fast = settings.extra.get("fast")
         locked = position_lock(scene, method)
+        if getattr(scene, "support_ends", ()):  # no compiled offsets: the reference solver
+            locked = (f"method {method!r} does not take moving supports "
+                      f"({', '.join(sorted(scene.supports))}) compiled")
         if locked is not None:
             # impacts and locks are not compiled: the whole run on the reference solver,
             # which locates the impact in the step and splits indeterminate forces

@@ -37,6 +37,9 @@ def closed_form_oscillator(scene: Scene) -> tuple[BinghamOscillator, float, floa
     except ImportError:  # pragma: no cover - before the law library exists
         BUILTIN_LAWS = None
 
+    if getattr(scene, "support_ends", ()):
+        return (f"the scene has moving supports ({', '.join(sorted(scene.supports))}), "
+                "which the closed form does not take (use 'bdf1' or 'bdf2')")
     if len(scene.nodes) != 1 or not isinstance(scene.nodes[0], Mass):
         return "the scene must have exactly one node, a Mass"
     if len(scene.elements) != 2:

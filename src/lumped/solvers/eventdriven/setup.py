@@ -65,6 +65,9 @@ def read_options(settings) -> dict:
 def scope_error(scene: Scene) -> str | None:
     """Why ``radau5`` does not take ``scene``, or ``None`` when it does.
 
+    A scene with moving supports (:mod:`lumped.scene.supports`) is refused: its stage
+    system has no time-dependent element offsets yet; ``auto`` runs ``bdf2`` there.
+
     A branch whose ``dR/dF`` is unbounded at its boundary
     (:attr:`lumped.codegen.branches.BranchInfo.steep`: Herschel-Bulkley with ``n < 1`` at
     its yield force, where ``dq/dF -> infinity``) is solved in its inverse form
@@ -76,6 +79,11 @@ def scope_error(scene: Scene) -> str | None:
     """
     from ...codegen.branches import law_branches
 
+    if getattr(scene, "support_ends", ()):
+        return (f"method 'radau5' does not take a scene with moving supports "
+                f"({', '.join(sorted(scene.supports))}): their time-dependent element "
+                "offsets are not in its stage system; use 'bdf1' or 'bdf2' (or 'auto', which "
+                "runs 'bdf2' here)")
     for el in scene.elements:
         lb = law_branches(el.law)
         for info in lb.info:
