@@ -158,6 +158,16 @@ class Table:
         kinks (time events for an adaptive method)."""
         return self._t[bisect_right(self._t, t0):bisect_left(self._t, t1)]
 
+    def kinks(self, t0: float, t1: float) -> list[float]:
+        """The :meth:`breakpoints` at which the interpolant is continuous (a kink, not a
+        jump): every inner point, and an end point where the value outside equals the
+        end value (``outside="hold"``, or a record that starts or ends at 0). An
+        adaptive method steps onto a kink without choosing the mode again."""
+        _, tt, yy, _, before, after, _ = self.interpolant()
+        inner = self.breakpoints(t0, t1)
+        return [tk for tk in inner
+                if (tk != tt[0] or before == yy[0]) and (tk != tt[-1] or after == yy[-1])]
+
     # -- description -----------------------------------------------------------------------
     @property
     def unit(self) -> str:

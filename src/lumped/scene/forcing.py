@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from .._validate import as_finite, as_nonnegative
 
-__all__ = ["SineBurst", "zero_forcing", "paper_F1", "paper_F2"]
+__all__ = ["SineBurst", "zero_forcing", "paper_F1", "paper_F2", "jumps"]
 
 
 @dataclass(frozen=True)
@@ -50,6 +50,21 @@ class SineBurst:
         if t > self.t_off:
             return 0.0
         return self.amplitude * math.sin(self.omega * t)
+
+
+def jumps(fn: object, t0: float, t1: float) -> list[float]:
+    """The breakpoints of the forcing ``fn`` in ``(t0, t1)`` at which it may jump: those
+    of its ``breakpoints(t0, t1)`` that its ``kinks(t0, t1)`` (the points where it is
+    continuous) does not list; all of them for a forcing without ``kinks``."""
+    get = getattr(fn, "breakpoints", None)
+    if get is None:
+        return []
+    points = list(get(t0, t1))
+    get_kinks = getattr(fn, "kinks", None)
+    if get_kinks is None:
+        return points
+    continuous = set(get_kinks(t0, t1))
+    return [b for b in points if b not in continuous]
 
 
 def zero_forcing(t: float) -> float:

@@ -148,6 +148,11 @@ class GroundMotion:
         get = getattr(self._accel, "breakpoints", None)
         return list(get(t0, t1)) if get is not None else []
 
+    def kinks(self, t0: float, t1: float) -> list[float]:
+        """The :meth:`breakpoints` at which ``a_g`` is continuous (kinks, not jumps)."""
+        get = getattr(self._accel, "kinks", None)
+        return list(get(t0, t1)) if get is not None else []
+
     # -- the whole motion, for post-processing ------------------------------------------
     def motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(x_g, v_g, a_g)`` at the times ``t`` (arrays of ``t``'s shape)."""
@@ -304,6 +309,27 @@ class _PiecewiseMotion:
 
     def breakpoints(self, t0: float, t1: float) -> list[float]:
         return [tk for tk in self._t if t0 < tk < t1]
+
+    def kinks(self, t0: float, t1: float) -> list[float]:
+        """The knots in ``(t0, t1)`` at which ``a(t)`` is continuous: its values on both
+        sides agree to ``1e-9`` of its largest value (an acceleration record, a
+        displacement spline; a velocity record's slope jumps at every knot)."""
+        continuous = self._continuous
+        return [tk for k, tk in enumerate(self._t) if t0 < tk < t1 and continuous[k]]
+
+    @property
+    def _continuous(self) -> list[bool]:
+        """Per knot: whether ``a`` is continuous there (made once)."""
+        got = getattr(self, "_cont", None)
+        if got is None:
+            tt, segs = self._t, self._a
+            ends = [a + s * (tt[k + 1] - tt[k]) for k, (a, s) in enumerate(segs)]
+            left = [self.a_before] + ends
+            right = [a for a, _ in segs] + [self.a_after]
+            scale = 1e-9 * max([abs(a) for a in left + right] + [1e-300])
+            got = self._cont = [abs(lv - rv) <= scale for lv, rv in zip(left, right,
+                                                                         strict=True)]
+        return got
 
     def interpolant(self) -> tuple:
         """``("motion", t, a, s, a_before, a_after, 1.0)``: the knots, each segment's

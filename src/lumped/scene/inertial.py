@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from .forcing import SineBurst
+from .forcing import SineBurst, jumps
 
 if TYPE_CHECKING:
     from .ground import GroundMotion
@@ -33,6 +33,10 @@ class _Scaled:
 
     def breakpoints(self, t0: float, t1: float) -> list[float]:
         get = getattr(self.fn, "breakpoints", None)
+        return list(get(t0, t1)) if get is not None else []
+
+    def kinks(self, t0: float, t1: float) -> list[float]:
+        get = getattr(self.fn, "kinks", None)
         return list(get(t0, t1)) if get is not None else []
 
     def interpolant(self) -> tuple | None:
@@ -70,6 +74,13 @@ class SumForcing:
             if get is not None:
                 out.update(get(t0, t1))
         return sorted(out)
+
+    def kinks(self, t0: float, t1: float) -> list[float]:
+        """The breakpoints at which every part is continuous."""
+        jumped: set[float] = set()
+        for fn in self.parts:
+            jumped.update(jumps(fn, t0, t1))
+        return [b for b in self.breakpoints(t0, t1) if b not in jumped]
 
     def __repr__(self) -> str:
         return " + ".join(repr(fn) for fn in self.parts)

@@ -168,7 +168,10 @@ class CompiledLoop:
         self.N, self.E = len(js.masses), len(js.ea)
         self.outputs = self.ws = self.wm = self.iw = None  # on the first call
         self.fst = np.zeros(15)
-        self.ist = np.zeros(20, dtype=np.int64)
+        self.ist = np.zeros(21, dtype=np.int64)
+        self.breaks = np.zeros(0)
+        self.kinks = np.zeros(0, dtype=np.int64)
+        self._breaks_of: list | None = None  # the run's list they were made from
         self.calls = 0
         self._akey: tuple | None = None
         self._arrays: tuple = ()
@@ -198,6 +201,11 @@ class CompiledLoop:
         ist[L.HAVE_DF] = st["dF_n"] is not None
         ist[L.STALLED] = st["stalled"]
         ist[L.MAX_STEPS] = st["max_steps"]
+        ist[L.BI] = st["bi"]
+        if self._breaks_of is not st["breaks"]:  # (one list for a whole run)
+            self._breaks_of = st["breaks"]
+            self.breaks = np.array(st["breaks"], dtype=float)
+            self.kinks = np.array(st["kinks"], dtype=np.int64)
         if stats is not None:
             for key, i in _COUNTERS:
                 ist[i] = stats[key]
@@ -208,7 +216,8 @@ class CompiledLoop:
     def _call(self, x, v, F, dF, T0, HS, Y0, D, ROWS) -> None:
         self.fn(self.law.addr, self.guards.addr, self.js.consts, self.js.masses, self.js.ea,
                 self.js.eb, self.js.spring, self.js.lock_q, self.modes_a, self.watched_a,
-                self.checked, self.A, self.W, self.fkind, self.fpar, x, v, F, dF, self.fst,
+                self.checked, self.A, self.W, self.fkind, self.fpar, self.breaks, self.kinks,
+                x, v, F, dF, self.fst,
                 self.ist, T0, HS, Y0, D, ROWS, self.ws, self.wm, self.iw)
         self.calls += 1
 
@@ -306,6 +315,7 @@ class CompiledLoop:
         st["h_good"] = float(fst[L.H_GOOD])
         st["x"], st["v"], st["F"] = x.tolist(), v.tolist(), F.tolist()
         st["dF_n"] = dF.tolist() if ist[L.HAVE_DF] else None
+        st["bi"] = int(ist[L.BI])
         return L.REASONS.get(int(ist[L.REASON]), "?")
 
 

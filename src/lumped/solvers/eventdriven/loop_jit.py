@@ -66,7 +66,7 @@ __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", 
 # ist: int state and counters
 (HAVE_ACC, HAVE_DF, STALLED, STEPS, REJECTED, NEWTON_ITERATIONS, FACTORIZATIONS, NFEV, NJEV,
  MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK,
- A_HIT, A_W, A_J) = range(20)
+ A_HIT, A_W, A_J, BI) = range(21)
 STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD, STOPPED, DAMPED = range(1, 11)
 REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "floor",
            FULL: "full", LIMIT: "limit", ATTEMPT: "attempt", STOPPED: "stopped",
@@ -82,7 +82,7 @@ _stage = njit(cache=True)(stage_solve)
 def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, watched, checked,
             A, W,
             fkind,
-            fpar, x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
+            fpar, breaks, kinks, x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
     """Steps with the modes held until a reason to return (see the module notes).
 
     ``law_addr`` and ``guards_addr`` are the addresses of the scene's compiled
@@ -90,6 +90,10 @@ def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, 
     caller keeps them alive), ``lawc`` the scene's law constants they take: an integer
     is passed in a few nanoseconds, where numba passes a first-class function argument
     through two Python calls that unpickle its signature (about 3.5 us each, per call).
+    ``breaks`` are the forcing's breakpoints and ``kinks`` (1 or 0) whether each is a
+    kink (:func:`~lumped.solvers.eventdriven.setup.time_events`): a step that ends on a
+    kink goes on to the next breakpoint, as the Python loop does, instead of returning;
+    ``ist[BI]`` is the next breakpoint's index.
     ``ws`` (vectors), ``wm`` (matrices) and ``iw`` (ints) are :func:`loop_workspace`."""
     branch_law = _law_at(law_addr)
     branch_guards = _guards_at(guards_addr)
@@ -293,7 +297,21 @@ def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, 
         fst[H_GOOD] = h
         ist[STALLED] = 0
         h = h_new
-        if to_stop:  # Python handles what happens at the stop (a time event, the end)
+        if to_stop:
+            bi = ist[BI]
+            if bi < breaks.shape[0] and t == breaks[bi] and kinks[bi] == 1:
+                # a kink of the forcing: the held mode goes on (Python's time_event), the
+                # error estimate starts afresh
+                bi += 1
+                ist[BI] = bi
+                prev_break = t
+                fst[PREV_BREAK] = t
+                t_stop = breaks[bi] if bi < breaks.shape[0] else t_final
+                fst[T_STOP] = t_stop
+                ist[HAVE_DF] = 0
+                ist[HAVE_ACC] = 0
+                continue
+            # Python handles what happens at the stop (a time event, the end)
             reason = STOPPED
             break
     fst[T] = t
@@ -322,7 +340,7 @@ def compiled_advance():
         iv = T_.int64[::1]
         sig = T_.none(T_.int64, T_.int64, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
                       m,
-                      iv, m, v, v, v, v, v, iv, v, v, m, m3, m, m, m3,
+                      iv, m, v, iv, v, v, v, v, v, iv, v, v, m, m3, m, m, m3,
                       T_.int64[:, ::1])
         _COMPILED.append(njit(sig, cache=True)(advance))
     return _COMPILED[0]

@@ -69,6 +69,7 @@ class ModeState:
         self.cones: dict[int, tuple[float, float, float, float]] = {}
         self.events: list[Event] = []
         self.recent: deque = deque(maxlen=opts["zeno_events"])
+        self.time_events = 0  # of the events, the forcing's time events
         self.log = IntervalLog()
         self.fast = None  # the compiled loop (told when x, v, F change in place)
         # a guessed mode is tried first when every law is monotone (lumped.solvers.
@@ -275,12 +276,14 @@ class ModeState:
         if msg:
             return Status.INCONSISTENT, msg
         if accumulating(self.recent, self.zeno_window) or \
-                len(self.events) > self.opts["max_events"]:
-            return too_many(self.events, self.recent, t, self.opts)
+                len(self.events) - self.time_events > self.opts["max_events"]:
+            return too_many(self.events, self.recent, t, self.opts, self.time_events)
         return None
 
     def time_event(self, t: float) -> None:
-        """Record a time event of the forcing at ``t``."""
+        """Record a time event of the forcing at ``t`` (not counted in ``max_events``:
+        the forcing's own jumps are as many as it has)."""
+        self.time_events += 1
         self.events.append(Event(t, "", "time", -1, -1))
         self.recent.append(t)
 

@@ -31,7 +31,7 @@ from .checks import StepChecks
 from .fast import compiled_loop
 from .landing import Landing
 from .mode_state import ModeState
-from .setup import breakpoints, compiled_stage_solver, read_options, scene_plan
+from .setup import compiled_stage_solver, read_options, scene_plan, time_events
 from .step import StepPass
 
 __all__ = ["Radau5Run", "DEFAULT_RTOL", "DEFAULT_ATOL"]
@@ -100,7 +100,8 @@ class Radau5Run(StepPass, StepChecks):
         v, F, ic = consistent_initial_state(scene, time_scale=t_final,
                                             options=settings.options)
         self.x, self.v, self.F = x, v, F
-        self.breaks = breakpoints(scene, t_final)
+        # the forcing's breakpoints, and whether each is a kink (no mode choice there)
+        self.breaks, self.kinks = time_events(scene, t_final)
         zeno_window = opts["zeno_window"] or 1e-6 * t_final
         self.dense = DenseOutput(N, E)
         self.rows = Rows()
@@ -201,10 +202,15 @@ class Radau5Run(StepPass, StepChecks):
             "guard at once, and no landing step holds)")
 
     def time_event(self, h: float) -> bool:
-        """A time event at the breakpoint ``t``; whether the run stops there."""
+        """A time event at the breakpoint ``t``; whether the run stops there. At a kink of
+        the forcing (:func:`~lumped.solvers.eventdriven.setup.time_events`) the mode goes
+        on and no event is recorded; the error estimate starts afresh either way."""
+        kink = self.kinks[self.bi]
         self.bi += 1
-        self.ms.time_event(self.t)
         self.dF_n = self.h_acc = None
+        if kink:
+            return False
+        self.ms.time_event(self.t)
         return self.stop(self.at_event(self.t, h, "time"))
 
     def choose_again(self, h_p: float) -> bool | None:
@@ -253,7 +259,8 @@ class Radau5Run(StepPass, StepChecks):
                 "dF_n": self.dF_n, "F_seen": self.F_seen, "h_acc": self.h_acc,
                 "err_acc": self.err_acc, "h_good": self.h_good, "stalled": self.stalled,
                 "t_stop": self.t_stop(), "t_final": self.t_final,
-                "prev_break": breaks[bi - 1] if bi > 0 else math.nan, "rtol": self.rtol,
+                "prev_break": breaks[bi - 1] if bi > 0 else math.nan, "bi": bi,
+                "breaks": breaks, "kinks": self.kinks, "rtol": self.rtol,
                 "atol": self.atol, "m_min": self.m_min,
                 "max_steps": self.budget.compiled_cap(self.stats)}
 
@@ -364,6 +371,7 @@ class Radau5Run(StepPass, StepChecks):
         self.commit(self.t)
         self.F_seen, self.h_acc, self.err_acc = st["F_seen"], st["h_acc"], st["err_acc"]
         self.h_good, self.stalled = st["h_good"], st["stalled"]
+        self.bi = st["bi"]  # (the kinks it stepped onto)
         if stats["steps"] > before:
             self.floor_tried, self.creeping = False, 0
         if why != "stopped":

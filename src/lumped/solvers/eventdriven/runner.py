@@ -11,7 +11,9 @@ reasons are in ``docs/theory/radau.md`` and ``docs/theory/events.md``):
 3. after an accepted step, the branch guards along the collocation polynomial: at the
    first crossing the step is redone to end on it, the next mode is chosen, and the
    event is recorded; a break of the forcing in time (``breakpoints(t0, t1)`` of a
-   forcing object) is stepped to exactly and is a time event;
+   forcing object) is stepped to exactly and is a time event where the forcing may
+   jump; at a kink (``kinks(t0, t1)``: a point of a record, where the forcing is
+   continuous) the held mode goes on;
 4. more than ``max_events`` events, or ``zeno_events`` events within ``zeno_window``
    seconds, stop the run with :attr:`Status.TOO_MANY_EVENTS`; a step below its floor stops
    it with :attr:`Status.STEP_TOO_SMALL`;

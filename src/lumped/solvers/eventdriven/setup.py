@@ -13,9 +13,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...scene import Scene
+from ...scene.forcing import jumps
 
-__all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "compiled_stage_solver",
-           "scope_error", "ScenePlan", "scene_plan", "accumulating", "too_many"]
+__all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "time_events",
+           "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "accumulating",
+           "too_many"]
 
 #: The double's machine epsilon (the step floor's unit).
 _EPS = 2.220446049250313e-16
@@ -97,24 +99,45 @@ def scope_error(scene: Scene) -> str | None:
 
 def breakpoints(scene: Scene, t_end: float) -> list[float]:
     """The times in ``(0, t_end)`` where a forcing of ``scene`` jumps or kinks, from the
-    ``breakpoints(t0, t1)`` method of the forcing objects that have one (time events).
+    ``breakpoints(t0, t1)`` method of the forcing objects that have one (time events);
+    :func:`time_events`."""
+    return time_events(scene, t_end)[0]
+
+
+def time_events(scene: Scene, t_end: float) -> tuple[list[float], list[bool]]:
+    """``(breaks, kinks)``: the times in ``(0, t_end)`` where a forcing of ``scene`` jumps
+    or kinks, in order, and per time whether every forcing is continuous there (a kink:
+    a point of a record; :func:`lumped.scene.forcing.jumps`).
+
+    A step of ``radau5`` ends on each of them. At a jump the full laws choose the mode
+    again (a time event, in the run's events); at a kink the state, the forces and so
+    every guard are continuous, and the held mode goes on (not an event).
 
     Times closer than the step floor ``16 eps max(|t|, 1e-3 t_end)`` to the one before
-    (or to ``0`` or ``t_end``) are one time event, at the first of them: no step fits
-    between them (two forcings' points an ulp apart, a sine switched off where a record
-    has a point), so each would be a step below the floor."""
+    (or to ``0`` or ``t_end``) are one time, the first of them (a kink only if all of
+    them are): no step fits between them (two forcings' points an ulp apart, a sine
+    switched off where a record has a point), so each would be a step below the
+    floor."""
     out: set[float] = set()
+    jumped: set[float] = set()
     for fn in scene.forcing:
         get = getattr(fn, "breakpoints", None)
         if get is not None:
             out.update(float(b) for b in get(0.0, t_end) if 0.0 < b < t_end)
-    kept: list[float] = []
+            jumped.update(float(b) for b in jumps(fn, 0.0, t_end))
+    breaks: list[float] = []
+    kinks: list[bool] = []
     last = 0.0
+    unit, end_room = 16.0 * _EPS, _floor(t_end, t_end)
+    low = 1e-3 * t_end
     for b in sorted(out):
-        if b - last >= _floor(b, t_end) and t_end - b >= _floor(t_end, t_end):
-            kept.append(b)
+        if b - last >= unit * (b if b > low else low) and t_end - b >= end_room:
+            breaks.append(b)
+            kinks.append(b not in jumped)
             last = b
-    return kept
+        elif breaks and b in jumped:
+            kinks[-1] = False
+    return breaks, kinks
 
 
 def _floor(t: float, t_end: float) -> float:
@@ -196,13 +219,16 @@ def accumulating(recent: deque, window: float) -> bool:
     return len(recent) == recent.maxlen and recent[-1] - recent[0] <= window
 
 
-def too_many(events: list, recent: deque, t: float, opts: dict) -> tuple:
-    """``(Status.TOO_MANY_EVENTS, message)``: too many events, or an accumulation."""
+def too_many(events: list, recent: deque, t: float, opts: dict, time_events: int = 0
+             ) -> tuple:
+    """``(Status.TOO_MANY_EVENTS, message)``: too many events (beyond the ``time_events``
+    of the forcing, which ``max_events`` does not count), or an accumulation."""
     from ..status import Status
 
-    if len(events) > opts["max_events"]:
+    if len(events) - time_events > opts["max_events"]:
         return Status.TOO_MANY_EVENTS, (
-            f"radau5 stopped at t = {t!r}: more than max_events = {opts['max_events']} events")
+            f"radau5 stopped at t = {t!r}: more than max_events = {opts['max_events']} events "
+            "(guard crossings and impacts; the forcing's time events aside)")
     names = sorted({ev.element for ev in events[-len(recent):]})
     return Status.TOO_MANY_EVENTS, (
         f"radau5 stopped at t = {t!r}: {len(recent)} events within "

@@ -338,9 +338,11 @@ class StepPass:
         # landing step can be ulps long when the event sits at the step's start)
         self.h = max(h_new, h_found)
         is_break = to_stop and self.bi < len(self.breaks) and t == self.breaks[self.bi]
-        if is_break:
-            self.bi += 1
-            ms.time_event(t)
-        if event_here or is_break:
+        if is_break and not event_here:
+            self.time_event(self.h)  # (a kink of the forcing: no mode choice)
+        elif event_here:
+            if is_break:
+                self.bi += 1
+                ms.time_event(t)
             self.dF_n = self.h_acc = None
-            self.stop(self.at_event(t, self.h, "guard" if event_here else "time"))
+            self.stop(self.at_event(t, self.h, "guard"))
