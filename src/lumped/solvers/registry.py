@@ -109,9 +109,9 @@ def resolve_method(scene: Scene, method: str, *, dt: float | None = None,
     given, and needs ``dt``."""
     if method != "auto":
         return method
-    from .eventdriven.setup import scope_error
+    from .eventdriven.setup import scene_plan
 
-    if scope_error(scene):
+    if scene_plan(scene).refused:  # (scope_error, kept per scene object)
         return "bdf2"
     if dt is not None and rtol is None and atol is None:
         return "closed-bdf2" if not isinstance(closed_form_oscillator(scene), str) else "bdf2"
