@@ -4,7 +4,8 @@ A scene whose every node is a mass starting at rest (``v0 = 0``), under no forci
 constant forces only, whose consistent initial forces hold it still (every element's law
 is monotone, every element with more than one branch reads its locking branch, the
 locks hold every node on a regular incidence matrix) with each guard above its
-round-off tolerance by a margin, never moves: the adaptive run would choose that mode at
+round-off tolerance by a margin (:func:`~lumped.solvers.eventdriven.mode_parts.
+rest_mode`), never moves: the adaptive run would choose that mode at
 ``t = 0`` (its probe confirms the mode read off the state, the locks keep it) and take
 one held interval (:func:`lumped.solvers.modes.stuck.hold_interval`) to ``t_end``, whose
 scan finds no break-out. :func:`rest_run` builds that run directly: the same consistent
@@ -23,25 +24,18 @@ import numpy as np
 from ...grid import steps_for
 from ...scene import Mass, Scene
 from ..implicit.initial_state import consistent_initial_state
-from ..modes.guards import guard_tolerance
 from ..modes.stuck import forcing_kinds, static_hold
 from ..nonsmooth.locks import IntervalLog, indeterminate_elements
 from ..radau.dense import DenseOutput
 from ..radau.rows import Rows, output_data, row_of
 from ..status import RawRun, Status
-from .mode_state import laws_hold, mode_cones, mode_parts
+from .mode_parts import rest_mode
 from .setup import read_options, scene_plan
 
 __all__ = ["REST_LOOP", "rest_run"]
 
 #: ``stats["loop"]`` of a run held at rest throughout (no loop ran).
 REST_LOOP = "none: at rest throughout (no steps)"
-
-#: How far above its round-off tolerance every guard must sit at the initial state, in
-#: units of that tolerance (:func:`~lumped.solvers.modes.guards.guard_tolerance`): the
-#: mode probe's forces differ from the initial ones by round-off, and must read the same
-#: branches.
-_MARGIN = 4.0
 
 
 def _candidate(scene: Scene, plan) -> bool:
@@ -58,25 +52,6 @@ def _candidate(scene: Scene, plan) -> bool:
     return got
 
 
-def _rest_mode(scene: Scene, plan, q: list[float], F: list[float]
-               ) -> tuple[tuple[int, ...], list] | None:
-    """``(modes, guards)``: the mode read off ``(q, F)`` and its guards, if it holds the
-    scene still with a margin (see the module notes), else ``None``."""
-    lbs = plan.branches
-    modes = tuple(lb.branch(qe, Fe) for lb, qe, Fe in zip(lbs, q, F, strict=True))
-    parts = mode_parts(plan, modes)
-    kernels, guards, watched = parts[0], parts[1], parts[2]
-    if mode_cones(scene, plan, list(modes), F, parts):  # locks in parallel share a load
-        return None
-    if any(not lbs[e].info[modes[e]].locks for e in watched):
-        return None  # an element that could switch is not on a lock
-    for e, guard in enumerate(guards):
-        margin = _MARGIN * guard_tolerance(q[e], F[e])
-        if any(not g > margin for g in guard(q[e], F[e])):
-            return None
-    return (modes, guards) if laws_hold(kernels, q, F) else None
-
-
 def rest_run(scene: Scene, settings) -> RawRun | None:
     """The ``radau5`` run of a scene at rest on ``[0, t_end]`` (see the module notes), or
     ``None`` when the scene is not proven at rest (the general driver,
@@ -91,7 +66,7 @@ def rest_run(scene: Scene, settings) -> RawRun | None:
     x = [float(nd.x0) for nd in scene.nodes]
     v, F, ic = consistent_initial_state(scene, time_scale=t_final, options=settings.options)
     q = scene.elongations(x, v)
-    got = _rest_mode(scene, plan, q, F)
+    got = rest_mode(scene, plan, q, F)
     if got is None:
         return None
     modes, guards = got
@@ -99,12 +74,12 @@ def rest_run(scene: Scene, settings) -> RawRun | None:
     hold = static_hold(scene, plan, modes, x, v, F, fkind, fpar)
     if hold is None:
         return None
-    t_b, samples = hold.breakout(0.0, t_final, guards, modes)
-    if t_b is not None:
-        return None
+    F1 = hold.forces(t_final)  # (the forcing is steady: the forces of every time)
+    if F1 != F and hold.breakout(0.0, t_final, guards, modes)[0] is not None:
+        return None  # (F: a user's F0 off the balance; F1 itself is checked by the scan)
+    samples = hold.samples(0.0, t_final)
     dense = DenseOutput(len(x), len(F))
     dense.add_static(0.0, t_final, hold)
-    F1 = hold.forces(t_final)
     data = np.array([row_of(0.0, x, v, F)]
                     + [row_of(s, x, v, hold.forces(s)) for s in samples if s < t_final]
                     + [row_of(t_final, x, v, F1)], dtype=float)

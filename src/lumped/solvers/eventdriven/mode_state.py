@@ -16,19 +16,19 @@ from collections import deque
 
 from ...scene import Mass, Scene
 from ..modes.choice import select_modes
-from ..modes.lock_events import apply_impacts, hold_rate_locks, lock_cones, snap_to_locks
+from ..modes.lock_events import apply_impacts, hold_rate_locks, snap_to_locks
 from ..modes.mode_guess import try_modes
 from ..nonsmooth.locks import (
     IntervalLog,
-    cycles_among,
     indeterminate_elements,
     lock_parallel_rates,
     prefer_locks,
 )
 from ..status import Event, Status
+from .mode_parts import laws_hold, mode_cones, mode_parts
 from .setup import accumulating, too_many
 
-__all__ = ["ModeState", "laws_hold", "mode_cones", "mode_parts"]
+__all__ = ["ModeState"]
 
 _EPS = 2.220446049250313e-16
 
@@ -276,56 +276,3 @@ class ModeState:
             free = indeterminate_elements(self.scene, self.scene.elongations(x, v), F,
                                           self.cyclic)
             self.log.mark(t0, t1, [self.names[e] for e in free])
-
-
-def laws_hold(kernels: list, q: list[float], F: list[float]) -> bool:
-    """Whether every element's law holds at ``(q_e, F_e)`` on its branch (``kernels``:
-    the stage kernels of the mode, :func:`mode_parts`), to ``1e-8`` relative to the size
-    of its terms."""
-    for kernel, qe, Fe in zip(kernels, q, F, strict=True):
-        R, Rq, RF = kernel(qe, Fe)
-        if not abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe)):
-            return False
-    return True
-
-
-def mode_parts(plan, modes: tuple[int, ...]) -> tuple[list, list, list[int], int]:
-    """What :meth:`ModeState.set_modes` holds for ``modes``, which depends only on the
-    scene's laws, kept on ``plan`` (the scene's
-    :class:`~lumped.solvers.eventdriven.setup.ScenePlan`; the lists are only read): the
-    branch kernels and guards in the stage solve's form, the elements with more than one
-    branch (their guards are watched), and how many elements on cycles are held on a lock
-    with a known value (:func:`lock_cones` takes them; with fewer than two there are no
-    cones)."""
-    cache = plan.__dict__.setdefault("mode_parts", {})
-    parts = cache.get(modes)
-    if parts is None:
-        parts = _mode_parts(plan.branches, modes, plan.cyclic)
-        if len(cache) >= 4096:  # (a network with very many modes)
-            cache.clear()
-        cache[modes] = parts
-    return parts
-
-
-def mode_cones(scene: Scene, plan, modes: list[int], F: list[float], parts: tuple
-               ) -> dict[int, tuple[float, float, float, float]]:
-    """The force-split cones of ``modes`` (``parts``: its :func:`mode_parts`): element ->
-    ``(centre, half-width, lo, hi)`` of the locks in parallel with each other, whose
-    split is free; empty when there are none."""
-    if parts[3] < 2:  # a cone needs two locks on cycles: with fewer, none is read
-        return {}
-    locked = lock_cones(plan.branches, modes, F, plan.cyclic)
-    # only locks in parallel with each other leave their split free (a stuck link in
-    # series with another keeps its exact LU solve, and so its exact zero rate)
-    parallel = cycles_among(scene, tuple(locked)) if len(locked) > 1 else ()
-    return {e: locked[e] for e in parallel} if len(parallel) > 1 else {}
-
-
-def _mode_parts(lbs: list, modes: tuple[int, ...], cyclic: tuple[int, ...]
-                ) -> tuple[list, list, list[int], int]:
-    E = len(lbs)
-    return ([lbs[e].stage_kernel_for(modes[e]) for e in range(E)],
-            [lbs[e].stage_guards_for(modes[e]) for e in range(E)],
-            [e for e in range(E) if lbs[e].count > 1],
-            sum(1 for e in cyclic if lbs[e].info[modes[e]].locks
-                and lbs[e].info[modes[e]].lock_value is not None))
