@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from lumped import simulate
 from lumped.bench.scenes import PAPER_SCENES, generic_scene
 from lumped.laws import get_law
-from lumped.scene import Element, Mass, Scene
+from lumped.scene import Element, Junction, Mass, Scene
 from lumped.scene.forcing import SineBurst
 from lumped.solvers.eventdriven import runner
 from lumped.solvers.eventdriven.at_rest import REST_LOOP
@@ -118,6 +118,26 @@ def test_two_masses_at_rest_give_the_general_solution(d1, d2):
     _assert_same(simulate(scene, t_end=2.0), _general(scene, t_end=2.0))
 
 
+def _maxwell() -> Scene:
+    """A mass on a spring to a junction, the junction on a Bingham dashpot to ground."""
+    return Scene(
+        [Mass("mass", m=1.0, x0=0.001), Junction("j")],
+        [Element("spring", get_law("linear_spring").bind(k=100.0), "j", "mass"),
+         Element("dashpot", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground", "j")],
+    )
+
+
+def _parallel_locks() -> Scene:
+    """Two Bingham dashpots in parallel hold one mass (their split is free)."""
+    bing = get_law("bingham")
+    return Scene(
+        [Mass("mass", m=1.0, x0=0.005)],
+        [Element("spring", get_law("linear_spring").bind(k=100.0), "ground", "mass"),
+         Element("d1", bing.bind(gamma=1.0, tau=1.0), "ground", "mass"),
+         Element("d2", bing.bind(gamma=2.0, tau=0.5), "ground", "mass")],
+    )
+
+
 @pytest.mark.parametrize("scene", [
     _oscillator(x0=0.0100001),  # k x0 just past tau = 1: breaks out at once
     _oscillator(x0=-0.0100001),
@@ -128,8 +148,11 @@ def test_two_masses_at_rest_give_the_general_solution(d1, d2):
     _oscillator(x0=0.0, force=lambda t: 0.0),  # a callable of t
     _oscillator(x0=0.0, force=1.5),  # a constant load past the band
     _two_masses(0.0, 0.03),  # d2 loaded past tau2 = 1 (k2 x = 1.5)
+    _maxwell(),  # a junction (its velocity is the limit system's)
+    _parallel_locks(),  # locks in parallel (cones)
 ], ids=["past yield", "past yield, negative", "at yield", "velocity", "forcing",
-        "zero sine", "callable", "constant past yield", "two masses, past yield"])
+        "zero sine", "callable", "constant past yield", "two masses, past yield",
+        "junction", "locks in parallel"])
 def test_a_scene_not_proven_at_rest_runs_the_general_driver(scene):
     sol = simulate(scene, t_end=2.0)
     assert sol.stats["loop"] != REST_LOOP
