@@ -71,9 +71,8 @@ def _two_masses(x1: float, x2: float, tau1: float = 2.0, tau2: float = 1.0) -> S
     {"method": "radau5", "rtol": 1e-9, "compiled": False},
     {"method": "radau5", "dt": 0.01}, {"method": "radau5", "rtol": 1e-6, "dt": 0.003},
 ])
-@pytest.mark.parametrize("name", ["release-0.005", "forcing-F1"])
-def test_the_bench_scenes_at_rest_give_the_general_solution(kw, name):
-    bench = next(s for s in PAPER_SCENES if s.name == name)
+def test_the_bench_scene_at_rest_gives_the_general_solution(kw):
+    bench = next(s for s in PAPER_SCENES if s.name == "release-0.005")
     scene = generic_scene(bench)
     _assert_same(simulate(scene, t_end=bench.t_end, **kw),
                  _general(scene, t_end=bench.t_end, **kw))
@@ -86,11 +85,8 @@ def test_the_bench_scenes_at_rest_give_the_general_solution(kw, name):
     _oscillator(x0=0.005, F0=-0.5),  # the user's force, the consistent one
     _oscillator(x0=0.005, F0=0.3),  # ... one the law admits, off the balance
     _two_masses(0.004, 0.01),
-    _oscillator(x0=0.0, force=SineBurst(0.5, 5.0, 1.0)),  # a burst below yield, then off
-    _oscillator(x0=0.003, force=SineBurst(0.6, 40.0)),  # never switched off
-    _oscillator(x0=0.0, force=SineBurst(0.0, 5.0, 1.0)),  # a burst of zero amplitude
 ], ids=["negative", "zero", "constant load", "user F0", "user F0 off balance",
-        "two masses", "burst", "endless burst", "zero burst"])
+        "two masses"])
 def test_other_scenes_at_rest_give_the_general_solution(scene):
     _assert_same(simulate(scene, t_end=3.0), _general(scene, t_end=3.0))
 
@@ -109,28 +105,6 @@ def test_at_rest_in_the_stick_band_gives_the_general_solution(m, k, gamma, tau, 
     scene = _oscillator(m=m, k=k, gamma=gamma, tau=tau, x0=x0, force=f or None)
     _assert_same(simulate(scene, t_end=t_end, rtol=1e-8), _general(scene, t_end=t_end,
                                                                     rtol=1e-8))
-
-
-@settings(max_examples=40, deadline=None)
-@given(amp=st.floats(-1.2, 1.2), omega=st.floats(0.1, 100.0), t_off=st.floats(0.0, 3.0),
-       frac=st.floats(-0.99, 0.99), t_end=st.floats(0.01, 2.0),
-       compiled=st.sampled_from([None, True, False]))
-def test_bursts_from_rest_give_the_general_solution(amp, omega, t_off, frac, t_end,
-                                                    compiled):
-    # tau = 1; the dashpot carries A sin(w t) - k x0 = A sin(w t) - frac: inside the band
-    # throughout when |A| + |frac| < 1, past it at some time for larger bursts (then the
-    # general driver runs, and both runs are its run)
-    scene = _oscillator(x0=frac / 100.0, force=SineBurst(amp, omega, t_off))
-    kw = {"t_end": t_end, "rtol": 1e-8, "compiled": compiled}
-    fast, ref = simulate(scene, **kw), _general(scene, **kw)
-    if fast.stats["loop"] == REST_LOOP:
-        _assert_same(fast, ref)
-    else:
-        assert np.array_equal(fast.data, ref.data) and fast.stats == ref.stats
-    if abs(amp) + abs(frac) < 0.99 and t_end * omega > 2.0:
-        assert fast.stats["loop"] == REST_LOOP  # (a burst that stays in the band)
-    if abs(amp) > 1.01 + abs(frac) and min(t_off, t_end) * omega > 2.0:
-        assert fast.stats["loop"] != REST_LOOP  # (a burst that breaks out)
 
 
 @settings(max_examples=25, deadline=None)
@@ -169,16 +143,15 @@ def _parallel_locks() -> Scene:
     _oscillator(x0=-0.0100001),
     _oscillator(x0=0.01),  # k x0 = tau exactly: on the yield limit
     _oscillator(x0=0.005, v0=1e-9),  # an initial velocity
-    _oscillator(x0=0.0, force=SineBurst(1.5, 5.0, 1.0)),  # a burst past yield
-    _oscillator(x0=0.005, force=SineBurst(0.6, 5.0, 1.0)),  # ... with the spring's load
+    _oscillator(x0=0.0, force=SineBurst(0.5, 5.0, 1.0)),  # a forcing (stays stuck)
+    _oscillator(x0=0.0, force=SineBurst(0.0, 5.0, 1.0)),  # a sine burst of zero amplitude
     _oscillator(x0=0.0, force=lambda t: 0.0),  # a callable of t
     _oscillator(x0=0.0, force=1.5),  # a constant load past the band
     _two_masses(0.0, 0.03),  # d2 loaded past tau2 = 1 (k2 x = 1.5)
     _maxwell(),  # a junction (its velocity is the limit system's)
     _parallel_locks(),  # locks in parallel (cones)
-], ids=["past yield", "past yield, negative", "at yield", "velocity", "burst past yield",
-        "burst and spring past yield", "callable", "constant past yield",
-        "two masses, past yield",
+], ids=["past yield", "past yield, negative", "at yield", "velocity", "forcing",
+        "zero sine", "callable", "constant past yield", "two masses, past yield",
         "junction", "locks in parallel"])
 def test_a_scene_not_proven_at_rest_runs_the_general_driver(scene):
     sol = simulate(scene, t_end=2.0)
