@@ -24,6 +24,16 @@ def test_warm_fills_an_empty_cache_and_says_what_it_compiled(tmp_path, monkeypat
     assert any((cache / "jit").glob("*.py"))  # the generated modules are on disk
 
 
+def test_warm_compiles_the_loop_of_a_scene_at_rest(tmp_path, monkeypatch, capsys):
+    # release-0.005 never moves: radau5 holds it without a loop, warm compiles the loop
+    # for the runs of its structure that move
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(cache))
+    assert main(["warm", str(EXAMPLES / "release-0.005.toml"), "--method", "radau5"]) == 0
+    assert "the event-driven Radau IIA loop" in capsys.readouterr().out
+    assert any((cache / "jit").glob("*.py"))
+
+
 def test_method_is_repeatable_and_a_locked_scene_says_it_runs_in_python(capsys):
     assert main(["warm", str(EXAMPLES / "lock.toml"), "--method", "jit-bdf1",
                  "--method", "jit-bdf1"]) == 0

@@ -171,6 +171,19 @@ def test_cache_dir_from_environment(monkeypatch, tmp_path):
     assert cache_dir() == tmp_path / "x" / "lumped"
 
 
+def test_a_generated_module_exists_when_loaded_or_on_disk(js, monkeypatch, tmp_path):
+    from lumped.codegen.jit import generated_module_exists, module_cached, module_name
+
+    source = scene_source(js[0]).source
+    name = module_name(source)
+    assert generated_module_exists(name) and module_cached(source)  # loaded by the fixture
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path / "c"))  # loaded under another key
+    assert not generated_module_exists(name) and not module_cached(source)
+    (cache_dir() / "jit").mkdir(parents=True)
+    (cache_dir() / "jit" / f"{name}.py").write_text(source)
+    assert generated_module_exists(name) and module_cached(source)
+
+
 def test_write_once_never_replaces_a_file(tmp_path):
     path = tmp_path / "d" / "m.py"
     _write_once(path, "A = 1\n")

@@ -329,7 +329,12 @@ def loaded_key(name: str) -> tuple[str, str]:
 def module_cached(source: str) -> bool:
     """The generated module with text ``source`` is loaded in this process, or its file
     is in the disk cache (compiled by an earlier run on this machine)."""
-    name = module_name(source)
+    return generated_module_exists(module_name(source))
+
+
+def generated_module_exists(name: str) -> bool:
+    """The generated module ``name`` is loaded in this process (under
+    :func:`loaded_key` ``(name)``) or its file is in the disk cache (``cache_dir()/jit``)."""
     return (loaded_key(name) in LOADED_MODULES
             or (cache_dir() / "jit" / f"{name}.py").exists())
 

@@ -377,11 +377,26 @@ class Scene:
     # -- structure -------------------------------------------------------------------------
     @property
     def node_names(self) -> tuple[str, ...]:
-        return tuple(n.name for n in self.nodes)
+        return self._names()[0]
 
     @property
     def element_names(self) -> tuple[str, ...]:
-        return tuple(el.name for el in self.elements)
+        return self._names()[1]
+
+    def _names(self) -> tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]:
+        """``(node names, element names, columns)``, made once for the scene's ``nodes``
+        and ``elements`` (again if either is replaced)."""
+        got = self.__dict__.get("_names_of")
+        if got is None or got[0] is not self.nodes or got[1] is not self.elements:
+            nodes = tuple(n.name for n in self.nodes)
+            elements = tuple(el.name for el in self.elements)
+            cols = ["t"]
+            for name in nodes:
+                cols += [f"x_{name}", f"v_{name}"]
+            cols += [f"F_{name}" for name in elements]
+            got = self.__dict__["_names_of"] = (self.nodes, self.elements, nodes, elements,
+                                                tuple(cols))
+        return got[2:]
 
     @property
     def masses(self) -> tuple[float, ...]:
@@ -399,11 +414,7 @@ class Scene:
 
     def columns(self) -> tuple[str, ...]:
         """CSV / array column names: ``t``, ``x_<node>``, ``v_<node>`` per node, ``F_<el>``."""
-        cols = ["t"]
-        for name in self.node_names:
-            cols += [f"x_{name}", f"v_{name}"]
-        cols += [f"F_{name}" for name in self.element_names]
-        return tuple(cols)
+        return self._names()[2]
 
     def external_forces(self, t: float) -> list[float]:
         """``f_i(t)`` per node (checked finite)."""

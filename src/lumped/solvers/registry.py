@@ -43,6 +43,7 @@ from .bdf.runners import RUNNERS as BDF_RUNNERS
 from .closed.runners import RUNNERS as CLOSED_RUNNERS
 from .closed.runners import closed_form_oscillator
 from .eventdriven.runner import run_radau5
+from .eventdriven.setup import scene_plan
 from .status import Runner, RunSettings
 
 __all__ = [
@@ -109,9 +110,7 @@ def resolve_method(scene: Scene, method: str, *, dt: float | None = None,
     given, and needs ``dt``."""
     if method != "auto":
         return method
-    from .eventdriven.setup import scope_error
-
-    if scope_error(scene):
+    if scene_plan(scene).refused:  # (scope_error, kept per scene object)
         return "bdf2"
     if dt is not None and rtol is None and atol is None:
         return "closed-bdf2" if not isinstance(closed_form_oscillator(scene), str) else "bdf2"

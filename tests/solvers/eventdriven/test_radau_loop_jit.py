@@ -19,6 +19,7 @@ from lumped.codegen.jit import numba_enabled
 from lumped.laws import ElementLaw
 from lumped.scenarios import scenario_scene
 from lumped.scene.forcing import SineBurst
+from lumped.solvers.eventdriven.at_rest import REST_LOOP
 
 pytestmark = pytest.mark.skipif(not numba_enabled(), reason="the compiled loop needs numba")
 
@@ -121,13 +122,13 @@ def test_the_steps_to_a_stop_are_compiled(monkeypatch):
     loop's run (the breakpoint at t = 1.5 is a time event in both)."""
     from lumped.solvers.eventdriven.fast import CompiledLoop
 
-    base = scenario_scene("release-0.005")  # stuck from the start: no guard event
+    base = scenario_scene("release-0.005")  # at rest throughout: held, no loop runs
     attempts = []
     real = CompiledLoop.attempt
     monkeypatch.setattr(CompiledLoop, "attempt",
                         lambda self, *a: attempts.append(a[0]) or real(self, *a))
     sol = simulate(base, method="radau5", t_end=2.0, rtol=1e-6, compiled=True)
-    assert sol.ok and sol.stats["loop"] == "compiled" and not sol.events
+    assert sol.ok and sol.stats["loop"] == REST_LOOP and not sol.events
     assert sol.t[-1] == 2.0 and attempts == []
     kw = dict(method="radau5", t_end=2.0, rtol=1e-7, atol=1e-10)
     scene = _user_law_scene()

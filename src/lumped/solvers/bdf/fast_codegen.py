@@ -316,13 +316,11 @@ def fast_module_cached(scene, key: tuple | None = None) -> bool:
     """The scene's fast-path module exists: loaded in this process (under ``key`` or its
     source) or in the disk cache. Its source does not depend on the laws' numbers, so any
     earlier run of the same structure built it."""
-    from ...codegen.jit import cache_dir
+    from ...codegen.jit import cache_dir, generated_module_exists
 
     if key is not None and (str(cache_dir()), key) in _BY_KEY:
         return True
-    name = _fast_name(fast_source(scene))
-    return (loaded_key(name) in LOADED_MODULES
-            or (cache_dir() / "jit" / f"{name}.py").exists())
+    return generated_module_exists(_fast_name(fast_source(scene)))
 
 
 def fast_module(scene, key: tuple | None = None) -> ModuleType:

@@ -16,16 +16,16 @@ from collections import deque
 
 from ...scene import Mass, Scene
 from ..modes.choice import select_modes
-from ..modes.lock_events import apply_impacts, hold_rate_locks, lock_cones, snap_to_locks
+from ..modes.lock_events import apply_impacts, hold_rate_locks, snap_to_locks
 from ..modes.mode_guess import try_modes
 from ..nonsmooth.locks import (
     IntervalLog,
-    cycles_among,
     indeterminate_elements,
     lock_parallel_rates,
     prefer_locks,
 )
 from ..status import Event, Status
+from .mode_parts import laws_hold, mode_cones, mode_parts
 from .setup import accumulating, too_many
 
 __all__ = ["ModeState"]
@@ -77,32 +77,16 @@ class ModeState:
         self.guessing = not plan.checked
         self.hint: int | None = None
         self.forces_from_probe = False  # the forces at t are an event probe's
-        # mode -> (kernels, guards, watched, locks on cycles), kept per scene plan
-        self._mode_parts: dict[tuple[int, ...], tuple] = plan.__dict__.setdefault(
-            "mode_parts", {})
+        self.plan = plan
 
     def set_modes(self, new: list[int], F: list[float]) -> None:
         """Hold every element on branch ``new[e]`` (the list ``modes`` is kept)."""
-        lbs = self.lbs
         self.modes[:] = new
-        key = tuple(new)
-        parts = self._mode_parts.get(key)
-        if parts is None:
-            parts = _mode_parts(lbs, key, self.cyclic)
-            if len(self._mode_parts) >= 4096:  # (a network with very many modes)
-                self._mode_parts.clear()
-            self._mode_parts[key] = parts
+        parts = mode_parts(self.plan, tuple(new))
         # (in place: the driver holds these lists)
         self.kernels[:], self.guards[:], self.watched[:] = parts[0], parts[1], parts[2]
         self.cones.clear()
-        if parts[3] < 2:  # a cone needs two locks on cycles: with fewer, none is read
-            return
-        locked = lock_cones(lbs, new, F, self.cyclic)
-        # only locks in parallel with each other leave their split free (a stuck link in
-        # series with another keeps its exact LU solve, and so its exact zero rate)
-        parallel = cycles_among(self.scene, tuple(locked)) if len(locked) > 1 else ()
-        if len(parallel) > 1:
-            self.cones.update({e: locked[e] for e in parallel})
+        self.cones.update(mode_cones(self.scene, self.plan, new, F, parts))
 
     def change_mode(self, t: float, h_probe: float, cause: str, x: list[float],
                     v: list[float], F: list[float]) -> str:
@@ -162,7 +146,8 @@ class ModeState:
         # at t = 0 the consistent initial forces stay, unless they miss a law at the
         # probe's junction velocities (the initial state can leave a junction between
         # two slipping dashpots unresolved)
-        if cause != "start" or not _laws_hold(lbs, new, scene.elongations(x, v), F):
+        if cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
+                                             scene.elongations(x, v), F):
             F[:] = F_p
         for e in range(self.E):
             if new[e] != modes[e] and not any(ev.t == t and ev.element == names[e]
@@ -294,27 +279,3 @@ class ModeState:
             free = indeterminate_elements(self.scene, self.scene.elongations(x, v), F,
                                           self.cyclic)
             self.log.mark(t0, t1, [self.names[e] for e in free])
-
-
-def _laws_hold(lbs: list, modes: list[int], q: list[float], F: list[float]) -> bool:
-    """Whether every element's law holds at ``(q_e, F_e)`` on its branch, to ``1e-8``
-    relative to the size of its terms."""
-    for e, (qe, Fe) in enumerate(zip(q, F, strict=True)):
-        R, Rq, RF = lbs[e].stage_kernel_for(modes[e])(qe, Fe)
-        if not abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe)):
-            return False
-    return True
-
-
-def _mode_parts(lbs: list, modes: tuple[int, ...], cyclic: tuple[int, ...]
-                ) -> tuple[list, list, list[int], int]:
-    """What :meth:`ModeState.set_modes` holds for ``modes``, which depends only on the
-    scene's laws: the branch kernels and guards in the stage solve's form, the elements
-    with more than one branch (their guards are watched), and how many elements on
-    cycles are held on a lock with a known value (:func:`lock_cones` takes them)."""
-    E = len(lbs)
-    return ([lbs[e].stage_kernel_for(modes[e]) for e in range(E)],
-            [lbs[e].stage_guards_for(modes[e]) for e in range(E)],
-            [e for e in range(E) if lbs[e].count > 1],
-            sum(1 for e in cyclic if lbs[e].info[modes[e]].locks
-                and lbs[e].info[modes[e]].lock_value is not None))

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 from ...scene import Scene
 from ..status import RawRun
+from .at_rest import rest_run
 from .run import DEFAULT_ATOL, DEFAULT_RTOL, Radau5Run
 from .setup import EXTRA_OPTIONS
 
@@ -48,6 +49,9 @@ def run_radau5(scene: Scene, settings) -> RawRun:
 
     ``settings.rtol`` / ``atol`` default to :data:`DEFAULT_RTOL` / :data:`DEFAULT_ATOL`;
     ``settings.dt`` (optional) samples the dense output on ``t_n = n dt``; the keywords of
-    :data:`EXTRA_OPTIONS` come in ``settings.extra``.
+    :data:`EXTRA_OPTIONS` come in ``settings.extra``. A scene proven at rest for the
+    whole run takes its one held interval directly
+    (:func:`lumped.solvers.eventdriven.at_rest.rest_run`, the same solution).
     """
-    return Radau5Run(scene, settings).run()
+    held = rest_run(scene, settings)
+    return held if held is not None else Radau5Run(scene, settings).run()

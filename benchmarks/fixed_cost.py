@@ -1,0 +1,128 @@
+"""The fixed cost of a run on the bench's two scenes that never move (issue 27).
+
+Usage, from the repository root (after ``pip install -e ".[test]"``)::
+
+    python benchmarks/fixed_cost.py [--repeats 7] [--calls 2000]
+
+``simulate(scene, t_end=5)`` and the :class:`~lumped.result.Solution` it returns, on
+``release-0.005`` (k x0 = 0.5 < tau = 1, no forcing: at rest throughout) and
+``forcing-F1`` (0.5 sin(5 pi t) on [0, 1], below tau: stuck throughout) of
+:mod:`lumped.bench.scenes`, the scene object built once (its structure cached, as in a
+benchmark or a study that runs one scene again and again). Cases: ``auto`` (no
+tolerances: what ``simulate(scene, t_end=...)`` runs, ``radau5`` at its defaults),
+``radau5`` at ``rtol`` 1e-7 and ``radau5`` at ``rtol`` 1e-7 with ``compiled=True`` (the
+bench's setting), and, where the run at rest
+(:mod:`lumped.solvers.eventdriven.at_rest`) exists, ``auto`` through the general driver
+(the run at rest switched off in this process, for comparison).
+
+Each case is the CPU time (:func:`time.process_time`) of ``--calls`` calls, repeated
+``--repeats`` times interleaved with the yardstick (:func:`lumped.bench.measure_unit`'s
+loop, one call per repeat); printed are the median per call in microseconds and the
+median over repeats of its ratio to one iteration of the yardstick loop (``u``), and
+issue 27's target (at most 50 us).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import statistics
+import time
+
+from lumped import simulate
+from lumped.bench.scenes import PAPER_SCENES, YARDSTICK_ITERATIONS, generic_scene
+from lumped.bench.timing import yardstick
+
+SCENES = ("release-0.005", "forcing-F1")
+#: name -> keywords of ``simulate``
+CASES = {
+    "auto": {},
+    "radau5 rtol=1e-7": {"method": "radau5", "rtol": 1e-7},
+    "radau5 rtol=1e-7 compiled=True": {"method": "radau5", "rtol": 1e-7, "compiled": True},
+}
+TARGET_US = 50.0
+
+
+def _general_driver():
+    """A context that switches the run at rest off (``None`` before it existed)."""
+    try:
+        from lumped.solvers.eventdriven import runner
+    except ImportError:  # pragma: no cover
+        return None
+    if not hasattr(runner, "rest_run"):
+        return None
+
+    class Off:
+        def __enter__(self):
+            self.saved = runner.rest_run
+            runner.rest_run = lambda scene, settings: None
+
+        def __exit__(self, *exc):
+            runner.rest_run = self.saved
+
+    return Off()
+
+
+def _time(fn, calls: int) -> float:
+    t0 = time.process_time()
+    for _ in range(calls):
+        fn()
+    return (time.process_time() - t0) / calls
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=7)
+    parser.add_argument("--calls", type=int, default=2000)
+    args = parser.parse_args()
+
+    by_name = {s.name: s for s in PAPER_SCENES}
+    runs = {}
+    for name in SCENES:
+        bench = by_name[name]
+        scene = generic_scene(bench)
+        for case, kw in CASES.items():
+            runs[(name, case)] = (lambda sc=scene, kw=kw, t=bench.t_end:
+                                  simulate(sc, t_end=t, **kw), None)
+        off = _general_driver()
+        if off is not None:
+            runs[(name, "auto, general driver")] = (lambda sc=scene, t=bench.t_end:
+                                                    simulate(sc, t_end=t), off)
+    for fn, off in runs.values():  # warm: structure, kernels, compiled parts
+        for _ in range(3):
+            if off is None:
+                fn()
+            else:
+                with off:
+                    fn()
+
+    per_call: dict = {key: [] for key in runs}
+    ratios: dict = {key: [] for key in runs}
+    units = []
+    for _ in range(args.repeats):
+        t0 = time.process_time()
+        yardstick()
+        unit = (time.process_time() - t0) / YARDSTICK_ITERATIONS
+        units.append(unit)
+        for key, (fn, off) in runs.items():
+            if off is None:
+                sec = _time(fn, args.calls)
+            else:
+                with off:
+                    sec = _time(fn, args.calls)
+            per_call[key].append(sec)
+            ratios[key].append(sec / unit)
+
+    unit_ns = statistics.median(units) * 1e9
+    print(f"python {platform.python_version()}, load {os.getloadavg()[0]:.1f}; yardstick "
+          f"{unit_ns:.1f} ns per iteration (u); median of {args.repeats} repeats of "
+          f"{args.calls} calls; issue 27's target {TARGET_US:g} us")
+    print(f"{'scene':15s} {'case':32s} {'us/run':>9s} {'u':>9s}")
+    for name, case in runs:
+        us = statistics.median(per_call[(name, case)]) * 1e6
+        print(f"{name:15s} {case:32s} {us:9.1f} {statistics.median(ratios[(name, case)]):9.0f}")
+
+
+if __name__ == "__main__":
+    main()
