@@ -17,6 +17,7 @@ from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
 from lumped.solvers.eventdriven.bridge import BRIDGE_STEPS, MAX_STEPS, bridge_steps, linear_stages
+from lumped.solvers.eventdriven.mode_state import ModeState
 from lumped.solvers.radau.dense_defect import dense_defect
 from lumped.solvers.radau.tableau import C
 from lumped.solvers.status import Status
@@ -186,12 +187,9 @@ def test_the_defect_of_a_linear_law_is_round_off_and_of_a_curved_one_its_interpo
     assert d_loose < d
 
 
-def test_a_creep_above_the_step_floor_is_bridged():
-    """A junction that hangs on a mass by one Coulomb element (its force is 0, it moves
-    with the mass) beside a string to a second mass: radau5 lands again and again on the
-    Coulomb element's guard with steps of 3e-14 s, 40 times the step floor, so the creep
-    was not seen: 5000 steps took 77 s, and the LUMPED_LARGE run hung on the draw. Steps
-    below 1e-12 of the run count as creeping too; the point is bridged."""
+def _junction_on_a_stuck_coulomb_element() -> tuple[Scene, float]:
+    # a junction that hangs on a mass by one Coulomb element (its force is 0, it moves
+    # with the mass) beside a string to a second mass
     scene = Scene(
         [Mass("m0", m=0.11926677478103379, x0=0.8139395355548813, v0=-2.8256135157766822e-12),
          Mass("m1", m=1.0, x0=1e-15, v0=-1.6098666530272876), Junction("j2", x0=0.0),
@@ -205,7 +203,37 @@ def test_a_creep_above_the_step_floor_is_bridged():
          Element("e4", get_law("linear_spring").bind(k=0.8657160926584776), "m3", "m0"),
          Element("e5", get_law("coulomb").bind(tau=0.1, r=14.19248334546979), "ground", "m1"),
          Element("e6", get_law("linear_spring").bind(k=14.704417605088656), "ground", "m0")])
-    h = 0.016967846511721136
+    return scene, 0.016967846511721136
+
+
+def test_a_mode_kept_at_a_guard_keeps_the_junction_state_at_t():
+    """At t = 0.2093 the full laws keep the mode at e2's guard only with the probe 10^6
+    times the first, whose state is 4e-3 s later: the junction took its velocity, a rate of
+    0.04-0.23 against m0 at t, crossed e2's guard at t again, and radau5 landed on it again and
+    again with steps of 3e-14 s until the creep was bridged (41 steps; x off a tight run by
+    6.7e-4). A kept mode now keeps the junction velocities and forces at t (issue 29)."""
+    scene, h = _junction_on_a_stuck_coulomb_element()
+    sol = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=h**2, atol=h**3,
+                   compiled=False, max_steps=5000)
+    assert sol.ok and sol.message == "" and sol.stats.get("bridges", 0) == 0
+    assert sol.stats["steps"] <= 25  # (20)
+    # the string's impacts
+    assert [ev.element for ev in sol.events if ev.kind == "impact"] == ["e3", "e3"]
+    fine = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=1e-10, atol=1e-12,
+                    compiled=False)
+    assert fine.ok, fine.message
+    for name in ("m0", "j2"):  # (5.8e-6)
+        assert np.abs(sol.x[name] - fine.x[name]).max() <= 5e-5
+
+
+def test_a_creep_above_the_step_floor_is_bridged(monkeypatch):
+    """The scene above with the kept mode's state taken from the deciding probe, as before
+    issue 29: radau5 lands again and again on e2's guard with steps of 3e-14 s, 40 times
+    the step floor, so the creep was not seen: 5000 steps took 77 s, and the LUMPED_LARGE
+    run hung on the draw. Steps below 1e-12 of the run count as creeping too; the point
+    is bridged."""
+    monkeypatch.setattr(ModeState, "state_stays", lambda self, *args: False)
+    scene, h = _junction_on_a_stuck_coulomb_element()
     sol = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=h**2, atol=h**3,
                    compiled=False, max_steps=5000)
     # (20 creeping steps, not 200 as before: 41 steps in all)
