@@ -27,7 +27,8 @@ rate (dashpot), ``F`` its force (sign convention of :mod:`lumped.scene`).
     F_e + sum_{b_e = i} F_e``, junction rows without the first term, law rows
     ``R_e(q_e, F_e)`` with ``q_e = x_hat_b + h v_b - (x_hat_a + h v_a)`` (springs) or
     ``v_b - v_a`` (dashpots). ``roundoff`` selects the law rows' scale
-    ``max(|R_q q| + |R_F F|, M)`` (else the first term alone).
+    ``max(|R_q| (|q_b| + |q_a|) + |R_F F|, M)`` (the terms ``q = q_b - q_a`` is computed
+    from; :func:`lumped.solvers.implicit.step_system.law_scale`), else ``|R_q q| + |R_F F|``.
 ``active_branch(e, q, F) -> int``
     The index of element ``e``'s active smooth branch at ``(q, F)``, by the kernel's own
     rules (:meth:`lumped.codegen.branches.LawBranches.branch`; -1 where none holds).
@@ -243,11 +244,13 @@ def _evaluate_source(scene, law_index: list[int]) -> list[str]:
         j = law_index[e]
         qb, qa, dq = end_values_source(el.kind, a, b, lambda i: f"p[{xh + i}]",
                                        lambda i: f"u[{i}]")
-        L += [f"    q = {qb} - {qa}", f"    Fe = u[{k}]", f"    R, Rq, RF = law_{j}(q, Fe)",
-              f"    G{k} = R", "    lin = abs(Rq * q) + abs(RF * Fe)", "    if roundoff:",
+        L += [f"    qb = {qb}", f"    qa = {qa}", "    q = qb - qa", f"    Fe = u[{k}]",
+              f"    R, Rq, RF = law_{j}(q, Fe)", f"    G{k} = R", "    if roundoff:",
+              "        lin = abs(Rq) * (abs(qb) + abs(qa)) + abs(RF * Fe)",
               f"        M = mag_{j}(q, Fe)",
               f"        S{k} = M if (M > lin and M != math.inf) else lin", "    else:",
-              f"        S{k} = lin", f"    g = Rq * {dq}", f"    J[{k}, {k}] = RF"]
+              f"        S{k} = abs(Rq * q) + abs(RF * Fe)", f"    g = Rq * {dq}",
+              f"    J[{k}, {k}] = RF"]
         if a >= 0:
             L += [f"    G{a} -= Fe", f"    S{a} += abs(Fe)", f"    J[{a}, {k}] = -1.0",
                   f"    J[{k}, {a}] = -g"]
