@@ -58,30 +58,3 @@ def test_radau5_compiled_at_a_tight_tolerance_on_a_loaded_string_chain_runs():
     sol = simulate(loaded_string_chain(), method="radau5", t_end=0.2, rtol=1e-10,
                    atol=1e-13, compiled=True)
     assert sol.ok
-
-
-def _loaded_at_the_summed_yield_force() -> Scene:
-    # a draw of the random-network suite at LUMPED_LARGE=1000 (radau5, Python loop; issue
-    # 29), reduced: one mass on two Bingham dashpots to ground, loaded by exactly the sum
-    # of their yield forces (0.1 + 0.125 = 0.225, exact in binary). The mass stays at rest
-    # (bdf1 and bdf2 keep it there); a load below the sum (0.2) runs at once
-    bingham = get_law("bingham")
-    return Scene([Mass("m", m=1.0)],
-                 [Element("a", bingham.bind(gamma=1.0, tau=0.1), "ground", "m"),
-                  Element("b", bingham.bind(gamma=1.0, tau=0.125), "ground", "m")],
-                 {"m": 0.225})
-
-
-@pytest.mark.xfail(strict=True, raises=SolverError, reason=(
-    "radau5 lands again and again on the break-out guards of two yielding dashpots in "
-    "parallel whose summed yield force the load meets exactly (about 38 passes of the "
-    "loop an accepted step, t = 4.8e-4 after 10 000): its work budget stops it "
-    "(Status.MAX_ITERS, after 5 s by default; when max_steps counted accepted steps only, "
-    "1e6 of them took some 4e7 passes, hours). Not diagnosed. The draw had three yielding "
-    "links and a dashpot on one mass, its load their summed yield force (issue 29)"))
-@pytest.mark.parametrize("compiled", [False, True])
-def test_a_load_at_the_summed_yield_force_of_parallel_dashpots_runs(compiled):
-    # (max_steps = 2000: the same stop in 1 s)
-    sol = simulate(_loaded_at_the_summed_yield_force(), method="radau5", t_end=0.5,
-                   compiled=compiled, max_steps=2000)
-    assert sol.ok
