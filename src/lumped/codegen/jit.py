@@ -37,8 +37,9 @@ every entry point below takes last:
     momentum rows ``(m_i / h)(v_i - v_hat_i) - f_i - sum_{a_e = i} F_e + sum_{b_e = i}
     F_e``, junction rows without the first term, law rows ``R_e(q_e, F_e)`` with ``q_e =
     x_hat_b + h v_b - (x_hat_a + h v_a)`` (springs) or ``v_b - v_a`` (dashpots).
-    ``roundoff`` selects the law rows' scale ``max(|R_q q| + |R_F F|, M)`` (else the
-    first term alone).
+    ``roundoff`` selects the law rows' scale ``max(|R_q| (|q_b| + |q_a|) + |R_F F|, M)``
+    (the terms ``q = q_b - q_a`` is computed from;
+    :func:`lumped.solvers.implicit.step_system.law_scale`), else ``|R_q q| + |R_F F|``.
 ``active_branch(e, q, F, c) -> int``
     The index of element ``e``'s active smooth branch at ``(q, F)``, by the kernel's own
     rules (:meth:`lumped.codegen.branches.LawBranches.branch`; -1 where none holds).
@@ -246,12 +247,14 @@ def _evaluate_source(scene, call: Callable[..., str]) -> list[str]:
         k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
         qb, qa, dq = end_values_source(el.kind, a, b, lambda i: f"p[{xh + i}]",
                                        lambda i: f"u[{i}]")
-        L += [f"    q = {qb} - {qa}", f"    Fe = u[{k}]",
+        L += [f"    qb = {qb}", f"    qa = {qa}", "    q = qb - qa", f"    Fe = u[{k}]",
               f"    R, Rq, RF = {call(e, 'law', 'q, Fe', 'p', 1 + 4 * N)}",
-              f"    G{k} = R", "    lin = abs(Rq * q) + abs(RF * Fe)", "    if roundoff:",
+              f"    G{k} = R", "    if roundoff:",
+              "        lin = abs(Rq) * (abs(qb) + abs(qa)) + abs(RF * Fe)",
               f"        M = {call(e, 'mag', 'q, Fe', 'p', 1 + 4 * N)}",
               f"        S{k} = M if (M > lin and M != math.inf) else lin", "    else:",
-              f"        S{k} = lin", f"    g = Rq * {dq}", f"    J[{k}, {k}] = RF"]
+              f"        S{k} = abs(Rq * q) + abs(RF * Fe)", f"    g = Rq * {dq}",
+              f"    J[{k}, {k}] = RF"]
         if a >= 0:
             L += [f"    G{a} -= Fe", f"    S{a} += abs(Fe)", f"    J[{a}, {k}] = -1.0",
                   f"    J[{k}, {a}] = -g"]

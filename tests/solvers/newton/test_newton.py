@@ -171,3 +171,53 @@ def test_factor_cache_reuses_factors_across_solves():
     for _ in range(3):
         again = newton_solve(ev, [0.0, 0.0], cache=cache)
         assert again.factorizations == 0 and again.u == first.u
+
+
+def _lock_on_a_lattice(h: float = 1e-4, m: float = 1.0, load: float = 2.6517535238691945):
+    # a mass at x = x_hat + h v on a lock q - L = 0, q = x - x_a, loaded by ``load``
+    # against the lock's force F: (m / h) v + F - load = 0. Far from the origin, q lies on
+    # a lattice of spacing ulp(x) = 1.4e-14 that misses L by 40 ulps of q (6.9e-17)
+    x_hat, x_a = 100.01, 100.0
+    q0 = x_hat - x_a  # exact (Sterbenz)
+    L = q0 + 40 * math.ulp(q0)
+
+    def evaluate(u):
+        v, F = u
+        p = (m / h) * v
+        x = x_hat + h * v
+        q = x - x_a
+        G = [p + F - load, q - L]
+        S = [abs(p) + abs(F) + abs(load), abs(x) + abs(x_a) + abs(L)]
+        return G, [[m / h, 1.0], [h, 0.0]], S
+
+    return evaluate, L
+
+
+def test_a_lock_that_no_float_meets_converges_at_round_off():
+    """The lock row cannot go below a fraction of ulp(x), and each correction asks the
+    force for m (q - L) / h^2 (6.9e-9), beyond rtol |F|: Newton keeps the iterate where
+    every row is at the rounding of its terms (``at_roundoff``), the lock row's terms being
+    the positions, instead of running out of budget."""
+    from lumped.solvers.newton.criteria import at_roundoff
+
+    evaluate, L = _lock_on_a_lattice()
+    res = newton_solve(evaluate, [0.0, 2.0])
+    assert res.code is NewtonCode.SUCCESS and res.iterations <= 3
+    G, _, S = evaluate(res.u)
+    assert G[1] != 0.0  # no floating-point root
+    assert abs(G[1]) <= 0.5 * math.ulp(100.01)
+    assert at_roundoff(G, S)
+    assert abs(res.u[1] - 2.6517535238691945) <= 1.0 * math.ulp(100.01) / 1e-4**2
+    # read from |q| + |L| alone the lock row would not be at round-off
+    assert not at_roundoff([G[1]], [abs(G[1] + L) + abs(L)])
+
+
+@given(st.lists(st.tuples(st.floats(-1e3, 1e3), st.floats(0.0, 1e3)), min_size=1,
+                max_size=6))
+def test_at_roundoff_compiled_is_the_reference(rows):
+    from lumped.solvers.newton.criteria import at_roundoff
+    from lumped.solvers.newton.criteria_jit import at_roundoff as at_roundoff_jit
+
+    G = [g * 1e-15 for g, _ in rows]
+    S = [s for _, s in rows]
+    assert at_roundoff_jit(np.array(G), np.array(S)) == at_roundoff(G, S)

@@ -80,7 +80,7 @@ def make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[f
             q = qb - qa
             R, Rq, RF = kernel(q, Fe)
             G[k] = R
-            S[k] = (law_scale(kernel, q, Fe, R, Rq, RF) if roundoff
+            S[k] = (law_scale(kernel, q, Fe, R, Rq, RF, abs(qb) + abs(qa)) if roundoff
                     else abs(Rq * q) + abs(RF * Fe))
             row = J[k]
             row[k] = RF
@@ -134,9 +134,10 @@ def generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[flo
             qb = f"u{b}" if b >= 0 else "0.0"
             qa = f"u{a}" if a >= 0 else "0.0"
             dq = 1.0
-        scale = (f"law_scale(k{e}, q, u{k}, R, Rq, RF)" if roundoff
+        scale = (f"law_scale(k{e}, q, u{k}, R, Rq, RF, abs(qb) + abs(qa))" if roundoff
                  else f"abs(Rq * q) + abs(RF * u{k})")
-        lines += [f"    q = {qb} - {qa}", f"    R, Rq, RF = k{e}(q, u{k})", f"    G{k} = R",
+        lines += [f"    qb = {qb}", f"    qa = {qa}", "    q = qb - qa",
+                  f"    R, Rq, RF = k{e}(q, u{k})", f"    G{k} = R",
                   f"    S{k} = {scale}", f"    g{e} = Rq * {dq!r}", f"    RF{e} = RF"]
         J[k, k] = f"RF{e}"
         if a >= 0:
@@ -166,10 +167,11 @@ def generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[flo
 EPS = sys.float_info.epsilon
 
 
-def law_scale(kernel, q: float, F: float, R: float, Rq: float, RF: float) -> float:
+def law_scale(kernel, q: float, F: float, R: float, Rq: float, RF: float,
+              q_terms: float | None = None) -> float:
     r"""Scale of the terms of a law row ``R(q, F)``, for the residual test.
 
-    ``max(|R_q q| + |R_F F|, M)``, ``M = kernel.magnitude(q, F)`` the magnitude of the
+    ``max(|R_q| Q + |R_F F|, M)``, ``M = kernel.magnitude(q, F)`` the magnitude of the
     residual's terms generated with the kernel (:func:`lumped.codegen.magnitude_expression`):
     on a smooth piece without cancellation about the linearised scale; where the law's
     terms cancel, their size. Example: a Bingham dashpot on its stuck piece
@@ -184,8 +186,16 @@ def law_scale(kernel, q: float, F: float, R: float, Rq: float, RF: float) -> flo
     neighbour (four kernel calls): the terms as the law's round-off shows them, which
     sees a cancellation only within an ulp of the kink. Used where Newton iterates (the
     initial state, steps off the fast path).
+
+    ``Q = q_terms`` is the magnitude of the terms ``q`` is computed from, ``|q_b| + |q_a|``
+    for ``q = q_b - q_a`` (a spring's end positions ``x_hat + h v``, a dashpot's end
+    velocities), ``|q|`` when not given. The rounding of ``q`` is ``eps Q``, not
+    ``eps |q|``: a taut string ``q - L = 0`` between masses at ``x ~ 1`` has ``q``
+    on a lattice of spacing ``ulp(x)`` that may miss ``L`` by up to half of it, however
+    small ``|q|`` and ``L`` are; Newton's round-off test
+    (:mod:`lumped.solvers.newton.criteria`) reads that from this scale.
     """
-    lin = abs(Rq * q) + abs(RF * F)
+    lin = (abs(Rq * q) if q_terms is None else abs(Rq) * q_terms) + abs(RF * F)
     mag = getattr(kernel, "magnitude", None)
     if mag is not None:
         M = mag(q, F)

@@ -38,11 +38,12 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ...scene import Scene
+from ..newton.criteria import ROUNDOFF
 from ..nonsmooth.rest_balance import rest_inverse
 from ..radau.rows import row_of
 from .guards import guard_tolerance
 
-__all__ = ["StaticHold", "static_hold", "forcing_kinds"]
+__all__ = ["StaticHold", "equilibrium_hold", "static_hold", "forcing_kinds"]
 
 #: ``id(fpar) -> (fpar, varying, kinds)`` (see :class:`StaticHold`).
 _KINDS: dict[int, tuple[np.ndarray, bool, list[tuple[int, float, float, float]]]] = {}
@@ -270,6 +271,56 @@ def static_hold(scene: Scene, plan, modes: Sequence[int], x: list[float],
     return StaticHold(scene, x, v, F, free, minv, c, fkind, fpar, arrays)
 
 
+def equilibrium_hold(scene: Scene, ms, t: float, x: list[float], v: list[float],
+                     F: list[float], fkind: np.ndarray | None, fpar: np.ndarray | None
+                     ) -> StaticHold | None:
+    r"""The :class:`StaticHold` of an equilibrium under a constant forcing, or ``None``.
+
+    When every node is at rest (``v_i = 0`` exactly), the forcing is constant (absent or
+    constant, no sine burst), every node's balance holds to the rounding of its terms,
+
+    .. math::
+
+        \Bigl|f_i + \sum_{a_e = i} F_e - \sum_{b_e = i} F_e\Bigr| \le 4 \epsilon
+        \Bigl(|f_i| + \sum_{e \ni i} |F_e|\Bigr),
+
+    every guard of every element's held branch holds at ``(q_e, F_e)`` (to its
+    round-off tolerance, :func:`lumped.solvers.modes.guards.guard_tolerance`), and every
+    lock in parallel (``ms.cones``) sits on a bound of its force interval (a guard zero to
+    that tolerance: the split has no room on that side; one inside its interval leaves
+    the split to the steps' rule, :mod:`lumped.solvers.radau.cone_split`), then
+    ``x(t) = x(t_0)``, ``v = 0``, ``F(t) = F(t_0)`` solves the held mode's DAE
+    (``x' = v = 0``, ``m v' = 0``, and each law ``R_e(q_e, F_e) = 0`` at its frozen ``q_e``),
+    and its guards stay where they are: it holds up to the next breakpoint. This takes
+    the locks in parallel too (a split among them that the steps' cone rule would keep),
+    which :func:`static_hold` leaves to the steps: e.g. a mass on two stuck Bingham
+    dashpots loaded by exactly the sum of their yield forces, both forces on their
+    bounds, where the stage forces scatter around the bounds by the stage Newton's
+    tolerance and each step read a crossing (38 loop passes an accepted step).
+    """
+    if fkind is None or (fkind == 2).any() or any(vi != 0.0 for vi in v):
+        return None
+    N = len(v)
+    net = scene.net_forces(t, F)
+    scale = [abs(fi) for fi in scene.external_forces(t)]
+    for e, Fe in enumerate(F):
+        for i in (scene.elem_a[e], scene.elem_b[e]):
+            if i >= 0:
+                scale[i] += abs(Fe)
+    if not all(abs(r) <= ROUNDOFF * s for r, s in zip(net, scale, strict=True)):
+        return None
+    q = scene.elongations(x, v)
+    for e, guard in enumerate(ms.guards):
+        tol = guard_tolerance(q[e], F[e])
+        gs = guard(q[e], F[e])
+        if not all(g + tol >= 0.0 for g in gs):
+            return None
+        if e in ms.cones and not any(abs(g) <= tol for g in gs):
+            return None  # inside its cone: the split is the steps' rule's to choose
+    return StaticHold(scene, x, v, F, [], [], [0.0] * N, fkind, fpar,
+                      (np.zeros((0, N)), np.zeros(0, dtype=np.int64)))
+
+
 def _structure_arrays(minv: list[list[float]], free: list[int]
                       ) -> tuple[np.ndarray, np.ndarray]:
     """``(minv, free)`` as the arrays of the compiled dense output."""
@@ -305,10 +356,13 @@ def hold_interval(scene: Scene, plan, ms, t: float, t_stop: float, x: list[float
     into ``dense`` and ``rows``; returns ``(t_1, F(t_1), broke_out)`` where ``t_1`` is the
     break-out time or ``t_stop``, or ``None`` (the steps must run: not stuck, or the
     break-out is at ``t`` itself)."""
-    if ms.cones:  # locks in parallel: their split rule is the steps' (lumped.solvers.radau.stage)
-        return None
     fkind, fpar = forcing_kinds(scene, plan)
-    hold = static_hold(scene, plan, ms.modes, x, v, F, fkind, fpar)
+    if ms.cones:
+        # locks in parallel: their split rule is the steps' (lumped.solvers.radau.stage),
+        # unless nothing moves and no force changes
+        hold = equilibrium_hold(scene, ms, t, x, v, F, fkind, fpar)
+    else:
+        hold = static_hold(scene, plan, ms.modes, x, v, F, fkind, fpar)
     if hold is None:
         return None
     t_b, samples = hold.breakout(t, t_stop, ms.guards, ms.modes, ms.fast)

@@ -7,6 +7,8 @@ solvers built on it) apply to an iterate:
 * :func:`update_ok`: ``|delta_j| <= rtol * |u_j| + atol`` for every unknown ``j``;
 * :func:`update_ok_scaled`: the update test against the scale of the terms each unknown
   enters;
+* :func:`at_roundoff`: the residual at the rounding of its terms, ``|G_i| <= ROUNDOFF
+  S_i`` (``ROUNDOFF = 4 eps``), the first test of a correction that is noise;
 
 the line search's merit :func:`merit` (the largest residual relative to the row scales)
 and :func:`hair`, the probe a hair along a Newton step that reads the Jacobian of the
@@ -17,9 +19,15 @@ piece the step points into. Their compiled twins are in
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Sequence
 
-__all__ = ["hair", "merit", "residual_ok", "update_ok", "update_ok_scaled"]
+__all__ = ["ROUNDOFF", "at_roundoff", "hair", "merit", "residual_ok", "update_ok",
+           "update_ok_scaled"]
+
+#: The round-off level of a row relative to its scale ``S_i`` (the sum of the magnitudes
+#: of its terms): ``4 eps``, a few roundings of its terms.
+ROUNDOFF = 4.0 * sys.float_info.epsilon
 
 
 def hair(u: float, d: float) -> float:
@@ -50,6 +58,28 @@ def residual_ok(G: Sequence[float], S: Sequence[float], rtol: float, atol: float
     """The residual test: ``|G_i| <= rtol * S_i + atol`` for every row ``i``."""
     for g, s in zip(G, S, strict=True):
         if not abs(g) <= rtol * s + atol:
+            return False
+    return True
+
+
+def at_roundoff(G: Sequence[float], S: Sequence[float]) -> bool:
+    r"""Every row at the rounding of its terms: ``|G_i| <= ROUNDOFF * S_i``.
+
+    The first of Newton's two tests for a correction that is noise
+    (:func:`lumped.solvers.newton.semismooth.newton_solve`; the second: the full
+    correction leaves the row bit for bit as it is). A scale ``S_i`` that counts terms
+    which cancel exactly (``gamma (F - tau)`` read as ``gamma |F|``) is above the row's
+    true rounding, so this test alone does not make a solution. Example: a taut string
+    (``q - L = 0``) holding a mass at rest on a stuck junction, ``q = x_m - x_j`` on a
+    lattice of spacing ``ulp(x_m)`` that misses ``L`` by a fraction of it: the lock row
+    asks the mass's velocity for ``(q - L) / h``, which moves ``x_m = x_hat + h v`` by
+    less than an ulp, and the momentum balance asks the forces for ``m (q - L) / h^2``
+    (``3e-9`` at ``h = 1e-4``), beyond ``rtol |F|``. The scale ``S_i`` of a law row
+    must then count the terms ``q`` is computed from
+    (:func:`lumped.solvers.implicit.step_system.law_scale`).
+    """
+    for g, s in zip(G, S, strict=True):
+        if not abs(g) <= ROUNDOFF * s:
             return False
     return True
 

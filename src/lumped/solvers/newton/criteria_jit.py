@@ -2,12 +2,12 @@ r"""Convergence tests of the compiled Newton, written for numba: the twin of
 :mod:`lumped.solvers.newton.criteria`.
 
 Owns the residual and update tests (:func:`residual_ok`, :func:`update_ok`,
-:func:`update_ok_scaled`), the line search's :func:`merit`, the probe :func:`hair`, the
-finiteness tests in the order Python's ``sum`` adds (:func:`finite_sum`,
-:func:`finite_matrix`, :func:`finite_matrix_rows`), the Jacobian comparison :func:`same`
-and :func:`worst_row`, on numpy arrays, each operation for operation as the reference
-(:mod:`lumped.solvers.newton.criteria` and the tests inside
-:func:`lumped.solvers.newton.semismooth.newton_solve`).
+:func:`update_ok_scaled`), the round-off test :func:`at_roundoff`, the line search's
+:func:`merit`, the probe :func:`hair`, the finiteness tests in the order Python's
+``sum`` adds (:func:`finite_sum`, :func:`finite_matrix`, :func:`finite_matrix_rows`),
+the Jacobian comparison :func:`same` and :func:`worst_row`, on numpy arrays, each
+operation for operation as the reference (:mod:`lumped.solvers.newton.criteria` and the
+tests inside :func:`lumped.solvers.newton.semismooth.newton_solve`).
 """
 
 from __future__ import annotations
@@ -17,8 +17,9 @@ import math
 import numpy as np
 
 from ...codegen.jit import njit
+from .criteria import ROUNDOFF
 
-__all__ = ["finite_matrix", "finite_matrix_rows", "finite_sum", "hair", "merit",
+__all__ = ["at_roundoff", "finite_matrix", "finite_matrix_rows", "finite_sum", "hair", "merit",
            "residual_ok", "same", "update_ok", "update_ok_scaled", "worst_row"]
 
 
@@ -57,6 +58,15 @@ def same(A, B) -> bool:
 def residual_ok(G, S, rtol: float, atol: float) -> bool:
     for i in range(G.shape[0]):
         if not abs(G[i]) <= rtol * S[i] + atol:
+            return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def at_roundoff(G, S) -> bool:
+    """``|G_i| <= ROUNDOFF * S_i`` for every row (the reference's ``at_roundoff``)."""
+    for i in range(G.shape[0]):
+        if not abs(G[i]) <= ROUNDOFF * S[i]:
             return False
     return True
 

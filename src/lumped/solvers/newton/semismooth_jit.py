@@ -4,9 +4,9 @@ The same algorithm, step for step and operation for operation, as
 :func:`lumped.solvers.newton.semismooth.newton_solve` with its
 :class:`~lumped.solvers.newton.linalg.FactorCache` (read that module for the maths: the
 residual test ``|G_i| <= rtol S_i + atol``, the update test, the directional retry at a
-kink, the update test scaled by the terms an unknown enters, the watchdog ``free_steps``
-and the backtracking line search on the merit ``max_i |G_i| / (S_i + atol / rtol)``), and
-the LU factorisation with singleton-row pivots of
+kink, the update test scaled by the terms an unknown enters, the round-off test, the
+watchdog ``free_steps`` and the backtracking line search on the merit
+``max_i |G_i| / (S_i + atol / rtol)``), and the LU factorisation with singleton-row pivots of
 :func:`lumped.solvers.newton.linalg.lu_factor` (a stuck dashpot's row ``v = 0`` gives
 ``v = 0`` exactly: eq. (19) of the paper comes out exact). The differences are only in
 the data layout:
@@ -39,6 +39,7 @@ import numpy as np
 
 from ...codegen.jit import njit
 from .criteria_jit import (
+    at_roundoff,
     finite_matrix,
     finite_matrix_rows,
     finite_sum,
@@ -187,6 +188,31 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
                 for i in range(n):
                     u[i] = u[i] - du[i]
                 break
+            if at_roundoff(G, S):
+                # the rows the full correction leaves bit for bit are solved: the
+                # correction without them decides
+                un, Gn, Sn, Jn = wv[WS_UN], wv[WS_GN], wv[WS_SN], wm[WS_JN]
+                for i in range(n):
+                    un[i] = u[i] - du[i]
+                evaluate(un, p, Gn, Jn, Sn, roundoff)
+                n_res += 1
+                if finite_sum(Gn):
+                    Gk = wv[WS_GA]
+                    kept = False
+                    for i in range(n):
+                        if Gn[i] == G[i]:
+                            Gk[i] = 0.0
+                            kept = kept or G[i] != 0.0
+                        else:
+                            Gk[i] = G[i]
+                    if kept:
+                        d4 = wv[WS_D2]
+                        lu_solve_into(cLU, cperm, Gk, d4)
+                        if finite_sum(d4) and (update_ok(d4, u, rtol, atol) or
+                                               update_ok_scaled(d4, u, J, S, rtol, atol)):
+                            for i in range(n):
+                                u[i] = u[i] - d4[i]
+                            break
         if iters >= max_iters:
             code = MAX_ITERS
             break

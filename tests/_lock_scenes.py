@@ -1,0 +1,31 @@
+"""A scene drawn by the random-network suite that more than one test file runs (issue 29):
+the loaded chain of strings of radau5's tight-tolerance check."""
+
+from __future__ import annotations
+
+from lumped.laws import get_law
+from lumped.scene import Element, Mass, Scene, SineBurst
+
+
+def loaded_string_chain() -> Scene:
+    # a draw of the random-network suite's tight-tolerance check at LUMPED_LARGE=300
+    # (issue 29): a chain of strings (ground - m0 - m1) and a string from ground to m3,
+    # m1 tied to m2 by a spring and a Herschel-Bulkley n = 0.8 link, a sine burst on m1;
+    # both strings of the chain go taut at once at t = 0.19476
+    string = get_law("string_spring")
+    return Scene(
+        [Mass("m0", m=0.4201702417518112, x0=-3.141099492883003e-250,
+              v0=0.026714769789581094),
+         Mass("m1", m=0.18571427732261467, x0=4.859632342139496e-263,
+              v0=0.07226945714490585),
+         Mass("m2", m=1.706516750708603, x0=0.001, v0=1.8244802830876417),
+         Mass("m3", m=9.671948270867205, x0=-0.27078910260744926, v0=0.001)],
+        [Element("e0", string.bind(k=15.862217459807617, L=0.18922035336843843), "ground",
+                 "m0"),
+         Element("e1", string.bind(k=5.166956371383977, L=0.01), "m0", "m1"),
+         Element("e2", get_law("linear_spring").bind(k=0.4400038037639899), "m1", "m2"),
+         Element("e3", string.bind(k=1.0, L=0.05506977693959426), "ground", "m3"),
+         Element("e4", get_law("herschel_bulkley").bind(gamma=0.14617915919865815, tau=0.1,
+                                                        n=0.8), "m2", "m1")],
+        {"m1": SineBurst(amplitude=1.936983360451386, omega=1.6104068096704158,
+                         t_off=0.313764147268767)})
