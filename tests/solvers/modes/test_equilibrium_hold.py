@@ -14,6 +14,7 @@ import pytest
 from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Mass, Scene
+from lumped.solvers.implicit.initial_state import consistent_initial_state
 
 
 def _two_dashpots(load: float) -> Scene:
@@ -31,18 +32,35 @@ def test_a_load_at_the_summed_yield_force_keeps_the_mass_at_rest(compiled):
                    max_steps=2000)
     assert sol.ok
     assert np.all(sol.x["m"] == 0.0) and np.all(sol.v["m"] == 0.0)
-    # (from the hold on: the rows at t = 0 and at the first landing, 4e-14, carry a split
-    # that does not balance the load, as before this hold with a load of 0.2: not this
-    # test's subject)
-    held = sol.t >= 1e-9
-    Fa, Fb = sol.F["a"][held], sol.F["b"][held]
-    # each dashpot within its yield force, together carrying the load
-    assert np.all(np.abs(Fa) <= 0.1) and np.all(np.abs(Fb) <= 0.125)
+    # every row, the initial state's too (it split the load three ways, m a, F_a, F_b,
+    # before: 0.075 each; the first landing then read 0 and 0)
+    Fa, Fb = sol.F["a"], sol.F["b"]
+    # each dashpot within its yield force (to round-off), together carrying the load
+    assert np.all(np.abs(Fa) <= 0.1 + 4 * math.ulp(0.1))
+    assert np.all(np.abs(Fb) <= 0.125 + 4 * math.ulp(0.1))
     assert np.abs(Fa + Fb - 0.225).max() <= 4 * math.ulp(0.225)
     assert sol.stats["held_intervals"] >= 1
     for method in ("bdf1", "bdf2"):  # the fixed-step methods keep it at rest too
         ref = simulate(_two_dashpots(0.225), method=method, dt=1e-2, t_end=0.5)
         assert np.abs(ref.v["m"]).max() <= 1e-12
+
+
+@pytest.mark.parametrize("load", [0.2, 0.05, -0.15])
+def test_the_initial_forces_of_dashpots_stuck_in_parallel_balance_the_load(load):
+    # the consistent initial state's limit system reads each stuck law at the rate
+    # 1e-20 a: its rows' entries are 1e-20, and the minimum-norm solve dropped them (the
+    # accelerations left free) until its rows were scaled
+    v, F, _ = consistent_initial_state(_two_dashpots(load), time_scale=0.5)
+    assert v == [0.0]
+    assert F[0] + F[1] == pytest.approx(load, abs=4 * math.ulp(0.25))
+    assert abs(F[0]) <= 0.1 + 4 * math.ulp(0.1) and abs(F[1]) <= 0.125 + 4 * math.ulp(0.1)
+    sol = simulate(_two_dashpots(load), method="radau5", t_end=0.5)
+    assert np.all(sol.v["m"] == 0.0)
+    # every row balances, the first (the initial state) to round-off, the steps' rows to
+    # their stage Newton's tolerance
+    total = sol.F["a"] + sol.F["b"]
+    assert abs(total[0] - load) <= 4 * math.ulp(0.25)
+    assert np.abs(total - load).max() <= 1e-9
 
 
 def test_a_load_beyond_the_summed_yield_force_is_not_held():

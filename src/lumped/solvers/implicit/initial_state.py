@@ -226,7 +226,8 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
     ]
     # one solve per run: allow a generous budget (degenerate yields converge linearly)
     ic_options = _ic_options(options)
-    res = newton_solve(evaluate, u0, ic_options, min_norm=True, check_scaled=True)
+    res = newton_solve(evaluate, u0, ic_options, min_norm=True, check_scaled=True,
+                       equilibrate=True)
     if res.code is not NewtonCode.SUCCESS:
         # restarts: the junctions' velocities from their balances solved one by one
         # (lumped.solvers.implicit.balance_sweeps.balance_sweeps), then every junction
@@ -335,7 +336,7 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
                 if start is u0 and proj is None:
                     continue  # done above
                 retry = newton_solve(evaluate, start, ic_options, min_norm=True, project=proj,
-                                     check_scaled=True)
+                                     check_scaled=True, equilibrate=True)
                 if retry.code is NewtonCode.SUCCESS:
                     res = retry
                     break

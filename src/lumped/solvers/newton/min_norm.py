@@ -17,22 +17,30 @@ from collections.abc import Sequence
 __all__ = ["equilibrated_min_norm", "min_norm_solver", "null_step_removed"]
 
 
-def min_norm_solver(J: Sequence[Sequence[float]]):
+def min_norm_solver(J: Sequence[Sequence[float]], rows: bool = False):
     """``solve(b)``: the minimum-norm least-squares solution of ``J y = b`` (numpy SVD).
 
     Singular values below ``n * eps`` times the largest count as zero, so an exactly
     rank-deficient step matrix (two locked elements in parallel) is solved on its range
-    and leaves the null space (the free split of the forces) untouched.
-    """
+    and leaves the null space (the free split of the forces) untouched. With ``rows``
+    the rows are scaled to unit largest entries first (the unknowns are not: the norm
+    minimised is theirs), so a row whose entries are small in its own units stays in the
+    range: the consistent initial state reads a stuck
+    dashpot's law at the rate ``1e-20 a`` (entries ``1e-20``); unscaled, two such rows in
+    parallel fell below the cut, the masses' accelerations were left free, and the load
+    was split three ways, ``m a``, ``F_1``, ``F_2`` (a mass at rest on two stuck dashpots
+    loaded by 0.2 started with the forces 0.0667 and 0.0667)."""
     import numpy as np
 
     A = np.array(J, dtype=float)
-    pinv = np.linalg.pinv(A, rcond=len(A) * 2.220446049250313e-16)
+    r = np.abs(A).max(axis=1) if rows else np.ones(len(A))
+    r[~(r > 0.0)] = 1.0  # (a zero row, or a non-finite one: Newton reports it)
+    pinv = np.linalg.pinv(A / r[:, None], rcond=len(A) * 2.220446049250313e-16)
 
     def solve(b: Sequence[float]) -> list[float]:
         # (a non-finite result is Newton's to report, NON_FINITE: no numpy warning)
         with np.errstate(invalid="ignore", over="ignore"):
-            return (pinv @ np.asarray(b, dtype=float)).tolist()
+            return (pinv @ (np.asarray(b, dtype=float) / r)).tolist()
 
     return solve
 

@@ -86,6 +86,7 @@ def newton_solve(
     min_norm: bool = False,
     project: Callable[[list[float]], list[float]] | None = None,
     check_scaled: bool = False,
+    equilibrate: bool = False,
 ) -> NewtonResult:
     """Solve ``G(u) = 0`` from ``u0`` by damped semismooth Newton (see the module notes).
 
@@ -120,6 +121,10 @@ def newton_solve(
         vanishing-step rows ``eps a = 0`` make a stuck piece's correction of ``F`` as
         large as the tolerance); the time steps keep the unchecked correction, which the
         compiled twin (:mod:`lumped.solvers.newton.semismooth_jit`) mirrors operation for operation.
+    equilibrate : bool
+        With ``min_norm``, scale the rows of a singular Jacobian to unit largest entries
+        before its minimum-norm solve (``min_norm_solver(J, rows=True)``): the consistent
+        initial state's vanishing-step rows (entries ``1e-20``) stay in its range.
 
     Returns
     -------
@@ -197,7 +202,7 @@ def newton_solve(
                 met_singular = True
                 if not min_norm:
                     return result(NewtonCode.SINGULAR)
-                solve = min_norm_solver(J)
+                solve = min_norm_solver(J, rows=equilibrate)
             elif cache is not None:
                 cache.store(J, solve)
         du = solve(G)  # J du = G; the step is -du
