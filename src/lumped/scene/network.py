@@ -438,27 +438,17 @@ class Scene:
     def elongations(self, x: Sequence[float], v: Sequence[float],
                     t: float | None = None) -> list[float]:
         """``q_e``: ``x_b - x_a`` for springs, ``v_b - v_a`` for dashpots (ground = 0), plus
-        the support offset ``o_e(t)`` of an element on a support (:mod:`.supports`), for
-        which ``t`` is required."""
+        the support offset ``o_e(t)`` of an element on a support
+        (:func:`.supports.support_offsets`), for which ``t`` is required."""
         out = []
         for el, a, b in zip(self.elements, self.elem_a, self.elem_b, strict=True):
             y = x if el.kind == "spring" else v
             out.append((y[b] if b >= 0 else 0.0) - (y[a] if a >= 0 else 0.0))
         if self.support_ends:
-            for e, o in enumerate(self.support_offsets(t)):
-                out[e] += o
-        return out
+            from .supports import support_offsets
 
-    def support_offsets(self, t: float | None) -> list[float]:
-        """``o_e(t)`` per element: ``+-x_s(t)`` (spring) or ``+-v_s(t)`` (dashpot) for an
-        end on support ``s`` (``+`` at end ``b``, ``-`` at end ``a``), else ``0``."""
-        if t is None or not isinstance(t, numbers.Real) or not math.isfinite(t):
-            raise ValueError(f"`t` must be a finite time on a scene with supports, got {t!r}")
-        out = [0.0] * len(self.elements)
-        for end in self.support_ends:
-            x_s, v_s, _ = self.supports[end.support].at(t)
-            kind = self.elements[end.element].kind
-            out[end.element] = end.sign * (x_s if kind == "spring" else v_s)
+            for e, o in enumerate(support_offsets(self, t)):
+                out[e] += o
         return out
 
     def net_forces(self, t: float, F: Sequence[float]) -> list[float]:

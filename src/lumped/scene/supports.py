@@ -34,6 +34,7 @@ value set by :meth:`SupportFrame.at_time` (the time of the system being solved,
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -43,7 +44,7 @@ if TYPE_CHECKING:
     from .network import Scene
 
 __all__ = ["SupportEnd", "check_supports", "SupportFrame", "solver_view", "supported_scene",
-           "support_lock"]
+           "support_lock", "support_offsets"]
 
 
 @dataclass(frozen=True)
@@ -91,6 +92,28 @@ def check_supports(supports: object, node_names: Sequence[str],
                          "states would be relative to the ground, the supports absolute): "
                          f"give the ground's motion as one more support, got supports "
                          f"{sorted(out)} and ground_motion={ground_motion!r}")
+    return out
+
+
+def support_offsets(scene: Scene, t: float | None) -> list[float]:
+    """``o_e(t)`` per element of ``scene``: ``+-x_s(t)`` (spring) or ``+-v_s(t)``
+    (dashpot) for an end on support ``s`` (``+`` at end ``b``, ``-`` at end ``a``), else
+    ``0``; each support's motion is evaluated once.
+
+    Raises
+    ------
+    ValueError
+        If ``t`` is not a finite time."""
+    if t is None or not isinstance(t, numbers.Real) or not math.isfinite(t):
+        raise ValueError(f"`t` must be a finite time on a scene with supports, got {t!r}")
+    out = [0.0] * len(scene.elements)
+    motions: dict[str, tuple[float, float, float]] = {}
+    for end in scene.support_ends:
+        got = motions.get(end.support)
+        if got is None:
+            got = motions[end.support] = scene.supports[end.support].at(t)
+        spring = scene.elements[end.element].kind == "spring"
+        out[end.element] = end.sign * (got[0] if spring else got[1])
     return out
 
 
@@ -175,9 +198,6 @@ class SupportFrame:
         view.supports = {}
         view.support_clock = self.at_time
         self.scene = view
-        self._ends = tuple((end.element, scene.supports[end.support], end.sign,
-                            scene.elements[end.element].kind == "spring")
-                           for end in scene.support_ends)
         self.at_time(0.0)
 
     def at_time(self, t: float) -> None:
@@ -186,12 +206,7 @@ class SupportFrame:
         if t == self._t:
             return
         self._t = t
-        cache: dict[int, tuple[float, float, float]] = {}
-        for e, motion, sign, spring in self._ends:
-            got = cache.get(id(motion))
-            if got is None:
-                got = cache[id(motion)] = motion.at(t)
-            self.offsets[e] = sign * (got[0] if spring else got[1])
+        self.offsets[:] = support_offsets(self.source, t)  # (in place: the laws read it)
 
 
 def _no_clock(t: float) -> None:
