@@ -296,6 +296,13 @@ class _PiecewiseMotion:
         self.a_before, self.a_after = float(a_before), float(a_after)
         self._t = self.knots.tolist()
         self._a = [(2.0 * float(r[2]), 6.0 * float(r[3])) for r in self.coef]
+        # per knot, whether a(t) is continuous there: its values on both sides agree to
+        # 1e-9 of its largest value (see kinks)
+        tt, segs = self._t, self._a
+        left = [self.a_before] + [a + s * (tt[k + 1] - tt[k]) for k, (a, s) in enumerate(segs)]
+        right = [a for a, _ in segs] + [self.a_after]
+        scale = 1e-9 * max([abs(a) for a in left + right] + [1e-300])
+        self._continuous = [abs(lv - rv) <= scale for lv, rv in zip(left, right, strict=True)]
 
     def __call__(self, t: float) -> float:
         tt = self._t
@@ -316,20 +323,6 @@ class _PiecewiseMotion:
         displacement spline; a velocity record's slope jumps at every knot)."""
         continuous = self._continuous
         return [tk for k, tk in enumerate(self._t) if t0 < tk < t1 and continuous[k]]
-
-    @property
-    def _continuous(self) -> list[bool]:
-        """Per knot: whether ``a`` is continuous there (made once)."""
-        got = getattr(self, "_cont", None)
-        if got is None:
-            tt, segs = self._t, self._a
-            ends = [a + s * (tt[k + 1] - tt[k]) for k, (a, s) in enumerate(segs)]
-            left = [self.a_before] + ends
-            right = [a for a, _ in segs] + [self.a_after]
-            scale = 1e-9 * max([abs(a) for a in left + right] + [1e-300])
-            got = self._cont = [abs(lv - rv) <= scale for lv, rv in zip(left, right,
-                                                                         strict=True)]
-        return got
 
     def interpolant(self) -> tuple:
         """``("motion", t, a, s, a_before, a_after, 1.0)``: the knots, each segment's

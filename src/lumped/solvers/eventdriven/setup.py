@@ -15,7 +15,7 @@ import numpy as np
 from ...scene import Scene
 from ...scene.forcing import jumps
 
-__all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "time_events",
+__all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "time_events", "step_floor",
            "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "accumulating",
            "too_many"]
 
@@ -128,10 +128,9 @@ def time_events(scene: Scene, t_end: float) -> tuple[list[float], list[bool]]:
     breaks: list[float] = []
     kinks: list[bool] = []
     last = 0.0
-    unit, end_room = 16.0 * _EPS, _floor(t_end, t_end)
-    low = 1e-3 * t_end
+    end_room = step_floor(t_end, t_end)
     for b in sorted(out):
-        if b - last >= unit * (b if b > low else low) and t_end - b >= end_room:
+        if b - last >= step_floor(b, t_end) and t_end - b >= end_room:
             breaks.append(b)
             kinks.append(b not in jumped)
             last = b
@@ -140,8 +139,9 @@ def time_events(scene: Scene, t_end: float) -> tuple[list[float], list[bool]]:
     return breaks, kinks
 
 
-def _floor(t: float, t_end: float) -> float:
-    """The step floor at ``t`` (the loops' ``16 eps max(|t|, 1e-3 t_end)``)."""
+def step_floor(t: float, t_end: float) -> float:
+    """The step floor of a run to ``t_end`` at ``t``: ``16 eps max(|t|, 1e-3 t_end)`` (the
+    compiled loop, :mod:`lumped.solvers.eventdriven.loop_jit`, writes it out)."""
     return 16.0 * _EPS * max(abs(t), t_end * 1e-3)
 
 

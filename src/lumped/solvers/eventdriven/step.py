@@ -22,6 +22,7 @@ from ..radau.tableau import A as _A
 from ..radau.tableau import C
 from ..status import Status
 from .landing import Landing
+from .setup import step_floor
 
 __all__ = ["StepPass"]
 
@@ -66,7 +67,7 @@ class StepPass:
         if t + 1.0001 * self.h >= t_stop or self.h >= room:
             self.h = room
             to_stop = True
-        h_min = 16.0 * _EPS * max(abs(t), self.t_final * 1e-3)
+        h_min = step_floor(t, self.t_final)
         if self.h < h_min and self.target is None and self.watched and not self.floor_tried:
             # the held branches end here (e.g. a law whose slip branch has no
             # continuation at zero rate, where Newton fails on every step): let the full
