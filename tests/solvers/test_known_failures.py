@@ -4,7 +4,6 @@ run: then drop the marker). Each names its diagnosis; see CHANGELOG "Known issue
 from __future__ import annotations
 
 import pytest
-from _lock_scenes import loaded_string_chain
 
 from lumped import SolverError, simulate
 from lumped.laws import get_law
@@ -50,16 +49,4 @@ def _string_between_two_herschel_bulkley_links() -> Scene:
 def test_a_string_locking_beside_a_shear_thinning_link_runs(method, dt):
     sol = simulate(_string_between_two_herschel_bulkley_links(), method=method, dt=dt,
                    t_end=0.5)
-    assert sol.ok
-
-
-@pytest.mark.xfail(strict=True, raises=SolverError, reason=(
-    "radau5's compiled loop at rtol 1e-10, atol 1e-13 on the loaded chain of strings: "
-    "both strings go taut at t = 0.19476 and the step falls below its floor again after "
-    "each of 12 backward-Euler bridges (their Newton now converges at round-off, issue "
-    "29); its Python loop goes on after 2 bridges and agrees with bdf2 "
-    "(tests/solvers/nonsmooth/test_lock_roundoff.py); not diagnosed"))
-def test_radau5_compiled_at_a_tight_tolerance_on_a_loaded_string_chain_runs():
-    sol = simulate(loaded_string_chain(), method="radau5", t_end=0.2, rtol=1e-10,
-                   atol=1e-13, compiled=True)
     assert sol.ok

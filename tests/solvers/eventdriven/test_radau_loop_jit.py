@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import pytest
+from _lock_scenes import loaded_string_chain
 
 from lumped import Element, Junction, Mass, Scene, get_law, simulate
 from lumped.bench.impact_scenes import impact_scene, lock_scene
@@ -96,6 +97,24 @@ def test_the_compiled_loop_gives_the_python_loop_run(name):
     # the dense output everywhere, including inside the steps
     t = np.linspace(0.0, t_end, 2001)
     assert np.all(np.abs(fast.sol(t) - ref.sol(t)) <= 1e-11 * scale)
+
+
+def test_a_bridge_after_compiled_steps_is_the_python_loop_one():
+    """A bridge's backward-Euler step scales with the longest step the run accepted
+    (:mod:`lumped.solvers.eventdriven.bridge`), the compiled loop's steps too: both
+    strings of the loaded chain go taut at once at t = 0.19476, the step falls below
+    its floor there and both loops bridge it with the same steps (1.6e-8 s, the longest
+    step 1.6e-3 s being the compiled loop's), bit for bit. (The compiled loop's steps
+    did not count: its bridges took steps of 1.2e-8 s, 1 bridge here where the Python
+    loop takes 3, and 12 bridges then a stop over ``t_end = 0.2``.)"""
+    kw = dict(method="radau5", t_end=0.195, rtol=1e-10, atol=1e-13)
+    ref = simulate(loaded_string_chain(), compiled=False, **kw)
+    fast = simulate(loaded_string_chain(), compiled=True, **kw)
+    assert fast.stats.pop("loop") == "compiled"
+    assert ref.stats.pop("loop") == "python: compiled=False"
+    assert ref.ok and ref.stats["bridges"] >= 1
+    assert fast.message == ref.message and fast.stats == ref.stats
+    assert np.array_equal(fast.data, ref.data)
 
 
 def test_exact_sticking_is_kept_in_the_compiled_loop():

@@ -289,21 +289,30 @@ class CompiledLoop:
     def run(self, st: dict, modes: list[int], watched: list[int], stats: dict, dense,
             rows) -> str:
         """Advance the driver's state ``st`` (keys ``t, h, x, v, F, dF_n, F_seen, h_acc,
-        err_acc, h_good, stalled, t_stop, t_final, prev_break, rtol, atol, m_min,
-        max_steps``) in place; returns the reason the loop stopped (``REASONS``)."""
+        err_acc, h_good, h_big, stalled, t_stop, t_final, prev_break, rtol, atol, m_min,
+        max_steps``) in place; returns the reason the loop stopped (``REASONS``).
+
+        ``h_big`` is the longest step the run accepted (the scale of a bridge's steps,
+        :mod:`lumped.solvers.eventdriven.bridge`): the longest of the steps taken here
+        too, as the Python loop's accepted steps raise it one by one."""
         x, v, F, dF = self._load(st, modes, watched, stats)
         fst, ist = self.fst, self.ist
         width = 1 + 2 * self.N + self.E
+        h_big = st["h_big"]
         if self.ws is None:
             self._workspace()
         while True:  # the accepted steps written in place into the output's arrays
             ist[L.N_OUT] = 0
-            self._call(x, v, F, dF, *dense.block(BLOCK), rows.block(BLOCK, width))
+            T0, HS, Y0, D = dense.block(BLOCK)
+            self._call(x, v, F, dF, T0, HS, Y0, D, rows.block(BLOCK, width))
             k = int(ist[L.N_OUT])
+            if k:
+                h_big = max(h_big, float(HS[:k].max()))
             dense.commit(k)
             rows.commit(k)
             if ist[L.REASON] != L.FULL:
                 break
+        st["h_big"] = h_big
         for key, i in _COUNTERS:
             stats[key] = int(ist[i])
         st["t"], st["h"], st["F_seen"] = float(fst[L.T]), float(fst[L.H]), float(fst[L.F_SEEN])

@@ -257,7 +257,8 @@ class Radau5Run(StepPass, StepChecks):
         bi, breaks = self.bi, self.breaks
         return {"t": self.t, "h": self.h, "x": self.x, "v": self.v, "F": self.F,
                 "dF_n": self.dF_n, "F_seen": self.F_seen, "h_acc": self.h_acc,
-                "err_acc": self.err_acc, "h_good": self.h_good, "stalled": self.stalled,
+                "err_acc": self.err_acc, "h_good": self.h_good, "h_big": self.h_big,
+                "stalled": self.stalled,
                 "t_stop": self.t_stop(), "t_final": self.t_final,
                 "prev_break": breaks[bi - 1] if bi > 0 else math.nan, "bi": bi,
                 "breaks": breaks, "kinks": self.kinks, "rtol": self.rtol,
@@ -370,10 +371,10 @@ class Radau5Run(StepPass, StepChecks):
         self.dF_n = st["dF_n"]
         self.commit(self.t)
         self.F_seen, self.h_acc, self.err_acc = st["F_seen"], st["h_acc"], st["err_acc"]
-        self.h_good, self.stalled = st["h_good"], st["stalled"]
+        self.h_good, self.h_big, self.stalled = st["h_good"], st["h_big"], st["stalled"]
         self.bi = st["bi"]  # (the kinks it stepped onto)
-        if stats["steps"] > before:
-            self.floor_tried, self.creeping = False, 0
+        if stats["steps"] > before:  # (as the Python loop's accepted steps reset them)
+            self.floor_tried, self.creeping, self.kink_cuts = False, 0, 0
         if why != "stopped":
             return False
         if self.bi < len(self.breaks) and self.t == self.breaks[self.bi]:
