@@ -20,6 +20,7 @@ from lumped.codegen.jit import numba_enabled
 from lumped.laws import ElementLaw
 from lumped.scenarios import scenario_scene
 from lumped.scene.forcing import SineBurst
+from lumped.solvers.eventdriven import step
 from lumped.solvers.eventdriven.at_rest import REST_LOOP
 
 pytestmark = pytest.mark.skipif(not numba_enabled(), reason="the compiled loop needs numba")
@@ -113,6 +114,23 @@ def test_a_bridge_after_compiled_steps_is_the_python_loop_one():
     assert fast.stats.pop("loop") == "compiled"
     assert ref.stats.pop("loop") == "python: compiled=False"
     assert ref.ok and ref.stats["bridges"] >= 1
+    assert fast.message == ref.message and fast.stats == ref.stats
+    assert np.array_equal(fast.data, ref.data)
+
+
+def test_a_run_that_creeps_stops_in_the_compiled_loop_as_in_the_python_loop(monkeypatch):
+    """The creep test of the Python loop's accepted steps (20 in a row below the creep
+    floor, :mod:`lumped.solvers.eventdriven.step`) is the compiled loop's too: with the
+    floor raised to 0.9 % of the run, the released mass's steps creep from the start;
+    both loops stop at the 20th step, are bridged 7 times and give the same run, bit for
+    bit. (The compiled loop had no creep test: it went on to ``t_end`` with no bridge.)"""
+    monkeypatch.setattr(step, "_CREEP_FRACTION", 9e-3)
+    kw = dict(method="radau5", t_end=0.5, rtol=1e-8, atol=1e-11)
+    ref = simulate(scenario_scene("release-0.5"), compiled=False, **kw)
+    fast = simulate(scenario_scene("release-0.5"), compiled=True, **kw)
+    assert fast.stats.pop("loop") == "compiled"
+    assert ref.stats.pop("loop") == "python: compiled=False"
+    assert ref.ok and ref.stats["bridges"] == 7 and "the run creeps" in ref.message
     assert fast.message == ref.message and fast.stats == ref.stats
     assert np.array_equal(fast.data, ref.data)
 

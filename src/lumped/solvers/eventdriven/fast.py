@@ -22,6 +22,7 @@ from ...scene import Scene
 from ..modes.mode_guess_jit import compiled_probe_modes, probe_workspace
 from ..modes.stuck_jit import compiled_breakout_root, compiled_breakout_scan
 from . import loop_jit as L
+from .step import creep_floor
 
 __all__ = ["CompiledLoop", "compiled_loop"]
 
@@ -167,8 +168,8 @@ class CompiledLoop:
         self.A, self.W = _butcher()
         self.N, self.E = len(js.masses), len(js.ea)
         self.outputs = self.ws = self.wm = self.iw = None  # on the first call
-        self.fst = np.zeros(15)
-        self.ist = np.zeros(21, dtype=np.int64)
+        self.fst = np.zeros(16)
+        self.ist = np.zeros(22, dtype=np.int64)
         self.breaks = np.zeros(0)
         self.kinks = np.zeros(0, dtype=np.int64)
         self._breaks_of: list | None = None  # the run's list they were made from
@@ -181,6 +182,7 @@ class CompiledLoop:
         fst = self.fst
         fst[L.T_FINAL], fst[L.RTOL], fst[L.ATOL], fst[L.M_MIN] = t_final, rtol, atol, m_min
         fst[L.TWO] = 2.0
+        fst[L.CREEP_FLOOR] = creep_floor(0.0, t_final)  # (its part that t does not change)
 
     def _load(self, st: dict, modes: list[int], watched: list[int], stats: dict | None):
         """The driver's state into the arrays of :func:`~lumped.solvers.eventdriven.loop_jit.
@@ -202,6 +204,7 @@ class CompiledLoop:
         ist[L.STALLED] = st["stalled"]
         ist[L.MAX_STEPS] = st["max_steps"]
         ist[L.BI] = st["bi"]
+        ist[L.CREEPING] = st["creeping"]
         if self._breaks_of is not st["breaks"]:  # (one list for a whole run)
             self._breaks_of = st["breaks"]
             self.breaks = np.array(st["breaks"], dtype=float)
@@ -289,12 +292,13 @@ class CompiledLoop:
     def run(self, st: dict, modes: list[int], watched: list[int], stats: dict, dense,
             rows) -> str:
         """Advance the driver's state ``st`` (keys ``t, h, x, v, F, dF_n, F_seen, h_acc,
-        err_acc, h_good, h_big, stalled, t_stop, t_final, prev_break, rtol, atol, m_min,
-        max_steps``) in place; returns the reason the loop stopped (``REASONS``).
+        err_acc, h_good, h_big, stalled, creeping, t_stop, t_final, prev_break, rtol, atol,
+        m_min, max_steps``) in place; returns the reason the loop stopped (``REASONS``).
 
         ``h_big`` is the longest step the run accepted (the scale of a bridge's steps,
         :mod:`lumped.solvers.eventdriven.bridge`): the longest of the steps taken here
-        too, as the Python loop's accepted steps raise it one by one."""
+        too, as the Python loop's accepted steps raise it one by one (but the one that
+        stops a run that creeps, ``"creep"``: then ``st["t_prev"]`` is its start)."""
         x, v, F, dF = self._load(st, modes, watched, stats)
         fst, ist = self.fst, self.ist
         width = 1 + 2 * self.N + self.E
@@ -306,8 +310,11 @@ class CompiledLoop:
             T0, HS, Y0, D = dense.block(BLOCK)
             self._call(x, v, F, dF, T0, HS, Y0, D, rows.block(BLOCK, width))
             k = int(ist[L.N_OUT])
-            if k:
-                h_big = max(h_big, float(HS[:k].max()))
+            kept = k - (ist[L.REASON] == L.CREEP)  # (the Python loop's order)
+            if kept > 0:
+                h_big = max(h_big, float(HS[:kept].max()))
+            if ist[L.REASON] == L.CREEP:
+                st["t_prev"] = float(T0[k - 1])
             dense.commit(k)
             rows.commit(k)
             if ist[L.REASON] != L.FULL:
@@ -325,6 +332,7 @@ class CompiledLoop:
         st["x"], st["v"], st["F"] = x.tolist(), v.tolist(), F.tolist()
         st["dF_n"] = dF.tolist() if ist[L.HAVE_DF] else None
         st["bi"] = int(ist[L.BI])
+        st["creeping"] = int(ist[L.CREEPING])
         return L.REASONS.get(int(ist[L.REASON]), "?")
 
 

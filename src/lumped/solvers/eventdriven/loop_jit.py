@@ -27,9 +27,13 @@ loop takes the step to the stop, with ``h`` the room left, and returns after it:
 known monotone one crosses a fold of its graph (:data:`FOLD`: Python redoes the step and
 stops with its message), a Jacobian is singular but finite (:data:`SINGULAR`: Python's
 minimum-norm solve), the step size is below its floor (:data:`FLOOR`), the output arrays
-are full (:data:`FULL`), ``max_steps`` or the stall limit (:data:`LIMIT`), or the eighth
+are full (:data:`FULL`), ``max_steps`` or the stall limit (:data:`LIMIT`), the eighth
 Newton failure in a row (:data:`DAMPED`: Python redoes that pass with its line-search
-fallback). With
+fallback), or the creep test of the Python loop's accepted steps
+(:meth:`~lumped.solvers.eventdriven.step.StepPass._accept`: ``ist[CREEPING]`` steps in a
+row shorter than ``max(step floor, fst[CREEP_FLOOR])`` reach ``CREEP_STEPS``): after such
+a step, accepted, before the controller sizes the next (:data:`CREEP`: Python stops the
+run there). With
 ``ist[SINGLE] = 1`` it makes one attempt of size ``h`` for the Python loop and returns
 (:data:`ATTEMPT`) its outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular),
 ``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]``, ``ist[A_HIT]`` (1 when a guard is
@@ -37,8 +41,8 @@ negative at a sample), the first crossing's root ``fst[A_ROOT]`` on guard ``ist[
 of watched element ``ist[A_W]`` (:func:`lumped.solvers.modes.crossing_root.first_root`, the
 Python loop's algorithm) and the stage values in ``ws[0]``.
 
-State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. A_ERR``)
-and ``ist`` (ints, indices ``HAVE_ACC .. A_J``).  The forcing is ``(fkind, fpar)`` of
+State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. CREEP_FLOOR``)
+and ``ist`` (ints, indices ``HAVE_ACC .. CREEPING``).  The forcing is ``(fkind, fpar)`` of
 :func:`lumped.scene.forcing_jit.forcing_into` (kinds 0 none, 1 constant, 2 sine burst;
 a tabulated forcing is not taken here).
 """
@@ -56,21 +60,23 @@ from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.stage_jit import stage_solve
 from ..radau.step_jit import crossed, finite, folded, forces, step_error
 from ..radau.tableau import END_SLOPES, C
+from .step import CREEP_STEPS
 
 __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", "SINGULAR",
-           "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "DAMPED", "REASONS"]
+           "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "DAMPED", "CREEP", "REASONS"]
 
 # fst: float state
 (T, H, F_SEEN, H_ACC, ERR_ACC, H_GOOD, T_STOP, T_FINAL, RTOL, ATOL, M_MIN, PREV_BREAK,
- TWO, A_ERR, A_ROOT) = range(15)
+ TWO, A_ERR, A_ROOT, CREEP_FLOOR) = range(16)
 # ist: int state and counters
 (HAVE_ACC, HAVE_DF, STALLED, STEPS, REJECTED, NEWTON_ITERATIONS, FACTORIZATIONS, NFEV, NJEV,
  MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK,
- A_HIT, A_W, A_J, BI) = range(21)
-STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD, STOPPED, DAMPED = range(1, 11)
+ A_HIT, A_W, A_J, BI, CREEPING) = range(22)
+(STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD, STOPPED, DAMPED,
+ CREEP) = range(1, 12)
 REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "floor",
            FULL: "full", LIMIT: "limit", ATTEMPT: "attempt", STOPPED: "stopped",
-           FOLD: "fold", DAMPED: "damped"}
+           FOLD: "fold", DAMPED: "damped", CREEP: "creep"}
 
 _EPS = 2.220446049250313e-16
 _C0, _C1, _C2 = C
@@ -286,6 +292,14 @@ def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, 
         for e in range(E):
             ROWS[o, 1 + 2 * N + e] = F[e]
         ist[N_OUT] = o + 1
+        # the creep test (step.StepPass._accept; the step floor at the step's start)
+        if t - T0[o] < max(16.0 * _EPS * max(abs(T0[o]), t_final * 1e-3), fst[CREEP_FLOOR]):
+            ist[CREEPING] += 1
+        else:
+            ist[CREEPING] = 0
+        if ist[CREEPING] >= CREEP_STEPS:
+            reason = CREEP
+            break
         h_new = h / quot
         if ist[HAVE_ACC] == 1 and err_norm > 0.0:
             facgus = (fst[H_ACC] / h) * (err_norm ** fst[TWO] / fst[ERR_ACC]) ** 0.25 / 0.9

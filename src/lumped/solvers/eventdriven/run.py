@@ -32,7 +32,7 @@ from .fast import compiled_loop
 from .landing import Landing
 from .mode_state import ModeState
 from .setup import compiled_stage_solver, read_options, scene_plan, time_events
-from .step import StepPass
+from .step import StepPass, creep_floor, creep_stop
 
 __all__ = ["Radau5Run", "DEFAULT_RTOL", "DEFAULT_ATOL"]
 
@@ -258,7 +258,7 @@ class Radau5Run(StepPass, StepChecks):
         return {"t": self.t, "h": self.h, "x": self.x, "v": self.v, "F": self.F,
                 "dF_n": self.dF_n, "F_seen": self.F_seen, "h_acc": self.h_acc,
                 "err_acc": self.err_acc, "h_good": self.h_good, "h_big": self.h_big,
-                "stalled": self.stalled,
+                "stalled": self.stalled, "creeping": self.creeping,
                 "t_stop": self.t_stop(), "t_final": self.t_final,
                 "prev_break": breaks[bi - 1] if bi > 0 else math.nan, "bi": bi,
                 "breaks": breaks, "kinks": self.kinks, "rtol": self.rtol,
@@ -373,8 +373,14 @@ class Radau5Run(StepPass, StepChecks):
         self.F_seen, self.h_acc, self.err_acc = st["F_seen"], st["h_acc"], st["err_acc"]
         self.h_good, self.h_big, self.stalled = st["h_good"], st["h_big"], st["stalled"]
         self.bi = st["bi"]  # (the kinks it stepped onto)
-        if stats["steps"] > before:  # (as the Python loop's accepted steps reset them)
-            self.floor_tried, self.creeping, self.kink_cuts = False, 0, 0
+        self.creeping = st["creeping"]
+        if stats["steps"] > before:  # (as the Python loop's accepted steps set them)
+            self.kink_cuts, self.ms.hint = 0, None
+            if why == "creep":  # (its last step stops the run: Python's order)
+                self.status, self.message = creep_stop(
+                    self.t, self.creeping, creep_floor(st["t_prev"], self.t_final), None)
+                return True
+            self.floor_tried = False
         if why != "stopped":
             return False
         if self.bi < len(self.breaks) and self.t == self.breaks[self.bi]:

@@ -24,14 +24,14 @@ from ..status import Status
 from .landing import Landing
 from .setup import step_floor
 
-__all__ = ["StepPass"]
+__all__ = ["CREEP_STEPS", "StepPass", "creep_floor", "creep_stop"]
 
 _EPS = 2.220446049250313e-16
 #: Accepted steps in a row shorter than the step floor after which a run that creeps
 #: (landing again and again on a guard, ``t`` moving by ulps) stops (and is bridged). At
 #: most 1 in a row in 5400 runs of random networks that did not creep (1800 draws, 3
 #: levels); 200 before, at 20-40 loop passes a creeping step (10 s a run).
-_CREEP_STEPS = 20
+CREEP_STEPS = 20
 #: ... steps shorter than the step floor or than this fraction of the run.
 _CREEP_FRACTION = 1e-12
 #: Cuts of one step at kinks of the force split (:mod:`lumped.solvers.modes.split_kink`) before
@@ -314,15 +314,11 @@ class StepPass:
         # in parallel: 2000 steps moved t by 1e-12, and max_steps = 1e6 would take hours)
         # (or 1e-12 of the run: a junction on one Coulomb element beside a mass landed
         # 5000 times on its guard with steps of 3e-14 s, 40 times the floor, 77 s a run)
-        creep_floor = max(h_min, _CREEP_FRACTION * self.t_final)
-        self.creeping = self.creeping + 1 if t - t_prev < creep_floor else 0
-        if self.creeping >= _CREEP_STEPS:
+        floor = creep_floor(t_prev, self.t_final)
+        self.creeping = self.creeping + 1 if t - t_prev < floor else 0
+        if self.creeping >= CREEP_STEPS:
             el = self.scene.elements[ms.hint] if ms.hint is not None else None
-            self.status, self.message = Status.STEP_TOO_SMALL, (
-                f"radau5 stopped at t = {t!r}: {self.creeping} accepted steps in a row below "
-                f"the creep floor {creep_floor!r} (the run creeps"
-                + (f", landing again and again on a guard of element {el.name!r} (law "
-                   f"{el.law_name!r})" if el is not None else "") + ")")
+            self.status, self.message = creep_stop(t, self.creeping, floor, el)
             return
         ms.mark_free(t_prev, t, self.x, self.v, self.F)  # locks on cycles: forces not unique
         # the step size for the next step (Gustafsson's predictive controller)
@@ -347,3 +343,23 @@ class StepPass:
                 ms.time_event(t)
             self.dF_n = self.h_acc = None
             self.stop(self.at_event(t, self.h, "guard"))
+
+
+def creep_floor(t: float, t_final: float) -> float:
+    """The creep floor of a step from ``t`` in a run to ``t_final``: the step floor
+    (:func:`~lumped.solvers.eventdriven.setup.step_floor`), or :data:`_CREEP_FRACTION` of
+    the run if more. ``creep_floor(0.0, t_final)`` is its part that does not depend on
+    ``t`` (the step floor grows with ``|t|``), which the compiled loop takes
+    (:mod:`lumped.solvers.eventdriven.loop_jit`, ``fst[CREEP_FLOOR]``)."""
+    return max(step_floor(t, t_final), _CREEP_FRACTION * t_final)
+
+
+def creep_stop(t: float, creeping: int, floor: float, el) -> tuple[Status, str]:
+    """The stop of a run that creeps: ``creeping`` accepted steps in a row, the last
+    ending at ``t``, below the creep ``floor``; ``el`` the element whose guard the steps
+    landed on (``None``: not landings)."""
+    return Status.STEP_TOO_SMALL, (
+        f"radau5 stopped at t = {t!r}: {creeping} accepted steps in a row below "
+        f"the creep floor {floor!r} (the run creeps"
+        + (f", landing again and again on a guard of element {el.name!r} (law "
+           f"{el.law_name!r})" if el is not None else "") + ")")
