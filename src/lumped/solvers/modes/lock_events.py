@@ -7,7 +7,8 @@ to the step's tolerance is put exactly on it (:func:`snap_to_locks`); the force 
 each lock admits weighs the split of the force among locks in parallel (:func:`lock_cones`,
 for :func:`lumped.solvers.radau.cone_split.cone_solver`); a spring that locks its
 elongation while its ends approach takes an impulse (:func:`apply_impacts`, by
-:mod:`lumped.solvers.nonsmooth.impacts`). The mode itself is chosen in
+:mod:`lumped.solvers.nonsmooth.impacts`), and the forces the locks then carry start the
+choice of the mode after it (:func:`after_impact_forces`). The mode itself is chosen in
 :mod:`lumped.solvers.modes.choice`.
 """
 
@@ -19,7 +20,8 @@ from collections.abc import Sequence
 
 from ...scene import Mass, Scene
 
-__all__ = ["apply_impacts", "hold_rate_locks", "lock_cones", "snap_to_locks"]
+__all__ = ["after_impact_forces", "apply_impacts", "hold_rate_locks", "lock_cones",
+           "snap_to_locks"]
 
 _EPS = sys.float_info.epsilon
 
@@ -226,3 +228,73 @@ def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Seq
         dx, _, _ = impact_solve(scene, [0.0] * len(x), inner, 0.0, target=gaps)
         x[:] = [xi + di for xi, di in zip(x, dx, strict=True)]
     return [(e, impulses[locked.index(e)]) for e in hits], lost
+
+
+def after_impact_forces(scene: Scene, t: float, x: Sequence[float], v: Sequence[float],
+                        F: Sequence[float], hits: Sequence[int],
+                        threshold: float) -> tuple[list[float], list[int]]:
+    r"""The forces right after an impact from the balance of accelerations, and the
+    impacted locks that hold.
+
+    After a plastic impact a string sits on its lock, ``q = L``, at the relative rate
+    ``0``; its force before the impact was the spring's, ``k L``, the kink of ``q =
+    min(F/k, L)``. The mode choice's vanishing implicit step (``h_p ~ 1e-9`` s) moves ``q``
+    by ``h_p^2 a``, far below ``ulp(L)``, and fixes a lock's force only to ``m ulp(x) /
+    h_p^2`` (about 8 N there), so it cannot tell the taut string from the slack one: it read
+    "slack" while the load pulled the ends apart, the string's force ``k L`` instead of the
+    taut force, until a second impact ``1e-7`` s later (impulse ``1e-7``) put it right
+    (issue 29). The balance of accelerations (:func:`~lumped.solvers.nonsmooth.
+    lock_forces.forces_from_accelerations`) decides without dividing by ``h_p``.
+
+    Each dashpot whose law fixes its force takes the force at its rate after the impact;
+    then every element of ``hits`` whose relative rate is within ``threshold`` of ``0`` (a
+    rebound separates clearly and is left to the probe), and every element whose law
+    leaves its force free at ``(q, F)`` (``dR/dF = 0``: stuck dashpots, other taut locks),
+    holds its relative motion.
+
+    Returns
+    -------
+    (forces, holding)
+        The forces, and the elements of ``hits`` whose balance force is strictly inside
+        their lock's set (an element the balance would push out of it is put on its
+        boundary, the kink: it goes slack). ``(F, [])`` when no impacted element is at
+        rest relative to its ends or the balances have no solution.
+    """
+    from ..newton.scalar_root import scalar_root
+    from ..nonsmooth.lock_forces import forces_from_accelerations
+
+    ea, eb = scene.elem_a, scene.elem_b
+    held = []
+    for e in hits:
+        a, b = ea[e], eb[e]
+        rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        if abs(rate) <= threshold:
+            held.append(e)
+    out = list(F)
+    if not held:
+        return out, []
+    q = scene.elongations(x, v)
+    free = list(held)
+    for e, el in enumerate(scene.elements):
+        if e in held:
+            continue
+        kernel = el.law.kernel
+        if el.kind == "dashpot" and kernel(q[e], out[e])[2] != 0.0:
+            try:
+                out[e] = scalar_root(kernel, q[e], out[e])[0]
+            except ValueError:
+                return list(F), []
+        if kernel(q[e], out[e])[2] == 0.0:
+            free.append(e)
+    got = forces_from_accelerations(scene, t, x, v, out, free)
+    if got is None or not all(map(math.isfinite, got)):
+        return list(F), []
+    holding = []
+    for e in held:
+        R, _, RF = scene.elements[e].law.kernel(q[e], got[e])
+        # strictly inside: admissible, and its rounding up and down too (not the kink)
+        if RF == 0.0 and all(scene.elements[e].law.kernel(q[e], f)[2] == 0.0 for f in
+                             (math.nextafter(got[e], -math.inf),
+                              math.nextafter(got[e], math.inf))):
+            holding.append(e)
+    return got, holding
