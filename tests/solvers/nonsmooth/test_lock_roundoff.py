@@ -78,15 +78,16 @@ _TIGHT = dict(method="radau5", t_end=0.2, rtol=1e-10, atol=1e-13)
 
 @pytest.fixture(scope="module")
 def python_loop_run():
-    """radau5's Python loop on the loaded chain of strings at a tight tolerance (bridged
-    twice by backward Euler, where both strings go taut at t = 0.19476)."""
+    """radau5's Python loop on the loaded chain of strings at a tight tolerance (both
+    strings taut from t = 0.19476; no bridge since the mode after an impact is decided
+    by the balance of accelerations, two before)."""
     return simulate(loaded_string_chain(), compiled=False, **_TIGHT)
 
 
 def test_radau5_at_a_tight_tolerance_on_a_loaded_string_chain_agrees_with_bdf2(
         python_loop_run):
     ref = python_loop_run
-    assert ref.ok and ref.stats["bridges"] == 2
+    assert ref.ok and ref.stats.get("bridges", 0) == 0
     # both strings taut at the end
     assert ref.x["m0"][-1] == pytest.approx(0.18922035336843843, abs=1e-12)
     assert ref.x["m1"][-1] - ref.x["m0"][-1] == pytest.approx(0.01, abs=1e-12)
@@ -99,9 +100,8 @@ def test_radau5_at_a_tight_tolerance_on_a_loaded_string_chain_agrees_with_bdf2(
 
 def test_radau5_compiled_at_a_tight_tolerance_on_a_loaded_string_chain_is_the_python_run(
         python_loop_run):
-    # the compiled loop's steps raise the bridge's scale (the longest accepted step) as
-    # the Python loop's do: the same two bridges, the same numbers bit for bit. (Before,
-    # its bridges took steps of 1.2e-8 s, not 1.6e-8, and it stopped after 12 of them.)
+    # the compiled loop gives the Python loop's numbers bit for bit (before, its bridges
+    # there took steps of 1.2e-8 s, not 1.6e-8, and it stopped after 12 of them)
     ref = python_loop_run
     sol = simulate(loaded_string_chain(), compiled=True, **_TIGHT)
     assert sol.ok
