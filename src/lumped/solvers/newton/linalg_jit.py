@@ -73,7 +73,7 @@ def lu_factor_into(A, LU, perm) -> bool:
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def lu_solve_into(LU, perm, b, y) -> None:
     """``y = A^{-1} b`` with the factors of :func:`lu_factor_into` (``y`` may not be ``b``)."""
     n = LU.shape[0]
@@ -106,8 +106,19 @@ def inverse_into(LU, perm, b, y, inv) -> None:
             inv[r, c] = y[r]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def copy_into(src, dst) -> None:
     """``dst[:n] = src`` for a vector ``src`` of length ``n``, element by element."""
     for i in range(src.shape[0]):
         dst[i] = src[i]
+
+
+@njit(cache=True)
+def copy_matrix_into(src, dst) -> None:
+    """``dst[:n, :m] = src`` for an ``n x m`` matrix ``src``, element by element.
+
+    (A row assignment ``dst[i] = src[i]`` would compile numba's broadcasting checks and
+    their error messages, about a second of a first run's compile.)"""
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
