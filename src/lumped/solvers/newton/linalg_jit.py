@@ -73,7 +73,7 @@ def lu_factor_into(A, LU, perm) -> bool:
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def lu_solve_into(LU, perm, b, y) -> None:
     """``y = A^{-1} b`` with the factors of :func:`lu_factor_into` (``y`` may not be ``b``)."""
     n = LU.shape[0]
@@ -106,14 +106,14 @@ def inverse_into(LU, perm, b, y, inv) -> None:
             inv[r, c] = y[r]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def copy_into(src, dst) -> None:
     """``dst[:n] = src`` for a vector ``src`` of length ``n``, element by element."""
     for i in range(src.shape[0]):
         dst[i] = src[i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def copy_matrix_into(src, dst) -> None:
     """``dst[:n, :m] = src`` for an ``n x m`` matrix ``src``, element by element.
 
