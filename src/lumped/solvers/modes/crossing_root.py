@@ -34,7 +34,7 @@ _TOL = 64.0 * 2.220446049250313e-16
 _MAX_ITERS = 200
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def collocation_at(s, y0, y1, y2, y3):
     """The polynomial through ``y0..y3`` at the nodes ``0, c_1, c_2, 1``, at ``s``."""
     l1 = s * (s - _C1) * (s - _C2) / _D1

@@ -69,7 +69,7 @@ def probe_modes(law_addr, branch_addr, lawc, masses, ea, eb, spring, cands, curr
     return UNDECIDED if undecided else REFUSED
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _probe(branch_law, lawc, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, G, u, q) -> bool:
     """:func:`lumped.solvers.modes.mode_guess._probe` into ``u`` (``v_p, F_p``) and ``q``;
     whether it converged."""
@@ -133,7 +133,7 @@ def _probe(branch_law, lawc, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, 
     return False
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _solve(J, G, n) -> bool:
     """:func:`lumped.solvers.modes.mode_guess._solve`: ``J^-1 G`` into ``G`` (``J`` consumed);
     False for a zero pivot or a non-finite result."""

@@ -29,7 +29,7 @@ __all__ = ["breakout_root", "breakout_scan", "brent", "compiled_breakout_root",
 _MAX_ITER = 100  # scipy's default
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _guard(guards, lawc, e, mode, j, q, r, fkind, fpar, c, minv, t, gbuf) -> float:
     """``g_j(q_e, F_e(t))`` with ``F_e`` the static balance's row ``r``."""
     N = fkind.shape[0]

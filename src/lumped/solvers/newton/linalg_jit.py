@@ -111,3 +111,14 @@ def copy_into(src, dst) -> None:
     """``dst[:n] = src`` for a vector ``src`` of length ``n``, element by element."""
     for i in range(src.shape[0]):
         dst[i] = src[i]
+
+
+@njit(cache=True, inline="always")
+def copy_matrix_into(src, dst) -> None:
+    """``dst[:n, :m] = src`` for an ``n x m`` matrix ``src``, element by element.
+
+    (A row assignment ``dst[i] = src[i]`` would compile numba's broadcasting checks and
+    their error messages, about a second of a first run's compile.)"""
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]

@@ -50,7 +50,7 @@ from .criteria_jit import (
     update_ok,
     update_ok_scaled,
 )
-from .linalg_jit import copy_into, lu_factor_into, lu_solve_into
+from .linalg_jit import copy_into, copy_matrix_into, lu_factor_into, lu_solve_into
 
 __all__ = [
     "CODE_NAMES",
@@ -164,7 +164,7 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
                         break
                     copy_into(Gc, G)
                     copy_into(Sc, S)
-                    copy_into(Jc, J)
+                    copy_matrix_into(Jc, J)
                 copy_into(uc, u)
                 break
             # directional retry: the Jacobian of the piece the step points into
@@ -241,7 +241,7 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
                     copy_into(ua, un)
                     copy_into(Ga, Gn)
                     copy_into(Sa, Sn)
-                    copy_into(Ja, Jn)
+                    copy_matrix_into(Ja, Jn)
             if finite_sum(Gn):
                 if iters < free_steps or residual_ok(Gn, Sn, rtol, atol):
                     accepted = True
@@ -257,16 +257,16 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
             copy_into(un, u)
             copy_into(Gn, G)
             copy_into(Sn, S)
-            copy_into(Jn, J)
+            copy_matrix_into(Jn, J)
             iters += 1
             code = DIVERGED
             break
         have_prev = True
-        copy_into(J, wm[WS_JC])  # J_prev
+        copy_matrix_into(J, wm[WS_JC])  # J_prev
         copy_into(un, u)
         copy_into(Gn, G)
         copy_into(Sn, S)
-        copy_into(Jn, J)
+        copy_matrix_into(Jn, J)
         norm = -1.0
         iters += 1
     counts[0] = iters

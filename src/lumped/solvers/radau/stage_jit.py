@@ -33,7 +33,7 @@ from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 __all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_solve"]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n,
                    f, G, J) -> None:
     """Residual ``G`` and Jacobian ``J`` of the stage system at ``U`` (``f[k, i]``: the

@@ -38,7 +38,7 @@ _D2 = _C1 * (_C1 - _C0) * (_C1 - _C2)
 _D3 = _C2 * (_C2 - _C0) * (_C2 - _C1)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _elem_at(spring, A, h, x_n, v_n, U, n, i, k) -> float:
     """Node ``i``'s position (spring) or velocity at polynomial node ``k`` (-1: the
     start), 0 for the ground (:meth:`StageSystem.element_nodes`)."""
@@ -51,7 +51,7 @@ def _elem_at(spring, A, h, x_n, v_n, U, n, i, k) -> float:
     return v_n[i] if k < 0 else U[k * n + i]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, e, q, F) -> None:
     """``q`` and ``F`` of element ``e`` at ``s = 0, c_1, c_2, 1`` into ``q[:4]``,
     ``F[:4]`` (:meth:`StageSystem.element_nodes`)."""
@@ -81,7 +81,7 @@ def folded(branch_law, lawc, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n
     return False
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _left_branch(branch_law, lawc, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
     """:func:`lumped.solvers.bdf.core_jit.left_branch` (the fold test of
     :mod:`lumped.solvers.implicit.branch_check`) on element ``e``'s branch ``mode``."""
@@ -223,7 +223,7 @@ def error_norm(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h
     return math.sqrt(acc / cnt)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def forces(t, fkind, fpar, f) -> None:
     """``f_i(t)`` per node (``scene.external_forces``): 0 where there is no forcing."""
     for i in range(f.shape[0]):
@@ -231,7 +231,7 @@ def forces(t, fkind, fpar, f) -> None:
     forcing_into(0, t, fkind, fpar, fpar, f)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def finite(J) -> bool:
     for r in range(J.shape[0]):
         for c in range(J.shape[1]):
