@@ -10,6 +10,7 @@ import pytest
 from _bdf_scenes import creeping_pair_on_a_string, second_string_taut_within_the_step
 from _yield_check import run_checked as _run_ok
 
+from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
 from lumped.solvers.bdf.impact_step import impact_step, impulse_is_negligible
@@ -205,3 +206,81 @@ def test_forces_a_hair_after_an_impact_on_a_lock_that_rounds_off_its_length(meth
     # kinetic energy and the springs' (the taut strings store none): never rises
     energy = 0.5 * (v0**2 + v1**2) + 0.5 * x0**2 + 0.1 * (x1 - x0) ** 2
     assert np.diff(energy).max() <= 1e-15
+
+
+def _string_between_two_herschel_bulkley_links() -> Scene:
+    """Drawn by the suite at ``LUMPED_LARGE=2000`` (session 14, ``bdf2``, example 732, as
+    drawn): a string ``e1`` between ``m0`` and ``m1`` in parallel with a shear-thinning
+    Herschel-Bulkley link ``e5`` (``n = 0.3``), ``m0`` on a shear-thickening one ``e0``
+    (``n = 2``) to ground; the string goes taut near ``t = 0.355``, and ``m2``, ``m3``
+    (a Bingham link ``e3`` between them) stick together near ``t = 0.3627``."""
+    hb = get_law("herschel_bulkley")
+    return Scene([Mass("m0", m=1.0, x0=0.03, v0=-0.15255320740060307),
+                  Mass("m1", m=2.1388827264253187, x0=-0.23474113247313055,
+                       v0=1.4372197722803088),
+                  Mass("m2", m=1.0, x0=1e-16, v0=-5.969384734197956e-279),
+                  Mass("m3", m=1.0, x0=0.4204457137928099, v0=1.0632626670224887)],
+                 [Element("e0", hb.bind(gamma=0.13213704058409728, tau=1.0, n=2.0),
+                          "ground", "m0"),
+                  Element("e1", get_law("string_spring").bind(k=1.0, L=0.027118745378267504),
+                          "m0", "m1"),
+                  Element("e2", get_law("linear_spring").bind(k=1.0), "ground", "m2"),
+                  Element("e3", get_law("bingham").bind(gamma=1.0, tau=1.0), "m2", "m3"),
+                  Element("e4", get_law("coulomb").bind(tau=0.040464348930028954,
+                                                        r=39.34327808370772), "m3", "ground"),
+                  Element("e5", hb.bind(gamma=0.6054672850903626, tau=0.0866247187423721,
+                                        n=0.3), "m1", "m0")])
+
+
+@pytest.fixture(scope="module")
+def string_beside_herschel_bulkley_reference():
+    """A tight ``radau5`` run of the scene (agrees with ``rtol = 1e-10`` to ``5e-11``):
+    the impact of ``e1`` at ``t = 0.354912``."""
+    sol = simulate(_string_between_two_herschel_bulkley_links(), method="radau5",
+                   t_end=0.5, rtol=1e-9, atol=1e-11)
+    assert sol.ok, sol.message
+    return sol
+
+
+@pytest.mark.parametrize(("method", "dt"), [("bdf1", 0.025), ("bdf2", 0.025),
+                                            ("bdf2", 0.0125)])
+def test_a_string_locking_beside_a_shear_thinning_link_runs(method, dt):
+    """Every run stopped with 'Newton failed' at ``t = 0.36`` to ``0.4`` (issue 29, a strict
+    expected failure until now). After the impact the taut string ``e1`` and the stuck
+    ``e5`` beside it fix the same rate (their rows ``h (v_1 - v_0)`` and ``v_0 - v_1``
+    are proportional, their forces' columns opposite), a singular step matrix in which
+    LU left a pivot of ``1.5e-20``; with ``e0``'s law still converging, its correction
+    moved their free split by ``50`` to ``600`` (the minimum-norm one: ``0.19``), which
+    pushed ``e5`` onto its slipping branch and ``e1`` slack, and Newton crawled back by
+    halving (``bdf1``: 213 iterations in the remainder after the impact). Such a
+    correction is now checked from ten times the iterate (not ``1e6`` times) and
+    replaced by the minimum-norm one."""
+    sol = _run_ok(_string_between_two_herschel_bulkley_links(), method, dt, 0.5)
+    impacts = [ev for ev in sol.events if ev.kind == "impact"]
+    assert [ev.element for ev in impacts] == ["e1"]
+    after = sol.t > impacts[0].t + dt
+    # m0 and m1 move as one on the taut string, e5 stuck within its yield force
+    assert np.abs(sol.v["m1"][after] - sol.v["m0"][after]).max() <= 1e-12
+    assert (sol.x["m1"] - sol.x["m0"]).max() <= 0.027118745378267504 * (1 + 1e-12)
+    assert np.abs(sol.F["e5"][after]).max() <= 0.0866247187423721 * (1 + 1e-9)
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_a_string_locking_beside_a_shear_thinning_link_converges_to_radau5(
+        method, string_beside_herschel_bulkley_reference):
+    """The runs agree with a tight ``radau5`` run within their own error: the largest
+    displacement error over the samples falls as the step halves (``bdf2``: ``3.3e-3``,
+    ``2.2e-3``, ``6.6e-4`` at ``dt = 0.025`` to ``0.00625``; ``bdf1``: ``6.7e-3``,
+    ``4.3e-3``, ``1.6e-3``; first order across the impact, which the step locates only
+    to its own error), and the impact is found within one step of ``radau5``'s."""
+    ref = string_beside_herschel_bulkley_reference
+    t_ref = next(ev.t for ev in ref.events if ev.kind == "impact")
+    errors = []
+    for dt in (0.025, 0.0125, 0.00625):
+        sol = _run_ok(_string_between_two_herschel_bulkley_links(), method, dt, 0.5)
+        exact = ref.sol(sol.t)
+        errors.append(float(np.abs(sol.data[:, 1:9:2] - exact[:, 1:9:2]).max()))
+        t_hit = next(ev.t for ev in sol.events if ev.kind == "impact")
+        assert abs(t_hit - t_ref) <= dt
+    assert errors[1] <= 0.8 * errors[0] and errors[2] <= 0.5 * errors[1], errors
+    assert errors[2] <= (1e-3 if method == "bdf2" else 2e-3), errors

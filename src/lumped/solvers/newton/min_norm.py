@@ -64,8 +64,13 @@ def equilibrated_min_norm(J: Sequence[Sequence[float]], G: Sequence[float]) -> l
 
 
 #: A Newton correction longer than this times ``1 + max |u|`` is checked for a step
-#: along a null space that only rounding hides (:func:`null_step_removed`).
-_NULL_STEP_RATIO = 1e6
+#: along a null space that only rounding hides (:func:`null_step_removed`). The length
+#: of such a step is the residual's share outside the range over the pivot of an ulp:
+#: ``1e13`` while another law's residual is large (issue 11), but ``50`` to ``600`` where
+#: only round-off is left outside the range (a string taut beside a stuck
+#: Herschel-Bulkley dashpot, issue 29: pivot ``1.5e-20``, step ``536``); the check (an
+#: SVD of the step matrix) is cheap beside the Newton iterations such a step costs.
+_NULL_STEP_RATIO = 10.0
 
 
 def null_step_removed(J: Sequence[Sequence[float]], G: Sequence[float], du: list[float],
@@ -78,7 +83,11 @@ def null_step_removed(J: Sequence[Sequence[float]], G: Sequence[float], du: list
     the ratio of those rows is not a power of two, eliminates one of them to a pivot of
     an ulp instead of zero, and while the residual is not yet small (another law still
     converging) the correction moves the free split of the forces by ``residual / ulp``
-    (``1e13``), from where Newton crawls back by halving and runs out of iterations.
+    (``1e13``), from where Newton crawls back by halving and runs out of iterations. Even
+    a residual at round-off in the proportional rows moves the split by ``50`` to ``600``
+    (a string taut beside a stuck Herschel-Bulkley dashpot: the split lands outside the
+    dashpot's yield band and the string's force goes slack, and Newton walks back by
+    halving, or leaves the stuck mode for good).
     Checked only when ``du`` exceeds :data:`_NULL_STEP_RATIO` times ``1 + max |u|``:
     the minimum-norm solution of the equilibrated matrix
     (:func:`equilibrated_min_norm`) replaces it when it is a thousand times shorter and
