@@ -77,13 +77,24 @@ class Radau5Run(StepPass, StepChecks):
     Set up in the constructor: the consistent initial state and the initial mode (by a
     vanishing implicit step of the full laws), the first step size, the compiled loop if
     the scene has one.
+
+    With moving supports ``scene`` is the view of a
+    :class:`~lumped.scene.supports.SupportFrame` (``source`` the user's scene, which a
+    bridge runs on): :meth:`clock` sets its offsets to the time of the state being read,
+    the stage system sets them per stage, and the checks along a step read the law's
+    argument at the polynomial's nodes with the clock bare. Such a run has no compiled
+    loop and no held intervals (a node stuck to a moving support moves).
     """
 
-    def __init__(self, scene: Scene, settings) -> None:
+    def __init__(self, scene: Scene, settings, source: Scene | None = None) -> None:
         plan = scene_plan(scene)
         if plan.refused:
             raise ValueError(plan.refused)
         self.scene, self.settings, self.plan = scene, settings, plan
+        #: the support frame of a scene with moving supports (else None), and the scene
+        #: the user gave
+        self.frame = getattr(scene, "support_frame", None)
+        self.source = scene if source is None else source
         self.rtol = rtol = DEFAULT_RTOL if settings.rtol is None else settings.rtol
         self.atol = atol = DEFAULT_ATOL if settings.atol is None else settings.atol
         self.opts = opts = read_options(settings)
@@ -95,6 +106,7 @@ class Radau5Run(StepPass, StepChecks):
         (self.is_mass, self.masses, self.spring, self.massless,
          self.m_min) = _structure(scene, plan)
         self.system = StageSystem(self.masses, scene.elem_a, scene.elem_b, self.spring)
+        self.system.frame = self.frame
         self.checked = plan.checked
         x = [float(nd.x0) for nd in scene.nodes]
         v, F, ic = consistent_initial_state(scene, time_scale=t_final,
@@ -112,7 +124,8 @@ class Radau5Run(StepPass, StepChecks):
             "initial_newton_iterations": ic["newton_iterations"], "held_intervals": 0}
         self.status, self.message = Status.SUCCESS, ""
         self.budget = WorkBudget(opts["max_steps"], t_final)  # (lumped.solvers.eventdriven.budget)
-        self.fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"])
+        self.fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"]) \
+            if self.frame is None else (None, "python: moving supports (no compiled loop)")
 
         self.ms = ms = ModeState(scene, plan, settings, opts, rtol, atol, stats, zeno_window)
         ms.fast = self.fast
@@ -165,6 +178,17 @@ class Radau5Run(StepPass, StepChecks):
 
     # -----------------------------------------------------------------------------------
     # small pieces
+
+    def clock(self, t: float) -> None:
+        """The support offsets the laws read set to ``o_e(t)`` (no supports: nothing)."""
+        if self.frame is not None:
+            self.frame.at_time(t)
+
+    def bare(self) -> None:
+        """The support offsets set to 0, for law arguments that hold them already (the
+        nodes of a step's polynomial, :meth:`StageSystem.element_nodes`)."""
+        if self.frame is not None:
+            self.frame.bare()
 
     def commit(self, t: float) -> None:
         """Keep ``(t, x, v, F)`` as the last state a step or held interval ended on."""
@@ -240,9 +264,10 @@ class Radau5Run(StepPass, StepChecks):
         scale = ([atol + rtol * abs(vi) for vi in v]
                  + [rtol * max(abs(Fe), self.Fref) for Fe in F]) * 3
         system, kernels, cones = self.system, self.kernels, self.cones
+        system.t_n = t  # (the stage times t + c_k h of the support offsets)
         if damped:
             return system.solve_damped(self.U, h, x, v, fk, kernels, scale, max_iters=iters)
-        if self.stage_solve is None and self.opts["compiled"] is True:
+        if self.stage_solve is None and self.opts["compiled"] is True and self.frame is None:
             self.stage_solve = compiled_stage_solver(self.scene, self.modes)  # the live list
         if self.stage_solve is None or cones:  # (locks in parallel: the cone split)
             return system.solve(self.U, h, x, v, fk, kernels, scale, max_iters=iters,
@@ -275,7 +300,7 @@ class Radau5Run(StepPass, StepChecks):
             return False
         t = self.t
         start = self.committed if self.committed[0] == t else (t, self.x, self.v, self.F)
-        got = take_bridge(self.scene, start, len(bridges), self.rtol, self.h_big,
+        got = take_bridge(self.source, start, len(bridges), self.rtol, self.h_big,
                           self.t_final, self.settings.options, self.opts["restitution"],
                           self.dense, self.rows, self.ms.events, self.ms.log, self.stats)
         if isinstance(got, str):
@@ -315,12 +340,13 @@ class Radau5Run(StepPass, StepChecks):
                 continue
             if self.stop(self.budget.check(self.t, self.stats)):
                 continue  # the work budget is spent: the run ends (never bridged)
-            if self.hold_check and self.target is None and not self.kept:
+            if self.hold_check and self.target is None and not self.kept and self.frame is None:
                 self.hold_check = False
                 if self._hold():
                     continue
             stats = self.stats
-            if self.fast is None and stats["steps"] >= adaptive_fast.COMPILE_AFTER and \
+            if self.fast is None and self.frame is None and \
+                    stats["steps"] >= adaptive_fast.COMPILE_AFTER and \
                     stats["loop"].startswith("python: not compiled yet"):
                 # a long run: compile the scene's loop now
                 self.fast, stats["loop"] = compiled_loop(self.scene, self.plan, None,

@@ -14,6 +14,7 @@ import numpy as np
 
 from ...scene import Scene
 from ...scene.forcing import jumps
+from ...scene.supports import support_time_events
 
 __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "time_events", "step_floor",
            "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "accumulating",
@@ -67,8 +68,10 @@ def read_options(settings) -> dict:
 def scope_error(scene: Scene) -> str | None:
     """Why ``radau5`` does not take ``scene``, or ``None`` when it does.
 
-    A scene with moving supports (:mod:`lumped.scene.supports`) is refused: its stage
-    system has no time-dependent element offsets yet; ``auto`` runs ``bdf2`` there.
+    A scene with moving supports (:mod:`lumped.scene.supports`) is taken unless an element
+    on a support has a position lock (a taut string: impacts against a moving support
+    are not implemented, :func:`~lumped.scene.supports.support_lock`); its laws read
+    ``q + o_e(t)`` at the time of every system solved (see that module).
 
     A branch whose ``dR/dF`` is unbounded at its boundary
     (:attr:`lumped.codegen.branches.BranchInfo.steep`: Herschel-Bulkley with ``n < 1`` at
@@ -79,15 +82,14 @@ def scope_error(scene: Scene) -> str | None:
     stop mid-run, and ``auto`` runs ``bdf2`` there (its globalised Newton takes such
     points).
     """
-    from ...codegen.branches import law_branches
+    from ...scene.supports import branches_of, support_lock
 
     if getattr(scene, "support_ends", ()):
-        return (f"method 'radau5' does not take a scene with moving supports "
-                f"({', '.join(sorted(scene.supports))}): their time-dependent element "
-                "offsets are not in its stage system; use 'bdf1' or 'bdf2' (or 'auto', which "
-                "runs 'bdf2' here)")
+        why = support_lock(scene)
+        if why is not None:
+            return f"method 'radau5' does not take this scene: {why}"
     for el in scene.elements:
-        lb = law_branches(el.law)
+        lb = branches_of(el.law)
         for info in lb.info:
             if info.steep and info.stage is None:
                 return (f"method 'radau5' does not take element {el.name!r}: branch "
@@ -107,7 +109,11 @@ def breakpoints(scene: Scene, t_end: float) -> list[float]:
 def time_events(scene: Scene, t_end: float) -> tuple[list[float], list[bool]]:
     """``(breaks, kinks)``: the times in ``(0, t_end)`` where a forcing of ``scene`` jumps
     or kinks, in order, and per time whether every forcing is continuous there (a kink:
-    a point of a record; :func:`lumped.scene.forcing.jumps`).
+    a point of a record; :func:`lumped.scene.forcing.jumps`). The breakpoints of a
+    support's motion (:func:`lumped.scene.supports.support_time_events`; ``scene`` or the
+    scene of its :class:`~lumped.scene.supports.SupportFrame`) count as the forcing's: a
+    jump of the support's acceleration is a time event, a point where it is continuous
+    a kink.
 
     A step of ``radau5`` ends on each of them. At a jump the full laws choose the mode
     again (a time event, in the run's events); at a kink the state, the forces and so
@@ -125,6 +131,11 @@ def time_events(scene: Scene, t_end: float) -> tuple[list[float], list[bool]]:
         if get is not None:
             out.update(float(b) for b in get(0.0, t_end) if 0.0 < b < t_end)
             jumped.update(float(b) for b in jumps(fn, 0.0, t_end))
+    frame = getattr(scene, "support_frame", None)
+    s_breaks, s_kinks = support_time_events(frame.source if frame is not None else scene,
+                                            t_end)
+    out.update(b for b in s_breaks if 0.0 < b < t_end)
+    jumped.update(b for b in s_breaks if 0.0 < b < t_end and b not in s_kinks)
     breaks: list[float] = []
     kinks: list[bool] = []
     last = 0.0
@@ -204,11 +215,11 @@ def scene_plan(scene: Scene) -> ScenePlan:
                  or plan.key[2] == tuple(id(f) for f in scene.forcing)):
         return plan
     key = (scene.nodes, scene.elements, tuple(id(f) for f in scene.forcing), scene.forcing)
-    from ...codegen.branches import law_branches
+    from ...scene.supports import branches_of
     from ..implicit.branch_check import known_monotone
     from ..nonsmooth.locks import cyclic_elements
 
-    plan = ScenePlan(scope_error(scene), [law_branches(el.law) for el in scene.elements],
+    plan = ScenePlan(scope_error(scene), [branches_of(el.law) for el in scene.elements],
                      [e for e, el in enumerate(scene.elements) if not known_monotone(el.law)],
                      cyclic_elements(scene), key)
     _PLANS[scene] = plan
