@@ -58,7 +58,8 @@ if TYPE_CHECKING:
     from .network import Scene
 
 __all__ = ["SupportEnd", "check_supports", "SupportFrame", "ShiftedBranches", "branches_of",
-           "solver_view", "supported_scene", "support_lock", "support_offsets", "support_time",
+           "solver_view", "supported_scene", "support_lock", "support_offsets", "support_rates",
+           "support_time",
            "support_time_events", "support_time_restored"]
 
 
@@ -119,6 +120,20 @@ def support_offsets(scene: Scene, t: float | None) -> list[float]:
     ------
     ValueError
         If ``t`` is not a finite time."""
+    return _support_values(scene, t, 0)
+
+
+def support_rates(scene: Scene, t: float) -> list[float]:
+    """``o_e'(t)`` per element of ``scene`` (the scene a :class:`SupportFrame` was made
+    from, or its view): ``+-v_s(t)`` (spring) or ``+-a_s(t)`` (dashpot) for an end on a
+    support, else ``0`` (a stuck dashpot's rate stays 0 only if its nodes take the
+    support's acceleration: the initial state's limit system reads it)."""
+    frame = getattr(scene, "support_frame", None)
+    return _support_values(scene if frame is None else frame.source, t, 1)
+
+
+def _support_values(scene: Scene, t: float | None, order: int) -> list[float]:
+    """``o_e`` (``order`` 0) or ``o_e'`` (``order`` 1) per element at ``t``."""
     if t is None or not isinstance(t, numbers.Real) or not math.isfinite(t):
         raise ValueError(f"`t` must be a finite time on a scene with supports, got {t!r}")
     out = [0.0] * len(scene.elements)
@@ -128,7 +143,7 @@ def support_offsets(scene: Scene, t: float | None) -> list[float]:
         if got is None:
             got = motions[end.support] = scene.supports[end.support].at(t)
         spring = scene.elements[end.element].kind == "spring"
-        out[end.element] = end.sign * (got[0] if spring else got[1])
+        out[end.element] = end.sign * (got[order] if spring else got[order + 1])
     return out
 
 
