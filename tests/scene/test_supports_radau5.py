@@ -11,12 +11,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scene.test_supports import VB, D, W, belt, belt_exact, belt_phases, shaken, shaken_exact
 
 from lumped import Element, Mass, Scene, get_law, load_scene, simulate
 from lumped.io import Table
 from lumped.scene import GroundMotion, SineBurst
-
-from scene.test_supports import D, VB, W, belt, belt_exact, belt_phases, shaken, shaken_exact
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
