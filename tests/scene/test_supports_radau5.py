@@ -61,6 +61,15 @@ def test_a_slider_on_an_accelerating_support_sticks_or_slips_exactly(m, a0):
         np.testing.assert_allclose(rel, (a0 - F / m) * sol.t, rtol=1e-10, atol=1e-13)
 
 
+@pytest.mark.parametrize("method", ["bdf1", "bdf2", "radau5"])
+@pytest.mark.parametrize(("m", "a0"), [(2.0, 0.3), (2.0, -0.45), (1.0, 1.7)])
+def test_a_slider_starts_with_the_force_of_its_supports_acceleration(method, m, a0):
+    # the initial state's limit system reads the support's acceleration (F(0) was 0)
+    sol = simulate(slider(m, a0), method=method, dt=0.01, t_end=0.05)
+    assert sol.F["contact"][0] == pytest.approx(slider_exact(m, a0, np.zeros(1))[2][0],
+                                                rel=1e-12)
+
+
 # ---------------------------------------------------------------- a shaken oscillator
 
 

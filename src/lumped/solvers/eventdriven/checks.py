@@ -10,7 +10,7 @@ them changes the run's state.
 Each reads the laws' arguments at the nodes of the step's polynomial
 (:meth:`~lumped.solvers.radau.stage.StageSystem.element_nodes`, which add a support's
 offset at each node's time), so each sets the support clock bare first
-(:meth:`~lumped.solvers.eventdriven.run.Radau5Run.bare`): the guards and kernels are then
+(:meth:`StepChecks.bare`): the guards and kernels are then
 the laws' own.
 """
 
@@ -62,6 +62,14 @@ class StepChecks:
     scene's ``spring`` and ``massless`` flags, ``tangent``, ``rtol``, ``atol`` and
     ``F_seen``.
     """
+
+    def bare(self) -> None:
+        """The support offsets set to 0 (a run with moving supports: its ``frame``), for
+        law arguments that hold them already (the nodes of a step's polynomial,
+        :meth:`~lumped.solvers.radau.stage.StageSystem.element_nodes`)."""
+        frame = getattr(self, "frame", None)
+        if frame is not None:
+            frame.bare()
 
     def start_forces(self, U: list[float]) -> list[float]:
         """The forces at ``t`` the step's polynomial starts from: after an event the

@@ -184,12 +184,6 @@ class Radau5Run(StepPass, StepChecks):
         if self.frame is not None:
             self.frame.at_time(t)
 
-    def bare(self) -> None:
-        """The support offsets set to 0, for law arguments that hold them already (the
-        nodes of a step's polynomial, :meth:`StageSystem.element_nodes`)."""
-        if self.frame is not None:
-            self.frame.bare()
-
     def commit(self, t: float) -> None:
         """Keep ``(t, x, v, F)`` as the last state a step or held interval ended on."""
         self.committed = (t, list(self.x), list(self.v), list(self.F))

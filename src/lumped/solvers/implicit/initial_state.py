@@ -181,11 +181,18 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
     # 2. the limit system
     kernels = [el.law.kernel for el in elements]
     spring = [el.kind == "spring" for el in elements]
-    # a dashpot on a moving support (lumped.scene.supports) reads its rate at eps as
-    # q0 + eps (a_b - a_a + o_e'(0)), o_e' = +-a_s: one stuck to the support takes the
-    # force that gives its mass the support's acceleration
-    q_rate = [0.0 if spring[e] else eps * r for e, r in enumerate(support_rates(scene, 0.0))] \
-        if getattr(scene, "support_frame", None) is not None else [0.0] * E
+    q_rate = [0.0] * E
+    frame = getattr(scene, "support_frame", None)
+    if frame is not None:
+        # a dashpot on a moving support (lumped.scene.supports) reads its rate at eps as
+        # (q0 + o_e(0)) + eps (a_b - a_a + o_e'(0)), o_e' = +-a_s, in its law's own
+        # kernel (the offset added first: added after the eps terms, as the shifted
+        # kernel would, it rounds them away): one stuck to the support takes the force
+        # that gives its mass the support's acceleration
+        q0 = [q + o for q, o in zip(q0, frame.offsets_at(0.0), strict=True)]
+        kernels = [getattr(el.law, "bound", el.law).kernel for el in elements]
+        q_rate = [0.0 if spring[e] else eps * r
+                  for e, r in enumerate(support_rates(scene, 0.0))]
 
     def evaluate(u: list[float]):
         G = [0.0] * n
