@@ -338,6 +338,7 @@ class SupportFrame:
         view.support_frame = self
         self.scene = view
         self._cache: dict[float, list[float]] = {}
+        self._along: tuple = (None, [])
         self.at_time(0.0)
 
     def at_time(self, t: float) -> None:
@@ -358,6 +359,15 @@ class SupportFrame:
                 self._cache.clear()
             got = self._cache[t] = support_offsets(self.source, t)
         return list(got)
+
+    def offsets_along(self, t0: float, h: float, nodes: tuple[float, ...]
+                      ) -> list[list[float]]:
+        """``o_e`` per element at the times ``t0 + s h``, ``s`` in ``nodes`` (the nodes of
+        a step's polynomial; the last ones asked are kept)."""
+        key = (t0, h, nodes)
+        if self._along[0] != key:
+            self._along = (key, [self.offsets_at(t0 + s * h) for s in nodes])
+        return self._along[1]
 
     def bare(self) -> None:
         """Every offset ``0``: the shifted laws, branches and guards are the law's own,

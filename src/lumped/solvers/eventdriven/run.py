@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 from ...grid import steps_for
-from ...scene import Mass, Scene
+from ...scene import Scene
 from ..implicit.initial_state import consistent_initial_state
 from ..modes.stuck import hold_interval
 from ..radau.dense import DenseOutput
@@ -31,7 +31,7 @@ from .checks import StepChecks
 from .fast import compiled_loop
 from .landing import Landing
 from .mode_state import ModeState
-from .setup import compiled_stage_solver, read_options, scene_plan, time_events
+from .setup import compiled_stage_solver, read_options, scene_plan, structure, time_events
 from .step import StepPass
 
 __all__ = ["Radau5Run", "DEFAULT_RTOL", "DEFAULT_ATOL"]
@@ -49,25 +49,6 @@ _KEPT_AT_T = 4
 #: (``MAX_ITERS``, :mod:`lumped.solvers.eventdriven.budget`) and ``max_events`` end
 #: the run.
 _BRIDGED = frozenset({Status.STEP_TOO_SMALL, Status.TOO_MANY_EVENTS, Status.INCONSISTENT})
-
-
-def _structure(scene: Scene, plan) -> tuple[list[bool], tuple[float, ...], list[bool],
-                                             list[bool], float]:
-    """``(is_mass, masses, spring, massless, m_min)`` of the scene's nodes and elements,
-    made once per plan (the scene's structure; the lists are only read): which nodes are
-    masses, ``m_i`` (``0.0`` at a junction), which elements are springs, which are
-    dashpots between junctions and ground only (a lock there has its force from a
-    junction's balance), and the lightest mass."""
-    got = plan.__dict__.get("radau5_structure")
-    if got is None:
-        is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
-        masses = scene.masses
-        massless = [not any(p >= 0 and is_mass[p] for p in (scene.elem_a[e], scene.elem_b[e]))
-                    and el.kind == "dashpot" for e, el in enumerate(scene.elements)]
-        got = plan.__dict__["radau5_structure"] = (
-            is_mass, masses, [el.kind == "spring" for el in scene.elements], massless,
-            min(mi for mi in masses if mi > 0.0))
-    return got
 
 
 class Radau5Run(StepPass, StepChecks):
@@ -104,9 +85,9 @@ class Radau5Run(StepPass, StepChecks):
         self.N, self.E = N, E = len(scene.nodes), len(scene.elements)
         self.n = N + E
         (self.is_mass, self.masses, self.spring, self.massless,
-         self.m_min) = _structure(scene, plan)
+         self.m_min) = structure(scene, plan)
         self.system = StageSystem(self.masses, scene.elem_a, scene.elem_b, self.spring)
-        self.system.frame = self.frame
+        self.system.frame = self.frame  # (the stage times of the support offsets)
         self.checked = plan.checked
         x = [float(nd.x0) for nd in scene.nodes]
         v, F, ic = consistent_initial_state(scene, time_scale=t_final,
@@ -124,8 +105,7 @@ class Radau5Run(StepPass, StepChecks):
             "initial_newton_iterations": ic["newton_iterations"], "held_intervals": 0}
         self.status, self.message = Status.SUCCESS, ""
         self.budget = WorkBudget(opts["max_steps"], t_final)  # (lumped.solvers.eventdriven.budget)
-        self.fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"]) \
-            if self.frame is None else (None, "python: moving supports (no compiled loop)")
+        self.fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"])
 
         self.ms = ms = ModeState(scene, plan, settings, opts, rtol, atol, stats, zeno_window)
         ms.fast = self.fast
@@ -339,8 +319,7 @@ class Radau5Run(StepPass, StepChecks):
                 if self._hold():
                     continue
             stats = self.stats
-            if self.fast is None and self.frame is None and \
-                    stats["steps"] >= adaptive_fast.COMPILE_AFTER and \
+            if self.fast is None and stats["steps"] >= adaptive_fast.COMPILE_AFTER and \
                     stats["loop"].startswith("python: not compiled yet"):
                 # a long run: compile the scene's loop now
                 self.fast, stats["loop"] = compiled_loop(self.scene, self.plan, None,

@@ -12,12 +12,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...scene import Scene
+from ...scene import Mass, Scene
 from ...scene.forcing import jumps
 from ...scene.supports import support_time_events
 
 __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "time_events", "step_floor",
-           "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "accumulating",
+           "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "structure",
+           "accumulating",
            "too_many"]
 
 #: The double's machine epsilon (the step floor's unit).
@@ -224,6 +225,25 @@ def scene_plan(scene: Scene) -> ScenePlan:
                      cyclic_elements(scene), key)
     _PLANS[scene] = plan
     return plan
+
+
+def structure(scene: Scene, plan) -> tuple[list[bool], tuple[float, ...], list[bool],
+                                           list[bool], float]:
+    """``(is_mass, masses, spring, massless, m_min)`` of the scene's nodes and elements,
+    made once per plan (the scene's structure; the lists are only read): which nodes are
+    masses, ``m_i`` (``0.0`` at a junction), which elements are springs, which are
+    dashpots between junctions and ground only (a lock there has its force from a
+    junction's balance), and the lightest mass."""
+    got = plan.__dict__.get("radau5_structure")
+    if got is None:
+        is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+        masses = scene.masses
+        massless = [not any(p >= 0 and is_mass[p] for p in (scene.elem_a[e], scene.elem_b[e]))
+                    and el.kind == "dashpot" for e, el in enumerate(scene.elements)]
+        got = plan.__dict__["radau5_structure"] = (
+            is_mass, masses, [el.kind == "spring" for el in scene.elements], massless,
+            min(mi for mi in masses if mi > 0.0))
+    return got
 
 
 def accumulating(recent: deque, window: float) -> bool:

@@ -47,6 +47,9 @@ from .tableau import END_SLOPES, A, C, W
 
 __all__ = ["DAMPED_AFTER", "MAX_NEWTON", "STALL_PASSES", "StageSystem"]
 
+#: The nodes ``s`` of a step's polynomial (:meth:`StageSystem.element_nodes`).
+_NODES = (0.0, *C)
+
 #: Passes of the ``radau5`` loop without an accepted step after which it stops (a guard
 #: against any cycle; backward Euler then bridges the point,
 #: :mod:`lumped.solvers.eventdriven.bridge`).
@@ -94,7 +97,6 @@ class StageSystem(ErrorEstimate):
         #: supports (the kernels read its offsets), else None; ``t_n`` the step's start
         self.frame = None
         self.t_n = 0.0
-        self._node_offsets: tuple = (None, None)
 
     # -- the stage system ----------------------------------------------------------------
     def evaluate(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
@@ -383,18 +385,10 @@ class StageSystem(ErrorEstimate):
                 return v_n[i] if k < 0 else U[k * n + i]
         q = tuple(at(b, k) - at(a, k) for k in (-1, 0, 1, 2))
         if self.frame is not None:  # the law's argument: the support offset at each node
-            q = tuple(qk + o[e] for qk, o in zip(q, self.node_offsets(h), strict=True))
+            q = tuple(qk + o[e] for qk, o in zip(
+                q, self.frame.offsets_along(self.t_n, h, _NODES), strict=True))
         col = N + e
         return q, (F_n[e], U[col], U[n + col], U[2 * n + col])
-
-    def node_offsets(self, h: float) -> list[list[float]]:
-        """``o_e`` per element at the polynomial's nodes ``t_n + s h``, ``s = 0, c_1, c_2,
-        1`` (moving supports, :attr:`frame`)."""
-        key, got = self._node_offsets
-        if key != (self.t_n, h):
-            got = [self.frame.offsets_at(self.t_n + s * h) for s in (0.0, C[0], C[1], C[2])]
-            self._node_offsets = ((self.t_n, h), got)
-        return got
 
     def end_slope(self, U: list[float], h: float, F_n: list[float]) -> list[float]:
         """``F'`` of every element at the end of the step, from its collocation polynomial."""
