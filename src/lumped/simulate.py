@@ -42,8 +42,8 @@ def simulate(
         One of :data:`lumped.solvers.registry.METHODS`; default ``"auto"``, which runs
         what the arguments ask for (:func:`lumped.solvers.registry.resolve_method`):
         ``rtol``/``atol`` or neither, the adaptive ``radau5``; ``dt`` alone, a fixed-step
-        method (``closed-bdf2`` on the paper's oscillator, else ``bdf2``); a scene with
-        moving supports, ``bdf2`` (``radau5`` does not take them).
+        method (``closed-bdf2`` on the paper's oscillator, else ``bdf2``, as on a scene
+        with moving supports).
     t_end : float
         Final time (``> 0``).
     dt : float, optional

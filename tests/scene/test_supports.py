@@ -272,18 +272,12 @@ def test_elongations_of_a_support_scene_need_the_time():
 
 
 @pytest.mark.parametrize(("method", "match"), [
-    ("radau5", "radau5' does not take a scene with moving supports"),
     ("closed-bdf2", "moving supports"),
     ("exact", "moving supports"),
 ])
 def test_methods_without_supports_refuse_them(method, match):
     with pytest.raises(ValueError, match=match):
         simulate(belt(), method=method, dt=1e-3, t_end=0.1)
-
-
-def test_auto_with_tolerances_says_it_needs_dt_for_bdf2():
-    with pytest.raises(ValueError, match="moving supports"):
-        simulate(belt(), rtol=1e-8, t_end=0.1)
 
 
 def test_a_string_on_a_support_is_refused():

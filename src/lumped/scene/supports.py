@@ -29,13 +29,27 @@ time-stepping solvers run: each support element's law is replaced by its *shifte
 ``R_e(y_b - y_a + o_e(t), F)``, an ordinary law in the node states whose offset is the
 value set by :meth:`SupportFrame.at_time` (the time of the system being solved,
 ``t_{n+1}`` for a BDF step).
+
+**The adaptive method** (``radau5``) runs on the same view: its laws' branches are the
+shifted branches (:class:`ShiftedBranches`: every kernel, guard and branch selector of
+the law reads ``q + o_e``), and the driver sets the clock to the time of every system it
+solves or state it reads (each stage time ``t_n + c_k h`` in turn, the probe's
+``t + h_p``, an event's ``t``). Where it reads ``q`` along a step's collocation
+polynomial it forms the law's argument itself, ``q_e + o_e(t_n + s h)`` at the
+polynomial's nodes (:meth:`SupportFrame.offsets_at`), with the clock *bare*
+(:meth:`SupportFrame.bare`: every offset 0, so the shifted functions are the law's own).
+A locking branch of an element on a support reports no ``lock_value``: its lock
+``q_e + o_e(t) = L`` moves with the support, so the rules that set rates or positions
+exactly onto a lock value leave it to the stage system, which holds it at every stage.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -43,8 +57,10 @@ if TYPE_CHECKING:
     from .ground import GroundMotion
     from .network import Scene
 
-__all__ = ["SupportEnd", "check_supports", "SupportFrame", "solver_view", "supported_scene",
-           "support_lock", "support_offsets"]
+__all__ = ["SupportEnd", "check_supports", "SupportFrame", "ShiftedBranches", "branches_of",
+           "solver_view", "supported_scene", "support_lock", "support_offsets", "support_rates",
+           "support_time",
+           "support_time_events", "support_time_restored"]
 
 
 @dataclass(frozen=True)
@@ -104,6 +120,20 @@ def support_offsets(scene: Scene, t: float | None) -> list[float]:
     ------
     ValueError
         If ``t`` is not a finite time."""
+    return _support_values(scene, t, 0)
+
+
+def support_rates(scene: Scene, t: float) -> list[float]:
+    """``o_e'(t)`` per element of ``scene`` (the scene a :class:`SupportFrame` was made
+    from, or its view): ``+-v_s(t)`` (spring) or ``+-a_s(t)`` (dashpot) for an end on a
+    support, else ``0`` (a stuck dashpot's rate stays 0 only if its nodes take the
+    support's acceleration: the initial state's limit system reads it)."""
+    frame = getattr(scene, "support_frame", None)
+    return _support_values(scene if frame is None else frame.source, t, 1)
+
+
+def _support_values(scene: Scene, t: float | None, order: int) -> list[float]:
+    """``o_e`` (``order`` 0) or ``o_e'`` (``order`` 1) per element at ``t``."""
     if t is None or not isinstance(t, numbers.Real) or not math.isfinite(t):
         raise ValueError(f"`t` must be a finite time on a scene with supports, got {t!r}")
     out = [0.0] * len(scene.elements)
@@ -113,7 +143,7 @@ def support_offsets(scene: Scene, t: float | None) -> list[float]:
         if got is None:
             got = motions[end.support] = scene.supports[end.support].at(t)
         spring = scene.elements[end.element].kind == "spring"
-        out[end.element] = end.sign * (got[0] if spring else got[1])
+        out[end.element] = end.sign * (got[order] if spring else got[order + 1])
     return out
 
 
@@ -157,14 +187,122 @@ class _ShiftedKernel:
 class _ShiftedLaw:
     """A bound law whose kernel reads ``q + o_e(t)`` (see the module notes)."""
 
-    __slots__ = ("bound", "law", "params", "kernel")
+    __slots__ = ("bound", "law", "params", "kernel", "offsets", "e", "_branches")
 
     def __init__(self, bound: Any, offsets: list[float], e: int) -> None:
         self.bound, self.law, self.params = bound, bound.law, bound.params
         self.kernel = _ShiftedKernel(bound.kernel, offsets, e)
+        self.offsets, self.e = offsets, e
+        self._branches: ShiftedBranches | None = None
+
+    def branches(self) -> ShiftedBranches:
+        """The law's branches in the shifted argument (:class:`ShiftedBranches`)."""
+        if self._branches is None:
+            from ..codegen.branches import law_branches
+
+            self._branches = ShiftedBranches(law_branches(self.bound), self.bound,
+                                             self.offsets, self.e)
+        return self._branches
 
     def __repr__(self) -> str:
         return f"shifted({self.bound!r})"
+
+
+def _shifted(fn: Callable, offsets: list[float], e: int) -> Callable:
+    """``fn(q + offsets[e], F)``, with ``fn``'s ``magnitude`` shifted the same way."""
+    def shifted(q: float, F: float):
+        return fn(q + offsets[e], F)
+
+    mag = getattr(fn, "magnitude", None)
+    if mag is not None:
+        shifted.magnitude = lambda q, F: mag(q + offsets[e], F)  # type: ignore[attr-defined]
+    return shifted
+
+
+class ShiftedBranches:
+    r"""The branches of an element's law on a support, in the node states: each kernel,
+    guard and the branch selector of :class:`~lumped.codegen.branches.LawBranches` called
+    at ``(q + o_e, F)``, ``o_e`` read from the frame's offsets at the call (the clock's
+    time, :meth:`SupportFrame.at_time`; ``0`` when :meth:`SupportFrame.bare`).
+
+    ``info`` and ``count`` are the law's, except that a locking branch has no
+    ``lock_value`` (its lock ``q = L - o_e(t)`` in the node states moves with the
+    support; see the module notes)."""
+
+    def __init__(self, lb: Any, bound: Any, offsets: list[float], e: int) -> None:
+        self.lb, self.bound, self.offsets, self.e = lb, bound, offsets, e
+        self.count = lb.count
+        self.info = tuple(dataclasses.replace(info, lock_value=None) for info in lb.info)
+        self.branch = _shifted(lb.branch, offsets, e)
+        self._made: dict[tuple, Callable | None] = {}
+
+    def _get(self, key: tuple, make: Callable[[], Callable | None]) -> Callable | None:
+        if key not in self._made:
+            fn = make()
+            self._made[key] = None if fn is None else _shifted(fn, self.offsets, self.e)
+        return self._made[key]
+
+    def kernel_for(self, i: int) -> Callable:
+        return self._get(("kernel", i), lambda: self.lb.kernel_for(i))
+
+    def stage_kernel_for(self, i: int) -> Callable:
+        return self._get(("stage", i), lambda: self.lb.stage_kernel_for(i))
+
+    def guards_for(self, i: int) -> Callable:
+        return self._get(("guards", i), lambda: self.lb.guards_for(i))
+
+    def stage_guards_for(self, i: int) -> Callable:
+        return self._get(("stage_guards", i), lambda: self.lb.stage_guards_for(i))
+
+    def stage_law_for(self, law_kernel: Callable) -> Callable | None:
+        """The law's :meth:`~lumped.codegen.branches.LawBranches.stage_law_for` on its own
+        kernel, shifted; ``None`` as there (the caller's ``law_kernel``, the element's
+        shifted kernel, is then the answer)."""
+        return self._get(("law",), lambda: self.lb.stage_law_for(self.bound.kernel))
+
+    def __repr__(self) -> str:
+        return f"shifted({self.lb!r}, element {self.e})"
+
+
+def branches_of(law: Any) -> Any:
+    """:func:`~lumped.codegen.branches.law_branches` of ``law``, or the
+    :class:`ShiftedBranches` of a law shifted by a :class:`SupportFrame`."""
+    if isinstance(law, _ShiftedLaw):
+        return law.branches()
+    from ..codegen.branches import law_branches
+
+    return law_branches(law)
+
+
+def support_time(scene: Any, t: float) -> None:
+    """Set the support clock of ``scene`` (a :class:`SupportFrame`'s view) to ``t``;
+    nothing on any other scene."""
+    clock = getattr(scene, "support_clock", None)
+    if clock is not None:
+        clock(t)
+
+
+@contextmanager
+def support_time_restored(scene: Any, t: float) -> Iterator[None]:
+    """Within the block the caller sets the clock where it needs it; on the way out it
+    is set back to ``t`` (a probe at ``t + h_p`` inside a choice at ``t``)."""
+    try:
+        yield
+    finally:
+        support_time(scene, t)
+
+
+def support_time_events(scene: Scene, t_end: float) -> tuple[list[float], list[float]]:
+    """``(breaks, kinks)``: the times in ``(0, t_end)`` where a support's acceleration
+    jumps or kinks (its :meth:`~lumped.scene.GroundMotion.breakpoints`), and those at
+    which it is continuous (:meth:`~lumped.scene.GroundMotion.kinks`). The offsets
+    ``x_s``, ``v_s`` are continuous at all of them."""
+    breaks: set[float] = set()
+    kinks: set[float] = set()
+    for motion in getattr(scene, "supports", {}).values():
+        breaks.update(float(b) for b in motion.breakpoints(0.0, t_end))
+        kinks.update(float(b) for b in motion.kinks(0.0, t_end))
+    return sorted(breaks), sorted(kinks)
 
 
 class SupportFrame:
@@ -197,7 +335,10 @@ class SupportFrame:
         view.support_ends = ()
         view.supports = {}
         view.support_clock = self.at_time
+        view.support_frame = self
         self.scene = view
+        self._cache: dict[float, list[float]] = {}
+        self._along: tuple = (None, [])
         self.at_time(0.0)
 
     def at_time(self, t: float) -> None:
@@ -206,7 +347,33 @@ class SupportFrame:
         if t == self._t:
             return
         self._t = t
-        self.offsets[:] = support_offsets(self.source, t)  # (in place: the laws read it)
+        self.offsets[:] = self.offsets_at(t)  # (in place: the laws read it)
+
+    def offsets_at(self, t: float) -> list[float]:
+        """``o_e(t)`` per element (a new list; the clock is not moved). The last few
+        times are remembered: a stage solve asks for the same three stage times at every
+        Newton iteration."""
+        got = self._cache.get(t)
+        if got is None:
+            if len(self._cache) >= 16:
+                self._cache.clear()
+            got = self._cache[t] = support_offsets(self.source, t)
+        return list(got)
+
+    def offsets_along(self, t0: float, h: float, nodes: tuple[float, ...]
+                      ) -> list[list[float]]:
+        """``o_e`` per element at the times ``t0 + s h``, ``s`` in ``nodes`` (the nodes of
+        a step's polynomial; the last ones asked are kept)."""
+        key = (t0, h, nodes)
+        if self._along[0] != key:
+            self._along = (key, [self.offsets_at(t0 + s * h) for s in nodes])
+        return self._along[1]
+
+    def bare(self) -> None:
+        """Every offset ``0``: the shifted laws, branches and guards are the law's own,
+        for arguments that already hold ``o_e`` (:meth:`offsets_at`)."""
+        self._t = math.nan
+        self.offsets[:] = [0.0] * len(self.offsets)
 
 
 def _no_clock(t: float) -> None:

@@ -25,7 +25,9 @@ Built-in methods (the same names on the command line):
 ``auto``
     What the user gave decides (:func:`resolve_method`): ``rtol``/``atol`` or nothing,
     ``radau5``; ``dt`` alone, ``closed-bdf2`` on the paper's scene, else ``bdf2``; a law
-    ``radau5`` does not take, or moving supports (:mod:`lumped.scene.supports`), ``bdf2``.
+    ``radau5`` does not take, ``bdf2``. Scenes with moving supports
+    (:mod:`lumped.scene.supports`) follow the same rule (``radau5`` runs them in its
+    Python loop, ``closed-bdf2`` refuses them).
 
 All but ``radau5`` are fixed-step methods (they need ``dt``; the grid is ``t_n = n dt``).
 Each family hands its runners over (``RUNNERS`` of :mod:`lumped.solvers.bdf.runners`
@@ -105,9 +107,10 @@ def resolve_method(scene: Scene, method: str, *, dt: float | None = None,
     neither
         ``radau5`` at its default tolerances.
 
-    A scene with a law ``radau5`` does not take, or with moving supports
+    A scene with a law ``radau5`` does not take
     (:func:`lumped.solvers.eventdriven.setup.scope_error`), runs ``bdf2`` whatever was
-    given, and needs ``dt``."""
+    given, and needs ``dt``. A scene with moving supports follows the rules above
+    (``dt`` alone: ``bdf2``, as ``closed-bdf2`` refuses supports)."""
     if method != "auto":
         return method
     if scene_plan(scene).refused:  # (scope_error, kept per scene object)

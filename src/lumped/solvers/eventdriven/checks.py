@@ -6,6 +6,12 @@ the stage system): the forces the step's polynomials start from after an event, 
 guard crossing along the step, the dense output's defect against the held laws, a kink of
 the force split among locks in parallel, and a guard's value at the step's end. None of
 them changes the run's state.
+
+Each reads the laws' arguments at the nodes of the step's polynomial
+(:meth:`~lumped.solvers.radau.stage.StageSystem.element_nodes`, which add a support's
+offset at each node's time), so each sets the support clock bare first
+(:meth:`StepChecks.bare`): the guards and kernels are then
+the laws' own.
 """
 
 from __future__ import annotations
@@ -57,6 +63,14 @@ class StepChecks:
     ``F_seen``.
     """
 
+    def bare(self) -> None:
+        """The support offsets set to 0 (a run with moving supports: its ``frame``), for
+        law arguments that hold them already (the nodes of a step's polynomial,
+        :meth:`~lumped.solvers.radau.stage.StageSystem.element_nodes`)."""
+        frame = getattr(self, "frame", None)
+        if frame is not None:
+            frame.bare()
+
     def start_forces(self, U: list[float]) -> list[float]:
         """The forces at ``t`` the step's polynomial starts from: after an event the
         stage forces' quadratic at ``s = 0`` rather than the probe's forces, whose
@@ -88,6 +102,7 @@ class StepChecks:
         if not self.ms.forces_from_probe:
             return F
         F_q = self.start_forces(U)
+        self.bare()
         cones, lbs, modes, massless = self.cones, self.lbs, self.modes, self.massless
         out = []
         for e in range(self.E):
@@ -109,6 +124,7 @@ class StepChecks:
         watched, tangent, guards = self.watched, self.tangent, self.guards
         if not watched:
             return None
+        self.bare()
         system, x, v = self.system, self.x, self.v
         fns = [guards[e] for e in watched]
         if tangent:
@@ -127,6 +143,7 @@ class StepChecks:
         (:func:`lumped.solvers.radau.dense_defect.dense_defect`)."""
         n, N, x, v = self.n, self.N, self.x, self.v
         F0 = self.dense_start_forces(U, h)
+        self.bare()
         v_scale = max([abs(vi) for vi in v] + [abs(U[2 * n + i]) for i in range(N)])
         x_scale = max(abs(xi) for xi in x) + h * v_scale
         return dense_defect([self.system.element_nodes(U, h, x, v, F0, e)
@@ -152,6 +169,7 @@ class StepChecks:
         run's tolerance: not a tangency's round-off, another root of the held branch."""
         system, x, v, F, rtol, atol = self.system, self.x, self.v, self.F, self.rtol, \
             self.atol
+        self.bare()
         for w, j in self.tangent:
             e = self.watched[w]
             q, Fe = system.element_nodes(U, h, x, v, F, e)
@@ -164,5 +182,6 @@ class StepChecks:
         """Guard ``which = (watched index, guard index)`` at the step's end, and its
         tolerance."""
         e = self.watched[which[0]]
+        self.bare()
         q, Fe = self.system.element_nodes(U, h, self.x, self.v, self.F, e)
         return self.guards[e](q[3], Fe[3])[which[1]], guard_tolerance(q[3], Fe[3])

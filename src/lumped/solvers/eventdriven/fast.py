@@ -49,9 +49,13 @@ def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
     compiled parts are kept on it); ``option`` is the ``compiled`` keyword: ``False``
     asks for the Python loop, ``True`` for the compiled loop now, ``None`` for it now if
     the scene's structure has its compiled module (in this process or the disk cache),
-    else once the run has taken :data:`COMPILE_AFTER` ``steps``."""
+    else once the run has taken :data:`COMPILE_AFTER` ``steps``. A scene with moving
+    supports (a :class:`~lumped.scene.supports.SupportFrame`'s view) has none: the
+    compiled loop has no support offsets."""
     if option is False:
         return None, "python: compiled=False"
+    if getattr(scene, "support_frame", None) is not None:  # (lumped.scene.supports)
+        return None, "python: moving supports (no compiled loop)"
     with plan.lock:
         if plan.fast is None:
             if option is None and steps < COMPILE_AFTER and not _loaded(scene, plan):

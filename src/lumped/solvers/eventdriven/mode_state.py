@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections import deque
 
 from ...scene import Mass, Scene
+from ...scene.supports import support_time
 from ..modes.choice import select_modes
 from ..modes.lock_events import (
     after_impact_forces,
@@ -104,6 +105,8 @@ class ModeState:
         scene, lbs, modes, names, events = self.scene, self.lbs, self.modes, self.names, \
             self.events
         rtol, atol, options = self.rtol, self.atol, self.settings.options
+        support_time(scene, t)  # (moving supports: the laws at t; a probe at t + h_p
+        # sets its own time and sets t back)
         if self.fast is not None:
             self.fast.forget()  # x, v, F may change in place here
         h0 = h_probe

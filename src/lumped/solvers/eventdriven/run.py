@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 from ...grid import steps_for
-from ...scene import Mass, Scene
+from ...scene import Scene
 from ..implicit.initial_state import consistent_initial_state
 from ..modes.stuck import hold_interval
 from ..radau.dense import DenseOutput
@@ -31,7 +31,7 @@ from .checks import StepChecks
 from .fast import compiled_loop
 from .landing import Landing
 from .mode_state import ModeState
-from .setup import compiled_stage_solver, read_options, scene_plan, time_events
+from .setup import compiled_stage_solver, read_options, scene_plan, structure, time_events
 from .step import StepPass, creep_floor, creep_stop
 
 __all__ = ["Radau5Run", "DEFAULT_RTOL", "DEFAULT_ATOL"]
@@ -51,25 +51,6 @@ _KEPT_AT_T = 4
 _BRIDGED = frozenset({Status.STEP_TOO_SMALL, Status.TOO_MANY_EVENTS, Status.INCONSISTENT})
 
 
-def _structure(scene: Scene, plan) -> tuple[list[bool], tuple[float, ...], list[bool],
-                                             list[bool], float]:
-    """``(is_mass, masses, spring, massless, m_min)`` of the scene's nodes and elements,
-    made once per plan (the scene's structure; the lists are only read): which nodes are
-    masses, ``m_i`` (``0.0`` at a junction), which elements are springs, which are
-    dashpots between junctions and ground only (a lock there has its force from a
-    junction's balance), and the lightest mass."""
-    got = plan.__dict__.get("radau5_structure")
-    if got is None:
-        is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
-        masses = scene.masses
-        massless = [not any(p >= 0 and is_mass[p] for p in (scene.elem_a[e], scene.elem_b[e]))
-                    and el.kind == "dashpot" for e, el in enumerate(scene.elements)]
-        got = plan.__dict__["radau5_structure"] = (
-            is_mass, masses, [el.kind == "spring" for el in scene.elements], massless,
-            min(mi for mi in masses if mi > 0.0))
-    return got
-
-
 class Radau5Run(StepPass, StepChecks):
     """The state of one ``radau5`` run of ``scene`` (see the module notes); :meth:`run`
     takes it to the end.
@@ -77,13 +58,24 @@ class Radau5Run(StepPass, StepChecks):
     Set up in the constructor: the consistent initial state and the initial mode (by a
     vanishing implicit step of the full laws), the first step size, the compiled loop if
     the scene has one.
+
+    With moving supports ``scene`` is the view of a
+    :class:`~lumped.scene.supports.SupportFrame` (``source`` the user's scene, which a
+    bridge runs on): :meth:`clock` sets its offsets to the time of the state being read,
+    the stage system sets them per stage, and the checks along a step read the law's
+    argument at the polynomial's nodes with the clock bare. Such a run has no compiled
+    loop and no held intervals (a node stuck to a moving support moves).
     """
 
-    def __init__(self, scene: Scene, settings) -> None:
+    def __init__(self, scene: Scene, settings, source: Scene | None = None) -> None:
         plan = scene_plan(scene)
         if plan.refused:
             raise ValueError(plan.refused)
         self.scene, self.settings, self.plan = scene, settings, plan
+        #: the support frame of a scene with moving supports (else None), and the scene
+        #: the user gave
+        self.frame = getattr(scene, "support_frame", None)
+        self.source = scene if source is None else source
         self.rtol = rtol = DEFAULT_RTOL if settings.rtol is None else settings.rtol
         self.atol = atol = DEFAULT_ATOL if settings.atol is None else settings.atol
         self.opts = opts = read_options(settings)
@@ -93,8 +85,9 @@ class Radau5Run(StepPass, StepChecks):
         self.N, self.E = N, E = len(scene.nodes), len(scene.elements)
         self.n = N + E
         (self.is_mass, self.masses, self.spring, self.massless,
-         self.m_min) = _structure(scene, plan)
+         self.m_min) = structure(scene, plan)
         self.system = StageSystem(self.masses, scene.elem_a, scene.elem_b, self.spring)
+        self.system.frame = self.frame  # (the stage times of the support offsets)
         self.checked = plan.checked
         x = [float(nd.x0) for nd in scene.nodes]
         v, F, ic = consistent_initial_state(scene, time_scale=t_final,
@@ -165,6 +158,11 @@ class Radau5Run(StepPass, StepChecks):
 
     # -----------------------------------------------------------------------------------
     # small pieces
+
+    def clock(self, t: float) -> None:
+        """The support offsets the laws read set to ``o_e(t)`` (no supports: nothing)."""
+        if self.frame is not None:
+            self.frame.at_time(t)
 
     def commit(self, t: float) -> None:
         """Keep ``(t, x, v, F)`` as the last state a step or held interval ended on."""
@@ -240,9 +238,10 @@ class Radau5Run(StepPass, StepChecks):
         scale = ([atol + rtol * abs(vi) for vi in v]
                  + [rtol * max(abs(Fe), self.Fref) for Fe in F]) * 3
         system, kernels, cones = self.system, self.kernels, self.cones
+        system.t_n = t  # (the stage times t + c_k h of the support offsets)
         if damped:
             return system.solve_damped(self.U, h, x, v, fk, kernels, scale, max_iters=iters)
-        if self.stage_solve is None and self.opts["compiled"] is True:
+        if self.stage_solve is None and self.opts["compiled"] is True and self.frame is None:
             self.stage_solve = compiled_stage_solver(self.scene, self.modes)  # the live list
         if self.stage_solve is None or cones:  # (locks in parallel: the cone split)
             return system.solve(self.U, h, x, v, fk, kernels, scale, max_iters=iters,
@@ -276,7 +275,7 @@ class Radau5Run(StepPass, StepChecks):
             return False
         t = self.t
         start = self.committed if self.committed[0] == t else (t, self.x, self.v, self.F)
-        got = take_bridge(self.scene, start, len(bridges), self.rtol, self.h_big,
+        got = take_bridge(self.source, start, len(bridges), self.rtol, self.h_big,
                           self.t_final, self.settings.options, self.opts["restitution"],
                           self.dense, self.rows, self.ms.events, self.ms.log, self.stats)
         if isinstance(got, str):
@@ -308,15 +307,14 @@ class Radau5Run(StepPass, StepChecks):
         opts = self.opts
         while self.t < self.t_final:
             if self.status is not Status.SUCCESS:
-                # a stop mid-run: backward Euler bridges it (lumped.solvers.eventdriven.bridge), or
-                # the run ends here
+                # a stop mid-run: bridged by backward Euler (.bridge), or the run ends here
                 if not (opts["bridge"] and self.status in _BRIDGED
                         and len(self.ms.events) <= opts["max_events"] and self.bridge_over()):
                     break
                 continue
             if self.stop(self.budget.check(self.t, self.stats)):
                 continue  # the work budget is spent: the run ends (never bridged)
-            if self.hold_check and self.target is None and not self.kept:
+            if self.hold_check and self.target is None and not self.kept and self.frame is None:
                 self.hold_check = False
                 if self._hold():
                     continue
@@ -367,13 +365,10 @@ class Radau5Run(StepPass, StepChecks):
         stats = self.stats
         before = stats["steps"]
         why = self.fast.run(st, self.modes, self.watched, stats, self.dense, self.rows)
-        self.t, self.h, self.x, self.v, self.F = st["t"], st["h"], st["x"], st["v"], st["F"]
-        self.dF_n = st["dF_n"]
+        for key in ("t", "h", "x", "v", "F", "dF_n", "F_seen", "h_acc", "err_acc", "h_good",
+                    "h_big", "stalled", "bi", "creeping"):  # (bi: the kinks it stepped onto)
+            setattr(self, key, st[key])
         self.commit(self.t)
-        self.F_seen, self.h_acc, self.err_acc = st["F_seen"], st["h_acc"], st["err_acc"]
-        self.h_good, self.h_big, self.stalled = st["h_good"], st["h_big"], st["stalled"]
-        self.bi = st["bi"]  # (the kinks it stepped onto)
-        self.creeping = st["creeping"]
         if stats["steps"] > before:  # (as the Python loop's accepted steps set them)
             self.kink_cuts, self.ms.hint = 0, None
             if why == "creep":  # (its last step stops the run: Python's order)

@@ -36,10 +36,11 @@ numbers.
 from __future__ import annotations
 
 from ...scene import Scene
+from ...scene.supports import supported_scene
 from ..status import RawRun
 from .at_rest import rest_run
 from .run import DEFAULT_ATOL, DEFAULT_RTOL, Radau5Run
-from .setup import EXTRA_OPTIONS
+from .setup import EXTRA_OPTIONS, scope_error
 
 __all__ = ["run_radau5", "DEFAULT_RTOL", "DEFAULT_ATOL", "EXTRA_OPTIONS"]
 
@@ -52,6 +53,16 @@ def run_radau5(scene: Scene, settings) -> RawRun:
     :data:`EXTRA_OPTIONS` come in ``settings.extra``. A scene proven at rest for the
     whole run takes its one held interval directly
     (:func:`lumped.solvers.eventdriven.at_rest.rest_run`, the same solution).
+
+    A scene with moving supports (:mod:`lumped.scene.supports`) runs on the view of its
+    :class:`~lumped.scene.supports.SupportFrame` (the laws shifted by ``o_e(t)``, the
+    clock set by the driver) in the Python loop; a backward-Euler bridge runs on the
+    scene itself (``bdf1`` with its own frame).
     """
+    if getattr(scene, "support_ends", ()):
+        why = scope_error(scene)
+        if why is not None:
+            raise ValueError(why)
+        return Radau5Run(supported_scene(scene, "radau5").scene, settings, source=scene).run()
     held = rest_run(scene, settings)
     return held if held is not None else Radau5Run(scene, settings).run()

@@ -12,11 +12,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...scene import Scene
+from ...scene import Mass, Scene
 from ...scene.forcing import jumps
+from ...scene.supports import support_time_events
 
 __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "time_events", "step_floor",
-           "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "accumulating",
+           "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "structure",
+           "accumulating",
            "too_many"]
 
 #: The double's machine epsilon (the step floor's unit).
@@ -67,8 +69,10 @@ def read_options(settings) -> dict:
 def scope_error(scene: Scene) -> str | None:
     """Why ``radau5`` does not take ``scene``, or ``None`` when it does.
 
-    A scene with moving supports (:mod:`lumped.scene.supports`) is refused: its stage
-    system has no time-dependent element offsets yet; ``auto`` runs ``bdf2`` there.
+    A scene with moving supports (:mod:`lumped.scene.supports`) is taken unless an element
+    on a support has a position lock (a taut string: impacts against a moving support
+    are not implemented, :func:`~lumped.scene.supports.support_lock`); its laws read
+    ``q + o_e(t)`` at the time of every system solved (see that module).
 
     A branch whose ``dR/dF`` is unbounded at its boundary
     (:attr:`lumped.codegen.branches.BranchInfo.steep`: Herschel-Bulkley with ``n < 1`` at
@@ -79,15 +83,14 @@ def scope_error(scene: Scene) -> str | None:
     stop mid-run, and ``auto`` runs ``bdf2`` there (its globalised Newton takes such
     points).
     """
-    from ...codegen.branches import law_branches
+    from ...scene.supports import branches_of, support_lock
 
     if getattr(scene, "support_ends", ()):
-        return (f"method 'radau5' does not take a scene with moving supports "
-                f"({', '.join(sorted(scene.supports))}): their time-dependent element "
-                "offsets are not in its stage system; use 'bdf1' or 'bdf2' (or 'auto', which "
-                "runs 'bdf2' here)")
+        why = support_lock(scene)
+        if why is not None:
+            return f"method 'radau5' does not take this scene: {why}"
     for el in scene.elements:
-        lb = law_branches(el.law)
+        lb = branches_of(el.law)
         for info in lb.info:
             if info.steep and info.stage is None:
                 return (f"method 'radau5' does not take element {el.name!r}: branch "
@@ -107,7 +110,11 @@ def breakpoints(scene: Scene, t_end: float) -> list[float]:
 def time_events(scene: Scene, t_end: float) -> tuple[list[float], list[bool]]:
     """``(breaks, kinks)``: the times in ``(0, t_end)`` where a forcing of ``scene`` jumps
     or kinks, in order, and per time whether every forcing is continuous there (a kink:
-    a point of a record; :func:`lumped.scene.forcing.jumps`).
+    a point of a record; :func:`lumped.scene.forcing.jumps`). The breakpoints of a
+    support's motion (:func:`lumped.scene.supports.support_time_events`; ``scene`` or the
+    scene of its :class:`~lumped.scene.supports.SupportFrame`) count as the forcing's: a
+    jump of the support's acceleration is a time event, a point where it is continuous
+    a kink.
 
     A step of ``radau5`` ends on each of them. At a jump the full laws choose the mode
     again (a time event, in the run's events); at a kink the state, the forces and so
@@ -125,6 +132,11 @@ def time_events(scene: Scene, t_end: float) -> tuple[list[float], list[bool]]:
         if get is not None:
             out.update(float(b) for b in get(0.0, t_end) if 0.0 < b < t_end)
             jumped.update(float(b) for b in jumps(fn, 0.0, t_end))
+    frame = getattr(scene, "support_frame", None)
+    s_breaks, s_kinks = support_time_events(frame.source if frame is not None else scene,
+                                            t_end)
+    out.update(b for b in s_breaks if 0.0 < b < t_end)
+    jumped.update(b for b in s_breaks if 0.0 < b < t_end and b not in s_kinks)
     breaks: list[float] = []
     kinks: list[bool] = []
     last = 0.0
@@ -204,15 +216,34 @@ def scene_plan(scene: Scene) -> ScenePlan:
                  or plan.key[2] == tuple(id(f) for f in scene.forcing)):
         return plan
     key = (scene.nodes, scene.elements, tuple(id(f) for f in scene.forcing), scene.forcing)
-    from ...codegen.branches import law_branches
+    from ...scene.supports import branches_of
     from ..implicit.branch_check import known_monotone
     from ..nonsmooth.locks import cyclic_elements
 
-    plan = ScenePlan(scope_error(scene), [law_branches(el.law) for el in scene.elements],
+    plan = ScenePlan(scope_error(scene), [branches_of(el.law) for el in scene.elements],
                      [e for e, el in enumerate(scene.elements) if not known_monotone(el.law)],
                      cyclic_elements(scene), key)
     _PLANS[scene] = plan
     return plan
+
+
+def structure(scene: Scene, plan) -> tuple[list[bool], tuple[float, ...], list[bool],
+                                           list[bool], float]:
+    """``(is_mass, masses, spring, massless, m_min)`` of the scene's nodes and elements,
+    made once per plan (the scene's structure; the lists are only read): which nodes are
+    masses, ``m_i`` (``0.0`` at a junction), which elements are springs, which are
+    dashpots between junctions and ground only (a lock there has its force from a
+    junction's balance), and the lightest mass."""
+    got = plan.__dict__.get("radau5_structure")
+    if got is None:
+        is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+        masses = scene.masses
+        massless = [not any(p >= 0 and is_mass[p] for p in (scene.elem_a[e], scene.elem_b[e]))
+                    and el.kind == "dashpot" for e, el in enumerate(scene.elements)]
+        got = plan.__dict__["radau5_structure"] = (
+            is_mass, masses, [el.kind == "spring" for el in scene.elements], massless,
+            min(mi for mi in masses if mi > 0.0))
+    return got
 
 
 def accumulating(recent: deque, window: float) -> bool:

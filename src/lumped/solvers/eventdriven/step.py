@@ -121,6 +121,7 @@ class StepPass:
             bi = self.bi
             t_n0 = math.nextafter(t, math.inf) if (bi > 0 and t == self.breaks[bi - 1]) else t
             net_n = self.scene.net_forces(t_n0, F)
+            self.clock(t)  # (the laws at y_n: the support offsets at t)
             q_n = self.scene.elongations(x, v)
             jac_n = [self.kernels[e](q_n[e], F[e])[1:] for e in range(self.E)]
             err = self.system.error(self.U, h, x, v, net_n, jac_n)
@@ -165,6 +166,7 @@ class StepPass:
                 self.h_acc = None
                 return
         F_0 = self.start_forces(sol) if self.checked else self.F
+        self.bare()  # (element_nodes hold the support offsets)
         folded = [e for e in self.checked if fold_crossed(
             self.kernels[e], *self.system.element_nodes(sol, h, self.x, self.v, F_0, e))]
         if folded:
@@ -303,6 +305,7 @@ class StepPass:
         self.target = None
         t_prev, t = self.t, t_new
         self.t = t
+        self.clock(t)
         self.x, self.v, self.F = Y[2][:N], Y[2][N:2 * N], Y[2][2 * N:]
         self.commit(t)
         stats["steps"] += 1

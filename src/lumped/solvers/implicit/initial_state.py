@@ -21,6 +21,7 @@ import math
 from functools import lru_cache
 
 from ...scene import Junction, Mass, Scene
+from ...scene.supports import support_rates
 from ..newton.criteria import residual_ok
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..newton.scalar_root import scalar_root
@@ -124,7 +125,12 @@ def consistent_initial_state(
             ) from None
         if fixed:
             pinned[e] = F_root
-    F_rest = initial_rest_forces(scene, pinned, q0, f) if all(is_mass) else None
+    # (a dashpot on a support that accelerates at t = 0 is no load held at rest)
+    accelerating = getattr(scene, "support_frame", None) is not None and any(
+        r != 0.0 and el.kind == "dashpot"
+        for r, el in zip(support_rates(scene, 0.0), elements, strict=True))
+    F_rest = initial_rest_forces(scene, pinned, q0, f) \
+        if all(is_mass) and not accelerating else None
     if F_rest is not None:  # at rest, the load held by locks: no Newton
         v, F = list(v0), F_rest
         stats = {"newton_iterations": 0, "residual_evals": 0, "jacobian_evals": 0,
@@ -175,6 +181,18 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
     # 2. the limit system
     kernels = [el.law.kernel for el in elements]
     spring = [el.kind == "spring" for el in elements]
+    q_rate = [0.0] * E
+    frame = getattr(scene, "support_frame", None)
+    if frame is not None:
+        # a dashpot on a moving support (lumped.scene.supports) reads its rate at eps as
+        # (q0 + o_e(0)) + eps (a_b - a_a + o_e'(0)), o_e' = +-a_s, in its law's own
+        # kernel (the offset added first: added after the eps terms, as the shifted
+        # kernel would, it rounds them away): one stuck to the support takes the force
+        # that gives its mass the support's acceleration
+        q0 = [q + o for q, o in zip(q0, frame.offsets_at(0.0), strict=True)]
+        kernels = [getattr(el.law, "bound", el.law).kernel for el in elements]
+        q_rate = [0.0 if spring[e] else eps * r
+                  for e, r in enumerate(support_rates(scene, 0.0))]
 
     def evaluate(u: list[float]):
         G = [0.0] * n
@@ -209,7 +227,7 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
                 row[k] = 1.0
                 continue
             scale = eps if spring[e] else 1.0  # springs see x0 + eps * v
-            q = q0[e] + scale * (at(d, b) - at(d, a))
+            q = q0[e] + q_rate[e] + scale * (at(d, b) - at(d, a))
             R, Rq, RF = kernels[e](q, Fe)
             G[k] = R
             S[k] = law_scale(kernels[e], q, Fe, R, Rq, RF)
@@ -220,7 +238,14 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
                 row[b] = Rq * scale * dd[b]
         return G, J, S
 
-    u0 = [0.0] * N + [
+    # a mass starts at the acceleration of a support it has a dashpot to (stuck there,
+    # its rate stays 0): the law row's residual is O(eps) and would pass at a = 0
+    a_guess = [0.0] * N
+    for e, r in enumerate(q_rate):
+        i = ea[e] if eb[e] < 0 else eb[e]
+        if r != 0.0 and i >= 0 and is_mass[i] and (ea[e] < 0 or eb[e] < 0):
+            a_guess[i] = (r if eb[e] < 0 else -r) / eps  # o_e' = -a_s at a, +a_s at b
+    u0 = a_guess + [
         Fp if Fp is not None else (el.F0 if el.F0 is not None else 0.0)
         for Fp, el in zip(pinned, elements, strict=True)
     ]
@@ -246,7 +271,7 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
             scale = eps if spring[e] else 1.0
             du_b = (eps * u[b] if is_mass[b] else u[b]) if b >= 0 else 0.0
             du_a = (eps * u[a] if is_mass[a] else u[a]) if a >= 0 else 0.0
-            return q0[e] + scale * (du_b - du_a)
+            return q0[e] + q_rate[e] + scale * (du_b - du_a)
 
         def project(u: list[float], free_out: list | None = None) -> list[float]:
             """Every free force on its own law where the law fixes it; with ``free_out``

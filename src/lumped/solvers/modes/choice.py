@@ -19,6 +19,7 @@ import sys
 from collections.abc import Sequence
 
 from ...scene import Mass, Scene
+from ...scene.supports import support_time, support_time_restored
 from ..implicit.globalize import solve_globalized
 from ..implicit.step_system import make_evaluate
 from ..newton.criteria import residual_ok
@@ -51,7 +52,21 @@ def select_modes(
     (modes, v_probe, F_probe) or str
         The branch indices, the velocities and forces of the probe step (the right limits
         at ``t``, up to ``O(h_probe)``), or a message when the step has no solution.
+
+    On a scene with moving supports (a :class:`~lumped.scene.supports.SupportFrame`'s
+    view) the laws are read at ``t + h_probe`` (the probe's state) and the clock is set
+    back to ``t`` on return.
     """
+    with support_time_restored(scene, t):
+        support_time(scene, t + h_probe)
+        return _select_modes(scene, branches, t, x, v, F, h_probe, options)
+
+
+def _select_modes(scene: Scene, branches: Sequence, t: float, x: list[float],
+                  v: list[float], F: list[float], h_probe: float,
+                  options: NewtonOptions | None
+                  ) -> tuple[list[int], list[float], list[float]] | str:
+    """:func:`select_modes` with the support clock at ``t + h_probe``."""
     N = len(scene.nodes)
     cm = [n.m / h_probe if isinstance(n, Mass) else 0.0 for n in scene.nodes]
     f = scene.external_forces(t + h_probe)

@@ -32,6 +32,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ...scene import Mass, Scene
+from ...scene.supports import support_time, support_time_restored
 
 __all__ = ["try_modes", "UNDECIDED", "REFUSED"]
 
@@ -60,32 +61,35 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
     (:func:`lumped.solvers.modes.mode_guess_jit.probe_modes`, the same numbers); the loop below
     is the reference. With ``min_norm`` (Python only) a singular step matrix (locks in
     parallel, whose split is free) is solved by the minimum-norm correction instead of
-    refusing the candidate."""
-    for _ in range(longer):
-        f = scene.external_forces(t + h_p)
-        if fast is not None:
-            k, out = fast.probe_modes(candidates, current, f, x, v, F, h_p)
-            if k >= 0:
-                N = len(x)
-                return list(candidates[k]), out[:N].tolist(), out[N:].tolist()
-            if k == REFUSED:
+    refusing the candidate. On a scene with moving supports the laws are read at
+    ``t + h_p`` and the clock is set back to ``t`` on return."""
+    with support_time_restored(scene, t):  # (moving supports: the laws at t + h_p)
+        for _ in range(longer):
+            support_time(scene, t + h_p)
+            f = scene.external_forces(t + h_p)
+            if fast is not None:
+                k, out = fast.probe_modes(candidates, current, f, x, v, F, h_p)
+                if k >= 0:
+                    N = len(x)
+                    return list(candidates[k]), out[:N].tolist(), out[N:].tolist()
+                if k == REFUSED:
+                    return None
+                h_p *= 1000.0
+                continue
+            undecided = False
+            for modes in candidates:
+                got = _probe(scene, branches, modes, f, x, v, F, h_p, min_norm)
+                if got is None:
+                    continue
+                v_p, F_p, q = got
+                read = [branches[e].branch(q[e], F_p[e]) for e in range(len(F))]
+                if read == list(modes):
+                    return list(modes), v_p, F_p
+                undecided = undecided or (current is not None and read == list(current))
+            if not undecided:
                 return None
             h_p *= 1000.0
-            continue
-        undecided = False
-        for modes in candidates:
-            got = _probe(scene, branches, modes, f, x, v, F, h_p, min_norm)
-            if got is None:
-                continue
-            v_p, F_p, q = got
-            read = [branches[e].branch(q[e], F_p[e]) for e in range(len(F))]
-            if read == list(modes):
-                return list(modes), v_p, F_p
-            undecided = undecided or (current is not None and read == list(current))
-        if not undecided:
-            return None
-        h_p *= 1000.0
-    return None
+        return None
 
 
 def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float],

@@ -15,7 +15,10 @@ collocation derivative ``V_k' ~ (1/h) sum_l w_kl (V_l - v_n)``, ``W = A^{-1}``::
                                       - net_i(t_n + c_k h, F_k) = 0    (junctions)
     R_e^{(b_e)}(q_e(X_k, V_k), F_k,e) = 0                              (elements)
 
-with ``q_e = X_b - X_a`` (springs) or ``V_b - V_a`` (dashpots), ground at 0. The step's
+with ``q_e = X_b - X_a`` (springs) or ``V_b - V_a`` (dashpots), ground at 0, plus an
+element's support offset ``o_e(t_n + c_k h)`` at the stage's own time when the scene has
+moving supports (:attr:`StageSystem.frame`: the clock of the shifted laws is set to each
+stage's time before its rows are formed, :mod:`lumped.scene.supports`). The step's
 result is stage 3 (``c_3 = 1``: stiffly accurate), and the stage values with ``y_n`` are
 the nodes of the collocation polynomial (the dense output,
 :func:`~lumped.solvers.radau.tableau.dense_weights`; the method's coefficients are in
@@ -40,9 +43,12 @@ from collections.abc import Callable, Sequence
 
 from .cone_split import cone_solver, linear_solver, row_scale, solves
 from .error import ErrorEstimate
-from .tableau import END_SLOPES, A, W
+from .tableau import END_SLOPES, A, C, W
 
 __all__ = ["DAMPED_AFTER", "MAX_NEWTON", "STALL_PASSES", "StageSystem"]
+
+#: The nodes ``s`` of a step's polynomial (:meth:`StageSystem.element_nodes`).
+_NODES = (0.0, *C)
 
 #: Passes of the ``radau5`` loop without an accepted step after which it stops (a guard
 #: against any cycle; backward Euler then bridges the point,
@@ -87,6 +93,10 @@ class StageSystem(ErrorEstimate):
         self.ea = list(elem_a)
         self.eb = list(elem_b)
         self.spring = list(spring)
+        #: the :class:`~lumped.scene.supports.SupportFrame` of a scene with moving
+        #: supports (the kernels read its offsets), else None; ``t_n`` the step's start
+        self.frame = None
+        self.t_n = 0.0
 
     # -- the stage system ----------------------------------------------------------------
     def evaluate(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
@@ -112,10 +122,13 @@ class StageSystem(ErrorEstimate):
         size = 3 * n
         G = [0.0] * size
         J = [[0.0] * size for _ in range(size)]
+        frame = self.frame
         for k in range(3):
             base = k * n
             fk = f[k]
             Wk = W[k]
+            if frame is not None:  # the shifted laws at the stage's time
+                frame.at_time(self.t_n + C[k] * h)
             for i in range(N):
                 row = J[base + i]
                 if m[i] > 0.0:
@@ -371,6 +384,9 @@ class StageSystem(ErrorEstimate):
                     return 0.0
                 return v_n[i] if k < 0 else U[k * n + i]
         q = tuple(at(b, k) - at(a, k) for k in (-1, 0, 1, 2))
+        if self.frame is not None:  # the law's argument: the support offset at each node
+            q = tuple(qk + o[e] for qk, o in zip(
+                q, self.frame.offsets_along(self.t_n, h, _NODES), strict=True))
         col = N + e
         return q, (F_n[e], U[col], U[n + col], U[2 * n + col])
 
