@@ -115,7 +115,6 @@ class ModeState:
                                  atol + rtol * max(abs(xi) for xi in x))
         hint = self.hint
         self._note_left(t)
-        self.returned = False
         sel = self._choose(t, h_probe, cause, x, v, F)
         if isinstance(sel, str):
             return sel
@@ -145,6 +144,7 @@ class ModeState:
                                     energy_lost=hit[1] if e == hit[0][0][0] else 0.0))
                 self.recent.append(t)
             self.left.clear()  # (the velocities jumped: a new state at t)
+            self.returned = False
             # the mode after the impact, from the velocities after it (the probe's guess:
             # the forces before it; a failed probe is tried longer, as above)
             for k in range(3):
@@ -248,6 +248,7 @@ class ModeState:
         scene, lbs, modes = self.scene, self.lbs, self.modes
         h0 = h_probe
         left = {m for m, (_, n) in self.left.items() if n >= 2} - {tuple(modes)}
+        self.returned = False
 
         def undecided(got: tuple) -> bool:
             # the mode kept at a guard, or one left twice at t before
