@@ -9,7 +9,7 @@ import numpy as np
 
 from lumped import simulate
 from lumped.laws import get_law
-from lumped.scene import Element, Junction, Mass, Scene
+from lumped.scene import Element, Junction, Mass, Scene, SineBurst
 
 
 def _hb(gamma: float, tau: float, n: float):
@@ -291,3 +291,34 @@ def test_a_run_that_creeps_at_a_landing_stops_with_a_clear_status(monkeypatch):
     assert np.all(np.isfinite(sol.data))
     assert sol.status.value == "step_too_small", sol.message
     assert "creeps" in sol.message and "'e1'" in sol.message, sol.message
+
+
+def test_a_choice_at_the_step_floor_forgets_the_old_modes_tangencies():
+    # random-network strategy, seed 226: at t = 0.29412 the step fell to its floor and
+    # the full laws chose the mode again (a Coulomb element and a Herschel-Bulkley n = 2
+    # dashpot between junctions switched); the guards read as a tangency's in the old mode,
+    # (watched element, guard) pairs, stayed, and the next step read guard 1 of an element
+    # whose new branch has one: IndexError. A change of mode now forgets them
+    scene = Scene(
+        [Mass("m0", m=0.22687633119984663, x0=-0.33700925978552687, v0=2.225073858507e-311),
+         Mass("m1", m=1.0, x0=0.0, v0=-0.28462255006106174),
+         Junction("j2", x0=-1.1096021837836067e-94), Junction("j3", x0=0.8406586938119713)],
+        [Element("e0", get_law("linear_spring").bind(k=1.602528605144585), "ground", "m0"),
+         Element("e1", get_law("coulomb").bind(tau=0.15885344768606313, r=1.0), "m0", "m1"),
+         Element("e2", _hb(1.0, 1.0, 1.0), "m1", "j2"),
+         Element("e3", _hb(1.0, 0.01, 2.0), "ground", "j3"),
+         Element("e4", get_law("string_spring").bind(k=23.346578955750612, L=1.0),
+                 "m1", "ground"),
+         Element("e5", get_law("implicit_spring").bind(k=1.0, L0=0.27808274376517994,
+                                                       F0=12.589254117941675), "j2", "ground"),
+         Element("e6", get_law("coulomb").bind(tau=0.010703885059810094, r=3.244360530116378),
+                 "j3", "m1")],
+        {"m0": SineBurst(amplitude=16.13689120876357, omega=1.0, t_off=0.4)})
+    dt, t_end = 0.018700937460469375, 0.5049253114326732
+    sol = simulate(scene, method="radau5", dt=dt, t_end=t_end, rtol=dt**2, atol=dt**3,
+                   compiled=False)
+    assert sol.ok, sol.message
+    # bdf2 at dt / 64 (its own error, against dt / 32: 4e-4)
+    ref = simulate(scene, method="bdf2", dt=dt / 64, t_end=t_end)
+    xs = slice(1, 1 + 2 * len(scene.nodes), 2)
+    assert np.abs(sol.data[:, xs] - ref.data[::64, xs]).max() < 1e-3  # (3.5e-4)

@@ -12,6 +12,7 @@ switches and tests for an accumulation of events.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 
 from ...scene import Mass, Scene
@@ -80,6 +81,12 @@ class ModeState:
         self.recent: deque = deque(maxlen=opts["zeno_events"])
         self.time_events = 0  # of the events, the forcing's time events
         self.kept_at_step = -2  # the accepted steps at the last kept choice at a guard
+        # the modes held at one t and left there, each with the number of events when it
+        # was first held there and the times it was (``left_at``: that t and the accepted
+        # steps then; :meth:`_note_left`)
+        self.left_at: tuple[float, int] = (math.nan, -1)
+        self.left: dict[tuple[int, ...], list[int]] = {}
+        self.returned = False  # the last choice returned to a mode held at t (_choose)
         self.log = IntervalLog()
         self.fast = None  # the compiled loop (told when x, v, F change in place)
         # a guessed mode is tried first when every law is monotone (lumped.solvers.
@@ -115,6 +122,7 @@ class ModeState:
             held = snap_to_locks(scene, lbs, x, v, F, atol + rtol * max(abs(vi) for vi in v),
                                  atol + rtol * max(abs(xi) for xi in x))
         hint = self.hint
+        self._note_left(t)
         sel = self._choose(t, h_probe, cause, x, v, F)
         if isinstance(sel, str):
             return sel
@@ -143,6 +151,8 @@ class ModeState:
                 events.append(Event(t, names[e], "impact", modes[e], new[e], impulse=impulse,
                                     energy_lost=hit[1] if e == hit[0][0][0] else 0.0))
                 self.recent.append(t)
+            self.left.clear()  # (the velocities jumped: a new state at t)
+            self.returned = False
             # the mode after the impact, from the velocities after it (the probe's guess:
             # the forces before it; a failed probe is tried longer, as above)
             for k in range(3):
@@ -163,7 +173,12 @@ class ModeState:
             if cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
                                                  scene.elongations(x, v), F):
                 F[:] = F_p
-        for e in range(self.E):
+        back = self.left.get(tuple(new))
+        if back is not None:
+            # back to a mode held at t (no accepted step since): the switches since then
+            # took no time, none stays
+            del events[back[0]:]
+        for e in range(self.E if back is None else 0):
             if new[e] != modes[e] and not any(ev.t == t and ev.element == names[e]
                                               and ev.kind == "impact"
                                               for ev in events[-self.E:]):
@@ -222,22 +237,65 @@ class ModeState:
             self.kept_at_step = steps
         return again and laws_hold(self.kernels, self.scene.elongations(x, v), F)
 
+    def _note_left(self, t: float) -> None:
+        """Record that the mode held now is left (or kept) at ``t``: the modes held at one
+        ``t`` with no accepted step between them, how often, and the events before the
+        first time (a return drops the switches since, :meth:`change_mode`; a mode left
+        twice is one :meth:`_choose` does not return to)."""
+        key = (t, self.stats["steps"])
+        if key != self.left_at:
+            self.left_at, self.left = key, {}
+        self.left.setdefault(tuple(self.modes), [len(self.events), 0])[1] += 1
+
     def _choose(self, t: float, h_probe: float, cause: str, x: list[float], v: list[float],
                 F: list[float]):
         """The full laws' mode after ``t`` from ``(x, v, F)``: ``(modes, v_p, F_p)`` of the
         probe that decided (a guessed mode first, then the full search, longer probes when
-        one fails or keeps the mode at a guard), the elements held at rate 0 put on their
-        locks; or the failure message."""
+        one fails, keeps the mode at a guard or returns to a mode left twice at ``t``),
+        the elements held at rate 0 put on their locks; or the failure message.
+
+        A mode held at ``t`` twice and left there twice (no accepted step between: each
+        step in it crossed a guard at ``t`` itself, :meth:`_note_left`) is not chosen again
+        at ``t``: the choice cycles, and the probe that reads that mode is too short to
+        decide (issue 29). One return is left alone (a string that goes taut at ``t`` and
+        slack again at once is kept slack, its guard read as a tangency).
+
+        Two dashpots reach their yield forces together under a load that grows past
+        their joint yield force (a Herschel-Bulkley ``n = 0.8`` dashpot to ground beside
+        a Bingham one to a junction held by a third): over a probe of ``2e-12`` s the
+        load beyond it is ``1e-11``, below the round-off of the Bingham force, which
+        reads stuck, while the Herschel-Bulkley one, flat in its inverse form, reads
+        slipping at a rate of ``1e-17``. Held, that mode put the whole load on the
+        Bingham dashpot, whose guard crossed at ``t``, and the next probe read both stuck
+        (the locks in parallel hold the slipping one at its rate of ``1e-23``), whose
+        guard crossed at ``t`` too: 50 events at one ``t`` and a backward-Euler bridge.
+        A probe of ``2e-6`` s reads both slipping.
+
+        When no probe up to ``10^6`` times the first reads a mode not left twice at
+        ``t``, the shortest probe's mode is held as a kept one (``returned``: the driver
+        reads its guards crossed at ``t`` as a tangency's round-off). A mass stuck by two
+        dashpots in parallel, one at its yield force, under a load still below their
+        joint yield force: probes of ``6e-9`` and ``6e-6`` s keep it stuck, one of
+        ``6e-3`` s looks beyond the time the load reaches the joint yield force and reads
+        both slipping, and a short probe from there reads both stuck again."""
         scene, lbs, modes = self.scene, self.lbs, self.modes
         h0 = h_probe
+        left = {m for m, (_, n) in self.left.items() if n >= 2} - {tuple(modes)}
+        self.returned = False
+
+        def undecided(got: tuple) -> bool:
+            # the mode kept at a guard, or one left twice at t before
+            return (cause == "guard" and got[0] == modes) or tuple(got[0]) in left
+
         guess = self._guesses(cause, x, v, F)
         sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
                          modes if cause == "guard" else None, 3, self.fast)
                if guess else None) or ""
         if sel:
             sel = self._locked(sel, h_probe)
-            if cause == "guard" and sel[0] == modes:  # the locks undid the guess: undecided
+            if undecided(sel):  # the locks undid the guess, or a mode left twice at t
                 sel = ""
+        first = None  # the shortest probe's mode
         for _ in range(0 if sel else 3):
             sel = select_modes(scene, lbs, t, x, v, F, h_probe, self.settings.options)
             if not isinstance(sel, str):
@@ -245,9 +303,15 @@ class ModeState:
                 # slow break-out of locks in parallel under a load just past their joint
                 # yield force moves the probe by less than its round-off, issue 11)
                 sel = self._locked(sel, h_probe)
-                if sel[0] != modes or cause != "guard":
+                first = first or sel
+                if not undecided(sel):
                     break
             h_probe *= 1000.0  # a failed or undecided probe: a longer one
+        if left and first is not None and not isinstance(sel, str) and undecided(sel):
+            # no probe reads a mode not left twice at t: the shortest probe's mode, its
+            # guards read at t as a tangency's (the driver's kept mode)
+            self.returned = True
+            return first
         if isinstance(sel, str):
             # every probe failed: shorter ones, nearer the start (the semismooth Newton
             # diverged at 4e-9 s and longer where a stuck Bingham dashpot joined a

@@ -188,6 +188,7 @@ class Radau5Run(StepPass, StepChecks):
         old = list(self.modes)
         stop = self.ms.at_event(t, h, cause, self.x, self.v, self.F)
         if stop or self.modes != old:
+            self.tangent.clear()  # (the old mode's (watched, guard) pairs)
             return stop
         if t != self.kept_at:
             self.kept_at, self.kept_count = t, 0

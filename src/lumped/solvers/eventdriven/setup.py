@@ -264,5 +264,5 @@ def too_many(events: list, recent: deque, t: float, opts: dict, time_events: int
     names = sorted({ev.element for ev in events[-len(recent):]})
     return Status.TOO_MANY_EVENTS, (
         f"radau5 stopped at t = {t!r}: {len(recent)} events within "
-        f"{recent[-1] - recent[0]!r} s (elements {names}): an accumulation of events "
-        "(Zeno or chattering)")
+        f"{recent[-1] - recent[0]!r} s (elements {names}; switches undone at one t, which "
+        "the events drop, included): an accumulation of events (Zeno or chattering)")

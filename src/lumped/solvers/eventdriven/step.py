@@ -213,7 +213,7 @@ class StepPass:
             old = list(self.modes)
             if self.stop(self.at_event(t, self.h_good, "guard")):
                 return
-            self.kept, self.h = self.modes == old, self.h_good
+            self.kept, self.h = self.modes == old or self.ms.returned, self.h_good
             self.tangent.clear()
 
     def _redo_for_a_guard(self, sol: list[float], h: float, in_python: bool, hit_c,
@@ -271,7 +271,7 @@ class StepPass:
                 return True
             # the full laws keep the mode at t (a tangency, round-off): the retried step
             # is accepted unless a guard fails later in it
-            self.kept = self.modes == old
+            self.kept = self.modes == old or self.ms.returned
             tangent.clear()
             return True
         self.target = Landing(hit[1], h, self.end_guard(sol, h, hit[1])[0], h)
