@@ -40,7 +40,20 @@ polynomial's nodes (:meth:`SupportFrame.offsets_at`), with the clock *bare*
 (:meth:`SupportFrame.bare`: every offset 0, so the shifted functions are the law's own).
 A locking branch of an element on a support reports no ``lock_value``: its lock
 ``q_e + o_e(t) = L`` moves with the support, so the rules that set rates or positions
-exactly onto a lock value leave it to the stage system, which holds it at every stage.
+exactly onto a lock value leave it to the system being solved.
+
+**A string on a support** (a spring-like element whose law locks ``q``; ``bdf1`` and
+``bdf2``, ``radau5`` refuses it, :func:`support_lock`). The support has a prescribed
+motion (infinite mass): the lock ``y_b - y_a + x_s(t) = L`` moves the attached mass
+with it, and its force comes from the balance. An impact at ``t`` reads the
+elongation rate with the support's, ``q' = v_b - v_a + o_e'(t)``
+(:func:`clock_rates`, at the clock's time): the impulse ``P`` sets the free masses so
+that ``q'^+ = -e q'^-``, ``M dv = -B^T P``; the support's motion is unchanged and it does
+the work ``o_e'(t) P``, so the energy lost is ``sum m (v^-2 - v^+2) / 2 + sum o_e' P``
+(``m (v^- - v_s)^2 / 2`` for one mass, plastic). The snap onto the lock and the
+locking test read the shifted law at that ``t``; the forces of a lock reached late in a
+step (and of one taut at ``t = 0``) come from the balance of accelerations with
+``q'' = a_b - a_a + o_e''(t)`` (:func:`support_accelerations`).
 """
 
 from __future__ import annotations
@@ -59,7 +72,7 @@ if TYPE_CHECKING:
 
 __all__ = ["SupportEnd", "check_supports", "SupportFrame", "ShiftedBranches", "branches_of",
            "solver_view", "supported_scene", "support_lock", "support_offsets", "support_rates",
-           "support_time",
+           "support_accelerations", "clock_rates", "support_time",
            "support_time_events", "support_time_restored"]
 
 
@@ -132,8 +145,18 @@ def support_rates(scene: Scene, t: float) -> list[float]:
     return _support_values(scene if frame is None else frame.source, t, 1)
 
 
+def support_accelerations(scene: Scene, t: float) -> list[float]:
+    """``+-a_s(t)`` per element of ``scene`` (or its view) with an end on a support
+    (``+`` at end ``b``), else ``0``, whatever its kind: the acceleration the support adds
+    to the rate of a locked spring's elongation (``q'' = a_b - a_a + o_e''``) and of a
+    stuck dashpot's rate (``q' = a_b - a_a + o_e'``)."""
+    frame = getattr(scene, "support_frame", None)
+    return _support_values(scene if frame is None else frame.source, t, 2)
+
+
 def _support_values(scene: Scene, t: float | None, order: int) -> list[float]:
-    """``o_e`` (``order`` 0) or ``o_e'`` (``order`` 1) per element at ``t``."""
+    """``o_e`` (``order`` 0) or ``o_e'`` (``order`` 1) per element at ``t``; ``order`` 2:
+    ``+-a_s`` for every kind (:func:`support_accelerations`)."""
     if t is None or not isinstance(t, numbers.Real) or not math.isfinite(t):
         raise ValueError(f"`t` must be a finite time on a scene with supports, got {t!r}")
     out = [0.0] * len(scene.elements)
@@ -143,14 +166,15 @@ def _support_values(scene: Scene, t: float | None, order: int) -> list[float]:
         if got is None:
             got = motions[end.support] = scene.supports[end.support].at(t)
         spring = scene.elements[end.element].kind == "spring"
-        out[end.element] = end.sign * (got[order] if spring else got[order + 1])
+        out[end.element] = end.sign * (got[order] if spring or order == 2 else got[order + 1])
     return out
 
 
 def support_lock(scene: Scene) -> str | None:
-    """Why the time-stepping solvers refuse ``scene``'s support elements, or ``None``: a
-    spring-like element on a support whose law has a position lock (a taut string:
-    impacts against a moving support are not implemented)."""
+    """Why ``radau5`` refuses ``scene``'s support elements, or ``None``: a spring-like
+    element on a support whose law has a position lock (a taut string: ``radau5`` has
+    no impacts against a moving support and no lock moving with one; ``bdf1`` and
+    ``bdf2`` take them, see the module notes)."""
     from ..codegen.branches import law_branches
 
     for end in scene.support_ends:
@@ -158,7 +182,7 @@ def support_lock(scene: Scene) -> str | None:
         if el.kind == "spring" and any(info.locks for info in law_branches(el.law).info):
             return (f"element {el.name!r} on support {end.support!r}: its law "
                     f"{el.law_name!r} has a position lock (impacts against a moving support "
-                    "are not implemented)")
+                    "and locks moving with it are implemented in 'bdf1' and 'bdf2' only)")
     return None
 
 
@@ -274,6 +298,15 @@ def branches_of(law: Any) -> Any:
     return law_branches(law)
 
 
+def clock_rates(scene: Any) -> list[float] | None:
+    """``o_e'`` per element at the time of the support clock of ``scene`` (a
+    :class:`SupportFrame`'s view: :meth:`SupportFrame.rates_now`), ``None`` on any other
+    scene or while the clock is bare: the rate a support adds to an element's
+    elongation rate, which the impact law reads (:mod:`lumped.solvers.nonsmooth.impacts`)."""
+    frame = getattr(scene, "support_frame", None)
+    return None if frame is None else frame.rates_now()
+
+
 def support_time(scene: Any, t: float) -> None:
     """Set the support clock of ``scene`` (a :class:`SupportFrame`'s view) to ``t``;
     nothing on any other scene."""
@@ -339,6 +372,7 @@ class SupportFrame:
         self.scene = view
         self._cache: dict[float, list[float]] = {}
         self._along: tuple = (None, [])
+        self._rates: tuple = (None, [])
         self.at_time(0.0)
 
     def at_time(self, t: float) -> None:
@@ -368,6 +402,16 @@ class SupportFrame:
         if self._along[0] != key:
             self._along = (key, [self.offsets_at(t0 + s * h) for s in nodes])
         return self._along[1]
+
+    def rates_now(self) -> list[float] | None:
+        """``o_e'`` per element at the clock's time (:func:`support_rates`), ``None``
+        while the clock is bare."""
+        t = self._t
+        if t != t:
+            return None
+        if self._rates[0] != t:
+            self._rates = (t, support_rates(self.source, t))
+        return self._rates[1]
 
     def bare(self) -> None:
         """Every offset ``0``: the shifted laws, branches and guards are the law's own,
@@ -407,9 +451,10 @@ def supported_scene(scene: Scene, method: str) -> SupportFrame:
     Raises
     ------
     ValueError
-        If an element on a support has a position lock (:func:`support_lock`).
+        If ``method`` is ``"radau5"`` and an element on a support has a position lock
+        (:func:`support_lock`).
     """
-    why = support_lock(scene)
+    why = support_lock(scene) if method == "radau5" else None
     if why is not None:
         raise ValueError(f"method {method!r} does not take this scene: {why}")
     return SupportFrame(scene)

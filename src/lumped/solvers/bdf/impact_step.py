@@ -46,6 +46,7 @@ import math
 from dataclasses import dataclass, field
 
 from ...scene import Mass, Scene
+from ...scene.supports import clock_rates
 from ..implicit.globalize import solve_globalized
 from ..implicit.step_system import make_evaluate
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
@@ -338,6 +339,9 @@ def _apply_impact(scene, ts, located, held, restitution, events):
     ``events``). Returns ``(x, v_after, F_before, s_hi, locked)``."""
     _, (xl, vl, Fl), hi, hi_state = located
     xh, vh, Fh = hi_state[:3]
+    clock = getattr(scene, "support_clock", None)
+    if clock is not None:  # the locks, the snap onto them and the impact law at ts + s_hi
+        clock(ts + hi)
     locked = locking_elements(scene, xh, vh, Fh)
     xh = onto_locks(scene, xh, Fh, locked)
     new = [e for e in locked if e not in held]
@@ -345,8 +349,10 @@ def _apply_impact(scene, ts, located, held, restitution, events):
     # motion just before it (v_lo); the bracket is 1e-10 dt wide
     v_after, impulses, lost = impact_velocities(scene, xh, vl, locked, restitution,
                                                    forces=Fh)
+    moving = clock_rates(scene)  # a support's o_e' adds to the rate
     rates = [(vl[scene.elem_b[e]] if scene.elem_b[e] >= 0 else 0.0)
-             - (vl[scene.elem_a[e]] if scene.elem_a[e] >= 0 else 0.0) for e in locked]
+             - (vl[scene.elem_a[e]] if scene.elem_a[e] >= 0 else 0.0)
+             + (moving[e] if moving is not None else 0.0) for e in locked]
     shares = {e: abs(p * r) for e, p, r in zip(locked, impulses, rates, strict=True)}
     total = sum(shares[e] for e in new) or 1.0
     qh = scene.elongations(xh, vh)
