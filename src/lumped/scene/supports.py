@@ -42,8 +42,8 @@ A locking branch of an element on a support reports no ``lock_value``: its lock
 ``q_e + o_e(t) = L`` moves with the support, so the rules that set rates or positions
 exactly onto a lock value leave it to the system being solved.
 
-**A string on a support** (a spring-like element whose law locks ``q``; ``bdf1`` and
-``bdf2``, ``radau5`` refuses it, :func:`support_lock`). The support has a prescribed
+**A string on a support** (a spring-like element whose law locks ``q``; every
+time-stepping method). The support has a prescribed
 motion (infinite mass): the lock ``y_b - y_a + x_s(t) = L`` moves the attached mass
 with it, and its force comes from the balance. An impact at ``t`` reads the
 elongation rate with the support's, ``q' = v_b - v_a + o_e'(t)``
@@ -53,7 +53,14 @@ the work ``o_e'(t) P``, so the energy lost is ``sum m (v^-2 - v^+2) / 2 + sum o_
 (``m (v^- - v_s)^2 / 2`` for one mass, plastic). The snap onto the lock and the
 locking test read the shifted law at that ``t``; the forces of a lock reached late in a
 step (and of one taut at ``t = 0``) come from the balance of accelerations with
-``q'' = a_b - a_a + o_e''(t)`` (:func:`support_accelerations`).
+``q'' = a_b - a_a + o_e''(t)`` (:func:`support_accelerations`). ``radau5``'s stage
+system holds a taut string on the velocity level, as a fixed one: the kernel of a
+locking branch (:meth:`ShiftedBranches.kernel_for`) keeps the branch's ``lock_value``
+``L`` and the law's own kernel as ``bare``, and the stage ``k`` reads
+``R(L) + dR/dq (h sum_j a_kj (V_jb - V_ja) + m_k)`` with the lock's move
+``m_k = h sum_j a_kj o_e'(t_n + c_j h)`` from the support's rates
+(:meth:`SupportFrame.lock_moves`; the difference ``o_e(t_n + c_k h) - o_e(t_n)`` would
+carry ``ulp(x_s)``, forces of ``m ulp / h^2`` on short steps).
 """
 
 from __future__ import annotations
@@ -71,7 +78,7 @@ if TYPE_CHECKING:
     from .network import Scene
 
 __all__ = ["SupportEnd", "check_supports", "SupportFrame", "ShiftedBranches", "branches_of",
-           "solver_view", "supported_scene", "support_lock", "support_offsets", "support_rates",
+           "solver_view", "supported_scene", "support_offsets", "support_rates",
            "support_accelerations", "clock_rates", "support_time",
            "support_time_events", "support_time_restored"]
 
@@ -170,22 +177,6 @@ def _support_values(scene: Scene, t: float | None, order: int) -> list[float]:
     return out
 
 
-def support_lock(scene: Scene) -> str | None:
-    """Why ``radau5`` refuses ``scene``'s support elements, or ``None``: a spring-like
-    element on a support whose law has a position lock (a taut string: ``radau5`` has
-    no impacts against a moving support and no lock moving with one; ``bdf1`` and
-    ``bdf2`` take them, see the module notes)."""
-    from ..codegen.branches import law_branches
-
-    for end in scene.support_ends:
-        el = scene.elements[end.element]
-        if el.kind == "spring" and any(info.locks for info in law_branches(el.law).info):
-            return (f"element {el.name!r} on support {end.support!r}: its law "
-                    f"{el.law_name!r} has a position lock (impacts against a moving support "
-                    "and locks moving with it are implemented in 'bdf1' and 'bdf2' only)")
-    return None
-
-
 class _ShiftedKernel:
     """``kernel(q + offsets[e], F)``, with the ``magnitude`` of the residual's terms
     shifted the same way where the kernel has one.
@@ -251,7 +242,8 @@ class ShiftedBranches:
 
     ``info`` and ``count`` are the law's, except that a locking branch has no
     ``lock_value`` (its lock ``q = L - o_e(t)`` in the node states moves with the
-    support; see the module notes)."""
+    support; see the module notes); its kernels keep it, with the law's own kernel as
+    ``bare``, for ``radau5``'s stage system."""
 
     def __init__(self, lb: Any, bound: Any, offsets: list[float], e: int) -> None:
         self.lb, self.bound, self.offsets, self.e = lb, bound, offsets, e
@@ -264,6 +256,11 @@ class ShiftedBranches:
         if key not in self._made:
             fn = make()
             self._made[key] = None if fn is None else _shifted(fn, self.offsets, self.e)
+            if getattr(fn, "lock_value", None) is not None:
+                # a locking branch's kernel: radau5's stage system holds its lock on the
+                # velocity level, q_n + o_e(t) = L read with the law's own kernel ``bare``
+                self._made[key].lock_value = fn.lock_value  # type: ignore[union-attr]
+                self._made[key].bare = fn  # type: ignore[union-attr]
         return self._made[key]
 
     def kernel_for(self, i: int) -> Callable:
@@ -373,6 +370,7 @@ class SupportFrame:
         self._cache: dict[float, list[float]] = {}
         self._along: tuple = (None, [])
         self._rates: tuple = (None, [])
+        self._moves: tuple = (None, [])
         self.at_time(0.0)
 
     def at_time(self, t: float) -> None:
@@ -402,6 +400,20 @@ class SupportFrame:
         if self._along[0] != key:
             self._along = (key, [self.offsets_at(t0 + s * h) for s in nodes])
         return self._along[1]
+
+    def lock_moves(self, t0: float, h: float, A: Sequence[Sequence[float]],
+                   C: Sequence[float]) -> list[list[float]]:
+        """``h sum_j A_kj o_e'(t0 + c_j h)`` per stage ``k`` and element ``e``: how far
+        a lock on a support moves from ``t0`` to the stage ``t0 + c_k h`` of a collocation
+        step (``A``, ``C`` its tableau), from the rates (the difference
+        ``o_e(t0 + c_k h) - o_e(t0)`` would carry ``ulp(x_s)``, a force ``m ulp / h^2``).
+        The last step asked is kept (a stage solve asks at every Newton iteration)."""
+        key = ("moves", t0, h)
+        if self._moves[0] != key:
+            rates = [support_rates(self.source, t0 + c * h) for c in C]
+            self._moves = (key, [[h * sum(a * r[e] for a, r in zip(row, rates, strict=True))
+                                  for e in range(len(self.offsets))] for row in A])
+        return self._moves[1]
 
     def rates_now(self) -> list[float] | None:
         """``o_e'`` per element at the clock's time (:func:`support_rates`), ``None``
@@ -448,13 +460,7 @@ def solver_view(scene: Scene, method: str, t0: float
 def supported_scene(scene: Scene, method: str) -> SupportFrame:
     """The :class:`SupportFrame` ``method`` runs ``scene`` (which has supports) on.
 
-    Raises
-    ------
-    ValueError
-        If ``method`` is ``"radau5"`` and an element on a support has a position lock
-        (:func:`support_lock`).
+    Every element on a support is taken, a string (position lock) too (see the module
+    notes); ``method`` is the caller's name, for its messages.
     """
-    why = support_lock(scene) if method == "radau5" else None
-    if why is not None:
-        raise ValueError(f"method {method!r} does not take this scene: {why}")
     return SupportFrame(scene)
