@@ -193,7 +193,7 @@ class _ShiftedKernel:
         self.kernel, self.offsets, self.e = kernel, offsets, e
         mag = getattr(kernel, "magnitude", None)
         if mag is not None:
-            self.magnitude = lambda q, F: mag(q + offsets[e], F)
+            self.magnitude = _shifted_magnitude(kernel, mag, offsets, e)
 
     def __call__(self, q: float, F: float) -> tuple[float, float, float]:
         return self.kernel(q + self.offsets[self.e], F)
@@ -230,8 +230,22 @@ def _shifted(fn: Callable, offsets: list[float], e: int) -> Callable:
 
     mag = getattr(fn, "magnitude", None)
     if mag is not None:
-        shifted.magnitude = lambda q, F: mag(q + offsets[e], F)  # type: ignore[attr-defined]
+        shifted.magnitude = _shifted_magnitude(fn, mag, offsets, e)  # type: ignore[attr-defined]
     return shifted
+
+
+def _shifted_magnitude(kernel: Callable, mag: Callable, offsets: list[float], e: int
+                       ) -> Callable[[float, float], float]:
+    """The magnitude of the terms of ``R(q + o_e, F)``: the law's at the shifted point
+    plus ``|dR/dq| |o_e|``, the rounding of the sum ``q + o_e`` (a string taut on a
+    support at ``x_s ~ 0.2`` has ``q + o_e = L`` only to ``ulp(0.2)``, beyond the round-off
+    of ``L`` itself: Newton's round-off test must see it)."""
+    def magnitude(q: float, F: float) -> float:
+        o = offsets[e]
+        M = mag(q + o, F)
+        return M if o == 0.0 else M + abs(kernel(q + o, F)[1] * o)
+
+    return magnitude
 
 
 class ShiftedBranches:
