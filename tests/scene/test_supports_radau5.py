@@ -221,12 +221,14 @@ def test_auto_runs_radau5_without_dt_and_bdf2_with_dt_alone():
     assert np.max(np.abs(sampled.x["m"] - x)) < 1e-9
 
 
-def test_radau5_refuses_a_string_on_a_support():
+def test_radau5_takes_a_string_on_a_support_and_auto_runs_it_without_dt():
+    """(tests/scene/test_support_strings.py: the impact and the moving lock)"""
     scene = Scene([Mass("m", 1.0)],
                   [Element("rope", get_law("string_spring").bind(k=1.0, L=0.1), "m", "belt")],
-                  supports={"belt": GroundMotion(velocity=0.1)})
-    with pytest.raises(ValueError, match="radau5.*position lock"):
-        simulate(scene, method="radau5", t_end=0.1)
+                  supports={"belt": GroundMotion(velocity=1.0)})
+    sol = simulate(scene, t_end=0.3)
+    assert sol.method == "radau5" and sol.ok
+    assert [ev.kind for ev in sol.events] == ["impact"]
 
 
 def test_a_network_on_one_support_is_the_moving_ground_network_in_absolute_terms():

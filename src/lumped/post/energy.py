@@ -28,7 +28,9 @@ Integrated from ``0`` to ``t`` this is the ledger, each entry a function of time
     move; see "Two frames" below. For a scene with supports
     (:mod:`lumped.scene.supports`; absolute states, one frame), ``support[s]`` is the
     work support ``s`` does through the elements attached to it,
-    ``int v_s (sum_{b_e = s} F_e - sum_{a_e = s} F_e) dt``, and ``stored``/``dissipated``
+    ``int v_s (sum_{b_e = s} F_e - sum_{a_e = s} F_e) dt``, plus ``+-v_s(t_k) P_k`` for
+    each impulse ``P_k`` of an impact at ``t_k`` on an element attached to it (``+`` at
+    its end ``b``: a string jerked taut by the support), and ``stored``/``dissipated``
     use the elongations with the support's motion.
 ``impacts``
     the kinetic energy lost at the impacts a method reported (``Event.energy_lost``),
@@ -171,6 +173,7 @@ def energy_ledger(scene: Scene, data: np.ndarray, events: Iterable = (), *,
     if frame not in ("relative", "absolute"):
         raise ValueError(f"`frame` must be 'relative' or 'absolute', got {frame!r}")
     t = data[:, 0]
+    events = list(events)
     gm = getattr(scene, "ground_motion", None)
     if gm is not None:
         _, v_g, a_g = gm.motion(t)
@@ -205,9 +208,15 @@ def energy_ledger(scene: Scene, data: np.ndarray, events: Iterable = (), *,
                 if a < 0:
                     pull -= data[:, F_col(scene, e)]
             support["ground"] = _cumulative_trapezoid(v_g * pull, t)
+    names = {el.name: e for e, el in enumerate(scene.elements)}
     for end in getattr(scene, "support_ends", ()):
         v_s = scene.supports[end.support].motion(t)[1]
         work_s = _cumulative_trapezoid(end.sign * v_s * data[:, F_col(scene, end.element)], t)
+        for ev in events:  # an impulse P through the element: the support's work o_e' P
+            if (getattr(ev, "kind", None) == "impact" and ev.impulse
+                    and names.get(ev.element) == end.element):
+                v_hit = float(scene.supports[end.support].at(ev.t)[1])
+                work_s[np.searchsorted(t, ev.t, side="left"):] += end.sign * v_hit * ev.impulse
         support[end.support] = support.get(end.support, 0.0) + work_s
     work = {n.name: _cumulative_trapezoid(f[:, i] * (data[:, v_col(i)] + shift), t)
             for i, n in enumerate(scene.nodes) if applied[i] is not None}

@@ -40,7 +40,27 @@ polynomial's nodes (:meth:`SupportFrame.offsets_at`), with the clock *bare*
 (:meth:`SupportFrame.bare`: every offset 0, so the shifted functions are the law's own).
 A locking branch of an element on a support reports no ``lock_value``: its lock
 ``q_e + o_e(t) = L`` moves with the support, so the rules that set rates or positions
-exactly onto a lock value leave it to the stage system, which holds it at every stage.
+exactly onto a lock value leave it to the system being solved.
+
+**A string on a support** (a spring-like element whose law locks ``q``; every
+time-stepping method). The support has a prescribed
+motion (infinite mass): the lock ``y_b - y_a + x_s(t) = L`` moves the attached mass
+with it, and its force comes from the balance. An impact at ``t`` reads the
+elongation rate with the support's, ``q' = v_b - v_a + o_e'(t)``
+(:func:`clock_rates`, at the clock's time): the impulse ``P`` sets the free masses so
+that ``q'^+ = -e q'^-``, ``M dv = -B^T P``; the support's motion is unchanged and it does
+the work ``o_e'(t) P``, so the energy lost is ``sum m (v^-2 - v^+2) / 2 + sum o_e' P``
+(``m (v^- - v_s)^2 / 2`` for one mass, plastic). The snap onto the lock and the
+locking test read the shifted law at that ``t``; the forces of a lock reached late in a
+step (and of one taut at ``t = 0``) come from the balance of accelerations with
+``q'' = a_b - a_a + o_e''(t)`` (:func:`support_accelerations`). ``radau5``'s stage
+system holds a taut string on the velocity level, as a fixed one: the kernel of a
+locking branch (:meth:`ShiftedBranches.kernel_for`) keeps the branch's ``lock_value``
+``L`` and the law's own kernel as ``bare``, and the stage ``k`` reads
+``R(L) + dR/dq (h sum_j a_kj (V_jb - V_ja) + m_k)`` with the lock's move
+``m_k = h sum_j a_kj o_e'(t_n + c_j h)`` from the support's rates
+(:meth:`SupportFrame.lock_moves`; the difference ``o_e(t_n + c_k h) - o_e(t_n)`` would
+carry ``ulp(x_s)``, forces of ``m ulp / h^2`` on short steps).
 """
 
 from __future__ import annotations
@@ -58,8 +78,8 @@ if TYPE_CHECKING:
     from .network import Scene
 
 __all__ = ["SupportEnd", "check_supports", "SupportFrame", "ShiftedBranches", "branches_of",
-           "solver_view", "supported_scene", "support_lock", "support_offsets", "support_rates",
-           "support_time",
+           "solver_view", "supported_scene", "support_offsets", "support_rates",
+           "support_accelerations", "clock_rates", "support_time",
            "support_time_events", "support_time_restored"]
 
 
@@ -132,8 +152,18 @@ def support_rates(scene: Scene, t: float) -> list[float]:
     return _support_values(scene if frame is None else frame.source, t, 1)
 
 
+def support_accelerations(scene: Scene, t: float) -> list[float]:
+    """``+-a_s(t)`` per element of ``scene`` (or its view) with an end on a support
+    (``+`` at end ``b``), else ``0``, whatever its kind: the acceleration the support adds
+    to the rate of a locked spring's elongation (``q'' = a_b - a_a + o_e''``) and of a
+    stuck dashpot's rate (``q' = a_b - a_a + o_e'``)."""
+    frame = getattr(scene, "support_frame", None)
+    return _support_values(scene if frame is None else frame.source, t, 2)
+
+
 def _support_values(scene: Scene, t: float | None, order: int) -> list[float]:
-    """``o_e`` (``order`` 0) or ``o_e'`` (``order`` 1) per element at ``t``."""
+    """``o_e`` (``order`` 0) or ``o_e'`` (``order`` 1) per element at ``t``; ``order`` 2:
+    ``+-a_s`` for every kind (:func:`support_accelerations`)."""
     if t is None or not isinstance(t, numbers.Real) or not math.isfinite(t):
         raise ValueError(f"`t` must be a finite time on a scene with supports, got {t!r}")
     out = [0.0] * len(scene.elements)
@@ -143,23 +173,8 @@ def _support_values(scene: Scene, t: float | None, order: int) -> list[float]:
         if got is None:
             got = motions[end.support] = scene.supports[end.support].at(t)
         spring = scene.elements[end.element].kind == "spring"
-        out[end.element] = end.sign * (got[order] if spring else got[order + 1])
+        out[end.element] = end.sign * (got[order] if spring or order == 2 else got[order + 1])
     return out
-
-
-def support_lock(scene: Scene) -> str | None:
-    """Why the time-stepping solvers refuse ``scene``'s support elements, or ``None``: a
-    spring-like element on a support whose law has a position lock (a taut string:
-    impacts against a moving support are not implemented)."""
-    from ..codegen.branches import law_branches
-
-    for end in scene.support_ends:
-        el = scene.elements[end.element]
-        if el.kind == "spring" and any(info.locks for info in law_branches(el.law).info):
-            return (f"element {el.name!r} on support {end.support!r}: its law "
-                    f"{el.law_name!r} has a position lock (impacts against a moving support "
-                    "are not implemented)")
-    return None
 
 
 class _ShiftedKernel:
@@ -178,7 +193,7 @@ class _ShiftedKernel:
         self.kernel, self.offsets, self.e = kernel, offsets, e
         mag = getattr(kernel, "magnitude", None)
         if mag is not None:
-            self.magnitude = lambda q, F: mag(q + offsets[e], F)
+            self.magnitude = _shifted_magnitude(kernel, mag, offsets, e)
 
     def __call__(self, q: float, F: float) -> tuple[float, float, float]:
         return self.kernel(q + self.offsets[self.e], F)
@@ -215,8 +230,22 @@ def _shifted(fn: Callable, offsets: list[float], e: int) -> Callable:
 
     mag = getattr(fn, "magnitude", None)
     if mag is not None:
-        shifted.magnitude = lambda q, F: mag(q + offsets[e], F)  # type: ignore[attr-defined]
+        shifted.magnitude = _shifted_magnitude(fn, mag, offsets, e)  # type: ignore[attr-defined]
     return shifted
+
+
+def _shifted_magnitude(kernel: Callable, mag: Callable, offsets: list[float], e: int
+                       ) -> Callable[[float, float], float]:
+    """The magnitude of the terms of ``R(q + o_e, F)``: the law's at the shifted point
+    plus ``|dR/dq| |o_e|``, the rounding of the sum ``q + o_e`` (a string taut on a
+    support at ``x_s ~ 0.2`` has ``q + o_e = L`` only to ``ulp(0.2)``, beyond the round-off
+    of ``L`` itself: Newton's round-off test must see it)."""
+    def magnitude(q: float, F: float) -> float:
+        o = offsets[e]
+        M = mag(q + o, F)
+        return M if o == 0.0 else M + abs(kernel(q + o, F)[1] * o)
+
+    return magnitude
 
 
 class ShiftedBranches:
@@ -227,7 +256,8 @@ class ShiftedBranches:
 
     ``info`` and ``count`` are the law's, except that a locking branch has no
     ``lock_value`` (its lock ``q = L - o_e(t)`` in the node states moves with the
-    support; see the module notes)."""
+    support; see the module notes); its kernels keep it, with the law's own kernel as
+    ``bare``, for ``radau5``'s stage system."""
 
     def __init__(self, lb: Any, bound: Any, offsets: list[float], e: int) -> None:
         self.lb, self.bound, self.offsets, self.e = lb, bound, offsets, e
@@ -240,6 +270,11 @@ class ShiftedBranches:
         if key not in self._made:
             fn = make()
             self._made[key] = None if fn is None else _shifted(fn, self.offsets, self.e)
+            if getattr(fn, "lock_value", None) is not None:
+                # a locking branch's kernel: radau5's stage system holds its lock on the
+                # velocity level, q_n + o_e(t) = L read with the law's own kernel ``bare``
+                self._made[key].lock_value = fn.lock_value  # type: ignore[union-attr]
+                self._made[key].bare = fn  # type: ignore[union-attr]
         return self._made[key]
 
     def kernel_for(self, i: int) -> Callable:
@@ -272,6 +307,15 @@ def branches_of(law: Any) -> Any:
     from ..codegen.branches import law_branches
 
     return law_branches(law)
+
+
+def clock_rates(scene: Any) -> list[float] | None:
+    """``o_e'`` per element at the time of the support clock of ``scene`` (a
+    :class:`SupportFrame`'s view: :meth:`SupportFrame.rates_now`), ``None`` on any other
+    scene or while the clock is bare: the rate a support adds to an element's
+    elongation rate, which the impact law reads (:mod:`lumped.solvers.nonsmooth.impacts`)."""
+    frame = getattr(scene, "support_frame", None)
+    return None if frame is None else frame.rates_now()
 
 
 def support_time(scene: Any, t: float) -> None:
@@ -339,6 +383,8 @@ class SupportFrame:
         self.scene = view
         self._cache: dict[float, list[float]] = {}
         self._along: tuple = (None, [])
+        self._rates: tuple = (None, [])
+        self._moves: tuple = (None, [])
         self.at_time(0.0)
 
     def at_time(self, t: float) -> None:
@@ -368,6 +414,30 @@ class SupportFrame:
         if self._along[0] != key:
             self._along = (key, [self.offsets_at(t0 + s * h) for s in nodes])
         return self._along[1]
+
+    def lock_moves(self, t0: float, h: float, A: Sequence[Sequence[float]],
+                   C: Sequence[float]) -> list[list[float]]:
+        """``h sum_j A_kj o_e'(t0 + c_j h)`` per stage ``k`` and element ``e``: how far
+        a lock on a support moves from ``t0`` to the stage ``t0 + c_k h`` of a collocation
+        step (``A``, ``C`` its tableau), from the rates (the difference
+        ``o_e(t0 + c_k h) - o_e(t0)`` would carry ``ulp(x_s)``, a force ``m ulp / h^2``).
+        The last step asked is kept (a stage solve asks at every Newton iteration)."""
+        key = ("moves", t0, h)
+        if self._moves[0] != key:
+            rates = [support_rates(self.source, t0 + c * h) for c in C]
+            self._moves = (key, [[h * sum(a * r[e] for a, r in zip(row, rates, strict=True))
+                                  for e in range(len(self.offsets))] for row in A])
+        return self._moves[1]
+
+    def rates_now(self) -> list[float] | None:
+        """``o_e'`` per element at the clock's time (:func:`support_rates`), ``None``
+        while the clock is bare."""
+        t = self._t
+        if t != t:
+            return None
+        if self._rates[0] != t:
+            self._rates = (t, support_rates(self.source, t))
+        return self._rates[1]
 
     def bare(self) -> None:
         """Every offset ``0``: the shifted laws, branches and guards are the law's own,
@@ -404,12 +474,7 @@ def solver_view(scene: Scene, method: str, t0: float
 def supported_scene(scene: Scene, method: str) -> SupportFrame:
     """The :class:`SupportFrame` ``method`` runs ``scene`` (which has supports) on.
 
-    Raises
-    ------
-    ValueError
-        If an element on a support has a position lock (:func:`support_lock`).
+    Every element on a support is taken, a string (position lock) too (see the module
+    notes); ``method`` is the caller's name, for its messages.
     """
-    why = support_lock(scene)
-    if why is not None:
-        raise ValueError(f"method {method!r} does not take this scene: {why}")
     return SupportFrame(scene)

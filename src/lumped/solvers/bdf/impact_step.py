@@ -25,7 +25,9 @@ the lock (the impulse that would stop them is not negligible). Then, from the st
    :data:`_MAX_IMPACTS`; beyond, the step is Moreau's). Elements locked at the end get
    rate zero; where that is more than round-off, the forces come from a substep a hair
    long from the stopped velocities (a dashpot beside the lock follows its new rate;
-   ``1e-10 dt``, longer where its Newton fails: :data:`_HAIRS`). A lock reached in the
+   ``1e-10 dt``, longer where its Newton fails: :data:`_HAIRS`; on a scene with moving
+   supports it ends at ``t + h``, and where every hair fails, the balance of
+   accelerations gives the forces: ``q + o_e`` rounds to ``ulp(x_s)``). A lock reached in the
    second half of the step takes the forces of its locked and stuck elements at
    ``t_{n+1}`` from the balance of accelerations (:func:`_forces_after`,
    :mod:`lumped.solvers.nonsmooth.lock_forces`: on the lock a remainder ``h`` fixes the rate only to
@@ -46,6 +48,7 @@ import math
 from dataclasses import dataclass, field
 
 from ...scene import Mass, Scene
+from ...scene.supports import clock_rates
 from ..implicit.globalize import solve_globalized
 from ..implicit.step_system import make_evaluate
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
@@ -193,9 +196,19 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
         # for forces of m ulp(x) / h^2 (1e7 for h = 6e-13, a taut string between two
         # masses), which it cannot polish: a longer hair then
         for k in _HAIRS:
-            got = sub(min(k * _LOCATE_RTOL * dt, dt), xs, vs, Fs, t0 + dt)
+            h = min(k * _LOCATE_RTOL * dt, dt)
+            got = sub(h, xs, vs, Fs, _after(scene, t0 + dt, h))
             if got[3].code is NewtonCode.SUCCESS:
-                break
+                return got
+        if getattr(scene, "support_clock", None) is not None:
+            # a lock on a moving support: q + o_e(t + h) rounds to ulp(x_s), the hair's
+            # forces to m ulp(x_s) / h^2 however long it is; the balance of
+            # accelerations instead (its lock rows read the support's acceleration)
+            held_now = set(locking_elements(scene, xs, vs, Fs)) | held
+            after = _forces_after(scene, t0 + dt, dt, xs, vs, Fs, held_now, sub)
+            if after is not None:
+                return (xs, *after, NewtonResult(list(after[0]) + list(after[1]),
+                                                 NewtonCode.SUCCESS, 0, 0, 0, 0, [], 0, []))
         return got
 
     # s: the time into the step reached so far, so that the first substep is the step
@@ -267,6 +280,14 @@ def impact_step(scene: Scene, t0: float, dt: float, x: list[float], v: list[floa
     return out
 
 
+def _after(scene, t: float, h: float) -> float:
+    """The end of a substep ``h`` long from the end ``t`` of the step: ``t + h`` on a
+    scene with moving supports (a lock on a support moves in it, and a substep whose
+    laws read the support at ``t`` holds its mass still: forces of ``m v_s / h``), else
+    ``t`` (the forcing read at the step's end)."""
+    return t + h if getattr(scene, "support_clock", None) is not None else t
+
+
 def _forces_after(scene, t1, dt, x1, v1, F1, held, sub):
     """The velocities and forces at ``t1`` when the lock is reached late in a step.
 
@@ -278,7 +299,7 @@ def _forces_after(scene, t1, dt, x1, v1, F1, held, sub):
     (:func:`lumped.solvers.nonsmooth.lock_forces.forces_from_accelerations`), not from the short
     remainder. Returns ``(v1, F1)``, or ``None`` (the remainder's forces stand) when the
     substep fails, keeps none of ``held`` locked, or the balance has no solution."""
-    x2, v2, F2, res = sub(dt, x1, v1, F1, t1)
+    x2, v2, F2, res = sub(dt, x1, v1, F1, _after(scene, t1, dt))
     if res.code is not NewtonCode.SUCCESS:
         return None
     still = [e for e in locking_elements(scene, x2, v2, F2) if e in held]
@@ -338,6 +359,9 @@ def _apply_impact(scene, ts, located, held, restitution, events):
     ``events``). Returns ``(x, v_after, F_before, s_hi, locked)``."""
     _, (xl, vl, Fl), hi, hi_state = located
     xh, vh, Fh = hi_state[:3]
+    clock = getattr(scene, "support_clock", None)
+    if clock is not None:  # the locks, the snap onto them and the impact law at ts + s_hi
+        clock(ts + hi)
     locked = locking_elements(scene, xh, vh, Fh)
     xh = onto_locks(scene, xh, Fh, locked)
     new = [e for e in locked if e not in held]
@@ -345,8 +369,10 @@ def _apply_impact(scene, ts, located, held, restitution, events):
     # motion just before it (v_lo); the bracket is 1e-10 dt wide
     v_after, impulses, lost = impact_velocities(scene, xh, vl, locked, restitution,
                                                    forces=Fh)
+    moving = clock_rates(scene)  # a support's o_e' adds to the rate
     rates = [(vl[scene.elem_b[e]] if scene.elem_b[e] >= 0 else 0.0)
-             - (vl[scene.elem_a[e]] if scene.elem_a[e] >= 0 else 0.0) for e in locked]
+             - (vl[scene.elem_a[e]] if scene.elem_a[e] >= 0 else 0.0)
+             + (moving[e] if moving is not None else 0.0) for e in locked]
     shares = {e: abs(p * r) for e, p, r in zip(locked, impulses, rates, strict=True)}
     total = sum(shares[e] for e in new) or 1.0
     qh = scene.elongations(xh, vh)

@@ -69,10 +69,9 @@ def read_options(settings) -> dict:
 def scope_error(scene: Scene) -> str | None:
     """Why ``radau5`` does not take ``scene``, or ``None`` when it does.
 
-    A scene with moving supports (:mod:`lumped.scene.supports`) is taken unless an element
-    on a support has a position lock (a taut string: impacts against a moving support
-    are not implemented, :func:`~lumped.scene.supports.support_lock`); its laws read
-    ``q + o_e(t)`` at the time of every system solved (see that module).
+    A scene with moving supports (:mod:`lumped.scene.supports`) is taken, a string on a
+    support too; its laws read ``q + o_e(t)`` at the time of every system solved (see
+    that module).
 
     A branch whose ``dR/dF`` is unbounded at its boundary
     (:attr:`lumped.codegen.branches.BranchInfo.steep`: Herschel-Bulkley with ``n < 1`` at
@@ -83,12 +82,8 @@ def scope_error(scene: Scene) -> str | None:
     stop mid-run, and ``auto`` runs ``bdf2`` there (its globalised Newton takes such
     points).
     """
-    from ...scene.supports import branches_of, support_lock
+    from ...scene.supports import branches_of
 
-    if getattr(scene, "support_ends", ()):
-        why = support_lock(scene)
-        if why is not None:
-            return f"method 'radau5' does not take this scene: {why}"
     for el in scene.elements:
         lb = branches_of(el.law)
         for info in lb.info:

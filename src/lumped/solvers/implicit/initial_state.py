@@ -27,6 +27,7 @@ from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..newton.scalar_root import scalar_root
 from ..newton.semismooth import newton_solve
 from ..nonsmooth.junction_balance import refuse_unbalanced_junctions
+from ..nonsmooth.lock_forces import taut_on_supports
 from ..status import InconsistentInitialForce, SolverError
 from .initial_rest import cluster_guesses, initial_rest_forces
 from .step_system import EPS, law_scale, newton_failure
@@ -137,6 +138,7 @@ def consistent_initial_state(
                  "factorizations": 0}
     else:
         v, F, stats = _limit_system(scene, pinned, q0, f, eps, options)
+    F = taut_on_supports(scene, 0.0, x0, v, F)  # a lock moving with a support: its force
     user = [e for e, el in enumerate(elements) if el.F0 is not None]
     if user:
         q_init = scene.elongations(x0, v)

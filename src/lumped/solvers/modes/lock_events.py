@@ -215,7 +215,14 @@ def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Seq
     for e in hits:
         L = branches[e].info[new[e]].lock_value
         a, b = ea[e], eb[e]
-        if L is not None and a < 0 and b >= 0:  # the lock holds q = L and q' = 0 exactly
+        if L is None and branches[e].info[new[e]].locks and hasattr(branches[e], "lb"):
+            # on a moving support (ShiftedBranches): onto q + o_e(t) = L, the clock at t
+            R, Rq, _ = branches[e].kernel_for(new[e])(
+                scene.elongations(x, v)[e], 0.0 if forces is None else forces[e])
+            if Rq != 0.0 and R == R:
+                inner.append(e)
+                gaps.append(-R / Rq)
+        elif L is not None and a < 0 and b >= 0:  # the lock holds q = L and q' = 0 exactly
             x[b], v[b] = float(L), 0.0
         elif L is not None and b < 0 and a >= 0:
             x[a], v[a] = -float(L), 0.0

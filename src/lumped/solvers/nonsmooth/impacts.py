@@ -29,12 +29,25 @@ Where the impulses are not unique (two strings in parallel), or a junction's vel
 is not fixed by the locks, the minimum-norm solution is taken (documented in
 ``docs/theory/events.md``).
 
+**A lock on a moving support** (:mod:`lumped.scene.supports`; the scene the view of a
+:class:`~lumped.scene.supports.SupportFrame`, its clock at the impact's time): the
+element's rate is ``q' = (B v)_e + o_e'(t)``, the support's ``o_e' = +-v_s(t)`` (``+``
+at its end ``b``), and the law above holds for it (``B v+ + o' = -e (B v- + o')``): the
+support's motion is prescribed (infinite mass), it takes no momentum, and does the work
+``o_e' P_e`` through the impulse, which the energy lost includes::
+
+    energy_lost = 1/2 sum_i m_i ((v-_i)^2 - (v+_i)^2) + sum_e o_e' P_e >= 0
+
+(one mass on a string to a support at ``v_s``: ``(1 - e^2) m (v- - v_s)^2 / 2``).
+
 All inputs and outputs are Python floats; the one linear solve per impact uses numpy.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+
+from ...scene.supports import clock_rates
 
 __all__ = ["lockable_elements", "locking_elements", "lock_state", "impact_velocities",
            "onto_locks"]
@@ -112,23 +125,33 @@ def locking_elements(scene, x: Sequence[float], v: Sequence[float],
     return out
 
 
-def _rates(scene, v: Sequence[float], elems: Sequence[int]) -> list[float]:
+def _rates(scene, v: Sequence[float], elems: Sequence[int],
+           moving: bool = False) -> list[float]:
+    """``v_b - v_a`` per element of ``elems``, plus the support's ``o_e'`` at the
+    support clock's time when ``moving`` (:func:`lumped.scene.supports.clock_rates`)."""
+    offsets = clock_rates(scene) if moving else None
     out = []
     for e in elems:
         a, b = scene.elem_a[e], scene.elem_b[e]
-        out.append((v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0))
+        r = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        out.append(r if offsets is None else r + offsets[e])
     return out
 
 
 def impact_solve(scene, v: Sequence[float], elems: Sequence[int], restitution: float,
-           target: Sequence[float] | None = None):
-    """The impact equations for the elements ``elems``: ``(v+, P)`` (minimum norm);
-    ``target`` replaces ``-e B v`` as the locked rates after the impact."""
+           target: Sequence[float] | None = None, moving: bool = False):
+    """The impact equations for the elements ``elems``: ``(v+, P, rates)`` (minimum norm);
+    ``target`` replaces ``-e q'`` as the locked rates after the impact.
+
+    With ``moving`` the rates ``q'`` of elements on a moving support include the
+    support's ``o_e'`` at the support clock's time (the impact law of the module notes;
+    ``target`` then is the whole rate ``q'`` after); without it they are ``B v`` (an
+    increment of positions or of node rates alone)."""
     import numpy as np
 
     N, L = len(scene.nodes), len(elems)
     m = scene.masses
-    rates = _rates(scene, v, elems)
+    rates = _rates(scene, v, elems, moving)
     # unknowns (dv_1..dv_N, P_1..P_L); rows: node balances, then lock conditions
     K = np.zeros((N + L, N + L))
     rhs = np.zeros(N + L)
@@ -193,7 +216,8 @@ def impact_velocities(scene, x: Sequence[float], v: Sequence[float], locked: Seq
         Impulse carried by each element of ``locked`` (same order; N s, positive in
         tension). ``0.0`` for an element released because it would have to push.
     energy_lost : float
-        ``1/2 sum m_i (v_i^2 - v_after_i^2) >= 0`` (J).
+        ``1/2 sum m_i (v_i^2 - v_after_i^2) >= 0`` (J), plus the supports' work
+        ``sum o_e' P_e`` on a scene with moving supports (see the module notes).
 
     Raises
     ------
@@ -218,7 +242,7 @@ def impact_velocities(scene, x: Sequence[float], v: Sequence[float], locked: Seq
     for _ in range(len(locked) + 1):
         if not active:
             break
-        v_after, P, rates = impact_solve(scene, v, active, restitution)
+        v_after, P, rates = impact_solve(scene, v, active, restitution, moving=True)
         # a lock holds, it never pushes: the impulse opposes the approach rate; an
         # element at rest on its lock (rate below the velocities' round-off, e.g. a
         # string holding a mass that another lock stopped) holds the way its force acts
@@ -236,6 +260,9 @@ def impact_velocities(scene, x: Sequence[float], v: Sequence[float], locked: Seq
             v_after = [float(vi) for vi in v]
     m = scene.masses
     lost = 0.5 * sum(mi * (vb * vb - va * va) for mi, vb, va in zip(m, v, v_after, strict=True))
+    offsets = clock_rates(scene)
+    if offsets is not None:  # the work of the supports through the impulses: o_e' P_e
+        lost += sum(offsets[e] * impulses[e] for e in locked)
     return v_after, [impulses[e] for e in locked], max(lost, 0.0)
 
 

@@ -9,11 +9,14 @@ other elements fixed (their laws give them at ``(x, v)``), the balances
 .. math::
 
     m_i a_i = f_i(t) + \sum_{a_e = i} F_e - \sum_{b_e = i} F_e \quad (\text{masses};
-    \ 0 = \dots \text{ at a junction}), \qquad a_{b_e} - a_{a_e} = 0 \ (e \in K)
+    \ 0 = \dots \text{ at a junction}), \qquad a_{b_e} - a_{a_e} + o_e''(t) = 0 \ (e \in K)
 
 are linear in the accelerations ``a`` and the forces ``F_K`` of the force-free set
-``K`` (ground has ``a = 0``). Their solution gives the forces these elements carry at
-that instant, the right limit ``h -> 0`` of an implicit step, without dividing by ``h``.
+``K`` (ground has ``a = 0``; an element on a moving support, :mod:`lumped.scene.supports`,
+has ``o_e'' = +-a_s(t)``, ``+`` at its end ``b``, for a locked spring's ``q''`` as for a
+stuck dashpot's ``q'``: its lock moves with the support; else ``o_e'' = 0``). Their
+solution gives the forces these elements carry at that instant, the right limit
+``h -> 0`` of an implicit step, without dividing by ``h``.
 
 A backward-Euler step of size ``h`` reads the same forces from ``m (v_1 - v_0) / h``, and
 on a position lock ``v_1`` is fixed only to ``ulp(x) / h`` (the rounding of
@@ -36,8 +39,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from ...scene import Mass, Scene
+from ...scene.supports import support_accelerations
 
-__all__ = ["forces_from_accelerations"]
+__all__ = ["forces_from_accelerations", "taut_on_supports"]
 
 #: Weight of a dashpot's force change against a lock's in the minimum-norm split.
 _DASHPOT_WEIGHT = 1e3
@@ -92,6 +96,8 @@ def forces_from_accelerations(scene: Scene, t: float, x: Sequence[float],
     kernels = [el.law.kernel for el in scene.elements]
     masses = [nd.m if isinstance(nd, Mass) else 0.0 for nd in scene.nodes]
     K = list(free)
+    moving = (support_accelerations(scene, t) if getattr(scene, "support_frame", None)
+              is not None else None)  # +-a_s: a lock on a moving support moves with it
     scale = 1.0 + max((abs(f) for f in out), default=0.0) \
         + max((abs(f) for f in scene.external_forces(t)), default=0.0)
     tol = [1e-12 * (abs(qe) + abs(fe)) + 1e-300 for qe, fe in zip(q, out, strict=True)]
@@ -114,6 +120,8 @@ def forces_from_accelerations(scene: Scene, t: float, x: Sequence[float],
                 A[col, eb[e]] = 1.0
             if scene.elements[e].kind != "spring":
                 w[col] = _DASHPOT_WEIGHT
+            if moving is not None:
+                rhs_full[col] = -moving[e]
         y, *_ = np.linalg.lstsq(A / w, rhs_full, rcond=None)
         z = y / w
         if np.abs(A @ z - rhs_full).max() > 1e-9 * scale:
@@ -130,3 +138,42 @@ def forces_from_accelerations(scene: Scene, t: float, x: Sequence[float],
         if not K:
             return out
     return out
+
+
+def taut_on_supports(scene: Scene, t: float, x: Sequence[float], v: Sequence[float],
+                     F: Sequence[float]) -> list[float]:
+    """The forces ``F`` at ``(t, x, v)`` with those of the spring-like elements on a
+    moving support (:mod:`lumped.scene.supports`; ``scene`` the view of a
+    :class:`~lumped.scene.supports.SupportFrame`, its clock at ``t``) that sit on a
+    position lock at the rate ``q' = 0`` taken from the balance of accelerations
+    (:func:`forces_from_accelerations`: the lock moves with the support, ``q'' = 0``).
+
+    The limit system of the initial state reads a lock's elongation at ``eps^2 a`` and
+    leaves such a force anywhere on the lock (the string's ``k L``, its kink); a string
+    the load keeps taut then carries the load and the support's ``m a_s``. An element
+    whose balance would push it off the lock keeps the boundary of its set. Any other
+    scene, or none locked: ``F`` unchanged."""
+    from .impacts import lock_state
+
+    frame = getattr(scene, "support_frame", None)
+    if frame is None:
+        return list(F)
+    q = scene.elongations(x, v)
+    rates = frame.rates_now() or [0.0] * len(F)
+    ends = {end.element for end in frame.source.support_ends}
+    free = []
+    for e in sorted(ends):
+        el = scene.elements[e]
+        if el.kind != "spring":
+            continue
+        R, Rq, _ = el.law.kernel(q[e], F[e])
+        rate = (v[scene.elem_b[e]] if scene.elem_b[e] >= 0 else 0.0) \
+            - (v[scene.elem_a[e]] if scene.elem_a[e] >= 0 else 0.0) + rates[e]
+        big = abs(F[e]) * 2.0 + 1.0  # on the lock: any force beyond the kink holds it
+        if R == 0.0 and abs(rate) <= 1e-12 * (1.0 + max(map(abs, v), default=0.0)) \
+                and lock_state(el.law, q[e], big):
+            free.append(e)
+    if not free:
+        return list(F)
+    got = forces_from_accelerations(scene, t, x, v, F, free)
+    return list(F) if got is None else got

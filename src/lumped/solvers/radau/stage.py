@@ -122,7 +122,8 @@ class StageSystem(ErrorEstimate):
         size = 3 * n
         G = [0.0] * size
         J = [[0.0] * size for _ in range(size)]
-        frame = self.frame
+        frame = self.frame  # a lock on a support moves with it (h A o_e')
+        moves = frame.lock_moves(self.t_n, h, A, C) if frame is not None else None
         for k in range(3):
             base = k * n
             fk = f[k]
@@ -178,8 +179,8 @@ class StageSystem(ErrorEstimate):
                     qb = U[base + b] if b >= 0 else 0.0
                     qa = U[base + a] if a >= 0 else 0.0
                 if lock is not None:  # R(L + dq) = R(L) + dR/dq dq: affine, exactly
-                    R, Rq, RF = kernels[e](lock, Fe)
-                    R += Rq * (h * (qb - qa))
+                    R, Rq, RF = getattr(kernels[e], "bare", kernels[e])(lock, Fe)
+                    R += Rq * (h * (qb - qa) + (moves[k][e] if moves else 0.0))
                 else:
                     R, Rq, RF = kernels[e](qb - qa, Fe)
                 lrow = J[col]
