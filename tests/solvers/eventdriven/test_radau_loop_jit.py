@@ -105,12 +105,13 @@ def test_a_bridge_after_compiled_steps_is_the_python_loop_one(monkeypatch):
     (:mod:`lumped.solvers.eventdriven.bridge`), the compiled loop's steps too. The
     loaded chain bridged where both strings are taut at t = 0.19476 while the mode after
     the impact was read off the probe alone; with that rule back (the balance of
-    accelerations off, :meth:`ModeState._hold_impacted`), the step falls below its floor
+    accelerations off,
+    :func:`~lumped.solvers.modes.lock_events.hold_impacted_locks`), the step falls below its floor
     there and both loops bridge it with the same steps (1.6e-8 s, the longest step 1.6e-3 s
     being the compiled loop's), bit for bit. (The compiled loop's steps did not count:
     its bridges took steps of 1.2e-8 s, 1 bridge here where the Python loop takes 3, and
     12 bridges then a stop over ``t_end = 0.2``.)"""
-    monkeypatch.setattr(mode_state.ModeState, "_hold_impacted", lambda *args: None)
+    monkeypatch.setattr(mode_state, "hold_impacted_locks", lambda *args: None)
     kw = dict(method="radau5", t_end=0.195, rtol=1e-10, atol=1e-13)
     ref = simulate(loaded_string_chain(), compiled=False, **kw)
     fast = simulate(loaded_string_chain(), compiled=True, **kw)

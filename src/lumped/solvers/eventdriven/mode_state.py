@@ -19,8 +19,8 @@ from ...scene import Mass, Scene
 from ...scene.supports import support_time
 from ..modes.choice import select_modes
 from ..modes.lock_events import (
-    after_impact_forces,
     apply_impacts,
+    hold_impacted_locks,
     hold_rate_locks,
     snap_to_locks,
 )
@@ -162,7 +162,8 @@ class ModeState:
             if isinstance(sel, str):
                 return sel
             new, v_p, F_p = sel
-            self._hold_impacted(t, [e for e, _ in hit[0]], scale_v, x, v, F, new, F_p)
+            hold_impacted_locks(scene, lbs, t, [e for e, _ in hit[0]], scale_v, x, v, F,
+                                new, F_p)
         if not self.state_stays(t, cause, new, bool(hit[0]), x, v, F):
             for p in range(self.N):
                 if not self.is_mass[p]:
@@ -187,30 +188,6 @@ class ModeState:
         self.set_modes(new, F)
         hold_rate_locks(scene, lbs, modes, v)
         return ""
-
-    def _hold_impacted(self, t: float, hits: list[int], scale_v: float, x: list[float],
-                       v: list[float], F: list[float], new: list[int],
-                       F_p: list[float]) -> None:
-        """Put back on its lock each impacted element the probe after the impact read off
-        it only by round-off (``new`` and ``F_p`` in place).
-
-        The probe cannot see a lock at rest: it moves ``q`` by ``h_p^2 a < ulp(L)``
-        (:func:`~lumped.solvers.modes.lock_events.after_impact_forces`). Where it read an
-        impacted element's free branch with ``q`` still on the lock to round-off, the
-        balance of accelerations decides: an element whose balance force lies strictly
-        inside its lock's set stays locked, with that force."""
-        lbs, scene = self.lbs, self.scene
-        q = scene.elongations(x, v)
-        doubt = [e for e in hits if not lbs[e].info[new[e]].locks
-                 and any(info.locks and info.lock_value is not None
-                         and abs(q[e] - info.lock_value) <= 4.0 * _EPS * max(
-                             abs(info.lock_value), abs(q[e])) for info in lbs[e].info)]
-        if not doubt:
-            return
-        forces, holding = after_impact_forces(scene, t, x, v, F, doubt, scale_v)
-        for e in holding:
-            new[e] = lbs[e].branch(q[e], forces[e])
-            F_p[e] = forces[e]
 
     def state_stays(self, t: float, cause: str, new: list[int], impact: bool,
                     x: list[float], v: list[float], F: list[float]) -> bool:

@@ -190,9 +190,7 @@ class Radau5Run(StepPass, StepChecks):
         if stop or self.modes != old:
             self.tangent.clear()  # (the old mode's (watched, guard) pairs)
             return stop
-        if t != self.kept_at:
-            self.kept_at, self.kept_count = t, 0
-        self.kept_count += 1
+        self.kept_at, self.kept_count = t, (self.kept_count + 1 if t == self.kept_at else 1)
         if self.kept_count < _KEPT_AT_T:
             return None
         return Status.STEP_TOO_SMALL, (

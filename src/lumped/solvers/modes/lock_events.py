@@ -20,8 +20,8 @@ from collections.abc import Sequence
 
 from ...scene import Mass, Scene
 
-__all__ = ["after_impact_forces", "apply_impacts", "hold_rate_locks", "lock_cones",
-           "snap_to_locks"]
+__all__ = ["after_impact_forces", "apply_impacts", "hold_impacted_locks", "hold_rate_locks",
+           "lock_cones", "snap_to_locks"]
 
 _EPS = sys.float_info.epsilon
 
@@ -305,3 +305,29 @@ def after_impact_forces(scene: Scene, t: float, x: Sequence[float], v: Sequence[
                               math.nextafter(got[e], math.inf))):
             holding.append(e)
     return got, holding
+
+
+def hold_impacted_locks(scene: Scene, branches: Sequence, t: float, hits: Sequence[int],
+                        threshold: float, x: Sequence[float], v: Sequence[float],
+                        F: Sequence[float], new: list[int], F_p: list[float]) -> None:
+    """Put back on its lock each impacted element that the mode choice after the impact
+    read off it only by round-off (``new`` and ``F_p``, the choice's modes and forces, in
+    place).
+
+    The choice's probe cannot see a lock at rest: it moves ``q`` by ``h_p^2 a < ulp(L)``
+    (:func:`after_impact_forces`). Where it read an element of ``hits`` on a free branch
+    with ``q`` still on the lock's value to round-off, the balance of accelerations
+    decides: an element whose balance force lies strictly inside its lock's set stays
+    locked, with that force (``threshold``: the rate below which an element is at rest
+    relative to its ends)."""
+    q = scene.elongations(x, v)
+    doubt = [e for e in hits if not branches[e].info[new[e]].locks
+             and any(info.locks and info.lock_value is not None
+                     and abs(q[e] - info.lock_value) <= 4.0 * _EPS * max(
+                         abs(info.lock_value), abs(q[e])) for info in branches[e].info)]
+    if not doubt:
+        return
+    forces, holding = after_impact_forces(scene, t, x, v, F, doubt, threshold)
+    for e in holding:
+        new[e] = branches[e].branch(q[e], forces[e])
+        F_p[e] = forces[e]
