@@ -82,7 +82,7 @@ def scope_error(scene: Scene) -> str | None:
     stop mid-run, and ``auto`` runs ``bdf2`` there (its globalised Newton takes such
     points).
     """
-    from ...scene.supports import branches_of
+    from ...scene.shifted_laws import branches_of
 
     for el in scene.elements:
         lb = branches_of(el.law)
@@ -211,7 +211,7 @@ def scene_plan(scene: Scene) -> ScenePlan:
                  or plan.key[2] == tuple(id(f) for f in scene.forcing)):
         return plan
     key = (scene.nodes, scene.elements, tuple(id(f) for f in scene.forcing), scene.forcing)
-    from ...scene.supports import branches_of
+    from ...scene.shifted_laws import branches_of
     from ..implicit.branch_check import known_monotone
     from ..nonsmooth.locks import cyclic_elements
 
