@@ -51,10 +51,11 @@ def test_two_dashpots_reaching_their_yield_forces_together_both_slip():
                    compiled=False)
     assert sol.ok, sol.message
     assert sol.stats.get("bridges", 0) == 0, sol.message
-    t_star = 0.13203269986975907
-    at = [ev for ev in sol.events if ev.t == t_star]
-    assert len(at) <= 4, at  # (was 50)
-    last = {ev.element: ev.to_branch for ev in sol.events if ev.t <= t_star}
+    # t* from the run (its last bits differ between machines): the joint break-out
+    t_star = 0.13203269986976
+    at = [ev for ev in sol.events if abs(ev.t - t_star) < 1e-9]
+    assert 2 <= len(at) <= 4, at  # (was 50)
+    last = {ev.element: ev.to_branch for ev in sol.events if ev.t < t_star + 1e-9}
     assert last["e2"] == 0 and last["e3"] == 1, last  # both slip (to -tau), e0 stuck
     # ... and the motion agrees with bdf2 (bdf2's own error at dt / 64: 2e-7)
     ref = simulate(scene, method="bdf2", dt=dt / 64, t_end=0.5)

@@ -100,24 +100,22 @@ def test_the_compiled_loop_gives_the_python_loop_run(name):
     assert np.all(np.abs(fast.sol(t) - ref.sol(t)) <= 1e-11 * scale)
 
 
-def test_a_bridge_after_compiled_steps_is_the_python_loop_one(monkeypatch):
-    """A bridge's backward-Euler step scales with the longest step the run accepted
-    (:mod:`lumped.solvers.eventdriven.bridge`), the compiled loop's steps too. The
-    loaded chain bridged where both strings are taut at t = 0.19476 while the mode after
-    the impact was read off the probe alone; with that rule back (the balance of
-    accelerations off,
-    :func:`~lumped.solvers.modes.lock_events.hold_impacted_locks`), the step falls below its floor
-    there and both loops bridge it with the same steps (1.6e-8 s, the longest step 1.6e-3 s
-    being the compiled loop's), bit for bit. (The compiled loop's steps did not count:
-    its bridges took steps of 1.2e-8 s, 1 bridge here where the Python loop takes 3, and
-    12 bridges then a stop over ``t_end = 0.2``.)"""
+def test_the_old_impact_rule_on_the_loaded_chain_is_the_python_loop_one(monkeypatch):
+    """With the mode after an impact read off the probe alone (the balance of
+    accelerations off, :func:`~lumped.solvers.modes.lock_events.hold_impacted_locks`),
+    the loaded chain reaches t = 0.19476 with both strings taut and a step near its floor:
+    on one machine it bridged there (steps of 1.6e-8 s, the longest step 1.6e-3 s being
+    the compiled loop's), on another its last bits take it through. Either way both loops
+    give the same run, bit for bit, on one machine. That a bridge scales with the compiled
+    loop's steps is checked where a bridge is forced on every machine (the creep test
+    below: 20 compiled steps, then 7 bridges)."""
     monkeypatch.setattr(mode_state, "hold_impacted_locks", lambda *args: None)
     kw = dict(method="radau5", t_end=0.195, rtol=1e-10, atol=1e-13)
     ref = simulate(loaded_string_chain(), compiled=False, **kw)
     fast = simulate(loaded_string_chain(), compiled=True, **kw)
     assert fast.stats.pop("loop") == "compiled"
     assert ref.stats.pop("loop") == "python: compiled=False"
-    assert ref.ok and ref.stats["bridges"] >= 1
+    assert ref.ok, ref.message
     assert fast.message == ref.message and fast.stats == ref.stats
     assert np.array_equal(fast.data, ref.data)
 
