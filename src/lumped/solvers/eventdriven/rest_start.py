@@ -23,12 +23,16 @@ crossed at the balance's forces when a user's ``F0`` lies off the balance).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
 
 from ...scene import Scene
 from ..implicit.initial_state import consistent_initial_state
 from ..modes.lock_events import hold_rate_locks
 from ..modes.stuck import StaticHold, forcing_kinds, static_hold
+from ..radau.rows import row_of
 from .mode_parts import rest_mode
 
 __all__ = ["RestStart", "rest_start"]
@@ -57,6 +61,21 @@ class RestStart:
         A forcing is a sine burst.
     F_end : list of float or None
         Under a steady forcing, the balance's forces at every ``t > 0``; else ``None``.
+    acc0 : list of float
+        The masses' accelerations at ``t = 0`` from the balance of the initial forces
+        (the driver's first step size reads them).
+    row0 : numpy.ndarray
+        The first output row, ``(1, 1 + 2N + E)`` (copied into each run's ``data``).
+    row_end : numpy.ndarray or None
+        Under a steady forcing, the output row of every ``t > 0`` (its time aside).
+    may_be_free : bool
+        Two or more elements on cycles have a branch whose ``dR/dF`` is not a nonzero
+        constant: only then can forces be indeterminate
+        (:func:`~lumped.solvers.nonsmooth.locks.indeterminate_elements` needs two
+        force-free elements on a cycle), and the run logs them.
+    first : dict
+        Under a sine burst, the held interval up to the first time event, the same for
+        every run that reaches it (:meth:`first_interval`).
     """
 
     x: list[float]
@@ -69,11 +88,28 @@ class RestStart:
     hold: StaticHold
     varying: bool
     F_end: list[float] | None
+    acc0: list[float]
+    row0: np.ndarray
+    row_end: np.ndarray | None
+    may_be_free: bool
+    first: dict = field(default_factory=dict)
 
     def fresh_hold(self, scene: Scene, plan) -> StaticHold:
         """The static balance from the initial state, made anew (a run's own)."""
         fkind, fpar = forcing_kinds(scene, plan)
         return static_hold(scene, plan, self.modes, self.x, self.v, self.F, fkind, fpar)
+
+    def first_interval(self, key: tuple, make: Callable[[], object]) -> object:
+        """The held interval up to the first time event, made once per ``key`` (its end,
+        and whether the compiled scan ran) by ``make`` (its verdict included: ``None``
+        when a guard crosses in it)."""
+        got = self.first.get(key, False)
+        if got is False:
+            got = make()
+            if len(self.first) >= 8:  # (runs to many ends: merged breakpoints)
+                self.first.clear()
+            self.first[key] = got
+        return got
 
 
 def rest_start(scene: Scene, plan, time_scale: float, options) -> RestStart | None:
@@ -122,5 +158,11 @@ def _start(scene: Scene, plan, x: list[float], v: list[float], F: list[float],
         # (F: a user's F0 off the balance; F_end itself is checked by the scan)
         if F_end != F and hold.breakout(0.0, 1.0, guards, modes)[0] is not None:
             return None
+    net = scene.net_forces(0.0, F)
+    acc0 = [net[i] / nd.m for i, nd in enumerate(scene.nodes)]
     return RestStart(x, v, F, q, newton_iterations, modes, guards, hold, hold.varying,
-                     F_end)
+                     F_end, acc0, np.array([row_of(0.0, x, v, F)], dtype=float),
+                     None if F_end is None else np.array(row_of(0.0, x, v, F_end)),
+                     sum(1 for e in plan.cyclic if any(
+                         not (info.dR_dF.is_number and info.dR_dF != 0)
+                         for info in plan.branches[e].info)) > 1)

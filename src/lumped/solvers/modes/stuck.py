@@ -94,6 +94,10 @@ class StaticHold:
             got = self._seen[t] = self._forces(t)
         return list(got)
 
+    def balance(self, t: float) -> list[float]:
+        """:meth:`forces` at ``t``, not kept (a time asked once)."""
+        return list(self._steady) if self._steady is not None else self._forces(t)
+
     def _forces(self, t: float) -> list[float]:
         # the forcing by its kind's formula (``scene.external_forces(t)``, the same
         # values: kinds 0 none, 1 constant, 2 sine burst)
