@@ -248,3 +248,18 @@ def test_the_kept_start_serves_its_scene_only_and_in_any_order():
         assert np.array_equal(first[name].data, again.data)
         _assert_same(again, _general(fresh[name], t_end=t, rtol=rtol))
     assert first["a3"].data[0, 1] == 0.004 and first["b3"].data[0, 1] == -0.003
+
+
+def test_one_scene_run_again_and_again_gives_the_general_solution_each_time():
+    # the start and the interval up to the first time event are kept on the scene: runs
+    # that end before the burst ends, past it, compiled or not, sampled or not, in any
+    # order, each give the general driver's solution on a fresh scene
+    def make():
+        return _burst_pair(0.5, 0.3, 0.7, 1.9)
+
+    scene = make()
+    for kw in ({"t_end": 0.5}, {"t_end": 2.5, "compiled": False}, {"t_end": 1.0},
+               {"t_end": 2.5, "rtol": 1e-9, "compiled": True}, {"t_end": 0.7},
+               {"t_end": 2.5, "dt": 0.01}, {"t_end": 1.9 + 1e-15}, {"t_end": 2.5}):
+        kw["method"] = "radau5"
+        _assert_same(simulate(scene, **kw), _general(make(), **kw))
