@@ -263,3 +263,16 @@ def test_one_scene_run_again_and_again_gives_the_general_solution_each_time():
                {"t_end": 2.5, "dt": 0.01}, {"t_end": 1.9 + 1e-15}, {"t_end": 2.5}):
         kw["method"] = "radau5"
         _assert_same(simulate(scene, **kw), _general(make(), **kw))
+
+
+def test_a_scene_given_other_nodes_or_forcing_reads_no_kept_start():
+    # what is kept lives on the scene's plan, made again when the nodes, elements or
+    # forcing objects are other objects (each of them immutable)
+    scene = _oscillator(x0=0.004, force=SineBurst(0.5, 5.0, 1.0))
+    simulate(scene, t_end=2.0)
+    scene.nodes = (Mass("mass", m=1.0, x0=-0.002),)
+    _assert_same(simulate(scene, t_end=2.0),
+                 _general(_oscillator(x0=-0.002, force=SineBurst(0.5, 5.0, 1.0)), t_end=2.0))
+    scene.forcing = (SineBurst(0.3, 9.0, 0.5),)
+    _assert_same(simulate(scene, t_end=2.0),
+                 _general(_oscillator(x0=-0.002, force=SineBurst(0.3, 9.0, 0.5)), t_end=2.0))

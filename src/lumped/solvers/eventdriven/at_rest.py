@@ -47,15 +47,16 @@ REST_LOOP = "none: at rest throughout (no steps)"
 
 
 def _candidate(scene: Scene, plan) -> bool:
-    """The scene's structure admits a run at rest (kept on ``plan``): every node a mass,
-    every law known monotone (the driver then tries the mode read off the state first),
-    every forcing absent, constant or a sine burst (the static balance's kinds)."""
+    """The scene's structure admits a run at rest (kept on ``plan``): every node a mass
+    starting at rest (``v0 = 0``), every law known monotone (the driver then tries the
+    mode read off the state first), every forcing absent, constant or a sine burst (the
+    static balance's kinds)."""
     got = plan.__dict__.get("at_rest_candidate")
     if got is None:
         fkind, _ = forcing_kinds(scene, plan)
         got = plan.__dict__["at_rest_candidate"] = (
             plan.refused is None and not plan.checked
-            and all(isinstance(nd, Mass) for nd in scene.nodes)
+            and all(isinstance(nd, Mass) and nd.v0 == 0.0 for nd in scene.nodes)
             and fkind is not None)
     return got
 
@@ -65,7 +66,7 @@ def rest_run(scene: Scene, settings) -> RawRun | None:
     ``None`` when the scene is not proven at rest (the general driver,
     :class:`lumped.solvers.eventdriven.run.Radau5Run`, runs it)."""
     plan = scene_plan(scene)
-    if not _candidate(scene, plan) or any(nd.v0 != 0.0 for nd in scene.nodes):
+    if not _candidate(scene, plan):
         return None
     opts = read_options(settings)  # (its checks: a bad keyword raises as in the driver)
     dt = settings.dt

@@ -43,6 +43,8 @@ def read_options(settings) -> dict:
         For a bad value; the message names the keyword and quotes the value.
     """
     out = dict(EXTRA_OPTIONS)
+    if not settings.extra:  # the defaults (valid)
+        return out
     for key, val in settings.extra.items():
         if key not in EXTRA_OPTIONS:
             raise TypeError(f"method 'radau5' takes no keyword argument {key!r} "
