@@ -18,6 +18,8 @@ and verdict), so repeated runs of one scene redo only what follows the first eve
 
 from __future__ import annotations
 
+import struct
+
 import numpy as np
 
 from ...scene import Scene
@@ -74,11 +76,11 @@ def burst_intervals(scene: Scene, plan, settings, opts: dict, start: RestStart,
                 return None
             if log is not None:
                 log.mark(t, t, free_names(scene, plan, start, F))
-            fkind, fpar = forcing_kinds(scene, plan)
-            hold = static_hold(scene, plan, modes, x, v, F, fkind, fpar)
-            seg = None if hold is None else _held(scene, plan, start, hold, t, t1, fast)
+            seg = (_after_bursts(scene, plan, start, F, t, t1) if t >= start.last_off
+                   else _held(scene, plan, start, _hold_of(scene, plan, start, F), t, t1,
+                              fast))
         elif breaks:  # up to the first time event: the same in every run that reaches it
-            seg = start.first_interval((t1, fast is not None), lambda t1=t1: _held(
+            seg = start.kept_interval(("first", t1, fast is not None), lambda t1=t1: _held(
                 scene, plan, start, start.fresh_hold(scene, plan), 0.0, t1, fast))
         else:
             seg = _held(scene, plan, start, start.fresh_hold(scene, plan), 0.0, t1, fast)
@@ -100,10 +102,38 @@ def free_names(scene: Scene, plan, start: RestStart, F: list[float]) -> list[str
             for e in indeterminate_elements(scene, start.q, F, plan.cyclic)]
 
 
-def _held(scene: Scene, plan, start: RestStart, hold: StaticHold, t: float, t1: float,
-          fast) -> Held | None:
-    """The held interval ``[t, t1]`` of ``hold``, or ``None`` when its scan finds a guard
-    crossed (as :func:`lumped.solvers.modes.stuck.hold_interval`)."""
+def _hold_of(scene: Scene, plan, start: RestStart, F: list[float]) -> StaticHold | None:
+    """The static balance of the start's mode from the forces ``F``."""
+    fkind, fpar = forcing_kinds(scene, plan)
+    return static_hold(scene, plan, start.modes, start.x, start.v, F, fkind, fpar)
+
+
+def _after_bursts(scene: Scene, plan, start: RestStart, F: list[float], t: float,
+                  t1: float) -> Held | None:
+    """The held interval ``[t, t1]`` from the forces ``F`` once every burst has ended
+    (``t >= start.last_off``): the forcing is steady, so every sample of the scan has the
+    same forces, those of the balance (its verdict and those forces kept on ``start`` per
+    ``F``, bit for bit: the balance reads nothing else); the rows at the scan's samples
+    (:meth:`~lumped.solvers.modes.stuck.StaticHold.samples`) are made per run."""
+    key = ("after", struct.pack(f"{len(F)}d", *F))
+    got = start.kept_interval(key, lambda: _held(scene, plan, start,
+                                                 _hold_of(scene, plan, start, F), t, t1, None))
+    if got is None:
+        return None
+    hold, block, F1, free = got
+    times = [s for s in hold.samples(t, t1) if s < t1] + [t1]
+    rows = np.empty((len(times), block.shape[1]))
+    rows[:] = block[-1]
+    rows[:, 0] = times
+    return hold, rows, F1, free
+
+
+def _held(scene: Scene, plan, start: RestStart, hold: StaticHold | None, t: float,
+          t1: float, fast) -> Held | None:
+    """The held interval ``[t, t1]`` of ``hold``, or ``None`` when there is none or its
+    scan finds a guard crossed (as :func:`lumped.solvers.modes.stuck.hold_interval`)."""
+    if hold is None:
+        return None
     x, v = start.x, start.v
     t_b, samples = hold.breakout(t, t1, start.guards, start.modes, fast, refine=False)
     if t_b is not None:

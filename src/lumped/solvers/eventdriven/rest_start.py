@@ -73,9 +73,13 @@ class RestStart:
         constant: only then can forces be indeterminate
         (:func:`~lumped.solvers.nonsmooth.locks.indeterminate_elements` needs two
         force-free elements on a cycle), and the run logs them.
-    first : dict
-        Under a sine burst, the held interval up to the first time event, the same for
-        every run that reaches it (:meth:`first_interval`).
+    last_off : float
+        Under a sine burst, the latest time a burst is switched off: from there on the
+        forcing is steady.
+    kept : dict
+        Under a sine burst, what the runs share (:meth:`kept_interval`): the held interval
+        up to the first time event, and the balance after every burst has ended per force
+        state.
     """
 
     x: list[float]
@@ -92,23 +96,23 @@ class RestStart:
     row0: np.ndarray
     row_end: np.ndarray | None
     may_be_free: bool
-    first: dict = field(default_factory=dict)
+    last_off: float
+    kept: dict = field(default_factory=dict)
 
     def fresh_hold(self, scene: Scene, plan) -> StaticHold:
         """The static balance from the initial state, made anew (a run's own)."""
         fkind, fpar = forcing_kinds(scene, plan)
         return static_hold(scene, plan, self.modes, self.x, self.v, self.F, fkind, fpar)
 
-    def first_interval(self, key: tuple, make: Callable[[], object]) -> object:
-        """The held interval up to the first time event, made once per ``key`` (its end,
-        and whether the compiled scan ran) by ``make`` (its verdict included: ``None``
-        when a guard crosses in it)."""
-        got = self.first.get(key, False)
+    def kept_interval(self, key: tuple, make: Callable[[], object]) -> object:
+        """What ``make`` gives, made once per ``key`` (which holds everything it reads
+        besides this start; its verdict included: ``None`` when a guard crosses)."""
+        got = self.kept.get(key, False)
         if got is False:
             got = make()
-            if len(self.first) >= 8:  # (runs to many ends: merged breakpoints)
-                self.first.clear()
-            self.first[key] = got
+            if len(self.kept) >= 16:  # (runs to many ends, or many probe sizes)
+                self.kept.clear()
+            self.kept[key] = got
         return got
 
 
@@ -165,4 +169,6 @@ def _start(scene: Scene, plan, x: list[float], v: list[float], F: list[float],
                      None if F_end is None else np.array(row_of(0.0, x, v, F_end)),
                      sum(1 for e in plan.cyclic if any(
                          not (info.dR_dF.is_number and info.dR_dF != 0)
-                         for info in plan.branches[e].info)) > 1)
+                         for info in plan.branches[e].info)) > 1,
+                     max([float(p[2]) for k, p in zip(fkind, fpar, strict=True) if k == 2],
+                         default=0.0))
