@@ -31,7 +31,7 @@ from ..radau.error import initial_step
 from ..radau.rows import row_of
 from ..status import Event
 from .fast import compiled_loop
-from .mode_parts import rest_mode
+from .mode_parts import holds_at, mode_parts, rest_mode
 from .rest_start import RestStart
 from .run import DEFAULT_ATOL, DEFAULT_RTOL
 from .setup import time_events
@@ -59,9 +59,7 @@ def burst_intervals(scene: Scene, plan, settings, opts: dict, start: RestStart,
     x, v, modes = start.x, start.v, start.modes
     # the start's probe reads the mode at the balance under the load at its end (the
     # probe's forces are those to round-off, which the margin covers)
-    F_probe = start.hold.balance(1e-9 * t_final)
-    if F_probe != start.F and (rest_mode(scene, plan, start.q, F_probe) or (None,))[0] \
-            != modes:
+    if not _start_probe_holds(scene, plan, start, start.hold.balance(1e-9 * t_final)):
         return None
     fast = _rest_loop(scene, plan, opts["compiled"])
     dense = DenseOutput(len(x), len(start.F))
@@ -144,6 +142,21 @@ def _held(scene: Scene, plan, start: RestStart, hold: StaticHold | None, t: floa
     return hold, block, F1, free_names(scene, plan, start, F1) if start.may_be_free else []
 
 
+def _start_probe_holds(scene: Scene, plan, start: RestStart, F_probe: list[float]
+                       ) -> bool:
+    """Whether the mode read off the start holds at the probe's load, ``F_probe``, beyond
+    round-off (:func:`~lumped.solvers.eventdriven.mode_parts.rest_mode`): read anew only
+    for the elements whose forces differ from the start's, when there are no cones (fewer
+    than two locks on cycles: the rest of :func:`rest_mode` reads the mode alone)."""
+    modes = start.modes
+    if F_probe == start.F:
+        return True
+    if mode_parts(plan, modes)[3] >= 2:
+        return (rest_mode(scene, plan, start.q, F_probe) or (None,))[0] == modes
+    changed = [e for e, (a, b) in enumerate(zip(F_probe, start.F, strict=True)) if a != b]
+    return holds_at(plan, modes, start.q, F_probe, changed)
+
+
 def _kept_at_time_event(scene: Scene, plan, modes: tuple[int, ...], t: float, h: float,
                         x: list[float], v: list[float], F: list[float], fast
                         ) -> list[float] | None:
@@ -154,15 +167,17 @@ def _kept_at_time_event(scene: Scene, plan, modes: tuple[int, ...], t: float, h:
     whose forces it takes. (Its locks' corrections, ``prefer_locks`` and
     ``lock_parallel_rates``, change only dashpots off a lock, and every element of
     ``modes`` with more than one branch is on one; the probe's velocities are those of
-    the masses at rest.)"""
+    the masses at rest.) With ``fast``, the compiled probe of
+    :func:`~lumped.solvers.modes.mode_guess.try_modes` with one candidate and one size
+    (a scene at rest has no moving supports to set the time of)."""
     h_p = max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t)))
     if fast is None:
         got = try_modes(scene, plan.branches, [list(modes)], t, x, v, F, h_p)
-    else:
-        with plan.lock:  # (the loop's probe workspace is shared by the runs at rest)
-            got = try_modes(scene, plan.branches, [list(modes)], t, x, v, F, h_p,
-                            fast=fast)
-    return None if got is None else got[2]
+        return None if got is None else got[2]
+    f = scene.external_forces(t + h_p)
+    with plan.lock:  # (the loop's probe workspace is shared by the runs at rest)
+        k, out = fast.probe_modes([list(modes)], None, f, x, v, F, h_p)
+        return out[len(x):].tolist() if k >= 0 else None
 
 
 def _rest_loop(scene: Scene, plan, option: bool | None):
