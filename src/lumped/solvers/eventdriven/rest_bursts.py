@@ -13,7 +13,10 @@ compiled loop (the same numbers as in Python).
 
 The interval up to the first time event reads nothing of the run but its end: it is kept
 on the run's :class:`~lumped.solvers.eventdriven.rest_start.RestStart` (its rows, forces
-and verdict), so repeated runs of one scene redo only what follows the first event.
+and verdict). Once every burst has ended the forcing is steady: the balance from a force
+state (the probe's) has the same forces at every later time, and its forces and verdict
+are kept there too, per force state, bit for bit. Repeated runs of one scene redo the
+start probe's check, the time events' probes and the rows of their own samples.
 """
 
 from __future__ import annotations
