@@ -103,7 +103,7 @@ def simulate(
         data = data.reshape(1, -1)
     return Solution(
         columns=scene.columns(), data=data, node_names=scene.node_names,
-        element_names=scene.element_names, method=concrete, stats=dict(raw.stats),
+        element_names=scene.element_names, method=concrete, stats=raw.stats,  # (copied)
         status=raw.status, message=raw.message,
         located_events=_located_events(raw), indeterminate=dict(raw.indeterminate),
         scene=scene, dense=raw.dense,

@@ -71,8 +71,9 @@ def _two_masses(x1: float, x2: float, tau1: float = 2.0, tau2: float = 1.0) -> S
     {"method": "radau5", "rtol": 1e-9, "compiled": False},
     {"method": "radau5", "dt": 0.01}, {"method": "radau5", "rtol": 1e-6, "dt": 0.003},
 ])
-def test_the_bench_scene_at_rest_gives_the_general_solution(kw):
-    bench = next(s for s in PAPER_SCENES if s.name == "release-0.005")
+@pytest.mark.parametrize("name", ["release-0.005", "forcing-F1"])
+def test_the_bench_scenes_at_rest_give_the_general_solution(kw, name):
+    bench = next(s for s in PAPER_SCENES if s.name == name)
     scene = generic_scene(bench)
     _assert_same(simulate(scene, t_end=bench.t_end, **kw),
                  _general(scene, t_end=bench.t_end, **kw))
@@ -85,8 +86,11 @@ def test_the_bench_scene_at_rest_gives_the_general_solution(kw):
     _oscillator(x0=0.005, F0=-0.5),  # the user's force, the consistent one
     _oscillator(x0=0.005, F0=0.3),  # ... one the law admits, off the balance
     _two_masses(0.004, 0.01),
+    _oscillator(x0=0.0, force=SineBurst(0.5, 5.0, 1.0)),  # a burst below yield
+    _oscillator(x0=0.0, force=SineBurst(0.0, 5.0, 1.0)),  # a burst of zero amplitude
+    _oscillator(x0=0.003, force=SineBurst(-0.4, 7.0, 5.0)),  # ... past t_end: no event
 ], ids=["negative", "zero", "constant load", "user F0", "user F0 off balance",
-        "two masses"])
+        "two masses", "burst", "zero burst", "burst past t_end"])
 def test_other_scenes_at_rest_give_the_general_solution(scene):
     _assert_same(simulate(scene, t_end=3.0), _general(scene, t_end=3.0))
 
@@ -143,15 +147,14 @@ def _parallel_locks() -> Scene:
     _oscillator(x0=-0.0100001),
     _oscillator(x0=0.01),  # k x0 = tau exactly: on the yield limit
     _oscillator(x0=0.005, v0=1e-9),  # an initial velocity
-    _oscillator(x0=0.0, force=SineBurst(0.5, 5.0, 1.0)),  # a forcing (stays stuck)
-    _oscillator(x0=0.0, force=SineBurst(0.0, 5.0, 1.0)),  # a sine burst of zero amplitude
+    _oscillator(x0=0.0, force=SineBurst(1.5, 5.0, 1.0)),  # a sine burst past yield
     _oscillator(x0=0.0, force=lambda t: 0.0),  # a callable of t
     _oscillator(x0=0.0, force=1.5),  # a constant load past the band
     _two_masses(0.0, 0.03),  # d2 loaded past tau2 = 1 (k2 x = 1.5)
     _maxwell(),  # a junction (its velocity is the limit system's)
     _parallel_locks(),  # locks in parallel (cones)
-], ids=["past yield", "past yield, negative", "at yield", "velocity", "forcing",
-        "zero sine", "callable", "constant past yield", "two masses, past yield",
+], ids=["past yield", "past yield, negative", "at yield", "velocity", "burst past yield",
+        "callable", "constant past yield", "two masses, past yield",
         "junction", "locks in parallel"])
 def test_a_scene_not_proven_at_rest_runs_the_general_driver(scene):
     sol = simulate(scene, t_end=2.0)
@@ -177,3 +180,99 @@ def test_bad_keywords_and_states_raise_as_in_the_general_driver():
         simulate(scene, t_end=1.0, max_steps=0)
     with pytest.raises(InconsistentInitialForce, match="F0 = 3.0"):  # beyond tau = 1
         simulate(_oscillator(x0=0.005, F0=3.0), t_end=1.0)
+
+
+def _burst_pair(a1: float, a2: float, t1: float, t2: float) -> Scene:
+    """The two masses of :func:`_two_masses` at rest, each under its own sine burst."""
+    lin, bing = get_law("linear_spring"), get_law("bingham")
+    return Scene(
+        [Mass("m1", m=1.0, x0=0.002), Mass("m2", m=0.5, x0=0.003)],
+        [Element("s1", lin.bind(k=100.0), "ground", "m1"),
+         Element("d1", bing.bind(gamma=1.0, tau=2.0), "ground", "m1"),
+         Element("s2", lin.bind(k=50.0), "m1", "m2"),
+         Element("d2", bing.bind(gamma=2.0, tau=1.0), "m1", "m2")],
+        {"m1": SineBurst(a1, 3.0, t1), "m2": SineBurst(a2, 11.0, t2)},
+    )
+
+
+@pytest.mark.parametrize("compiled", [None, True, False])
+@pytest.mark.parametrize("scene", [
+    _burst_pair(0.5, 0.3, 0.7, 1.9),  # two time events
+    _burst_pair(0.5, 0.3, 1.2, 1.2),  # both bursts end together: one time event
+    _burst_pair(-0.8, 0.2, 0.4, 2.5),  # the second past t_end
+], ids=["two events", "one event", "one inside"])
+def test_bursts_below_yield_give_the_general_solution(scene, compiled):
+    kw = {"t_end": 2.0, "rtol": 1e-7, "compiled": compiled}
+    _assert_same(simulate(scene, **kw), _general(scene, **kw))
+
+
+@settings(max_examples=40, deadline=None)
+@given(amp=st.floats(-2.0, 2.0), omega=st.floats(0.1, 100.0), t_off=st.floats(0.01, 3.0),
+       frac=st.floats(-0.99, 0.99), t_end=st.floats(0.05, 4.0),
+       compiled=st.sampled_from([None, True, False]), dt=st.sampled_from([None, 0.01]))
+def test_a_burst_gives_the_general_solution(amp, omega, t_off, frac, t_end, compiled, dt):
+    # tau = 1, k = 100: the dashpot holds k x0 = frac at rest; a burst of |amp| up to 2
+    # stays inside the band or breaks out (then the general driver runs both)
+    scene = _oscillator(x0=frac / 100.0, force=SineBurst(amp, omega, t_off))
+    kw = {"t_end": t_end, "rtol": 1e-7, "compiled": compiled, "dt": dt}
+    sol, ref = simulate(scene, **kw), _general(scene, **kw)
+    if sol.stats["loop"] == REST_LOOP:
+        _assert_same(sol, ref)
+    else:
+        assert np.array_equal(sol.data, ref.data) and sol.events == ref.events
+    if abs(frac) + abs(amp) < 0.9:  # inside the band by a margin: proven at rest
+        assert sol.stats["loop"] == REST_LOOP
+
+
+def test_a_negative_zero_velocity_reads_as_the_driver_sets_it():
+    # the start's mode choice sets the stuck dashpot's rate exactly: v = +0.0
+    for force in (None, SineBurst(0.5, 5.0, 1.0)):
+        scene = _oscillator(x0=0.004, v0=-0.0, force=force)
+        sol, ref = simulate(scene, t_end=2.0), _general(scene, t_end=2.0)
+        assert sol.stats["loop"] == REST_LOOP
+        assert np.array_equal(np.signbit(sol.data), np.signbit(ref.data))
+
+
+def test_the_kept_start_serves_its_scene_only_and_in_any_order():
+    # the start is kept per scene object: a scene with other numbers reads its own, and
+    # the runs of one scene give the same solution whatever ran before
+    a = _oscillator(x0=0.004, force=SineBurst(0.5, 5.0, 1.0))
+    b = _oscillator(x0=-0.003, force=SineBurst(0.5, 5.0, 1.0))
+    first = {name: simulate(sc, t_end=t, rtol=rtol) for name, sc, t, rtol in
+             (("a3", a, 3.0, 1e-6), ("b3", b, 3.0, 1e-6), ("a2", a, 2.0, 1e-9))}
+    fresh = {"a3": _oscillator(x0=0.004, force=SineBurst(0.5, 5.0, 1.0)),
+             "b3": _oscillator(x0=-0.003, force=SineBurst(0.5, 5.0, 1.0)),
+             "a2": _oscillator(x0=0.004, force=SineBurst(0.5, 5.0, 1.0))}
+    for name, t, rtol in (("a2", 2.0, 1e-9), ("b3", 3.0, 1e-6), ("a3", 3.0, 1e-6)):
+        again = simulate(fresh[name], t_end=t, rtol=rtol)
+        assert np.array_equal(first[name].data, again.data)
+        _assert_same(again, _general(fresh[name], t_end=t, rtol=rtol))
+    assert first["a3"].data[0, 1] == 0.004 and first["b3"].data[0, 1] == -0.003
+
+
+def test_one_scene_run_again_and_again_gives_the_general_solution_each_time():
+    # the start and the interval up to the first time event are kept on the scene: runs
+    # that end before the burst ends, past it, compiled or not, sampled or not, in any
+    # order, each give the general driver's solution on a fresh scene
+    def make():
+        return _burst_pair(0.5, 0.3, 0.7, 1.9)
+
+    scene = make()
+    for kw in ({"t_end": 0.5}, {"t_end": 2.5, "compiled": False}, {"t_end": 1.0},
+               {"t_end": 2.5, "rtol": 1e-9, "compiled": True}, {"t_end": 0.7},
+               {"t_end": 2.5, "dt": 0.01}, {"t_end": 1.9 + 1e-15}, {"t_end": 2.5}):
+        kw["method"] = "radau5"
+        _assert_same(simulate(scene, **kw), _general(make(), **kw))
+
+
+def test_a_scene_given_other_nodes_or_forcing_reads_no_kept_start():
+    # what is kept lives on the scene's plan, made again when the nodes, elements or
+    # forcing objects are other objects (each of them immutable)
+    scene = _oscillator(x0=0.004, force=SineBurst(0.5, 5.0, 1.0))
+    simulate(scene, t_end=2.0)
+    scene.nodes = (Mass("mass", m=1.0, x0=-0.002),)
+    _assert_same(simulate(scene, t_end=2.0),
+                 _general(_oscillator(x0=-0.002, force=SineBurst(0.5, 5.0, 1.0)), t_end=2.0))
+    scene.forcing = (SineBurst(0.3, 9.0, 0.5),)
+    _assert_same(simulate(scene, t_end=2.0),
+                 _general(_oscillator(x0=-0.002, force=SineBurst(0.3, 9.0, 0.5)), t_end=2.0))

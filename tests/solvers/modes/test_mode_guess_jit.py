@@ -13,6 +13,7 @@ from lumped.codegen.jit import numba_enabled
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
 from lumped.solvers.eventdriven import mode_state as adaptive_modes
+from lumped.solvers.eventdriven import runner
 from lumped.solvers.modes import mode_guess
 
 pytestmark = pytest.mark.skipif(not numba_enabled(), reason="needs numba")
@@ -53,6 +54,7 @@ def _recorded_probes() -> list[tuple]:
             (*_bench("release-0.5"), 1e-4), (*_bench("forcing-F1"), 1e-4),
             (bingham_chain(3), 5.0, 1e-6), (_junction_scene(), 2.0, 1e-6)]
     adaptive_modes.try_modes = record
+    rest_run, runner.rest_run = runner.rest_run, lambda scene, settings: None  # (Python)
     try:
         for scene, t_end, rtol in runs:
             sol = simulate(scene, method="radau5", t_end=t_end, rtol=rtol, atol=1e-2 * rtol,
@@ -60,6 +62,7 @@ def _recorded_probes() -> list[tuple]:
             assert sol.ok, sol.message
     finally:
         adaptive_modes.try_modes = keep
+        runner.rest_run = rest_run
     return calls
 
 

@@ -16,6 +16,7 @@ from lumped import simulate
 from lumped.bench.network_scenes import bingham_chain
 from lumped.bench.scenes import OWN_SCENES, PAPER_SCENES, generic_scene
 from lumped.codegen.jit import numba_enabled
+from lumped.solvers.eventdriven import runner
 from lumped.solvers.modes import stuck
 from lumped.solvers.modes.stuck_jit import brent, compiled_breakout_root
 
@@ -43,12 +44,15 @@ def test_brent_takes_the_steps_of_scipy_brentq():
 def _runs_through(method: str, record, names: tuple[str, ...]) -> None:
     """Run ``radau5`` (compiled) on the bench scenes ``names`` at rtol 1e-4 and 1e-9 and
     on a 3-mass chain, with :class:`~lumped.solvers.modes.stuck.StaticHold`'s ``method``
-    replaced by ``record`` for the runs; every run must succeed."""
+    replaced by ``record`` for the runs; every run must succeed. The run at rest
+    (:mod:`lumped.solvers.eventdriven.at_rest`, in Python) is off: ``forcing-F1`` runs
+    its held intervals in the compiled driver."""
     scenes = {s.name: s for s in PAPER_SCENES + OWN_SCENES}
     runs = [(generic_scene(scenes[name]), rtol) for name in names for rtol in (1e-4, 1e-9)]
     runs.append((bingham_chain(3), 1e-6))
-    keep = getattr(stuck.StaticHold, method)
+    keep, rest_run = getattr(stuck.StaticHold, method), runner.rest_run
     setattr(stuck.StaticHold, method, record)
+    runner.rest_run = lambda scene, settings: None
     try:
         for scene, rtol in runs:
             sol = simulate(scene, method="radau5", t_end=5.0, rtol=rtol, atol=1e-2 * rtol,
@@ -56,6 +60,7 @@ def _runs_through(method: str, record, names: tuple[str, ...]) -> None:
             assert sol.ok, sol.message
     finally:
         setattr(stuck.StaticHold, method, keep)
+        runner.rest_run = rest_run
 
 
 @pytest.mark.skipif(not numba_enabled(), reason="needs numba")
@@ -91,9 +96,9 @@ def test_compiled_breakout_scan_agrees_with_the_reference():
     calls = []
     keep = stuck.StaticHold.breakout
 
-    def record(self, t0, t1, guards, modes, fast=None):
+    def record(self, t0, t1, guards, modes, fast=None, refine=True):
         calls.append((self, t0, t1, list(guards), list(modes), fast))
-        return keep(self, t0, t1, guards, modes, fast)
+        return keep(self, t0, t1, guards, modes, fast, refine)
 
     _runs_through("breakout", record,
                   ("stick-breakout", "forcing-F1", "forcing-F2", "high-yield-forced"))

@@ -1,20 +1,28 @@
-r"""``radau5`` on a scene at rest for its whole span: the held interval ``[0, t_end]`` alone.
+r"""``radau5`` on a scene at rest for its whole span: held intervals alone, no steps.
 
-A scene whose every node is a mass starting at rest (``v0 = 0``), under no forcing or
-constant forces only, whose consistent initial forces hold it still (every element's law
-is monotone, every element with more than one branch reads its locking branch, the
-locks hold every node on a regular incidence matrix) with each guard above its
-round-off tolerance by a margin (:func:`~lumped.solvers.eventdriven.mode_parts.
-rest_mode`), never moves: the adaptive run would choose that mode at
-``t = 0`` (its probe confirms the mode read off the state, the locks keep it) and take
-one held interval (:func:`lumped.solvers.modes.stuck.hold_interval`) to ``t_end``, whose
-scan finds no break-out. :func:`rest_run` builds that run directly: the same consistent
-initial state, the same static balance (:func:`~lumped.solvers.modes.stuck.static_hold`,
-its break-out scan, dense segment and output rows), the same counters; the run's
-set-up (stage system, mode state, compiled loop, first step) is skipped, and
-``stats["loop"]`` says that no loop ran. Anything else (a velocity, a varying or
-switched forcing, a force at or near its yield limit, junctions, laws with folds, locks
-in parallel) returns ``None`` and the general driver runs.
+A scene whose every node is a mass starting at rest (``v0 = 0``), under forcings that are
+absent, constant or sine bursts, whose consistent initial forces hold it still (every
+element's law is monotone, every element with more than one branch reads its locking
+branch, the locks hold every node on a regular incidence matrix) with each guard above
+its round-off tolerance by a margin (:func:`~lumped.solvers.eventdriven.mode_parts.
+rest_mode`), at the initial load and, under a sine burst, at the load at the end of the
+start's probe, never moves: the adaptive run chooses that mode at ``t = 0`` (its probe
+confirms the mode read off the state, the locks keep it) and holds it
+(:func:`lumped.solvers.modes.stuck.hold_interval`) up to each time event of the forcing
+(a burst's end) and on to ``t_end``, as long as the break-out scan of each held interval
+finds no guard crossed and the full laws keep the mode at each time event.
+
+:func:`rest_run` builds that run directly: the same start
+(:func:`~lumped.solvers.eventdriven.rest_start.rest_start`, kept per scene), the same
+static balance (:func:`~lumped.solvers.modes.stuck.static_hold`: its break-out scan,
+dense segments and output rows), the same time events (each with the driver's mode probe
+on the mode held, :func:`~lumped.solvers.modes.mode_guess.try_modes`, whose forces the
+next interval holds; :mod:`lumped.solvers.eventdriven.rest_bursts`), the same counters;
+the driver's set-up (stage system, mode state, compiled loop, first step) is skipped, and
+``stats["loop"]`` says that no loop ran.
+Anything else returns ``None`` and the general driver runs: a velocity, another kind of
+forcing, a force at or near its yield limit, a guard crossed in the scan, a mode the
+probe does not confirm at a time event, junctions, laws with folds, locks in parallel.
 """
 
 from __future__ import annotations
@@ -23,13 +31,13 @@ import numpy as np
 
 from ...grid import steps_for
 from ...scene import Mass, Scene
-from ..implicit.initial_state import consistent_initial_state
-from ..modes.stuck import forcing_kinds, static_hold
-from ..nonsmooth.locks import IntervalLog, indeterminate_elements
+from ..modes.stuck import forcing_kinds
+from ..nonsmooth.locks import IntervalLog
 from ..radau.dense import DenseOutput
-from ..radau.rows import Rows, output_data, row_of
-from ..status import RawRun, Status
-from .mode_parts import rest_mode
+from ..radau.rows import Rows, output_data
+from ..status import Event, RawRun, Status
+from .rest_bursts import burst_intervals, free_names
+from .rest_start import rest_start
 from .setup import read_options, scene_plan
 
 __all__ = ["REST_LOOP", "rest_run"]
@@ -39,16 +47,17 @@ REST_LOOP = "none: at rest throughout (no steps)"
 
 
 def _candidate(scene: Scene, plan) -> bool:
-    """The scene's structure admits a run at rest (kept on ``plan``): every node a mass,
-    every law known monotone (the driver then tries the mode read off the state first),
-    the forcing absent or constant."""
+    """The scene's structure admits a run at rest (kept on ``plan``): every node a mass
+    starting at rest (``v0 = 0``), every law known monotone (the driver then tries the
+    mode read off the state first), every forcing absent, constant or a sine burst (the
+    static balance's kinds)."""
     got = plan.__dict__.get("at_rest_candidate")
     if got is None:
         fkind, _ = forcing_kinds(scene, plan)
         got = plan.__dict__["at_rest_candidate"] = (
             plan.refused is None and not plan.checked
-            and all(isinstance(nd, Mass) for nd in scene.nodes)
-            and fkind is not None and bool((fkind <= 1).all()))
+            and all(isinstance(nd, Mass) and nd.v0 == 0.0 for nd in scene.nodes)
+            and fkind is not None)
     return got
 
 
@@ -57,45 +66,43 @@ def rest_run(scene: Scene, settings) -> RawRun | None:
     ``None`` when the scene is not proven at rest (the general driver,
     :class:`lumped.solvers.eventdriven.run.Radau5Run`, runs it)."""
     plan = scene_plan(scene)
-    if not _candidate(scene, plan) or any(nd.v0 != 0.0 for nd in scene.nodes):
+    if not _candidate(scene, plan):
         return None
-    read_options(settings)  # (its checks: a bad keyword raises as in the general driver)
+    opts = read_options(settings)  # (its checks: a bad keyword raises as in the driver)
     dt = settings.dt
     t_final = settings.t_end if dt is None else max(settings.t_end,
                                                      steps_for(dt, settings.t_end) * dt)
-    x = [float(nd.x0) for nd in scene.nodes]
-    v, F, ic = consistent_initial_state(scene, time_scale=t_final, options=settings.options)
-    q = scene.elongations(x, v)
-    got = rest_mode(scene, plan, q, F)
-    if got is None:
+    start = rest_start(scene, plan, t_final, settings.options)
+    if start is None:
         return None
-    modes, guards = got
-    fkind, fpar = forcing_kinds(scene, plan)
-    hold = static_hold(scene, plan, modes, x, v, F, fkind, fpar)
-    if hold is None:
-        return None
-    F1 = hold.forces(t_final)  # (the forcing is steady: the forces of every time)
-    if F1 != F and hold.breakout(0.0, t_final, guards, modes)[0] is not None:
-        return None  # (F: a user's F0 off the balance; F1 itself is checked by the scan)
-    samples = hold.samples(0.0, t_final)
-    dense = DenseOutput(len(x), len(F))
-    dense.add_static(0.0, t_final, hold)
-    data = np.array([row_of(0.0, x, v, F)]
-                    + [row_of(s, x, v, hold.forces(s)) for s in samples if s < t_final]
-                    + [row_of(t_final, x, v, F1)], dtype=float)
+    events: list[Event] = []
+    # the elements on cycles whose forces are not unique, logged as the driver does
+    log = IntervalLog() if start.may_be_free else None
+    if start.varying:
+        got = burst_intervals(scene, plan, settings, opts, start, t_final, events, log)
+        if got is None:
+            return None
+        data, dense, held = got
+    else:  # one held interval; the steady forces of every t > 0
+        F1 = start.F_end
+        dense = DenseOutput(len(start.x), len(F1))
+        dense.add_static(0.0, t_final, start.hold)
+        # (the scan's samples of a steady forcing, t_final / 2 and t_final: the row of
+        # every t > 0 but its time)
+        data = np.empty((3, start.row0.shape[1]))
+        data[0] = start.row0[0]
+        data[1:] = start.row_end
+        data[1:, 0] = 0.5 * t_final, t_final
+        if log is not None:
+            log.mark(0.0, t_final, free_names(scene, plan, start, F1))
+        held = 1
     if dt is not None:  # the dense output on t_n = n dt
-        rows = Rows()
-        rows.extend(data)
-        data = output_data(rows, dense, dt, settings.t_end, t_final)
-    indeterminate: dict = {}
-    if plan.cyclic:  # locks on cycles whose forces are not unique
-        log = IntervalLog()
-        free = indeterminate_elements(scene, q, F1, plan.cyclic)
-        log.mark(0.0, t_final, [scene.element_names[e] for e in free])
-        indeterminate = log.result()
+        out = Rows()
+        out.extend(data)
+        data = output_data(out, dense, dt, settings.t_end, t_final)
     stats = {"steps": 0, "rejected": 0, "newton_iterations": 0, "factorizations": 0,
-             "nfev": 0, "njev": 0, "events": 0, "max_newton_iterations": 0,
-             "initial_newton_iterations": ic["newton_iterations"], "held_intervals": 1,
+             "nfev": 0, "njev": 0, "events": len(events), "max_newton_iterations": 0,
+             "initial_newton_iterations": start.newton_iterations, "held_intervals": held,
              "loop": REST_LOOP}
-    return RawRun(data, stats, Status.SUCCESS, "", [], dense, indeterminate=indeterminate)
-
+    return RawRun(data, stats, Status.SUCCESS, "", events, dense,
+                  indeterminate={} if log is None else log.result())

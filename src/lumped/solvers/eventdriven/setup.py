@@ -43,6 +43,8 @@ def read_options(settings) -> dict:
         For a bad value; the message names the keyword and quotes the value.
     """
     out = dict(EXTRA_OPTIONS)
+    if not settings.extra:  # the defaults (valid)
+        return out
     for key, val in settings.extra.items():
         if key not in EXTRA_OPTIONS:
             raise TypeError(f"method 'radau5' takes no keyword argument {key!r} "
@@ -128,10 +130,11 @@ def time_events(scene: Scene, t_end: float) -> tuple[list[float], list[bool]]:
             out.update(float(b) for b in get(0.0, t_end) if 0.0 < b < t_end)
             jumped.update(float(b) for b in jumps(fn, 0.0, t_end))
     frame = getattr(scene, "support_frame", None)
-    s_breaks, s_kinks = support_time_events(frame.source if frame is not None else scene,
-                                            t_end)
-    out.update(b for b in s_breaks if 0.0 < b < t_end)
-    jumped.update(b for b in s_breaks if 0.0 < b < t_end and b not in s_kinks)
+    source = frame.source if frame is not None else scene
+    if getattr(source, "supports", None):  # (none: no support events)
+        s_breaks, s_kinks = support_time_events(source, t_end)
+        out.update(b for b in s_breaks if 0.0 < b < t_end)
+        jumped.update(b for b in s_breaks if 0.0 < b < t_end and b not in s_kinks)
     breaks: list[float] = []
     kinks: list[bool] = []
     last = 0.0

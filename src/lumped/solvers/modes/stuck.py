@@ -94,6 +94,10 @@ class StaticHold:
             got = self._seen[t] = self._forces(t)
         return list(got)
 
+    def balance(self, t: float) -> list[float]:
+        """:meth:`forces` at ``t``, not kept (a time asked once)."""
+        return list(self._steady) if self._steady is not None else self._forces(t)
+
     def _forces(self, t: float) -> list[float]:
         # the forcing by its kind's formula (``scene.external_forces(t)``, the same
         # values: kinds 0 none, 1 constant, 2 sine burst)
@@ -157,13 +161,15 @@ class StaticHold:
         return out
 
     def breakout(self, t0: float, t1: float, guards: Sequence, modes: Sequence[int],
-                 fast=None) -> tuple[float | None, list[float]]:
+                 fast=None, refine: bool = True) -> tuple[float | None, list[float]]:
         """The first time in ``(t0, t1]`` where a guard of a locked element turns negative
         (shifted by its round-off tolerance, as a step's crossing test), refined to a root
         of the guard; ``(None, samples)`` if none. ``samples`` are the scan's times before
         it (for the output rows). With ``fast`` (the run's compiled loop) the root is
         found compiled (:mod:`lumped.solvers.modes.stuck_jit`, the same numbers), and so is the
-        scan of the samples under a sine burst when there are more than two of them."""
+        scan of the samples under a sine burst when there are more than two of them.
+        ``refine=False``: the first sample where a guard fails, not refined (whether there
+        is a break-out at all)."""
         done: list[float] = []
         prev = t0
         samples = self.samples(t0, t1)
@@ -183,6 +189,8 @@ class StaticHold:
                 tol = guard_tolerance(self.q[e], F[e])
                 for j, g in enumerate(gs):
                     if g + tol < 0.0:  # the earliest root of all the guards that fail
+                        if not refine:
+                            return s, done
                         roots.append(self._root(e, j, guards[e], prev, s, modes, fast))
             if roots:
                 return min(roots), done
