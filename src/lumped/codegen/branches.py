@@ -280,20 +280,27 @@ _CACHE: dict[object, LawBranches] = {}
 def law_branches(bound) -> LawBranches:
     """The :class:`LawBranches` of a bound law (anything with a compiled ``kernel`` whose
     ``expressions[0]`` is the prepared residual, e.g. :class:`lumped.laws.BoundLaw`);
-    cached per bound law."""
+    cached per bound law. A law of a class :mod:`lumped.codegen.parametric` derives once
+    gets the class's branches with its own numbers."""
     try:
         hit = _CACHE.get(bound)
     except TypeError:  # unhashable: no cache
         hit = None
     if hit is not None:
         return hit
-    try:
-        residual = bound.kernel.expressions[0]
-    except AttributeError:
-        raise TypeError(
-            f"`bound` must be a bound law with a compiled kernel, got {type(bound).__name__}"
-        ) from None
-    out = LawBranches(residual)
+    from .parametric import law_class
+
+    parametric = law_class(bound)
+    if parametric is not None:
+        out = parametric[0].branches(parametric[1])
+    else:
+        try:
+            residual = bound.kernel.expressions[0]
+        except AttributeError:
+            raise TypeError(
+                f"`bound` must be a bound law with a compiled kernel, got "
+                f"{type(bound).__name__}") from None
+        out = LawBranches(residual)
     try:
         _CACHE[bound] = out
     except TypeError:

@@ -1,0 +1,126 @@
+"""Parametric binding (lumped.codegen.parametric): new numbers derive nothing again, and a
+law bound through its class gets what a derivation from scratch gives, bit for bit."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import pytest
+
+import lumped.codegen.emit as emit
+from lumped.codegen import compile_kernel
+from lumped.codegen.branches import LawBranches, law_branches
+from lumped.codegen.parametric import admitted, derivations
+from lumped.codegen.templates import law_template, template_from_scratch
+from lumped.laws import ElementLaw, get_law
+
+POINTS = [(0.0, 0.0), (0.3, -1.7), (-2.5, 4.0), (1e-9, 0.6), (-0.7, -0.2), (7.0, 30.0)]
+
+#: (label, law, parameter sets): numbers on both sides of each of the law's decisions
+#: (sign; an integral value or 1/2, which sympy takes apart; Bingham steep or not, gamma
+#: tau against 16; Herschel-Bulkley n < 1 and n > 1; string and Coulomb locks)
+CASES = [
+    ("linear_spring", get_law("linear_spring"),
+     [{"k": 100.37}, {"k": 3.3e-7}, {"k": 100.0}, {"k": 0.5}, {"k": 1.0}, {"k": 2.6e5}]),
+    ("newtonian", get_law("newtonian"), [{"c": 0.77}, {"c": 0.0}, {"c": 12.25}]),
+    ("user_linear", ElementLaw("lin", "dashpot", "2*F = k*q", ["k"]),
+     [{"k": 1.5}, {"k": -1.5}, {"k": -0.25}, {"k": -3.0}]),
+    ("user_signed", ElementLaw("ab", "spring", "a*F - b*q", ["a", "b"]),
+     [{"a": 0.3, "b": 2.7}, {"a": -0.3, "b": 2.7}, {"a": 0.3, "b": -2.7}, {"a": 0.3, "b": 0.3},
+      {"a": 1.0, "b": 2.7}]),
+    ("bingham", get_law("bingham"),
+     [{"gamma": 2.3, "tau": 1.7}, {"gamma": 20.3, "tau": 1.7}, {"gamma": 1.0, "tau": 1.0}]),
+    ("coulomb", get_law("coulomb"), [{"tau": 1.7, "r": 10.3}, {"tau": 0.2, "r": 1e6}]),
+    ("hb_n_below_1", get_law("herschel_bulkley"), [{"gamma": 2.3, "tau": 1.7, "n": 0.37}]),
+    ("hb_n_above_1", get_law("herschel_bulkley"), [{"gamma": 2.3, "tau": 1.7, "n": 1.61}]),
+    ("string_spring", get_law("string_spring"), [{"k": 100.3, "L": 0.13}]),
+    ("implicit_spring", get_law("implicit_spring"), [{"k": 1.3, "L0": 0.1, "F0": 1.7}]),
+]
+IDS = [c[0] for c in CASES]
+
+
+def _same(a: float, b: float) -> bool:
+    if math.isnan(a) or math.isnan(b):
+        return math.isnan(a) and math.isnan(b)
+    return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
+
+
+def _same_kernel(got, ref) -> None:
+    assert got.__source__ == ref.__source__
+    assert got.magnitude.__source__ == ref.magnitude.__source__
+    for q, F in POINTS:
+        assert all(map(_same, got(q, F), ref(q, F))), (q, F)
+        assert _same(got.magnitude(q, F), ref.magnitude(q, F)), (q, F)
+
+
+@pytest.mark.parametrize(("label", "law", "sets"), CASES, ids=IDS)
+def test_bound_through_the_class_as_from_scratch(label, law, sets) -> None:
+    for values, factor in itertools.product(sets, (1.0, 1.0000001, 1.37)):
+        values = {p: v * factor for p, v in values.items()}  # new numbers, often one class
+        bound = law.bind(**values)
+        params = {law.symbols[p]: v for p, v in values.items()}
+        ref = compile_kernel(law.residual, law.q, law.F, params)
+        _same_kernel(bound.kernel, ref)
+        assert bound.kernel.expressions == ref.expressions
+        got, want = law_branches(bound), LawBranches(ref.expressions[0])
+        assert got.info == want.info
+        assert got.branch.__source__ == want.branch.__source__
+        for i in range(want.count):
+            for guard in (True, False):
+                assert got.source_for(i, guard=guard) == want.source_for(i, guard=guard)
+                assert got.stage_source_for(i, guard=guard) == want.stage_source_for(
+                    i, guard=guard)
+            _same_kernel(got.kernel_for(i), want.kernel_for(i))
+            _same_kernel(got.stage_kernel_for(i), want.stage_kernel_for(i))
+            assert got.kernel_for(i).lock_value == want.kernel_for(i).lock_value
+            for fn in ("guards_for", "stage_guards_for"):
+                g, w = getattr(got, fn)(i), getattr(want, fn)(i)
+                assert g.__source__ == w.__source__ and g.codes == w.codes
+                for q, F in POINTS:
+                    assert all(map(_same, g(q, F), w(q, F)))
+        assert law_template(bound) == template_from_scratch(bound, want)
+
+
+def test_new_numbers_derive_nothing_again(monkeypatch) -> None:
+    """After the first law of a class, a new spring constant prepares no residual and
+    builds no branches in sympy (counted, not timed)."""
+    law = get_law("linear_spring")
+    assert callable(law.bind(k=7.123456789).kernel)  # the class's first law
+    law_template(law.bind(k=7.123456789))
+    calls = {"prepare": 0, "branches": 0}
+    prepare, init = emit.prepare, LawBranches.__init__
+
+    def counted_prepare(*args, **kwargs):
+        calls["prepare"] += 1
+        return prepare(*args, **kwargs)
+
+    def counted_init(self, *args, **kwargs):
+        calls["branches"] += 1
+        return init(self, *args, **kwargs)
+
+    monkeypatch.setattr(emit, "prepare", counted_prepare)
+    monkeypatch.setattr(LawBranches, "__init__", counted_init)
+    before = derivations()
+    for j in range(5):
+        bound = law.bind(k=7.123456789 + 0.0123 * (j + 1))
+        assert callable(bound.kernel)
+        law_branches(bound).kernel_for(0)
+        law_template(bound)
+    assert calls == {"prepare": 0, "branches": 0}
+    assert derivations() == before
+
+
+@pytest.mark.parametrize(("residual", "params", "expected"), [
+    ("F - k*q", ["k"], True),
+    ("2*F = k*q", ["k"], True),
+    ("a*F - b*q", ["a", "b"], True),
+    ("F - k*q - c*q", ["k", "c"], False),  # dR/dq = -(k + c): two numbers combined
+    ("F - 2*k*q", ["k"], False),  # 2 k: a parameter combined with a number
+    ("F - k*(q - L)", ["k", "L"], False),  # k L at q = 0: steep or not by the numbers
+    ("F - k*q**3", ["k"], False),
+    ("k*F - k*q", ["k"], False),  # one parameter twice
+    ("F - k*Abs(q)", ["k"], False),
+])
+def test_admitted_from_the_expression(residual, params, expected) -> None:
+    assert admitted(ElementLaw("bingham", "spring", residual, params)) is expected
