@@ -56,7 +56,7 @@ from .guards import compile_guards, feasible_path
 from .rewrite import magnitude_expression
 from .stage_forms import affine_inverse_form, inverse_form, odd_continuation
 
-__all__ = ["BranchInfo", "LawBranches", "law_branches"]
+__all__ = ["BranchInfo", "LawBranches", "law_branches", "leaves"]
 
 _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 
@@ -292,7 +292,7 @@ def law_branches(bound) -> LawBranches:
 
     parametric = law_class(bound)
     if parametric is not None:
-        out = parametric[0].branches(parametric[1])
+        out = parametric.branches()
     else:
         try:
             residual = bound.kernel.expressions[0]
@@ -333,6 +333,13 @@ def _arms(pw: sp.Piecewise, path: _Path) -> Iterator[tuple[sp.Expr, _Path]]:
             return
         yield value, path + tuple(before) + ((cond, True),)
         before.append((cond, False))
+
+
+def leaves(residual: sp.Expr) -> list[tuple[sp.Expr, _Path]]:
+    """Every leaf of a prepared residual (a smooth piece and the path that selects it,
+    feasible or not), in the order of the law's ``Piecewise`` arms."""
+    with distribute(False):
+        return list(_leaves(residual, ()))
 
 
 def _leaves(expr: sp.Expr, path: _Path) -> Iterator[tuple[sp.Expr, _Path]]:

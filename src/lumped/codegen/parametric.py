@@ -1,89 +1,97 @@
-r"""Parametric binding: a law's generated code derived once per class of numbers.
+r"""Parametric binding: a law's code derived once per class of its numbers.
 
 Binding a law to new numbers used to derive everything again in sympy (the prepared
 residual and its derivatives, the branches, the kernels' code, the template of the
-compiled module): 5-35 ms a law, more than a short run itself. Here a law's derivation
-is done once per *class* of its numbers (:func:`class_key`), at the class's first bound
-law, and every later law of the class gets those results with its own numbers in place
-of the first's (:class:`LawClass`): each float literal of the generated code
-(:func:`lift_text`) and each float of the sympy expressions (:meth:`LawClass.atoms`) is
-either a constant of the law or the magnitude of one parameter, read from the bound law
-(a *recipe*); the functions are made by factories compiled once, so the same source
-evaluates the same floats, bit for bit.
+compiled module): 5-35 ms a law, more than a short run itself. Here a law is derived
+once per *class* of its numbers (:func:`class_key`), at the class's first bound law, and
+every other law of the class gets those results remade with its own numbers
+(:mod:`lumped.codegen.rebinding`): each float literal of the generated code and each
+float of the sympy expressions is a constant of the law or the magnitude of one
+parameter, read from the bound law. No sympy runs then, and no code is compiled.
 
-That is exact, the code and the numbers a derivation from scratch gives, when no step of
-the derivation combines a parameter with another number and no decision in it (a leaf's
-feasibility, a steep branch, a sign, an exponent of 2 or 1/2, the order sympy gives the
-terms of a sum) depends on a parameter's value beyond its class. :func:`admitted` takes
-the laws for which this is shown from the expression alone, read from the law's residual
-and never its name: ``R = a F + b q`` with ``a`` and ``b`` each a nonzero number or
-``+-`` one parameter (the linear spring ``F - k q``, the Newtonian dashpot ``F - c q``, a
-user's law of that shape). Its derivation has one smooth branch, no guard, no lock, no
-stage form (its steepness is 0: the force at ``q = 0`` is 0), and its expressions hold
-each parameter once, as a coefficient. The class fixes each parameter's sign and how
-sympy orders the floats, and leaves out the values sympy takes apart (an integral float
-becomes an integer, ``+-1/2`` a square root); a class is also checked once against a
-second derivation a few ulps away. Any other law, or value, is derived from scratch as
-before; so is every law when the check fails.
+That is exact, the code and the numbers a derivation from scratch gives, where the
+derivation's shape does not depend on the numbers within the class: no step combines a
+parameter with another number into a number of the output, and no decision depends on
+a parameter's value beyond what the class fixes. The class fixes each parameter's sign,
+the order sympy gives the floats ``+-v_j`` and the law's own constants (by value, and by
+their binary digits: that order decides the order of the terms of a sum in the code),
+and leaves out the values sympy takes apart (an integral float becomes an integer,
+``+-1/2`` a square root). What the class does not fix is decided per law from its
+numbers: the steepness of each affine branch against
+:data:`~lumped.codegen.stage_forms.STEEP_SPAN` (Bingham's ``gamma tau``; a law whose
+branch would be steep is derived from scratch). :func:`admitted` refuses a law that
+compares numbers alone other than lone parameters (``gamma*tau > 1``, folded by sympy
+without a trace). A class is made only after a second derivation, its numbers moved by
+about ``1e-12`` of themselves within the class, gives the same code with the recipes'
+numbers, the same expressions, branches and bounds, and no steep branch; otherwise its
+laws are derived from scratch, as are all laws of a class that combines numbers
+(Herschel-Bulkley's ``n - 1``, a string's ``1/k``). Every decision is read from the law's
+expression and numbers, never its name.
 """
 
 from __future__ import annotations
 
 import math
-import re
+import random
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import sympy as sp
 
-__all__ = ["LawClass", "admitted", "derivations", "law_class", "lift_source"]
+from .branches import LawBranches
+from .rebinding import LazyExpressions, Lifted, fill, float_ids, lift_source, lift_text, slots, swap
+from .stage_forms import STEEP_SPAN, affine_steepness
 
-#: A float literal of the generated code (as :mod:`lumped.codegen.templates` reads them).
-_FLOAT_LITERAL = re.compile(r"(?<![\w.])(?:\d+\.\d*(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])")
-_SLOT = re.compile(r"\b_c(\d+)\b")
-_NAMESPACE = {"ArithmeticError": ArithmeticError, "ValueError": ValueError, "max": max,
-              "min": min}
+__all__ = ["LawClass", "Rebound", "ReboundBranches", "admitted", "class_key", "derivations",
+           "law_class"]
+
 _DERIVATIONS = [0]
 _CLASSES: dict[tuple, LawClass | None] = {}
+_FAILURES: dict[tuple, int] = {}
 _ADMITTED: dict[object, bool] = {}
 _LAW_CONSTANTS: dict[object, tuple] = {}
+_REBOUND: dict[object, Rebound | None] = {}
+#: How many first laws of a class are tried before its laws are derived from scratch.
+_TRIES = 3
+#: How many moved numbers are tried for a class's check (sympy orders floats by their
+#: binary digits: about 1 in ``n!`` keeps the order of ``n`` values).
+_NUDGES = 400
+#: Bound laws remembered with their rebound results (the oldest half forgotten past it).
+_REMEMBERED = 4096
 
 
 def derivations() -> int:
-    """How many parametric derivations (one per law and class) this process has done."""
+    """How many classes (:class:`LawClass`) this process has derived."""
     return _DERIVATIONS[0]
 
 
 def admitted(law) -> bool:
-    """Whether ``law``'s residual is ``a F + b q`` with ``a``, ``b`` each a nonzero number
-    or ``+-`` one parameter, each parameter at most once (see the module notes)."""
+    """Whether every comparison ``law``'s residual makes of numbers alone (an argument of
+    ``Min``, ``Max``, ``Abs``, ``sign``, ``Heaviside`` or of a relation without ``q`` and
+    ``F``) is of a number or ``+-`` a lone parameter, which the class's order of floats
+    decides (see the module notes)."""
     hit = _ADMITTED.get(law)
     if hit is None:
-        hit = _ADMITTED[law] = _linear_form(law)
+        hit = _ADMITTED[law] = _lone_comparisons(law)
     return hit
 
 
-def _linear_form(law) -> bool:
-    R, q, F = law.residual, law.q, law.F
+def _lone_comparisons(law) -> bool:
+    kinds = (sp.Min, sp.Max, sp.Abs, sp.sign, sp.Heaviside, sp.core.relational.Relational)
     params = set(law.symbols.values())
-    a, b = R.coeff(F, 1), R.coeff(q, 1)
-    if a * F + b * q != R:
-        return False
-    used = []
-    for c in (a, b):
-        if c.is_Number:
-            if c == 0 or not c.is_finite:
-                return False
+    for node in sp.preorder_traversal(law.residual):
+        if not isinstance(node, kinds):
             continue
-        sym = -c if c.could_extract_minus_sign() else c
-        if sym not in params:
-            return False
-        used.append(sym)
-    return len(used) == len(set(used))
+        for arg in node.args:
+            if arg.has(law.q, law.F) or arg.is_Number:
+                continue
+            if (-arg if arg.could_extract_minus_sign() else arg) not in params:
+                return False
+    return True
 
 
 def _special(value: float) -> bool:
-    """A value that sympy or the printer takes apart from the rest of its sign class."""
+    """A value sympy or the printer takes apart from the rest of its sign class."""
     return float(value).is_integer() or abs(value) == 0.5
 
 
@@ -95,91 +103,40 @@ def _constants(law) -> tuple[sp.Float, ...]:
     return hit
 
 
+def _key_and_floats(law, values: tuple[float, ...]) -> tuple[tuple | None, list]:
+    if not admitted(law) or any(_special(v) for v in values):
+        return None, []
+    floats = [sp.Float(s * v) for v in values for s in (1.0, -1.0)]
+    atoms = floats + list(_constants(law))
+    return (law, tuple(math.copysign(1.0, v) for v in values),
+            _dense_ranks([float(a) for a in atoms]),
+            _dense_ranks([a._hashable_content() for a in atoms])), floats
+
+
 def class_key(bound) -> tuple | None:
     """The class of a bound law's numbers, ``None`` when it is derived from scratch.
 
-    ``(law, signs, numeric order, sympy order)``: the sign of each parameter and how
-    sympy orders the floats ``+-v_j`` and the law's own non-integral constants, by value
-    and by :meth:`sympy.Basic.compare` (which decides the order of the terms of a sum,
-    and so the generated code, from the floats' binary digits: ``0.3 |F| + 2.7 |q|`` and
-    ``2.7 |F| + 0.3 |q|`` are printed in different orders). ``None`` for a law not
-    :func:`admitted`, a special value (:func:`_special`) or two of those floats equal.
+    ``(law, signs, order by value, order by sympy)`` of the floats ``+-v_j`` and the
+    law's non-integral constants, equal floats in one place; ``None`` for a law not
+    :func:`admitted`, a value :func:`_special`, or a law not given as a sympy residual.
     """
     law = getattr(bound, "law", None)
-    if law is None or not isinstance(getattr(law, "residual", None), sp.Expr) \
-            or not admitted(law):
+    if law is None or not isinstance(getattr(law, "residual", None), sp.Expr):
         return None
     params = bound.params
-    values = [params[p] for p in law.parameters]
-    if any(_special(v) for v in values):
-        return None
-    atoms = [sp.Float(s * v) for v in values for s in (1.0, -1.0)] + list(_constants(law))
-    if len({float(a) for a in atoms}) < len(atoms):
-        return None
-    ranks = range(len(atoms))
-    return (law, tuple(math.copysign(1.0, v) for v in values),
-            tuple(sorted(ranks, key=lambda i: float(atoms[i]))),
-            tuple(sorted(ranks, key=lambda i: atoms[i]._hashable_content())))
+    return _key_and_floats(law, tuple(params[p] for p in law.parameters))[0]
 
 
-@dataclass(frozen=True)
-class Lifted:
-    """One generated function with its float literals lifted: ``text`` names them
-    ``_c0, _c1, ...``; ``recipes[k]`` is ``j`` (the magnitude of parameter ``j``) or the
-    constant itself (a float); ``make(*values)`` returns the function."""
-
-    text: str
-    recipes: tuple
-    make: Callable
-
-    def build(self, values: tuple[float, ...]) -> Callable:
-        slots = _slots(self.recipes, values)
-        fn = self.make(*slots)
-        fn.__source__ = _fill(self.text, slots)
-        return fn
-
-
-def _fill(text: str, slots: tuple[float, ...]) -> str:
-    """``text`` with each ``_c<k>`` written as the literal of ``slots[k]``."""
-    return _SLOT.sub(lambda m: repr(slots[int(m.group(1))]), text)
-
-
-def _slots(recipes: tuple, values: tuple[float, ...]) -> tuple[float, ...]:
-    return tuple(abs(values[r]) if isinstance(r, int) else r for r in recipes)
-
-
-def lift_text(text: str, values: tuple[float, ...]) -> tuple[str, tuple]:
-    """``text`` with its ``k``-th float literal named ``_c<k>`` and the recipes: ``j``
-    where the literal is ``|values[j]|``, else the literal's value."""
-    recipes: list = []
-
-    def slot(m: re.Match) -> str:
-        v = float(m.group(0))
-        recipes.append(next((j for j, p in enumerate(values) if abs(p) == v), v))
-        return f"_c{len(recipes) - 1}"
-
-    return _FLOAT_LITERAL.sub(slot, text), tuple(recipes)
-
-
-def lift_source(source: str, values: tuple[float, ...]) -> Lifted:
-    """A generated function (its ``source``) lifted against the numbers it was made
-    with (:func:`lift_text`), with a factory compiled once that makes it for others."""
-    text, recipes = lift_text(source, values)
-    head = text.split("\n", 1)[0]
-    name = head[len("def "):head.index("(")]
-    args = ", ".join(f"_c{k}" for k in range(len(recipes)))
-    body = "\n".join("    " + line for line in text.rstrip("\n").split("\n"))
-    factory = f"def _make({args}):\n{body}\n    return {name}\n"
-    namespace: dict[str, object] = {"math": math, "__builtins__": dict(_NAMESPACE)}
-    exec(compile(factory, f"<lumped parametric {name}>", "exec"), namespace)  # noqa: S102
-    return Lifted(text, recipes, namespace["_make"])  # type: ignore[arg-type]
+def _dense_ranks(keys: list) -> tuple[int, ...]:
+    """Each key's place among the distinct keys (equal keys share a place)."""
+    order = {k: r for r, k in enumerate(sorted(set(keys)))}
+    return tuple(order[k] for k in keys)
 
 
 class _Derivation:
     """A law derived from scratch at ``values``, every function lifted against them."""
 
     def __init__(self, law, values: tuple[float, ...]) -> None:
-        from .branches import LawBranches
         from .emit import compile_kernel
         from .templates import template_from_scratch
 
@@ -203,9 +160,8 @@ class _Derivation:
                              tuple(lift_text(code, values) for code in fn.codes))
                        for key, fn in lb._guards.items()}
         self.template = template_from_scratch(law.bind(**named), lb)
-        self.template_recipes = tuple(
-            next((j for j, p in enumerate(values) if abs(p) == v), v)
-            for v in self.template.values)
+        self.template_recipes = lift_text(
+            " ".join(repr(v) for v in self.template.values), values)[1]
 
     def _pair(self, fn: Callable) -> tuple[Lifted, Lifted]:
         return lift_source(fn.__source__, self.values), lift_source(
@@ -221,81 +177,168 @@ class _Derivation:
                 {k: (sig(a), codes) for k, (a, codes) in self.guards.items()},
                 self.template.functions, self.template_recipes)
 
+    def bounds(self) -> list:
+        """Each leaf's feasibility and the bound of each of its conditions on one
+        variable (:func:`~lumped.codegen.guards.feasible_path` compares them) as
+        recipes."""
+        from .branches import leaves
+        from .guards import affine_bound, feasible_path
+
+        out: list = []
+        for _, path in leaves(self.expressions[0]):
+            out.append(feasible_path(path))
+            for cond, want in path:
+                bound = affine_bound(cond, want)
+                if bound is not None:
+                    c = float(bound[1] if bound[1] != -sp.oo else bound[3])
+                    j = next((j for j, v in enumerate(self.values) if abs(v) == abs(c)), None)
+                    out.append((c,) if j is None else
+                               (j, math.copysign(1.0, c * self.values[j])))
+        return out
+
 
 class LawClass:
-    """A law derived once for a class of numbers (:func:`class_key`), ready to rebind.
+    """A law derived once for a class of its numbers (:func:`class_key`).
 
-    Made from the class's first bound law (values ``p0``) and checked against a second
-    derivation at ``p1`` (each value a few ulps away, the same class): the same code with
-    every literal that was a parameter's magnitude at ``p0`` that parameter's at ``p1``
-    and every other literal unchanged, and the same sympy expressions with ``p0``'s floats
-    replaced by ``p1``'s. ``ValueError`` when they differ (the class is then derived from
-    scratch, law by law).
+    Made from the class's first bound law (``values``) and checked against a second
+    derivation, its numbers moved within the class (see the module notes); ``ValueError``
+    when the check fails.
     """
 
     def __init__(self, key: tuple, values: tuple[float, ...]) -> None:
         law = self.law = key[0]
         d = self._d = _Derivation(law, values)
-        other = None
-        for step in (2.0**-40, -(2.0**-39), 2.0**-38):
-            p1 = tuple(v * (1.0 + step) for v in values)
-            if class_key(law.bind(**dict(zip(law.parameters, p1, strict=True)))) == key:
+        trees = list(d.expressions) + [e for info in d.lb.info for e in (
+            info.residual, info.dR_dq, info.dR_dF, *(c for c, _ in info.path))]
+        self._ids = float_ids(trees, _key_and_floats(law, values)[1])
+        other, p1 = None, values
+        rng = random.Random(0)
+        for _ in range(_NUDGES):
+            steps = {abs(v): rng.choice((-1.0, 1.0)) * rng.uniform(1e-13, 1e-11)
+                     for v in values}
+            p1 = tuple(v * (1.0 + steps[abs(v)]) for v in values)
+            k1, floats = _key_and_floats(law, p1)
+            if k1 == key:
                 other = _Derivation(law, p1)
                 break
         if other is None or other.signature() != d.signature():
             raise ValueError(f"law {law.name!r}: its code changes with its numbers")
-        if tuple(e.xreplace(self.atoms(p1)) for e in d.expressions) != other.expressions \
-                or self._infos(p1) != other.lb.info:
+        atoms = self.atoms(floats)
+        if tuple(swap(e, atoms) for e in d.expressions) != other.expressions \
+                or self.infos(atoms) != other.lb.info or d.bounds() != other.bounds():
             raise ValueError(f"law {law.name!r}: its expressions change with its numbers")
+        if any(info.steep or info.stage is not None for info in d.lb.info):
+            raise ValueError(f"law {law.name!r}: a steep branch, its form chosen by the "
+                             f"numbers")
+        symbols = [law.symbols[p] for p in law.parameters]
+        back = {}
+        for p, sym in zip(values, symbols, strict=True):
+            back[sp.Float(p)], back[sp.Float(-p)] = sym, -sym
+        self._steepness = [steepness_function(info.residual.xreplace(back), symbols)
+                           for info in d.lb.info
+                           if not info.locks and affine_steepness(info.residual) > 0.0]
         _DERIVATIONS[0] += 1
 
-    def atoms(self, values: tuple[float, ...]) -> dict:
-        """The first law's floats -> those of ``values``, for the sympy expressions."""
-        out = {}
-        for p, v in zip(self._d.values, values, strict=True):
-            out[sp.Float(p)] = sp.Float(v)
-            out[sp.Float(-p)] = sp.Float(-v)
-        return out
+    def forward(self, values: tuple[float, ...]) -> bool:
+        """Whether every affine branch of the law with ``values`` is not steep, as for the
+        class's first law: its steepness below ``STEEP_SPAN (1 - 1e-9)`` (the margin
+        covers the rounding of the steepness computed here against a derivation's)."""
+        return all(s(*values) < STEEP_SPAN * (1.0 - 1e-9) for s in self._steepness)
 
-    def _infos(self, values: tuple[float, ...]) -> tuple:
-        atoms = self.atoms(values)
-        return tuple(replace(info, residual=info.residual.xreplace(atoms),
-                             dR_dq=info.dR_dq.xreplace(atoms),
-                             dR_dF=info.dR_dF.xreplace(atoms),
-                             path=tuple((c.xreplace(atoms), w) for c, w in info.path))
+    def atoms(self, floats: list) -> dict:
+        """The first law's float nodes ``+-v_j`` (by ``id``) -> ``floats``, another law's
+        in the same order (:func:`~lumped.codegen.rebinding.swap`)."""
+        return {node: floats[i] for node, i in self._ids.items()}
+
+    def infos(self, atoms: dict) -> tuple:
+        """The first law's :class:`~lumped.codegen.branches.BranchInfo` with ``atoms``."""
+        memo: dict = {}
+        return tuple(replace(info, residual=swap(info.residual, atoms, memo),
+                             dR_dq=swap(info.dR_dq, atoms, memo),
+                             dR_dF=swap(info.dR_dF, atoms, memo),
+                             path=tuple((swap(c, atoms, memo), w) for c, w in info.path))
                      for info in self._d.lb.info)
 
-    def kernel(self, values: tuple[float, ...]) -> Callable:
-        """The bound law's :func:`~lumped.codegen.compile_kernel` (guarded)."""
-        kernel = _with_magnitude(self._d.kernel, values)
-        atoms = self.atoms(values)
-        kernel.expressions = tuple(e.xreplace(atoms) for e in self._d.expressions)
+
+class Rebound:
+    """A bound law's results made from its :class:`LawClass` (see the module notes)."""
+
+    def __init__(self, cls: LawClass, values: tuple[float, ...], floats: list) -> None:
+        self.cls, self.values, self._floats, self._atoms = cls, values, floats, None
+
+    def atoms(self) -> dict:
+        if self._atoms is None:
+            self._atoms = self.cls.atoms(self._floats)
+        return self._atoms
+
+    def kernel(self) -> Callable:
+        """The law's :func:`~lumped.codegen.compile_kernel` (guarded)."""
+        kernel = _with_magnitude(self.cls._d.kernel, self.values)
+        kernel.expressions = LazyExpressions(self.cls._d.expressions, self.atoms)
         return kernel
 
-    def branches(self, values: tuple[float, ...]):
-        """The bound law's :class:`~lumped.codegen.LawBranches`."""
-        from .branches import LawBranches
+    def branches(self):
+        """The law's :class:`~lumped.codegen.branches.LawBranches` (its kernels and guard
+        functions made when first asked for)."""
+        return ReboundBranches(self)
 
-        d = self._d
-        out = LawBranches.__new__(LawBranches)
-        out.info = self._infos(values)
-        out.count = d.lb.count
-        out.branch = d.selector.build(values)
-        out._kernels = {}
-        for key, pair in d.kernels.items():
-            fn = _with_magnitude(pair, values)
-            fn.lock_value = d.lb._kernels[key].lock_value
-            out._kernels[key] = fn
-        out._guards = {}
-        for key, (lifted, codes) in d.guards.items():
-            fn = lifted.build(values)
-            fn.codes = tuple(_fill(text, _slots(r, values)) for text, r in codes)
-            out._guards[key] = fn
-        return out
+    def template(self):
+        """The law's :class:`~lumped.codegen.templates.LawTemplate`."""
+        d = self.cls._d
+        return replace(d.template, values=slots(d.template_recipes, self.values))
 
-    def template(self, values: tuple[float, ...]):
-        """The bound law's :class:`~lumped.codegen.templates.LawTemplate`."""
-        return replace(self._d.template, values=_slots(self._d.template_recipes, values))
+
+class ReboundBranches(LawBranches):
+    """:class:`~lumped.codegen.branches.LawBranches` of a rebound law: the same methods,
+    its functions made from its class's when first asked for (see the module notes)."""
+
+    def __init__(self, rebound: Rebound) -> None:  # no derivation: made from the class
+        d = rebound.cls._d
+        self._rebound = rebound
+        self.info = rebound.cls.infos(rebound.atoms())
+        self.count = d.lb.count
+        self.branch = d.selector.build(rebound.values)
+        self._kernels, self._guards = {}, {}
+
+    def _kernel(self, i: int, *, guard: bool, stage: bool = False) -> Callable:
+        key = (i, guard, stage and self.info[i].stage is not None)
+        hit = self._kernels.get(key)
+        if hit is None:
+            d = self._rebound.cls._d
+            hit = self._kernels[key] = _with_magnitude(d.kernels[key], self._rebound.values)
+            hit.lock_value = d.lb._kernels[key].lock_value
+        return hit
+
+    def guards_for(self, i: int) -> Callable:
+        i = self._check(i)
+        hit = self._guards.get(i)
+        if hit is None:
+            lifted, codes = self._rebound.cls._d.guards[i]
+            values = self._rebound.values
+            hit = self._guards[i] = lifted.build(values)
+            hit.codes = tuple(fill(text, slots(r, values)) for text, r in codes)
+        return hit
+
+
+def steepness_function(leaf: sp.Expr, symbols: list) -> Callable[..., float]:
+    """:func:`~lumped.codegen.stage_forms.affine_steepness` of the branch ``leaf`` (in
+    ``q``, ``F`` and the parameters' ``symbols``) as a float function of their values."""
+    from .emit import compile_function
+
+    q, F = sp.Symbol("q"), sp.Symbol("F")
+    beta = sp.diff(leaf, F)
+    A = sp.expand(leaf - beta * F)
+    parts = [compile_function(e, symbols) for e in
+             (beta, A.xreplace({q: sp.S.Zero}), sp.diff(A, q).xreplace({q: sp.S.Zero}))]
+
+    def steepness(*values: float) -> float:
+        b, a0, slope = (f(*values) for f in parts)
+        F0, slope = (-a0 / b if b != 0.0 else math.nan), abs(slope)
+        if not math.isfinite(F0) or F0 == 0.0 or not math.isfinite(slope):
+            return 0.0
+        return math.inf if slope == 0.0 else abs(b) * abs(F0) / slope
+
+    return steepness
 
 
 def _with_magnitude(pair: tuple[Lifted, Lifted], values: tuple[float, ...]) -> Callable:
@@ -305,21 +348,42 @@ def _with_magnitude(pair: tuple[Lifted, Lifted], values: tuple[float, ...]) -> C
     return fn
 
 
-def law_class(bound) -> tuple[LawClass, tuple[float, ...]] | None:
-    """The :class:`LawClass` of ``bound`` and its parameter values, or ``None`` when the
-    law is derived from scratch (see the module notes)."""
-    key = class_key(bound)
-    if key is None:
+def law_class(bound) -> Rebound | None:
+    """``bound``'s results from its class (:class:`Rebound`), or ``None`` when it is
+    derived from scratch (see the module notes); remembered per bound law."""
+    try:
+        hit = _REBOUND[bound]
+    except (KeyError, TypeError):
+        hit = _rebound(bound)
+        try:
+            if len(_REBOUND) >= _REMEMBERED:
+                for old in list(_REBOUND)[:_REMEMBERED // 2]:
+                    del _REBOUND[old]
+            _REBOUND[bound] = hit
+        except TypeError:  # unhashable
+            pass
+    return hit
+
+
+def _rebound(bound) -> Rebound | None:
+    law = getattr(bound, "law", None)
+    if law is None or not isinstance(getattr(law, "residual", None), sp.Expr):
         return None
     params = bound.params
-    values = tuple(params[p] for p in key[0].parameters)
-    hit = _CLASSES.get(key)
-    if hit is None and key not in _CLASSES:
+    values = tuple(params[p] for p in law.parameters)
+    key, floats = _key_and_floats(law, values)
+    if key is None:
+        return None
+    cls = _CLASSES.get(key)
+    if cls is None and key not in _CLASSES:
         _CLASSES[key] = None  # while its first law is derived, the class derives from scratch
         try:
-            hit = _CLASSES[key] = LawClass(key, values)
-        except ValueError:
+            cls = _CLASSES[key] = LawClass(key, values)
+        except ValueError:  # tried again with another first law, up to _TRIES times
+            _FAILURES[key] = _FAILURES.get(key, 0) + 1
+            if _FAILURES[key] < _TRIES:
+                del _CLASSES[key]
             return None
-    if hit is None:
+    if cls is None or not cls.forward(values):
         return None
-    return hit, values
+    return Rebound(cls, values, floats)

@@ -162,7 +162,7 @@ def law_template(bound) -> LawTemplate:
 
     hit = law_class(bound)
     if hit is not None:
-        return hit[0].template(hit[1])
+        return hit.template()
     return template_from_scratch(bound)
 
 

@@ -374,7 +374,7 @@ class BoundLaw:
         kernel = self._kernel
         if kernel is None:
             parametric = law_class(self)
-            kernel = parametric[0].kernel(parametric[1]) if parametric is not None else \
+            kernel = parametric.kernel() if parametric is not None else \
                 compile_kernel(self.law.residual, self.law.q, self.law.F,
                                {self.law.symbols[p]: v for p, v in self._params.items()})
             object.__setattr__(self, "_kernel", kernel)
