@@ -67,8 +67,23 @@ class Lifted:
         """The function for the parameters' ``values``, with its ``__source__``."""
         literals = slots(self.recipes, values)
         fn = self.make(*literals)
-        fn.__source__ = fill(self.text, literals)
+        pieces = _pieces(self.text)
+        fn.__source__ = "".join(
+            p if k % 2 == 0 else repr(literals[p]) for k, p in enumerate(pieces))
         return fn
+
+
+_PIECES: dict[str, list] = {}
+
+
+def _pieces(text: str) -> list:
+    """``text`` split at its ``_c<k>``: text, ``k``, text, ... (cached)."""
+    hit = _PIECES.get(text)
+    if hit is None:
+        hit = _SLOT.split(text)
+        hit[1::2] = [int(k) for k in hit[1::2]]
+        _PIECES[text] = hit
+    return hit
 
 
 def lift_source(source: str, values: tuple[float, ...]) -> Lifted:
