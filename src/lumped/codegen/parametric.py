@@ -21,18 +21,18 @@ numbers: the steepness of each affine branch against
 :data:`~lumped.codegen.stage_forms.STEEP_SPAN` (Bingham's ``gamma tau``; a law whose
 branch would be steep is derived from scratch). :func:`admitted` refuses a law that
 compares numbers alone other than lone parameters (``gamma*tau > 1``, folded by sympy
-without a trace). A class is made only after a second derivation, its numbers moved by
-about ``1e-12`` of themselves within the class, gives the same code with the recipes'
-numbers, the same expressions, branches and bounds, and no steep branch; otherwise its
-laws are derived from scratch, as are all laws of a class that combines numbers
-(Herschel-Bulkley's ``n - 1``, a string's ``1/k``). Every decision is read from the law's
-expression and numbers, never its name.
+without a trace). The first two laws of a class are derived from scratch, as before;
+the class is made when the second has the same code with the recipes' numbers, the
+same expressions, branches and bounds with its floats swapped in, and neither a steep
+branch (:meth:`LawClass.check`). A class that combines numbers (Herschel-Bulkley's
+``n - 1``, a string's ``1/k``) fails the check, and after three failures its laws are
+derived law by law. Every decision is read from the law's expression and numbers,
+never its name.
 """
 
 from __future__ import annotations
 
 import math
-import random
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -51,11 +51,10 @@ _FAILURES: dict[tuple, int] = {}
 _ADMITTED: dict[object, bool] = {}
 _LAW_CONSTANTS: dict[object, tuple] = {}
 _REBOUND: dict[object, Rebound | None] = {}
-#: How many first laws of a class are tried before its laws are derived from scratch.
+#: A class's first law, waiting for a second to be checked against.
+_PENDING: dict[tuple, LawClass] = {}
+#: How many failed checks of a class before its laws are derived law by law.
 _TRIES = 3
-#: How many moved numbers are tried for a class's check (sympy orders floats by their
-#: binary digits: about 1 in ``n!`` keeps the order of ``n`` values).
-_NUDGES = 400
 #: Bound laws remembered with their rebound results (the oldest half forgotten past it).
 _REMEMBERED = 4096
 
@@ -198,45 +197,50 @@ class _Derivation:
 
 
 class LawClass:
-    """A law derived once for a class of its numbers (:func:`class_key`).
+    """A law derived for one set of its numbers (``values``), every function lifted
+    against them: exact for those numbers, and, once :meth:`check` ed against the
+    derivation of a second law of the class, for every law of its class (see the module
+    notes).
 
-    Made from the class's first bound law (``values``) and checked against a second
-    derivation, its numbers moved within the class (see the module notes); ``ValueError``
-    when the check fails.
+    Attributes
+    ----------
+    checked : bool
+        Made a class by :meth:`check`.
+    steep : bool
+        The law has a steep branch: its form is chosen by its numbers, no class.
     """
 
-    def __init__(self, key: tuple, values: tuple[float, ...]) -> None:
-        law = self.law = key[0]
+    def __init__(self, law, values: tuple[float, ...]) -> None:
+        self.law, self.values = law, values
         d = self._d = _Derivation(law, values)
         trees = list(d.expressions) + [e for info in d.lb.info for e in (
             info.residual, info.dR_dq, info.dR_dF, *(c for c, _ in info.path))]
         self._ids = float_ids(trees, _key_and_floats(law, values)[1])
-        other, p1 = None, values
-        rng = random.Random(0)
-        for _ in range(_NUDGES):
-            steps = {abs(v): rng.choice((-1.0, 1.0)) * rng.uniform(1e-13, 1e-11)
-                     for v in values}
-            p1 = tuple(v * (1.0 + steps[abs(v)]) for v in values)
-            k1, floats = _key_and_floats(law, p1)
-            if k1 == key:
-                other = _Derivation(law, p1)
-                break
-        if other is None or other.signature() != d.signature():
-            raise ValueError(f"law {law.name!r}: its code changes with its numbers")
-        atoms = self.atoms(floats)
-        if tuple(swap(e, atoms) for e in d.expressions) != other.expressions \
-                or self.infos(atoms) != other.lb.info or d.bounds() != other.bounds():
-            raise ValueError(f"law {law.name!r}: its expressions change with its numbers")
-        if any(info.steep or info.stage is not None for info in d.lb.info):
+        self.steep = any(info.steep or info.stage is not None for info in d.lb.info)
+        self.checked, self._steepness = False, []
+
+    def check(self, other: LawClass, floats: list) -> None:
+        """Make this a class if ``other`` (a law of the same :func:`class_key`, its floats
+        ``floats``) has the same code with the recipes' numbers and the same expressions,
+        branches and bounds with its floats swapped in; ``ValueError`` if not."""
+        law, d, e = self.law, self._d, other._d
+        if self.steep or other.steep:
             raise ValueError(f"law {law.name!r}: a steep branch, its form chosen by the "
                              f"numbers")
+        if e.signature() != d.signature():
+            raise ValueError(f"law {law.name!r}: its code changes with its numbers")
+        atoms = self.atoms(floats)
+        if tuple(swap(x, atoms) for x in d.expressions) != e.expressions \
+                or self.infos(atoms) != e.lb.info or d.bounds() != e.bounds():
+            raise ValueError(f"law {law.name!r}: its expressions change with its numbers")
         symbols = [law.symbols[p] for p in law.parameters]
         back = {}
-        for p, sym in zip(values, symbols, strict=True):
+        for p, sym in zip(self.values, symbols, strict=True):
             back[sp.Float(p)], back[sp.Float(-p)] = sym, -sym
         self._steepness = [steepness_function(info.residual.xreplace(back), symbols)
                            for info in d.lb.info
                            if not info.locks and affine_steepness(info.residual) > 0.0]
+        self.checked = True
         _DERIVATIONS[0] += 1
 
     def forward(self, values: tuple[float, ...]) -> bool:
@@ -310,12 +314,18 @@ class ReboundBranches(LawBranches):
         return hit
 
     def guards_for(self, i: int) -> Callable:
+        return self._guard(self._check(i))
+
+    def stage_guards_for(self, i: int) -> Callable:
         i = self._check(i)
-        hit = self._guards.get(i)
+        return self._guard(i if self.info[i].stage is None else -1 - i)
+
+    def _guard(self, key: int) -> Callable:
+        hit = self._guards.get(key)
         if hit is None:
-            lifted, codes = self._rebound.cls._d.guards[i]
+            lifted, codes = self._rebound.cls._d.guards[key]
             values = self._rebound.values
-            hit = self._guards[i] = lifted.build(values)
+            hit = self._guards[key] = lifted.build(values)
             hit.codes = tuple(fill(text, slots(r, values)) for text, r in codes)
         return hit
 
@@ -375,15 +385,25 @@ def _rebound(bound) -> Rebound | None:
     if key is None:
         return None
     cls = _CLASSES.get(key)
-    if cls is None and key not in _CLASSES:
-        _CLASSES[key] = None  # while its first law is derived, the class derives from scratch
-        try:
-            cls = _CLASSES[key] = LawClass(key, values)
-        except ValueError:  # tried again with another first law, up to _TRIES times
-            _FAILURES[key] = _FAILURES.get(key, 0) + 1
-            if _FAILURES[key] < _TRIES:
-                del _CLASSES[key]
-            return None
-    if cls is None or not cls.forward(values):
+    if cls is not None:
+        return Rebound(cls, values, floats) if cls.forward(values) else None
+    if key in _CLASSES:  # given up: derived law by law
         return None
-    return Rebound(cls, values, floats)
+    own = LawClass(law, values)  # this law's derivation, exact for it
+    first = _PENDING.get(key)
+    if not own.steep:
+        if first is None:
+            _PENDING[key] = own
+        else:
+            try:
+                first.check(own, floats)
+            except ValueError:  # the next law is checked against this one, _TRIES times
+                _FAILURES[key] = _FAILURES.get(key, 0) + 1
+                _PENDING[key] = own
+                if _FAILURES[key] >= _TRIES:
+                    _CLASSES[key] = None
+                    del _PENDING[key]
+            else:
+                _CLASSES[key] = first
+                del _PENDING[key]
+    return Rebound(own, values, floats)
