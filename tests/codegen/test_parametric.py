@@ -198,3 +198,17 @@ def test_steepness_decided_per_law() -> None:
     assert law_class(law.bind(gamma=below, tau=1.7)).cls.checked  # 15.9
     assert law_class(law.bind(gamma=above, tau=1.7)) is None  # 16.1: steep
     assert law_branches(law.bind(gamma=above, tau=1.7)).info[0].stage is not None
+
+
+@pytest.mark.parametrize(("gamma", "tau"), [(2.3, 1.7), (9.47, 1.7), (1e6, 3.1e-4), (0.3, 0.0)])
+def test_steepness_function_as_the_branch_steepness(gamma, tau) -> None:
+    """The float function of the parameters gives a slip branch's steepness (gamma tau)
+    to a few ulps."""
+    import sympy as sp
+
+    from lumped.codegen.stage_forms import affine_steepness, affine_steepness_function
+
+    g, t, q, F = sp.symbols("gamma tau q F")
+    steepness = affine_steepness_function(q - g * (F - t), [g, t])
+    leaf = q - sp.Float(gamma) * (F - sp.Float(tau))
+    assert steepness(gamma, tau) == pytest.approx(affine_steepness(leaf), rel=1e-14)

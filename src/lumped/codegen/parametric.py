@@ -40,7 +40,7 @@ import sympy as sp
 
 from .branches import LawBranches
 from .rebinding import LazyExpressions, Lifted, fill, float_ids, lift_source, lift_text, slots, swap
-from .stage_forms import STEEP_SPAN, affine_steepness
+from .stage_forms import STEEP_SPAN, affine_steepness, affine_steepness_function
 
 __all__ = ["LawClass", "Rebound", "ReboundBranches", "admitted", "class_key", "derivations",
            "law_class"]
@@ -237,7 +237,7 @@ class LawClass:
         back = {}
         for p, sym in zip(self.values, symbols, strict=True):
             back[sp.Float(p)], back[sp.Float(-p)] = sym, -sym
-        self._steepness = [steepness_function(info.residual.xreplace(back), symbols)
+        self._steepness = [affine_steepness_function(info.residual.xreplace(back), symbols)
                            for info in d.lb.info
                            if not info.locks and affine_steepness(info.residual) > 0.0]
         self.checked = True
@@ -330,27 +330,6 @@ class ReboundBranches(LawBranches):
         return hit
 
 
-def steepness_function(leaf: sp.Expr, symbols: list) -> Callable[..., float]:
-    """:func:`~lumped.codegen.stage_forms.affine_steepness` of the branch ``leaf`` (in
-    ``q``, ``F`` and the parameters' ``symbols``) as a float function of their values."""
-    from .emit import compile_function
-
-    q, F = sp.Symbol("q"), sp.Symbol("F")
-    beta = sp.diff(leaf, F)
-    A = sp.expand(leaf - beta * F)
-    parts = [compile_function(e, symbols) for e in
-             (beta, A.xreplace({q: sp.S.Zero}), sp.diff(A, q).xreplace({q: sp.S.Zero}))]
-
-    def steepness(*values: float) -> float:
-        b, a0, slope = (f(*values) for f in parts)
-        F0, slope = (-a0 / b if b != 0.0 else math.nan), abs(slope)
-        if not math.isfinite(F0) or F0 == 0.0 or not math.isfinite(slope):
-            return 0.0
-        return math.inf if slope == 0.0 else abs(b) * abs(F0) / slope
-
-    return steepness
-
-
 def _with_magnitude(pair: tuple[Lifted, Lifted], values: tuple[float, ...]) -> Callable:
     kernel, magnitude = pair
     fn = kernel.build(values)
@@ -389,7 +368,11 @@ def _rebound(bound) -> Rebound | None:
         return Rebound(cls, values, floats) if cls.forward(values) else None
     if key in _CLASSES:  # given up: derived law by law
         return None
-    own = LawClass(law, values)  # this law's derivation, exact for it
+    try:
+        own = LawClass(law, values)  # this law's derivation, exact for it
+    except Exception:  # noqa: BLE001 - derived law by law, where it fails as it did before
+        _fail(key)
+        return None
     first = _PENDING.get(key)
     if not own.steep:
         if first is None:
@@ -398,12 +381,18 @@ def _rebound(bound) -> Rebound | None:
             try:
                 first.check(own, floats)
             except ValueError:  # the next law is checked against this one, _TRIES times
-                _FAILURES[key] = _FAILURES.get(key, 0) + 1
                 _PENDING[key] = own
-                if _FAILURES[key] >= _TRIES:
-                    _CLASSES[key] = None
-                    del _PENDING[key]
+                _fail(key)
             else:
                 _CLASSES[key] = first
                 del _PENDING[key]
     return Rebound(own, values, floats)
+
+
+def _fail(key: tuple) -> None:
+    """One more failure of ``key``'s class; past :data:`_TRIES` its laws are derived law
+    by law."""
+    _FAILURES[key] = _FAILURES.get(key, 0) + 1
+    if _FAILURES[key] >= _TRIES:
+        _CLASSES[key] = None
+        _PENDING.pop(key, None)
