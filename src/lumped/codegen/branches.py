@@ -56,7 +56,7 @@ from .guards import compile_guards, feasible_path
 from .rewrite import magnitude_expression
 from .stage_forms import affine_inverse_form, inverse_form, odd_continuation
 
-__all__ = ["BranchInfo", "LawBranches", "law_branches"]
+__all__ = ["BranchInfo", "LawBranches", "law_branches", "leaves"]
 
 _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 
@@ -280,20 +280,27 @@ _CACHE: dict[object, LawBranches] = {}
 def law_branches(bound) -> LawBranches:
     """The :class:`LawBranches` of a bound law (anything with a compiled ``kernel`` whose
     ``expressions[0]`` is the prepared residual, e.g. :class:`lumped.laws.BoundLaw`);
-    cached per bound law."""
+    cached per bound law. A law of a class :mod:`lumped.codegen.parametric` derives once
+    gets the class's branches with its own numbers."""
     try:
         hit = _CACHE.get(bound)
     except TypeError:  # unhashable: no cache
         hit = None
     if hit is not None:
         return hit
-    try:
-        residual = bound.kernel.expressions[0]
-    except AttributeError:
-        raise TypeError(
-            f"`bound` must be a bound law with a compiled kernel, got {type(bound).__name__}"
-        ) from None
-    out = LawBranches(residual)
+    from .parametric import law_class
+
+    parametric = law_class(bound)
+    if parametric is not None:
+        out = parametric.branches()
+    else:
+        try:
+            residual = bound.kernel.expressions[0]
+        except AttributeError:
+            raise TypeError(
+                f"`bound` must be a bound law with a compiled kernel, got "
+                f"{type(bound).__name__}") from None
+        out = LawBranches(residual)
     try:
         _CACHE[bound] = out
     except TypeError:
@@ -326,6 +333,13 @@ def _arms(pw: sp.Piecewise, path: _Path) -> Iterator[tuple[sp.Expr, _Path]]:
             return
         yield value, path + tuple(before) + ((cond, True),)
         before.append((cond, False))
+
+
+def leaves(residual: sp.Expr) -> list[tuple[sp.Expr, _Path]]:
+    """Every leaf of a prepared residual (a smooth piece and the path that selects it,
+    feasible or not), in the order of the law's ``Piecewise`` arms."""
+    with distribute(False):
+        return list(_leaves(residual, ()))
 
 
 def _leaves(expr: sp.Expr, path: _Path) -> Iterator[tuple[sp.Expr, _Path]]:

@@ -30,7 +30,7 @@ import sympy as sp
 
 from .emit import KernelPrinter
 
-__all__ = ["compile_guards", "feasible_path"]
+__all__ = ["affine_bound", "compile_guards", "feasible_path"]
 
 _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 
@@ -122,7 +122,7 @@ def compile_guards(path: _Path, root: tuple[sp.Expr, sp.Expr] | None = None
 # Pruning: paths whose conditions contradict each other
 
 
-def _affine_bound(cond: sp.Basic, want: bool):
+def affine_bound(cond: sp.Basic, want: bool):
     """``(symbol, lo, lo_closed, hi, hi_closed)`` when ``cond == want`` is an interval of
     one symbol (``a s + b  op  0`` with numbers ``a != 0, b``); else ``None``."""
     if not isinstance(cond, sp.core.relational.Relational) or cond.rel_op in ("==", "!="):
@@ -156,7 +156,7 @@ def feasible_path(path: _Path) -> bool:
     for cond, want in path:
         if seen.setdefault(cond, want) != want:
             return False
-        bound = _affine_bound(cond, want)
+        bound = affine_bound(cond, want)
         if bound is None:
             continue
         s, lo, loc, hi, hic = bound

@@ -25,11 +25,12 @@ its guard's tolerance) gets a finite residual instead of ``nan``.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import sympy as sp
 
-__all__ = ["STEEP_SPAN", "affine_inverse_form", "affine_steepness", "inverse_form",
-           "odd_continuation"]
+__all__ = ["STEEP_SPAN", "affine_inverse_form", "affine_steepness",
+           "affine_steepness_function", "inverse_form", "odd_continuation"]
 
 _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 
@@ -132,6 +133,27 @@ def affine_steepness(expr: sp.Expr) -> float:
     if not math.isfinite(slope):
         return 0.0
     return math.inf if slope == 0.0 else abs(float(beta)) * abs(F0) / slope
+
+
+def affine_steepness_function(leaf: sp.Expr, symbols: list) -> Callable[..., float]:
+    """:func:`affine_steepness` of the branch ``leaf`` (in ``q``, ``F`` and the
+    parameters' ``symbols``) as a float function of their values: the same formula,
+    ``|beta| |F_0| / |A'(0)|``, in other roundings (a few ulps apart)."""
+    from .emit import compile_function
+
+    beta = sp.diff(leaf, _F)
+    A = sp.expand(leaf - beta * _F)
+    parts = [compile_function(e, symbols) for e in
+             (beta, A.xreplace({_Q: sp.S.Zero}), sp.diff(A, _Q).xreplace({_Q: sp.S.Zero}))]
+
+    def steepness(*values: float) -> float:
+        b, a0, slope = (f(*values) for f in parts)
+        F0, slope = (-a0 / b if b != 0.0 else math.nan), abs(slope)
+        if not math.isfinite(F0) or F0 == 0.0 or not math.isfinite(slope):
+            return 0.0
+        return math.inf if slope == 0.0 else abs(b) * abs(F0) / slope
+
+    return steepness
 
 
 def affine_inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:

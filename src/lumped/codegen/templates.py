@@ -19,7 +19,7 @@ import re
 from dataclasses import dataclass
 
 __all__ = ["kernel_sources", "lift_constants", "lift_function", "slot_arguments",
-           "LawTemplate", "law_template"]
+           "LawTemplate", "law_template", "template_from_scratch"]
 
 
 def kernel_sources(bound) -> tuple[str, str]:
@@ -156,9 +156,21 @@ _TEMPLATES: dict[tuple, LawTemplate] = {}
 
 def law_template(bound) -> LawTemplate:
     """The :class:`LawTemplate` of a bound law given as a sympy residual (memoised by
-    its generated sources)."""
+    its generated sources; a law of a class :mod:`lumped.codegen.parametric` derives
+    once gets the class's template with its own numbers)."""
+    from lumped.codegen.parametric import law_class
+
+    hit = law_class(bound)
+    if hit is not None:
+        return hit.template()
+    return template_from_scratch(bound)
+
+
+def template_from_scratch(bound, lb=None) -> LawTemplate:
+    """:func:`law_template` derived from the bound law's numbers (``lb``: its
+    :class:`~lumped.codegen.branches.LawBranches` when already made)."""
     ksrc, msrc = kernel_sources(bound)
-    selector, branches = _branches(bound)
+    selector, branches = _branches(bound, lb)
     key = (ksrc, msrc, selector, tuple(branches))
     hit = _TEMPLATES.get(key)
     if hit is not None:
@@ -180,12 +192,12 @@ def law_template(bound) -> LawTemplate:
     return hit
 
 
-def _branches(bound):
+def _branches(bound, lb=None):
     """``(selector source, [(kernel source, guard codes), ...])`` of a law's smooth
     branches (:func:`lumped.codegen.branches.law_branches`; the kernels in the form the
     stage solve of ``radau5`` takes, ``stage_source_for``)."""
     from lumped.codegen.branches import law_branches
 
-    lb = law_branches(bound)
+    lb = law_branches(bound) if lb is None else lb
     return lb.branch.__source__, [(lb.stage_source_for(i), tuple(lb.stage_guards_for(i).codes))
                                   for i in range(lb.count)]

@@ -48,6 +48,7 @@ import sympy as sp
 
 from .._validate import as_finite, as_nonnegative, as_positive
 from ..codegen import Kernel, check_supported, compile_kernel
+from ..codegen.parametric import law_class
 from .parser import check_symbol_name, parse_expression
 
 __all__ = ["BoundLaw", "ElementLaw", "KINDS"]
@@ -330,7 +331,9 @@ class BoundLaw:
         A copy of the parameter values.
     kernel : callable
         ``kernel(q, F) -> (R, dR/dq, dR/dF)`` on Python floats, compiled on first use
-        (once per law and parameter values, see :func:`lumped.codegen.compile_kernel`).
+        (once per law and parameter values, see :func:`lumped.codegen.compile_kernel`; a
+        law :mod:`lumped.codegen.parametric` derives once per class of numbers gets the
+        class's kernel with its own numbers).
 
     Examples
     --------
@@ -370,12 +373,10 @@ class BoundLaw:
     def kernel(self) -> Kernel:
         kernel = self._kernel
         if kernel is None:
-            kernel = compile_kernel(
-                self.law.residual,
-                self.law.q,
-                self.law.F,
-                {self.law.symbols[p]: v for p, v in self._params.items()},
-            )
+            parametric = law_class(self)
+            kernel = parametric.kernel() if parametric is not None else \
+                compile_kernel(self.law.residual, self.law.q, self.law.F,
+                               {self.law.symbols[p]: v for p, v in self._params.items()})
             object.__setattr__(self, "_kernel", kernel)
         return kernel
 

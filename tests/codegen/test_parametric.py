@@ -1,0 +1,214 @@
+"""Parametric binding (lumped.codegen.parametric): new numbers derive nothing again, and a
+law bound through its class gets what a derivation from scratch gives, bit for bit."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import lumped.codegen.emit as emit
+from lumped.codegen import compile_kernel
+from lumped.codegen.branches import LawBranches, law_branches
+from lumped.codegen.parametric import admitted, class_key, derivations, law_class
+from lumped.codegen.templates import law_template, template_from_scratch
+from lumped.laws import ElementLaw, get_law
+
+POINTS = [(0.0, 0.0), (0.3, -1.7), (-2.5, 4.0), (1e-9, 0.6), (-0.7, -0.2), (7.0, 30.0)]
+
+#: (label, law, parameter sets): numbers on both sides of each of the law's decisions
+#: (sign; an integral value or 1/2, which sympy takes apart; Bingham steep or not, gamma
+#: tau against 16; Herschel-Bulkley n < 1 and n > 1; string and Coulomb locks)
+CASES = [
+    ("linear_spring", get_law("linear_spring"),
+     [{"k": 100.37}, {"k": 3.3e-7}, {"k": 100.0}, {"k": 0.5}, {"k": 1.0}, {"k": 2.6e5}]),
+    ("newtonian", get_law("newtonian"), [{"c": 0.77}, {"c": 0.0}, {"c": 12.25}]),
+    ("user_linear", ElementLaw("lin", "dashpot", "2*F = k*q", ["k"]),
+     [{"k": 1.5}, {"k": -1.5}, {"k": -0.25}, {"k": -3.0}]),
+    ("user_signed", ElementLaw("ab", "spring", "a*F - b*q", ["a", "b"]),
+     [{"a": 0.3, "b": 2.7}, {"a": -0.3, "b": 2.7}, {"a": 0.3, "b": -2.7}, {"a": 0.3, "b": 0.3},
+      {"a": 1.0, "b": 2.7}]),
+    ("bingham", get_law("bingham"),
+     [{"gamma": 2.3, "tau": 1.7}, {"gamma": 20.3, "tau": 1.7}, {"gamma": 1.0, "tau": 1.0},
+      {"gamma": 9.37, "tau": 1.7}, {"gamma": 9.47, "tau": 1.7}, {"gamma": 0.03, "tau": 17.1}]),
+    ("coulomb", get_law("coulomb"), [{"tau": 1.7, "r": 10.3}, {"tau": 0.2, "r": 1e6},
+                                     {"tau": 0.0, "r": 3.3}]),
+    ("hb_n_below_1", get_law("herschel_bulkley"), [{"gamma": 2.3, "tau": 1.7, "n": 0.37}]),
+    ("hb_n_above_1", get_law("herschel_bulkley"), [{"gamma": 2.3, "tau": 1.7, "n": 1.61}]),
+    ("string_spring", get_law("string_spring"), [{"k": 100.3, "L": 0.13}]),
+    ("implicit_spring", get_law("implicit_spring"), [{"k": 1.3, "L0": 0.1, "F0": 1.7}]),
+]
+IDS = [c[0] for c in CASES]
+
+
+def _same(a: float, b: float) -> bool:
+    if math.isnan(a) or math.isnan(b):
+        return math.isnan(a) and math.isnan(b)
+    return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
+
+
+def _same_kernel(got, ref) -> None:
+    assert got.__source__ == ref.__source__
+    assert got.magnitude.__source__ == ref.magnitude.__source__
+    for q, F in POINTS:
+        assert all(map(_same, got(q, F), ref(q, F))), (q, F)
+        assert _same(got.magnitude(q, F), ref.magnitude(q, F)), (q, F)
+
+
+@pytest.mark.parametrize(("label", "law", "sets"), CASES, ids=IDS)
+def test_bound_through_the_class_as_from_scratch(label, law, sets) -> None:
+    for values, factor in itertools.product(sets, (1.0, 1.0000001, 1.37)):
+        values = {p: v * factor for p, v in values.items()}  # new numbers, often one class
+        bound = law.bind(**values)
+        params = {law.symbols[p]: v for p, v in values.items()}
+        ref = compile_kernel(law.residual, law.q, law.F, params)
+        _same_kernel(bound.kernel, ref)
+        assert bound.kernel.expressions == ref.expressions
+        got, want = law_branches(bound), LawBranches(ref.expressions[0])
+        assert got.info == want.info
+        assert got.branch.__source__ == want.branch.__source__
+        for i in range(want.count):
+            for guard in (True, False):
+                assert got.source_for(i, guard=guard) == want.source_for(i, guard=guard)
+                assert got.stage_source_for(i, guard=guard) == want.stage_source_for(
+                    i, guard=guard)
+            _same_kernel(got.kernel_for(i), want.kernel_for(i))
+            _same_kernel(got.stage_kernel_for(i), want.stage_kernel_for(i))
+            assert got.kernel_for(i).lock_value == want.kernel_for(i).lock_value
+            for fn in ("guards_for", "stage_guards_for"):
+                g, w = getattr(got, fn)(i), getattr(want, fn)(i)
+                assert g.__source__ == w.__source__ and g.codes == w.codes
+                for q, F in POINTS:
+                    assert all(map(_same, g(q, F), w(q, F)))
+        assert law_template(bound) == template_from_scratch(bound, want)
+
+
+def _check_as_from_scratch(law, values: dict) -> None:
+    bound = law.bind(**values)
+    params = {law.symbols[p]: v for p, v in values.items()}
+    ref = compile_kernel(law.residual, law.q, law.F, params)
+    _same_kernel(bound.kernel, ref)
+    got, want = law_branches(bound), LawBranches(ref.expressions[0])
+    assert got.info == want.info
+    assert got.branch.__source__ == want.branch.__source__
+    for i in range(want.count):
+        _same_kernel(got.stage_kernel_for(i), want.stage_kernel_for(i))
+        assert got.stage_guards_for(i).codes == want.stage_guards_for(i).codes
+    assert law_template(bound) == template_from_scratch(bound, want)
+
+
+magnitudes = st.floats(1e-3, 1e3).filter(lambda v: not v.is_integer() and v != 0.5)
+
+
+@settings(max_examples=25, deadline=None)
+@given(gamma=magnitudes, tau=magnitudes, k=magnitudes, c=magnitudes, r=magnitudes)
+def test_random_numbers_as_from_scratch(gamma, tau, k, c, r) -> None:
+    """Random numbers of the built-in laws a class takes (and Bingham's steep ones, which
+    it leaves to a derivation): what a law gets is what a derivation from scratch gives."""
+    _check_as_from_scratch(get_law("bingham"), {"gamma": gamma, "tau": tau})
+    _check_as_from_scratch(get_law("coulomb"), {"tau": tau, "r": r})
+    _check_as_from_scratch(get_law("linear_spring"), {"k": k})
+    _check_as_from_scratch(get_law("newtonian"), {"c": c})
+
+
+def test_new_numbers_derive_nothing_again(monkeypatch) -> None:
+    """After the first two laws of a class (derived, the second checks the class), a new
+    spring constant prepares no residual and builds no branches in sympy (counted, not
+    timed)."""
+    law = get_law("linear_spring")
+    for k in (7.123456789, 7.123456791):  # one class: the same signs and float order
+        bound = law.bind(k=k)
+        assert callable(bound.kernel)
+        law_template(bound)
+    assert law_class(bound).cls.checked
+    before = derivations()
+    calls = {"prepare": 0, "branches": 0}
+    prepare, init = emit.prepare, LawBranches.__init__
+
+    def counted_prepare(*args, **kwargs):
+        calls["prepare"] += 1
+        return prepare(*args, **kwargs)
+
+    def counted_init(self, *args, **kwargs):
+        calls["branches"] += 1
+        return init(self, *args, **kwargs)
+
+    monkeypatch.setattr(emit, "prepare", counted_prepare)
+    monkeypatch.setattr(LawBranches, "__init__", counted_init)
+    for j in range(5):
+        bound = law.bind(k=7.123456789 + 0.0123 * (j + 1))
+        assert callable(bound.kernel)
+        law_branches(bound).kernel_for(0)
+        law_template(bound)
+    assert calls == {"prepare": 0, "branches": 0}
+    assert derivations() == before
+
+
+@pytest.mark.parametrize(("residual", "params", "expected"), [
+    ("F - k*q", ["k"], True),
+    ("a*F - b*q", ["a", "b"], True),
+    ("q - gamma*(F - clip(F, -tau, tau))", ["gamma", "tau"], True),
+    ("F - k*Abs(q) - Max(q, -L)", ["k", "L"], True),
+    ("q - Piecewise((F/a, a*b > 1), (F, True))", ["a", "b"], False),  # folded by sympy
+    ("F - Max(q, a*b)", ["a", "b"], False),
+    ("F - k*q*Abs(a - b)", ["k", "a", "b"], False),
+])
+def test_admitted_from_the_expression(residual, params, expected) -> None:
+    """Laws whose comparisons of numbers alone are of lone parameters (named like a
+    built-in law, which changes nothing)."""
+    assert admitted(ElementLaw("bingham", "dashpot", residual, params)) is expected
+
+
+@pytest.mark.parametrize(("label", "law", "values"), [
+    ("k + c", ElementLaw("kc", "spring", "F - k*q - c*q", ["k", "c"]),
+     {"k": 1.3, "c": 2.9}),  # dR/dq = -(k + c): two numbers combined in the code
+    ("hb", get_law("herschel_bulkley"), {"gamma": 2.3, "tau": 1.7, "n": 1.61}),
+    ("steep", get_law("bingham"), {"gamma": 20.3, "tau": 1.7}),
+])
+def test_a_class_that_combines_numbers_is_not_made(label, law, values) -> None:
+    """Its laws fail the class's check (code or form that changes with the numbers): no
+    class is made, law after law is derived."""
+    before = derivations()
+    for factor in (1.0, 1.0000001, 1.0000002, 1.37, 1.5, 1.0000003):
+        bound = law.bind(**{p: v * factor for p, v in values.items()})
+        hit = law_class(bound)  # its own derivation, or None once the class is given up
+        assert hit is None or not hit.cls.checked
+    assert derivations() == before
+
+
+def _same_class(law, values: dict, name: str, candidates) -> float:
+    """The first of ``candidates`` for parameter ``name`` in the class of ``values``."""
+    key = class_key(law.bind(**values))
+    return next(v for v in candidates if class_key(law.bind(**{**values, name: v})) == key)
+
+
+def test_steepness_decided_per_law() -> None:
+    """Bingham's class (gamma tau < 16, the forward form) does not take a law with gamma
+    tau >= 16 (steep: its inverse form)."""
+    law = get_law("bingham")
+    values = {"gamma": 2.3, "tau": 1.7}
+    second = _same_class(law, values, "gamma", [2.3 + 1e-3 * j for j in range(1, 99)])
+    for gamma in (2.3, second):  # the class is made
+        law_class(law.bind(gamma=gamma, tau=1.7))
+    below = _same_class(law, values, "gamma", [9.37 + 1e-4 * j for j in range(99)])
+    above = _same_class(law, values, "gamma", [9.47 + 1e-4 * j for j in range(99)])
+    assert law_class(law.bind(gamma=below, tau=1.7)).cls.checked  # 15.9
+    assert law_class(law.bind(gamma=above, tau=1.7)) is None  # 16.1: steep
+    assert law_branches(law.bind(gamma=above, tau=1.7)).info[0].stage is not None
+
+
+@pytest.mark.parametrize(("gamma", "tau"), [(2.3, 1.7), (9.47, 1.7), (1e6, 3.1e-4), (0.3, 0.0)])
+def test_steepness_function_as_the_branch_steepness(gamma, tau) -> None:
+    """The float function of the parameters gives a slip branch's steepness (gamma tau)
+    to a few ulps."""
+    import sympy as sp
+
+    from lumped.codegen.stage_forms import affine_steepness, affine_steepness_function
+
+    g, t, q, F = sp.symbols("gamma tau q F")
+    steepness = affine_steepness_function(q - g * (F - t), [g, t])
+    leaf = q - sp.Float(gamma) * (F - sp.Float(tau))
+    assert steepness(gamma, tau) == pytest.approx(affine_steepness(leaf), rel=1e-14)
