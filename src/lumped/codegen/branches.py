@@ -217,7 +217,7 @@ class LawBranches:
                 exprs = list(info.stage[:3])
             else:
                 with distribute(False):
-                    odd = odd_continuation(info.residual)
+                    odd = odd_continuation(info.residual, info.path)
                     exprs = ([info.residual, info.dR_dq, info.dR_dF] if odd is info.residual
                              else [odd, sp.diff(odd, _Q), sp.diff(odd, _F)])
             with distribute(False):

@@ -84,23 +84,55 @@ def inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
     return _F - G, -dG, sp.S.One, base, w
 
 
-def odd_continuation(expr: sp.Expr) -> sp.Expr:
+def odd_continuation(expr: sp.Expr, path: tuple = ()) -> sp.Expr:
     r"""``expr`` with every power ``b^p`` (``p`` a non-integer number, ``b`` holding ``q``
-    or ``F``) replaced by ``b^p`` where ``b >= 0`` and ``-(-b)^p`` where ``b < 0``.
+    or ``F``) replaced by ``b^p`` where ``b >= 0`` and ``-(-b)^p`` where ``b < 0``; and
+    every even power ``b^p`` (``p = 2, 4, ...``) whose base has one sign wherever the
+    branch's ``path`` holds (a condition of the path is ``b > 0``, ``b >= 0``, or the
+    opposite, up to a positive factor) continued past ``b = 0`` with the opposite sign.
 
     Equal to ``expr`` wherever ``expr`` is real, so on its branch. Herschel-Bulkley with
     ``n = 3/2`` on its forward slip branch, ``R = q - gamma (F - tau)^{3/2}``: a stage
     that starts at ``F = tau - 5e-6`` (a step accepted with its force within the guard's
     tolerance below the yield force) had ``R = nan``, so Newton failed on every step and
-    the step size fell to its floor; now ``R = q + gamma (tau - F)^{3/2}`` there.
+    the step size fell to its floor; now ``R = q + gamma (tau - F)^{3/2}`` there. With
+    ``n = 2`` the branch ``q = -gamma (-F - tau)^2`` (``F < -tau``) has a mirror root
+    ``F = -tau + sqrt(-q / gamma)`` beyond its yield force: a stage solve of a dashpot
+    slipping at ``q = -7.8e-9`` from its yield force met it, ``F`` ``1.8e-4`` past the
+    guard, and the run read a false event every ``1e-12`` s until it was bridged (issue
+    29); continued, the branch is monotone in ``F`` and has the one root. A law even in
+    its base everywhere (no condition of the path fixes the base's sign) is left alone.
     Returns ``expr`` itself when it has no such power."""
-    pows = [node for node in sp.preorder_traversal(expr)
-            if isinstance(node, sp.Pow) and node.exp.is_number and not node.exp.is_integer
-            and node.base.has(_Q, _F)]
-    if not pows:
-        return expr
-    return expr.xreplace({P: sp.Piecewise((P, P.base >= 0), (-((-P.base) ** P.exp), True))
-                          for P in pows})
+    swap = {}
+    for node in sp.preorder_traversal(expr):
+        if not (isinstance(node, sp.Pow) and node.exp.is_number and node.base.has(_Q, _F)):
+            continue
+        if not node.exp.is_integer:
+            swap[node] = sp.Piecewise((node, node.base >= 0), (-((-node.base) ** node.exp),
+                                                               True))
+        elif node.exp.is_even and node.exp.is_positive:
+            sign = _sign_on_path(node.base, path)
+            if sign:
+                swap[node] = sp.Piecewise((node, sign * node.base >= 0), (-node, True))
+    return expr.xreplace(swap) if swap else expr
+
+
+def _sign_on_path(base: sp.Expr, path: tuple) -> int:
+    """``1`` (``-1``) when a condition of ``path`` says ``base > 0`` or ``base >= 0``
+    (``<= 0``) up to a positive number as a factor, else ``0``."""
+    for cond, want in path:
+        if not isinstance(cond, sp.core.relational.Relational) or \
+                isinstance(cond, (sp.Eq, sp.Ne)):
+            continue
+        up = cond.lhs - cond.rhs  # cond: up > 0 (>=) or up < 0 (<=)
+        if isinstance(cond, (sp.StrictLessThan, sp.LessThan)):
+            up = -up
+        if not want:
+            up = -up
+        ratio = sp.simplify(base / up)
+        if ratio.is_number and ratio.is_nonzero:
+            return 1 if ratio.is_positive else -1
+    return 0
 
 
 def affine_steepness(expr: sp.Expr) -> float:

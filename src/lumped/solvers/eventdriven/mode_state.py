@@ -22,6 +22,7 @@ from ..modes.lock_events import (
     apply_impacts,
     hold_impacted_locks,
     hold_rate_locks,
+    release_resting_locks,
     snap_to_locks,
 )
 from ..modes.mode_guess import try_modes
@@ -164,6 +165,7 @@ class ModeState:
             new, v_p, F_p = sel
             hold_impacted_locks(scene, lbs, t, [e for e, _ in hit[0]], scale_v, x, v, F,
                                 new, F_p)
+        release_resting_locks(scene, lbs, t, modes, scale_v, x, v, F, new, F_p)
         if not self.state_stays(t, cause, new, bool(hit[0]), x, v, F):
             for p in range(self.N):
                 if not self.is_mass[p]:
