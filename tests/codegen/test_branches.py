@@ -148,6 +148,20 @@ def test_an_even_power_is_continued_with_its_sign_beyond_the_branch() -> None:
     assert even.kernel_for(0)(0.5, -1.0) == (0.0, 1.0, 1.0)
 
 
+@pytest.mark.parametrize("n", [1.5, 2.0, 3.0])
+def test_the_guard_of_a_branch_flat_at_its_end_reads_its_rate(n) -> None:
+    # Herschel-Bulkley n > 1 slipping forwards, q = gamma (F - tau)^n: the stage guard of
+    # the slip's end is q / gamma, not F - tau (a stage force 1e-7 below the yield force
+    # at a rate of 2.6e-11, inside Newton's force tolerance, read a false end: issue 29)
+    gamma, tau = 0.28, 0.44
+    lb = law_branches(get_law("herschel_bulkley").bind(gamma=gamma, tau=tau, n=n))
+    fwd, back = lb.branch(1.0, 2.0 * tau), lb.branch(-1.0, -2.0 * tau)
+    assert min(lb.stage_guards_for(fwd)(2.6e-11, tau - 1e-7)) > 0.0
+    assert min(lb.stage_guards_for(back)(-2.6e-11, -tau + 1e-7)) > 0.0
+    assert min(lb.stage_guards_for(fwd)(-1e-15, tau + 1e-7)) < 0.0  # the rate's sign
+    assert min(lb.guards_for(fwd)(2.6e-11, tau - 1e-7)) < 0.0  # the law's own guards
+
+
 @pytest.mark.parametrize(("gamma", "tau", "steep"), [
     (1.0, 1.0, False), (10.0, 1.0, False), (20.0, 1.0, True), (1.0, 20.0, True),
     (1e3, 1.0, True), (1e12, 1.0, True), (1e12, 0.0, False)])

@@ -28,8 +28,8 @@ import math
 
 import sympy as sp
 
-__all__ = ["STEEP_SPAN", "affine_inverse_form", "affine_steepness", "inverse_form",
-           "odd_continuation"]
+__all__ = ["STEEP_SPAN", "affine_inverse_form", "affine_steepness", "flat_root",
+           "inverse_form", "odd_continuation"]
 
 _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 
@@ -44,24 +44,17 @@ _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 STEEP_SPAN = 16.0
 
 
-def inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
-    r"""A steep branch ``R = alpha(q) + beta (s F + d)^p`` (``p`` a non-integer number,
-    ``beta, s, d`` numbers, ``F`` nowhere else) solved for ``F``:
-    ``(F - G(q), -G'(q), 1, s F + d, w)`` with
-
-    .. math:: G(q) = (w^{1/p} - d) / s,\qquad w = -\alpha(q) / \beta,
-
-    and ``w^{1/p}`` continued oddly to ``w < 0`` (``-(-w)^{1/p}``), so that an iterate
-    beyond the branch's end gives a force beyond its guard (an event) rather than ``nan``.
-    ``G'(q) = r |w|^{r - 1} w'(q) / s`` (``r = 1/p``) is bounded where ``dR/dF`` is not
-    (``p < 1``: ``r > 1``). ``None`` for any other shape."""
+def _power_shape(expr: sp.Expr):
+    """``(base, p, slope, shift, alpha, beta)`` of a branch ``R = alpha(q) + beta (slope F
+    + shift)^p`` (``p``, ``beta``, ``slope``, ``shift`` numbers, ``beta`` and ``slope``
+    nonzero, ``F`` nowhere else, ``alpha`` holding ``q``), else ``None``."""
     pows = {node for node in sp.preorder_traversal(expr)
             if isinstance(node, sp.Pow) and node.base.has(_F)}
     if len(pows) != 1:
         return None
     (P,) = pows
     base, p = P.base, P.exp
-    if not p.is_number or p.is_integer or not p.is_positive:
+    if not p.is_number or not p.is_positive:
         return None
     slope = sp.diff(base, _F)
     shift = sp.expand(base - slope * _F)
@@ -75,6 +68,24 @@ def inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
     alpha = sp.expand(rest - beta * X)
     if not (beta.is_number and beta != 0) or alpha.has(X) or not alpha.has(_Q):
         return None
+    return base, p, slope, shift, alpha, beta
+
+
+def inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
+    r"""A steep branch ``R = alpha(q) + beta (s F + d)^p`` (``p`` a non-integer number,
+    ``beta, s, d`` numbers, ``F`` nowhere else) solved for ``F``:
+    ``(F - G(q), -G'(q), 1, s F + d, w)`` with
+
+    .. math:: G(q) = (w^{1/p} - d) / s,\qquad w = -\alpha(q) / \beta,
+
+    and ``w^{1/p}`` continued oddly to ``w < 0`` (``-(-w)^{1/p}``), so that an iterate
+    beyond the branch's end gives a force beyond its guard (an event) rather than ``nan``.
+    ``G'(q) = r |w|^{r - 1} w'(q) / s`` (``r = 1/p``) is bounded where ``dR/dF`` is not
+    (``p < 1``: ``r > 1``). ``None`` for any other shape."""
+    shape = _power_shape(expr)
+    if shape is None or shape[1].is_integer:
+        return None
+    base, p, slope, shift, alpha, beta = shape
     w = -alpha / beta
     r = 1 / p
     root = sp.Piecewise((w ** r, w >= 0), (-((-w) ** r), True))
@@ -82,6 +93,24 @@ def inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
     G = (root - shift) / slope
     dG = slope_root * sp.diff(w, _Q) / slope
     return _F - G, -dG, sp.S.One, base, w
+
+
+def flat_root(expr: sp.Expr) -> tuple[sp.Expr, sp.Expr] | None:
+    r"""``(s F + d, w)`` of a branch ``R = alpha(q) + beta (s F + d)^p`` flat at its end,
+    ``p > 1`` (Herschel-Bulkley ``n > 1``: ``q = gamma (F - tau)^n``, ``dR/dF = 0`` at the
+    yield force), with ``w = -alpha(q) / beta``: the power's base and the value of the
+    power on the branch, which have one sign there (the power continued oddly,
+    :func:`odd_continuation`). A guard that is a positive multiple of the base reads as
+    ``w`` (:meth:`lumped.codegen.branches.LawBranches.stage_guards_for`): the force is
+    flat there, so a stage solve fixes it only to its Newton tolerance (``1e-5`` of a
+    yield force ``0.44`` at a rate of ``2.6e-11``, a step of ``3.5e-12`` s just after a
+    velocity reversal at ``rtol = 1e-10``) and its guard read a false end of the slip,
+    while the rate ``w`` is held to the velocities' tolerance (issue 29). ``None`` for
+    any other shape."""
+    shape = _power_shape(expr)
+    if shape is None or not shape[1] > 1:
+        return None
+    return shape[0], -shape[4] / shape[5]
 
 
 def odd_continuation(expr: sp.Expr, path: tuple = ()) -> sp.Expr:

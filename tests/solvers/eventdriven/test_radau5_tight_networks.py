@@ -69,3 +69,72 @@ def test_the_tight_run_agrees_with_a_loose_one():
     loose = simulate(scene, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-6, atol=1e-9)
     for m in ("m0", "m1"):
         np.testing.assert_allclose(tight.x[m], loose.x[m], rtol=0.0, atol=1e-7)
+
+
+def _hb(gamma: float, tau: float, n: float):
+    return get_law("herschel_bulkley").bind(gamma=gamma, tau=tau, n=n)
+
+
+def _reversal_on_a_flat_dashpot() -> Scene:
+    # seed 194: one mass under a constant load on a Herschel-Bulkley n = 2 dashpot, an
+    # implicit spring and a Coulomb element; its velocity reverses at t = 0.1596569
+    return Scene(
+        [Mass("m0", m=2.6565687933920197, x0=-0.21046971942104764, v0=-1.7097946948874458)],
+        [Element("e0", _hb(0.27963355412729224, 0.4412091524066749, 2.0), "ground", "m0"),
+         Element("e1", get_law("implicit_spring").bind(k=9.40868042238207,
+                                                       L0=0.0015935589511856228,
+                                                       F0=5.879285344921708), "m0", "ground"),
+         Element("e2", get_law("coulomb").bind(tau=0.3068528816816773, r=4.994123538547976),
+                 "m0", "ground")],
+        {"m0": 23.231273403190748})
+
+
+def _flat_dashpot_beside_a_string() -> Scene:
+    # seed 213: one mass on a string, a spring and a Herschel-Bulkley n = 2 dashpot under
+    # a sine burst switched off at t = 0.4546
+    from lumped.scene import SineBurst
+
+    return Scene(
+        [Mass("m0", m=3.9899789046560774, x0=-1.0, v0=-1.2129175679201702)],
+        [Element("e0", get_law("string_spring").bind(k=38.61750789085946,
+                                                     L=0.0515048670355757), "ground", "m0"),
+         Element("e1", get_law("linear_spring").bind(k=68.00507898670062), "ground", "m0"),
+         Element("e2", _hb(1.817817533995073, 1.0, 2.0), "m0", "ground")],
+        {"m0": SineBurst(amplitude=431.4099384281861, omega=3.204603325404082,
+                         t_off=0.4546168700249126)})
+
+
+def _flat_link_between_two_masses() -> Scene:
+    # seed 49: two masses joined by a Herschel-Bulkley n = 1.5 link beside a Newtonian one,
+    # each held to ground by Coulomb friction, a constant load on m1
+    return Scene(
+        [Mass("m0", m=0.8666274162739471, x0=-5e-324, v0=-1.9728383359966308),
+         Mass("m1", m=0.6521039562145671, x0=0.6380837067484215, v0=0.31529104260138086)],
+        [Element("e0", get_law("coulomb").bind(tau=0.16015961405658938, r=18.114335354054283),
+                 "ground", "m0"),
+         Element("e1", _hb(1.6067472549655282, 1.0, 1.5), "m0", "m1"),
+         Element("e2", get_law("newtonian").bind(c=0.06670007435404195), "m0", "m1"),
+         Element("e3", get_law("coulomb").bind(tau=0.01518558690481843, r=11.99154758201777),
+                 "m0", "ground")],
+        {"m1": -2.952333662634861})
+
+
+@pytest.mark.parametrize("scene", [_reversal_on_a_flat_dashpot, _flat_dashpot_beside_a_string,
+                                   _flat_link_between_two_masses])
+def test_a_dashpot_flat_at_its_yield_force_slips_on_without_a_bridge(scene):
+    """A Herschel-Bulkley ``n > 1`` dashpot leaving its yield force (a velocity reversal
+    under a load: ``F = tau + (q / gamma)^(1/n)``, flat in ``F`` at ``q = 0``). The step
+    just after it is short (``3.5e-12`` s) and Newton's tolerance on forces is then wide
+    (``1e-5`` of a yield force ``0.44``: a force error below it does not show in ``x``,
+    ``v``), so the stage force read the slip's end in its guard ``F - tau > 0`` at a rate
+    of ``2.6e-11``: a false event at once, then a stop at the step floor and a bridge.
+    The guard of a branch flat at its end reads its rate now
+    (:func:`lumped.codegen.stage_forms.flat_root`)."""
+    sc = scene()
+    tight = simulate(sc, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-10, atol=1e-13,
+                     compiled=False)
+    assert tight.ok, tight.message
+    assert tight.stats.get("bridges", 0) == 0, tight.message
+    loose = simulate(sc, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-7, atol=1e-10)
+    for m in (nd.name for nd in sc.nodes):
+        np.testing.assert_allclose(tight.x[m], loose.x[m], rtol=0.0, atol=1e-6)
