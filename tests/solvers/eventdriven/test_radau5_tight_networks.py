@@ -5,6 +5,8 @@ bridge, as at ``rtol = 1e-6``."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -138,3 +140,43 @@ def test_a_dashpot_flat_at_its_yield_force_slips_on_without_a_bridge(scene):
     loose = simulate(sc, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-7, atol=1e-10)
     for m in (nd.name for nd in sc.nodes):
         np.testing.assert_allclose(tight.x[m], loose.x[m], rtol=0.0, atol=1e-6)
+
+
+def _break_out_beside_a_slipping_junction() -> Scene:
+    # seed 299: m1 held by a Herschel-Bulkley n = 0.3 dashpot under a sine burst from 0;
+    # apart from it, m2 pulls the junction j0 through a Bingham link against a Coulomb
+    # element and a Herschel-Bulkley n = 2 dashpot, both slipping
+    from lumped.scene import Junction, SineBurst
+
+    return Scene(
+        [Junction("j0", x0=-0.4493388199063352),
+         Mass("m1", m=1.0, x0=-0.8093858571406134, v0=-1.9901902673742497e-265),
+         Mass("m2", m=0.9101753972241203, x0=-4.393472556134144e-284, v0=1.3462318218299716)],
+        [Element("e0", get_law("coulomb").bind(tau=1.0, r=4.188702165799558), "ground", "j0"),
+         Element("e1", _hb(1.0023052380778996, 0.2766720230509037, 0.3), "ground", "m1"),
+         Element("e2", get_law("bingham").bind(gamma=0.9999769744141629,
+                                               tau=0.21148509565329432), "j0", "m2"),
+         Element("e3", _hb(0.2541925035541346, 0.04027863975236504, 2.0), "ground", "j0")],
+        {"m1": SineBurst(amplitude=-12.713856305975922, omega=13.666925321491332,
+                         t_off=math.inf)})
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_break_out_decided_by_a_long_probe_keeps_the_junction_at_t(compiled):
+    """At ``t = 0.0015924`` the load on m1 reaches e1's yield force; probes of ``3e-10``
+    and ``3e-7`` s read e1 still stuck (the load beyond the yield force is below their
+    round-off), the one of ``3e-4`` s reads it slipping. That probe's junction velocity
+    is j0's at ``t + 3e-4`` (``0.05388`` against ``0.05399`` at ``t``), which the state
+    at ``t`` took: the forces at j0 jumped by ``4.5e-4`` at the step's start, every step
+    was rejected down to the step floor and backward Euler bridged it. The mode a long
+    probe decides now takes its junction velocities and forces from the first probe's
+    size (:func:`lumped.solvers.modes.mode_guess.probe_state`)."""
+    sc = _break_out_beside_a_slipping_junction()
+    sol = simulate(sc, method="radau5", dt=0.01463386938139617 / 4, t_end=0.5121854283488659,
+                   rtol=1e-10, atol=1e-13, compiled=compiled)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message
+    assert sol.events[0].element == "e1" and sol.events[0].t == pytest.approx(0.0015924, abs=1e-7)
+    # j0's balance at every output point: e0 (slipping at tau) + e3 = e2
+    F = {e: np.asarray(sol.F[e]) for e in ("e0", "e2", "e3")}
+    np.testing.assert_allclose(F["e0"] + F["e3"], F["e2"], rtol=0.0, atol=1e-9)

@@ -25,7 +25,7 @@ from ..modes.lock_events import (
     release_resting_locks,
     snap_to_locks,
 )
-from ..modes.mode_guess import try_modes
+from ..modes.mode_guess import probe_state, try_modes
 from ..nonsmooth.locks import (
     IntervalLog,
     indeterminate_elements,
@@ -95,6 +95,7 @@ class ModeState:
         self.guessing = not plan.checked
         self.hint: int | None = None
         self.forces_from_probe = False  # the forces at t are an event probe's
+        self.decided = [0.0]  # the sizes of the probes of the last choice, the deciding last
         self.plan = plan
 
     def set_modes(self, new: list[int], F: list[float]) -> None:
@@ -142,6 +143,11 @@ class ModeState:
             else:
                 sel = again
         new, v_p, F_p = sel
+        got = probe_state(scene, lbs, new, t, x, v, F, h0) if self.decided[-1] > h0 and \
+            not self.cones and not all(self.is_mass) else None  # (a long probe's junctions)
+        if got:  # (... at t + h0; a lock's force stays the long probe's, not m ulp / h0^2)
+            v_p, F_p = got[0], [F_p[e] if lbs[e].info[new[e]].locks else f
+                                for e, f in enumerate(got[1])]
         scale_v = atol + rtol * max(abs(vi) for vi in v)
         hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"],
                             F)
@@ -266,9 +272,10 @@ class ModeState:
             # the mode kept at a guard, or one left twice at t before
             return (cause == "guard" and got[0] == modes) or tuple(got[0]) in left
 
-        guess = self._guesses(cause, x, v, F)
+        guess, used = self._guesses(cause, x, v, F), self.decided
+        used[:] = [h0]
         sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
-                         modes if cause == "guard" else None, 3, self.fast)
+                         modes if cause == "guard" else None, 3, self.fast, used=used)
                if guess else None) or ""
         if sel:
             sel = self._locked(sel, h_probe)
@@ -284,6 +291,7 @@ class ModeState:
                 sel = self._locked(sel, h_probe)
                 first = first or sel
                 if not undecided(sel):
+                    used.append(h_probe)
                     break
             h_probe *= 1000.0  # a failed or undecided probe: a longer one
         if left and first is not None and not isinstance(sel, str) and undecided(sel):
