@@ -3,6 +3,8 @@ run: then drop the marker). Each names its diagnosis; see CHANGELOG "Known issue
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from lumped import simulate
@@ -109,5 +111,27 @@ def _load_at_the_joint_yield_force() -> Scene:
 def test_radau5_on_a_load_at_the_joint_yield_force_needs_no_bridge():
     sol = simulate(_load_at_the_joint_yield_force(), method="radau5", dt=0.025 / 4,
                    t_end=0.5, rtol=1e-10, atol=1e-13, compiled=False)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message
+
+
+@pytest.mark.xfail(strict=False, raises=AssertionError, reason=(
+    "radau5 at rtol 1e-10 on one mass, a spring and a Herschel-Bulkley n = 2 dashpot "
+    "under a sine: its velocity reverses at t = 0.14620 and 0.47767, and 9c110be bridged "
+    "both; the first runs through since the slip guards of a branch flat at its end read "
+    "the rate, the second still stops at the step floor and is bridged for 3.9e-7 s. "
+    "The landing leaves v = +2.1e-15 and the new branch (F < -tau) "
+    "reads its guard -q / gamma = -7e-15, past its round-off tolerance: probably a "
+    "crossing at t itself, again and again (not traced further; a snap of the rate onto "
+    "the stuck lock at a reversal, whose force test is too strict for a flat branch, "
+    "would remove it). Not strict: the sign of that round-off may differ elsewhere"))
+def test_radau5_reverses_on_a_flat_dashpot_without_a_bridge():
+    scene = Scene([Mass("m", m=1.0, v0=-1.0)],
+                  [Element("k", get_law("linear_spring").bind(k=10.0), "ground", "m"),
+                   Element("d", get_law("herschel_bulkley").bind(gamma=0.3, tau=0.4, n=2.0),
+                           "ground", "m")],
+                  {"m": SineBurst(amplitude=8.0, omega=9.0, t_off=math.inf)})
+    sol = simulate(scene, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-10, atol=1e-13,
+                   compiled=False)
     assert sol.ok, sol.message
     assert sol.stats.get("bridges", 0) == 0, sol.message

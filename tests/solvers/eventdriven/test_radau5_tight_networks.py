@@ -52,6 +52,10 @@ def test_a_string_that_impacts_beside_a_flat_yielding_link_goes_slack_at_once(co
     assert [ev.element for ev in impacts] == ["e3"]
     assert impacts[0].t == pytest.approx(0.0729808183, abs=1e-9)
     assert impacts[0].impulse > 0.0  # a string pulls
+    # ... and goes slack at the same t: the record says so
+    at = [(ev.element, ev.kind, ev.from_branch, ev.to_branch) for ev in sol.events
+          if ev.t == impacts[0].t and ev.element == "e3"]
+    assert at == [("e3", "impact", 0, 1), ("e3", "switch", 1, 0)], at
     # after the impact: the string slack (q < L, its spring's force) and e1 slipping
     # backwards beyond its yield force, at every output point
     k, L = 3.6150856881332056, 0.8043055556612337

@@ -171,7 +171,10 @@ class ModeState:
             new, v_p, F_p = sel
             hold_impacted_locks(scene, lbs, t, [e for e, _ in hit[0]], scale_v, x, v, F,
                                 new, F_p)
-        release_resting_locks(scene, lbs, t, modes, scale_v, x, v, F, new, F_p)
+        was = list(new)
+        for e in release_resting_locks(scene, lbs, t, modes, scale_v, x, v, F, new, F_p):
+            if any(e == k for k, _ in hit[0]):  # (impacted, then slack at once: recorded)
+                events.append(Event(t, names[e], "switch", was[e], new[e]))
         if not self.state_stays(t, cause, new, bool(hit[0]), x, v, F):
             for p in range(self.N):
                 if not self.is_mass[p]:
