@@ -128,6 +128,40 @@ def test_fractional_powers_are_continued_oddly_beyond_the_branch() -> None:
     assert RF == pytest.approx(-1.5 * 0.01 ** 0.5, rel=1e-12)
 
 
+def test_an_even_power_is_continued_with_its_sign_beyond_the_branch() -> None:
+    # Herschel-Bulkley n = 2, backward slip branch q = -gamma (-F - tau)^2 (F < -tau):
+    # its mirror root F = -tau + sqrt(-q / gamma) beyond the yield force, where a stage
+    # solve landed (issue 29, random-network seed 274), is gone; on the branch the kernel
+    # is the law's
+    gamma, tau, q = 0.27, 0.108, -7.8e-9
+    lb = law_branches(get_law("herschel_bulkley").bind(gamma=gamma, tau=tau, n=2.0))
+    back = lb.branch(-1.0, -2.0 * tau)
+    k = lb.kernel_for(back)
+    d = math.sqrt(-q / gamma)
+    assert k(q, -tau - d)[0] == pytest.approx(0.0, abs=1e-20)  # the root on the branch
+    R, _, RF = k(q, -tau + d)  # its mirror: R = q - gamma d^2, not 0
+    assert R == pytest.approx(2.0 * q, rel=1e-12)
+    assert RF == pytest.approx(-2.0 * gamma * d, rel=1e-12)  # monotone: the slope's sign
+    assert k(q, -tau - d)[2] == pytest.approx(-2.0 * gamma * d, rel=1e-12)
+    # a law even in F everywhere (no branch condition fixes the base's sign) is kept
+    even = law_branches(ElementLaw("even", "spring", "q - F**2/k", ["k"]).bind(k=2.0))
+    assert even.kernel_for(0)(0.5, -1.0) == (0.0, 1.0, 1.0)
+
+
+@pytest.mark.parametrize("n", [1.5, 2.0, 3.0])
+def test_the_guard_of_a_branch_flat_at_its_end_reads_its_rate(n) -> None:
+    # Herschel-Bulkley n > 1 slipping forwards, q = gamma (F - tau)^n: the stage guard of
+    # the slip's end is q / gamma, not F - tau (a stage force 1e-7 below the yield force
+    # at a rate of 2.6e-11, inside Newton's force tolerance, read a false end: issue 29)
+    gamma, tau = 0.28, 0.44
+    lb = law_branches(get_law("herschel_bulkley").bind(gamma=gamma, tau=tau, n=n))
+    fwd, back = lb.branch(1.0, 2.0 * tau), lb.branch(-1.0, -2.0 * tau)
+    assert min(lb.stage_guards_for(fwd)(2.6e-11, tau - 1e-7)) > 0.0
+    assert min(lb.stage_guards_for(back)(-2.6e-11, -tau + 1e-7)) > 0.0
+    assert min(lb.stage_guards_for(fwd)(-1e-15, tau + 1e-7)) < 0.0  # the rate's sign
+    assert min(lb.guards_for(fwd)(2.6e-11, tau - 1e-7)) < 0.0  # the law's own guards
+
+
 @pytest.mark.parametrize(("gamma", "tau", "steep"), [
     (1.0, 1.0, False), (10.0, 1.0, False), (20.0, 1.0, True), (1.0, 20.0, True),
     (1e3, 1.0, True), (1e12, 1.0, True), (1e12, 0.0, False)])

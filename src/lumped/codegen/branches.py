@@ -54,7 +54,7 @@ from sympy.core.parameters import distribute
 from .emit import KernelPrinter, build_kernel
 from .guards import compile_guards, feasible_path
 from .rewrite import magnitude_expression
-from .stage_forms import affine_inverse_form, inverse_form, odd_continuation
+from .stage_forms import affine_inverse_form, flat_root, inverse_form, odd_continuation
 
 __all__ = ["BranchInfo", "LawBranches", "law_branches", "leaves"]
 
@@ -189,14 +189,18 @@ class LawBranches:
         ``s F + d`` is replaced by ``w(q)`` (:attr:`BranchInfo.stage`), which has the
         same sign on the branch and crosses zero with a nonzero slope in ``q``: the force
         ``F - F_end = w^(1/p) / s`` is flat there (``1/p > 1``), so a located end in
-        ``F`` would leave a rate of ``(round-off)^p``, far above the tolerance."""
+        ``F`` would leave a rate of ``(round-off)^p``, far above the tolerance. So is a
+        branch flat at its end (``p > 1``, :func:`~lumped.codegen.stage_forms.flat_root`),
+        whose force a stage solve fixes only to its Newton tolerance."""
         i = self._check(i)
         info = self.info[i]
-        if info.stage is None:
+        root = info.stage[3:] if info.stage is not None else (
+            None if info.locks else flat_root(info.residual))
+        if root is None:
             return self.guards_for(i)
         hit = self._guards.get(-1 - i)
         if hit is None:
-            hit = self._guards[-1 - i] = compile_guards(info.path, info.stage[3:])
+            hit = self._guards[-1 - i] = compile_guards(info.path, root)
         return hit
 
     def guards_for(self, i: int) -> Callable[[float, float], tuple[float, ...]]:
@@ -217,7 +221,7 @@ class LawBranches:
                 exprs = list(info.stage[:3])
             else:
                 with distribute(False):
-                    odd = odd_continuation(info.residual)
+                    odd = odd_continuation(info.residual, info.path)
                     exprs = ([info.residual, info.dR_dq, info.dR_dF] if odd is info.residual
                              else [odd, sp.diff(odd, _Q), sp.diff(odd, _F)])
             with distribute(False):

@@ -30,7 +30,7 @@ from collections.abc import Callable
 import sympy as sp
 
 __all__ = ["STEEP_SPAN", "affine_inverse_form", "affine_steepness",
-           "affine_steepness_function", "inverse_form", "odd_continuation"]
+           "affine_steepness_function", "flat_root", "inverse_form", "odd_continuation"]
 
 _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 
@@ -45,24 +45,17 @@ _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 STEEP_SPAN = 16.0
 
 
-def inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
-    r"""A steep branch ``R = alpha(q) + beta (s F + d)^p`` (``p`` a non-integer number,
-    ``beta, s, d`` numbers, ``F`` nowhere else) solved for ``F``:
-    ``(F - G(q), -G'(q), 1, s F + d, w)`` with
-
-    .. math:: G(q) = (w^{1/p} - d) / s,\qquad w = -\alpha(q) / \beta,
-
-    and ``w^{1/p}`` continued oddly to ``w < 0`` (``-(-w)^{1/p}``), so that an iterate
-    beyond the branch's end gives a force beyond its guard (an event) rather than ``nan``.
-    ``G'(q) = r |w|^{r - 1} w'(q) / s`` (``r = 1/p``) is bounded where ``dR/dF`` is not
-    (``p < 1``: ``r > 1``). ``None`` for any other shape."""
+def _power_shape(expr: sp.Expr):
+    """``(base, p, slope, shift, alpha, beta)`` of a branch ``R = alpha(q) + beta (slope F
+    + shift)^p`` (``p``, ``beta``, ``slope``, ``shift`` numbers, ``beta`` and ``slope``
+    nonzero, ``F`` nowhere else, ``alpha`` holding ``q``), else ``None``."""
     pows = {node for node in sp.preorder_traversal(expr)
             if isinstance(node, sp.Pow) and node.base.has(_F)}
     if len(pows) != 1:
         return None
     (P,) = pows
     base, p = P.base, P.exp
-    if not p.is_number or p.is_integer or not p.is_positive:
+    if not p.is_number or not p.is_positive:
         return None
     slope = sp.diff(base, _F)
     shift = sp.expand(base - slope * _F)
@@ -76,6 +69,24 @@ def inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
     alpha = sp.expand(rest - beta * X)
     if not (beta.is_number and beta != 0) or alpha.has(X) or not alpha.has(_Q):
         return None
+    return base, p, slope, shift, alpha, beta
+
+
+def inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
+    r"""A steep branch ``R = alpha(q) + beta (s F + d)^p`` (``p`` a non-integer number,
+    ``beta, s, d`` numbers, ``F`` nowhere else) solved for ``F``:
+    ``(F - G(q), -G'(q), 1, s F + d, w)`` with
+
+    .. math:: G(q) = (w^{1/p} - d) / s,\qquad w = -\alpha(q) / \beta,
+
+    and ``w^{1/p}`` continued oddly to ``w < 0`` (``-(-w)^{1/p}``), so that an iterate
+    beyond the branch's end gives a force beyond its guard (an event) rather than ``nan``.
+    ``G'(q) = r |w|^{r - 1} w'(q) / s`` (``r = 1/p``) is bounded where ``dR/dF`` is not
+    (``p < 1``: ``r > 1``). ``None`` for any other shape."""
+    shape = _power_shape(expr)
+    if shape is None or shape[1].is_integer:
+        return None
+    base, p, slope, shift, alpha, beta = shape
     w = -alpha / beta
     r = 1 / p
     root = sp.Piecewise((w ** r, w >= 0), (-((-w) ** r), True))
@@ -85,23 +96,73 @@ def inverse_form(expr: sp.Expr) -> tuple[sp.Expr, ...] | None:
     return _F - G, -dG, sp.S.One, base, w
 
 
-def odd_continuation(expr: sp.Expr) -> sp.Expr:
+def flat_root(expr: sp.Expr) -> tuple[sp.Expr, sp.Expr] | None:
+    r"""``(s F + d, w)`` of a branch ``R = alpha(q) + beta (s F + d)^p`` flat at its end,
+    ``p > 1`` (Herschel-Bulkley ``n > 1``: ``q = gamma (F - tau)^n``, ``dR/dF = 0`` at the
+    yield force), with ``w = -alpha(q) / beta``: the power's base and the value of the
+    power on the branch, which have one sign there (the power continued oddly,
+    :func:`odd_continuation`). A guard that is a positive multiple of the base reads as
+    ``w`` (:meth:`lumped.codegen.branches.LawBranches.stage_guards_for`): the force is
+    flat there, so a stage solve fixes it only to its Newton tolerance (``1e-5`` of a
+    yield force ``0.44`` at a rate of ``2.6e-11``, a step of ``3.5e-12`` s just after a
+    velocity reversal at ``rtol = 1e-10``) and its guard read a false end of the slip,
+    while the rate ``w`` is held to the velocities' tolerance (issue 29). ``None`` for
+    any other shape."""
+    shape = _power_shape(expr)
+    if shape is None or not shape[1] > 1:
+        return None
+    return shape[0], -shape[4] / shape[5]
+
+
+def odd_continuation(expr: sp.Expr, path: tuple = ()) -> sp.Expr:
     r"""``expr`` with every power ``b^p`` (``p`` a non-integer number, ``b`` holding ``q``
-    or ``F``) replaced by ``b^p`` where ``b >= 0`` and ``-(-b)^p`` where ``b < 0``.
+    or ``F``) replaced by ``b^p`` where ``b >= 0`` and ``-(-b)^p`` where ``b < 0``; and
+    every even power ``b^p`` (``p = 2, 4, ...``) whose base has one sign wherever the
+    branch's ``path`` holds (a condition of the path is ``b > 0``, ``b >= 0``, or the
+    opposite, up to a positive factor) continued past ``b = 0`` with the opposite sign.
 
     Equal to ``expr`` wherever ``expr`` is real, so on its branch. Herschel-Bulkley with
     ``n = 3/2`` on its forward slip branch, ``R = q - gamma (F - tau)^{3/2}``: a stage
     that starts at ``F = tau - 5e-6`` (a step accepted with its force within the guard's
     tolerance below the yield force) had ``R = nan``, so Newton failed on every step and
-    the step size fell to its floor; now ``R = q + gamma (tau - F)^{3/2}`` there.
+    the step size fell to its floor; now ``R = q + gamma (tau - F)^{3/2}`` there. With
+    ``n = 2`` the branch ``q = -gamma (-F - tau)^2`` (``F < -tau``) has a mirror root
+    ``F = -tau + sqrt(-q / gamma)`` beyond its yield force: a stage solve of a dashpot
+    slipping at ``q = -7.8e-9`` from its yield force met it, ``F`` ``1.8e-4`` past the
+    guard, and the run read a false event every ``1e-12`` s until it was bridged (issue
+    29); continued, the branch is monotone in ``F`` and has the one root. A law even in
+    its base everywhere (no condition of the path fixes the base's sign) is left alone.
     Returns ``expr`` itself when it has no such power."""
-    pows = [node for node in sp.preorder_traversal(expr)
-            if isinstance(node, sp.Pow) and node.exp.is_number and not node.exp.is_integer
-            and node.base.has(_Q, _F)]
-    if not pows:
-        return expr
-    return expr.xreplace({P: sp.Piecewise((P, P.base >= 0), (-((-P.base) ** P.exp), True))
-                          for P in pows})
+    swap = {}
+    for node in sp.preorder_traversal(expr):
+        if not (isinstance(node, sp.Pow) and node.exp.is_number and node.base.has(_Q, _F)):
+            continue
+        if not node.exp.is_integer:
+            swap[node] = sp.Piecewise((node, node.base >= 0), (-((-node.base) ** node.exp),
+                                                               True))
+        elif node.exp.is_even and node.exp.is_positive:
+            sign = _sign_on_path(node.base, path)
+            if sign:
+                swap[node] = sp.Piecewise((node, sign * node.base >= 0), (-node, True))
+    return expr.xreplace(swap) if swap else expr
+
+
+def _sign_on_path(base: sp.Expr, path: tuple) -> int:
+    """``1`` (``-1``) when a condition of ``path`` says ``base > 0`` or ``base >= 0``
+    (``<= 0``) up to a positive number as a factor, else ``0``."""
+    for cond, want in path:
+        if not isinstance(cond, sp.core.relational.Relational) or \
+                isinstance(cond, (sp.Eq, sp.Ne)):
+            continue
+        up = cond.lhs - cond.rhs  # cond: up > 0 (>=) or up < 0 (<=)
+        if isinstance(cond, (sp.StrictLessThan, sp.LessThan)):
+            up = -up
+        if not want:
+            up = -up
+        ratio = sp.simplify(base / up)
+        if ratio.is_number and ratio.is_nonzero:
+            return 1 if ratio.is_positive else -1
+    return 0
 
 
 def affine_steepness(expr: sp.Expr) -> float:

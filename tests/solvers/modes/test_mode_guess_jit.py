@@ -43,12 +43,13 @@ def _recorded_probes() -> list[tuple]:
     keep = adaptive_modes.try_modes
 
     def record(scene, branches, candidates, t, x, v, F, h_p, current=None, longer=1,
-               fast=None):
+               fast=None, used=None):
         assert fast is not None  # compiled runs
         calls.append((scene, branches, [list(c) for c in candidates], t, list(x), list(v),
                       list(F), h_p, None if current is None else list(current), longer,
                       fast))
-        return keep(scene, branches, candidates, t, x, v, F, h_p, current, longer, fast)
+        return keep(scene, branches, candidates, t, x, v, F, h_p, current, longer, fast,
+                    used=used)
 
     runs = [(*_bench("stick-breakout"), 1e-6), (*_bench("forcing-F2"), 1e-8),
             (*_bench("release-0.5"), 1e-4), (*_bench("forcing-F1"), 1e-4),

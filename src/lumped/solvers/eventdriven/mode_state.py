@@ -22,9 +22,10 @@ from ..modes.lock_events import (
     apply_impacts,
     hold_impacted_locks,
     hold_rate_locks,
+    release_resting_locks,
     snap_to_locks,
 )
-from ..modes.mode_guess import try_modes
+from ..modes.mode_guess import probe_state, try_modes
 from ..nonsmooth.locks import (
     IntervalLog,
     indeterminate_elements,
@@ -94,6 +95,7 @@ class ModeState:
         self.guessing = not plan.checked
         self.hint: int | None = None
         self.forces_from_probe = False  # the forces at t are an event probe's
+        self.decided = [0.0]  # the sizes of the probes of the last choice, the deciding last
         self.plan = plan
 
     def set_modes(self, new: list[int], F: list[float]) -> None:
@@ -141,6 +143,11 @@ class ModeState:
             else:
                 sel = again
         new, v_p, F_p = sel
+        got = probe_state(scene, lbs, new, t, x, v, F, h0) if self.decided[-1] > h0 and \
+            not self.cones and not all(self.is_mass) else None  # (a long probe's junctions)
+        if got:  # (... at t + h0; a lock's force stays the long probe's, not m ulp / h0^2)
+            v_p, F_p = got[0], [F_p[e] if lbs[e].info[new[e]].locks else f
+                                for e, f in enumerate(got[1])]
         scale_v = atol + rtol * max(abs(vi) for vi in v)
         hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"],
                             F)
@@ -164,6 +171,10 @@ class ModeState:
             new, v_p, F_p = sel
             hold_impacted_locks(scene, lbs, t, [e for e, _ in hit[0]], scale_v, x, v, F,
                                 new, F_p)
+        was = list(new)
+        for e in release_resting_locks(scene, lbs, t, modes, scale_v, x, v, F, new, F_p):
+            if any(e == k for k, _ in hit[0]):  # (impacted, then slack at once: recorded)
+                events.append(Event(t, names[e], "switch", was[e], new[e]))
         if not self.state_stays(t, cause, new, bool(hit[0]), x, v, F):
             for p in range(self.N):
                 if not self.is_mass[p]:
@@ -264,9 +275,10 @@ class ModeState:
             # the mode kept at a guard, or one left twice at t before
             return (cause == "guard" and got[0] == modes) or tuple(got[0]) in left
 
-        guess = self._guesses(cause, x, v, F)
+        guess, used = self._guesses(cause, x, v, F), self.decided
+        used[:] = [h0]
         sel = (try_modes(scene, lbs, guess, t, x, v, F, h_probe,
-                         modes if cause == "guard" else None, 3, self.fast)
+                         modes if cause == "guard" else None, 3, self.fast, used=used)
                if guess else None) or ""
         if sel:
             sel = self._locked(sel, h_probe)
@@ -282,6 +294,7 @@ class ModeState:
                 sel = self._locked(sel, h_probe)
                 first = first or sel
                 if not undecided(sel):
+                    used.append(h_probe)
                     break
             h_probe *= 1000.0  # a failed or undecided probe: a longer one
         if left and first is not None and not isinstance(sel, str) and undecided(sel):

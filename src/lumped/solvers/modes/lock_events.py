@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from ...scene import Mass, Scene
 
 __all__ = ["after_impact_forces", "apply_impacts", "hold_impacted_locks", "hold_rate_locks",
-           "lock_cones", "snap_to_locks"]
+           "lock_cones", "release_resting_locks", "snap_to_locks"]
 
 _EPS = sys.float_info.epsilon
 
@@ -331,3 +331,63 @@ def hold_impacted_locks(scene: Scene, branches: Sequence, t: float, hits: Sequen
     for e in holding:
         new[e] = branches[e].branch(q[e], forces[e])
         F_p[e] = forces[e]
+
+
+def release_resting_locks(scene: Scene, branches: Sequence, t: float, old: Sequence[int],
+                          threshold: float, x: Sequence[float], v: Sequence[float],
+                          F: Sequence[float], new: list[int], F_p: list[float]) -> list[int]:
+    r"""Put on its slack branch each spring that the mode choice read onto a position lock
+    (``q = L``) it was not held on, at rest relative to its ends, where the balance of
+    accelerations does not hold it there (``new`` and ``F_p`` in place).
+
+    At rest on the lock (``|q - L|`` a few ulps, ``|q'| <= threshold``) the choice's probe
+    reads the lock's force only to ``m ulp(x) / h_p^2`` (:func:`after_impact_forces`):
+    a string that went taut by a plastic impact beside a Herschel-Bulkley ``n = 2``
+    dashpot between the same two masses was read taut while the load pulled the ends
+    together (the balance wants ``0.14 < k L = 2.9``: it goes slack at once, the dashpot
+    slipping from its yield force), and the run alternated between taut and slack with
+    steps of ``1e-12`` s until it was bridged (issue 29). The balance (with every element
+    whose law leaves its force free: stuck dashpots, other locks) decides without
+    dividing by ``h_p``; an element it puts on the lock's boundary (the kink ``F = k L``)
+    takes the non-locking branch that holds its law there, with that force.
+
+    Returns
+    -------
+    list of int
+        The elements put on a slack branch (empty: ``new``, ``F_p`` unchanged; also when
+        the balances have no solution).
+    """
+    from ..newton.scalar_root import scalar_root
+
+    q = scene.elongations(x, v)
+    cand = []
+    for e, el in enumerate(scene.elements):
+        info = branches[e].info[new[e]]
+        L = info.lock_value
+        if el.kind != "spring" or new[e] == old[e] or not info.locks or L is None or \
+                abs(q[e] - L) > 4.0 * _EPS * max(abs(L), abs(q[e])):
+            continue
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        if abs((v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)) <= threshold:
+            cand.append(e)
+    if not cand:
+        return []
+    forces, holding = after_impact_forces(scene, t, x, v, F, cand, threshold)
+    if forces == list(F):  # (no balance: the probe's choice stands)
+        return []
+    out = []
+    for e in (e for e in cand if e not in holding):
+        lb = branches[e]
+        for info in lb.info:
+            if info.locks:
+                continue
+            try:
+                f = scalar_root(lb.kernel_for(info.index), q[e], forces[e])[0]
+            except ValueError:
+                continue
+            if all(g >= -math.sqrt(_EPS) * (1.0 + abs(f)) for g in
+                   lb.guards_for(info.index)(q[e], f)):
+                new[e], F_p[e] = info.index, f
+                out.append(e)
+                break
+    return out

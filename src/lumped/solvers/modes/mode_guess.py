@@ -34,7 +34,7 @@ import numpy as np
 from ...scene import Mass, Scene
 from ...scene.supports import support_time, support_time_restored
 
-__all__ = ["try_modes", "UNDECIDED", "REFUSED"]
+__all__ = ["probe_state", "try_modes", "UNDECIDED", "REFUSED"]
 
 #: The probe's verdicts besides a mode: no mode decided yet, or the guess refused
 #: (shared with its compiled twin, :mod:`lumped.solvers.modes.mode_guess_jit`).
@@ -46,7 +46,7 @@ _MAX_ITERS = 30
 def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[int]],
               t: float, x: list[float], v: list[float], F: list[float], h_p: float,
               current: Sequence[int] | None = None, longer: int = 1, fast=None,
-              min_norm: bool = False
+              min_norm: bool = False, used: list[float] | None = None
               ) -> tuple[list[int], list[float], list[float]] | None:
     """The first of ``candidates`` (modes) that the full laws confirm after the probe step
     of size ``h_p`` from ``t`` (see the module notes): ``(modes, v_p, F_p)``, or ``None``.
@@ -62,7 +62,8 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
     is the reference. With ``min_norm`` (Python only) a singular step matrix (locks in
     parallel, whose split is free) is solved by the minimum-norm correction instead of
     refusing the candidate. On a scene with moving supports the laws are read at
-    ``t + h_p`` and the clock is set back to ``t`` on return."""
+    ``t + h_p`` and the clock is set back to ``t`` on return. ``used`` (a list) gets the
+    size of the probe that decided."""
     with support_time_restored(scene, t):  # (moving supports: the laws at t + h_p)
         for _ in range(longer):
             support_time(scene, t + h_p)
@@ -71,6 +72,8 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
                 k, out = fast.probe_modes(candidates, current, f, x, v, F, h_p)
                 if k >= 0:
                     N = len(x)
+                    if used is not None:
+                        used.append(h_p)
                     return list(candidates[k]), out[:N].tolist(), out[N:].tolist()
                 if k == REFUSED:
                     return None
@@ -84,12 +87,25 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
                 v_p, F_p, q = got
                 read = [branches[e].branch(q[e], F_p[e]) for e in range(len(F))]
                 if read == list(modes):
+                    if used is not None:
+                        used.append(h_p)
                     return list(modes), v_p, F_p
                 undecided = undecided or (current is not None and read == list(current))
             if not undecided:
                 return None
             h_p *= 1000.0
         return None
+
+
+def probe_state(scene: Scene, branches: Sequence, modes: Sequence[int], t: float,
+                x: list[float], v: list[float], F: list[float], h_p: float
+                ) -> tuple[list[float], list[float]] | None:
+    """The probe step of size ``h_p`` from ``t`` on the mode ``modes`` (no branch read):
+    ``(v_p, F_p)``, the junction velocities and forces at ``t + h_p``, or ``None``."""
+    with support_time_restored(scene, t):
+        support_time(scene, t + h_p)
+        got = _probe(scene, branches, modes, scene.external_forces(t + h_p), x, v, F, h_p)
+    return None if got is None else (got[0], got[1])
 
 
 def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float],

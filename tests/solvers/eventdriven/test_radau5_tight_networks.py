@@ -1,0 +1,186 @@
+"""``radau5`` at ``rtol = 1e-10`` on loaded random networks that it used to bridge or stop
+on (issue 29), each scene written out from the random-network strategy
+(``benchmarks/tight_hunt.py`` draws seed ``s``); each runs through with no backward-Euler
+bridge, as at ``rtol = 1e-6``."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from lumped import simulate
+from lumped.laws import get_law
+from lumped.scene import Element, Mass, Scene
+
+
+def _string_beside_a_flat_herschel_bulkley_link() -> Scene:
+    # seed 274: a loaded mass m0 tied to m1 by a string (e3) beside a shear-thickening
+    # Herschel-Bulkley link (e1, n = 2)
+    hb = get_law("herschel_bulkley")
+    return Scene(
+        [Mass("m0", m=1.0, x0=-0.37624293996242686, v0=-1.77269902465682),
+         Mass("m1", m=0.9999999999999686, x0=0.3280626156988069, v0=1.1860400812457152e-233)],
+        [Element("e0", get_law("implicit_spring").bind(k=1.0, L0=0.46991011312735004,
+                                                       F0=2.4975923322238236), "ground", "m0"),
+         Element("e1", hb.bind(gamma=0.26969640567091646, tau=0.10816107742637955, n=2.0),
+                 "m0", "m1"),
+         Element("e2", hb.bind(gamma=0.6471675365679924, tau=0.9906610524904494, n=1.5),
+                 "m1", "ground"),
+         Element("e3", get_law("string_spring").bind(k=3.6150856881332056,
+                                                     L=0.8043055556612337), "m0", "m1")],
+        {"m0": 1.638745886928079})
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_string_that_impacts_beside_a_flat_yielding_link_goes_slack_at_once(compiled):
+    """At ``t = 0.0729808183`` the string e3 reaches its length while its ends separate: a
+    plastic impact. After it the load and the springs pull the ends together (the balance
+    of accelerations wants ``0.14`` of the string, below its ``k L = 2.9``), so the string
+    goes slack at once and e1, at rest relative to its ends, slips from its yield force
+    (``F = -tau - sqrt(-q / gamma)``). The mode choice's probe read the string taut from
+    round-off and a stage solve found e1's mirror root beyond its yield force: the modes
+    alternated with steps of ``1e-12`` s until the run stopped at its step floor and
+    backward Euler bridged it (a strict expected failure before)."""
+    scene = _string_beside_a_flat_herschel_bulkley_link()
+    sol = simulate(scene, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-10, atol=1e-13,
+                   compiled=compiled)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message
+    impacts = [ev for ev in sol.events if ev.kind == "impact"]
+    assert [ev.element for ev in impacts] == ["e3"]
+    assert impacts[0].t == pytest.approx(0.0729808183, abs=1e-9)
+    assert impacts[0].impulse > 0.0  # a string pulls
+    # ... and goes slack at the same t: the record says so
+    at = [(ev.element, ev.kind, ev.from_branch, ev.to_branch) for ev in sol.events
+          if ev.t == impacts[0].t and ev.element == "e3"]
+    assert at == [("e3", "impact", 0, 1), ("e3", "switch", 1, 0)], at
+    # after the impact: the string slack (q < L, its spring's force) and e1 slipping
+    # backwards beyond its yield force, at every output point
+    k, L = 3.6150856881332056, 0.8043055556612337
+    tau = 0.10816107742637955
+    after = np.asarray(sol.t) > impacts[0].t
+    q = np.asarray(sol.x["m1"])[after] - np.asarray(sol.x["m0"])[after]
+    assert after.sum() >= 60 and np.all(q < L)
+    np.testing.assert_allclose(np.asarray(sol.F["e3"])[after], k * q, rtol=1e-9)
+    assert np.all(np.asarray(sol.F["e1"])[after] < -tau)
+
+
+def test_the_tight_run_agrees_with_a_loose_one():
+    # the same trajectory at rtol 1e-6 (no event there is in doubt): within its error
+    scene = _string_beside_a_flat_herschel_bulkley_link()
+    tight = simulate(scene, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-10,
+                     atol=1e-13, compiled=False)
+    loose = simulate(scene, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-6, atol=1e-9)
+    for m in ("m0", "m1"):
+        np.testing.assert_allclose(tight.x[m], loose.x[m], rtol=0.0, atol=1e-7)
+
+
+def _hb(gamma: float, tau: float, n: float):
+    return get_law("herschel_bulkley").bind(gamma=gamma, tau=tau, n=n)
+
+
+def _reversal_on_a_flat_dashpot() -> Scene:
+    # seed 194: one mass under a constant load on a Herschel-Bulkley n = 2 dashpot, an
+    # implicit spring and a Coulomb element; its velocity reverses at t = 0.1596569
+    return Scene(
+        [Mass("m0", m=2.6565687933920197, x0=-0.21046971942104764, v0=-1.7097946948874458)],
+        [Element("e0", _hb(0.27963355412729224, 0.4412091524066749, 2.0), "ground", "m0"),
+         Element("e1", get_law("implicit_spring").bind(k=9.40868042238207,
+                                                       L0=0.0015935589511856228,
+                                                       F0=5.879285344921708), "m0", "ground"),
+         Element("e2", get_law("coulomb").bind(tau=0.3068528816816773, r=4.994123538547976),
+                 "m0", "ground")],
+        {"m0": 23.231273403190748})
+
+
+def _flat_dashpot_beside_a_string() -> Scene:
+    # seed 213: one mass on a string, a spring and a Herschel-Bulkley n = 2 dashpot under
+    # a sine burst switched off at t = 0.4546
+    from lumped.scene import SineBurst
+
+    return Scene(
+        [Mass("m0", m=3.9899789046560774, x0=-1.0, v0=-1.2129175679201702)],
+        [Element("e0", get_law("string_spring").bind(k=38.61750789085946,
+                                                     L=0.0515048670355757), "ground", "m0"),
+         Element("e1", get_law("linear_spring").bind(k=68.00507898670062), "ground", "m0"),
+         Element("e2", _hb(1.817817533995073, 1.0, 2.0), "m0", "ground")],
+        {"m0": SineBurst(amplitude=431.4099384281861, omega=3.204603325404082,
+                         t_off=0.4546168700249126)})
+
+
+def _flat_link_between_two_masses() -> Scene:
+    # seed 49: two masses joined by a Herschel-Bulkley n = 1.5 link beside a Newtonian one,
+    # each held to ground by Coulomb friction, a constant load on m1
+    return Scene(
+        [Mass("m0", m=0.8666274162739471, x0=-5e-324, v0=-1.9728383359966308),
+         Mass("m1", m=0.6521039562145671, x0=0.6380837067484215, v0=0.31529104260138086)],
+        [Element("e0", get_law("coulomb").bind(tau=0.16015961405658938, r=18.114335354054283),
+                 "ground", "m0"),
+         Element("e1", _hb(1.6067472549655282, 1.0, 1.5), "m0", "m1"),
+         Element("e2", get_law("newtonian").bind(c=0.06670007435404195), "m0", "m1"),
+         Element("e3", get_law("coulomb").bind(tau=0.01518558690481843, r=11.99154758201777),
+                 "m0", "ground")],
+        {"m1": -2.952333662634861})
+
+
+@pytest.mark.parametrize("scene", [_reversal_on_a_flat_dashpot, _flat_dashpot_beside_a_string,
+                                   _flat_link_between_two_masses])
+def test_a_dashpot_flat_at_its_yield_force_slips_on_without_a_bridge(scene):
+    """A Herschel-Bulkley ``n > 1`` dashpot leaving its yield force (a velocity reversal
+    under a load: ``F = tau + (q / gamma)^(1/n)``, flat in ``F`` at ``q = 0``). The step
+    just after it is short (``3.5e-12`` s) and Newton's tolerance on forces is then wide
+    (``1e-5`` of a yield force ``0.44``: a force error below it does not show in ``x``,
+    ``v``), so the stage force read the slip's end in its guard ``F - tau > 0`` at a rate
+    of ``2.6e-11``: a false event at once, then a stop at the step floor and a bridge.
+    The guard of a branch flat at its end reads its rate now
+    (:func:`lumped.codegen.stage_forms.flat_root`)."""
+    sc = scene()
+    tight = simulate(sc, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-10, atol=1e-13,
+                     compiled=False)
+    assert tight.ok, tight.message
+    assert tight.stats.get("bridges", 0) == 0, tight.message
+    loose = simulate(sc, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-7, atol=1e-10)
+    for m in (nd.name for nd in sc.nodes):
+        np.testing.assert_allclose(tight.x[m], loose.x[m], rtol=0.0, atol=1e-6)
+
+
+def _break_out_beside_a_slipping_junction() -> Scene:
+    # seed 299: m1 held by a Herschel-Bulkley n = 0.3 dashpot under a sine burst from 0;
+    # apart from it, m2 pulls the junction j0 through a Bingham link against a Coulomb
+    # element and a Herschel-Bulkley n = 2 dashpot, both slipping
+    from lumped.scene import Junction, SineBurst
+
+    return Scene(
+        [Junction("j0", x0=-0.4493388199063352),
+         Mass("m1", m=1.0, x0=-0.8093858571406134, v0=-1.9901902673742497e-265),
+         Mass("m2", m=0.9101753972241203, x0=-4.393472556134144e-284, v0=1.3462318218299716)],
+        [Element("e0", get_law("coulomb").bind(tau=1.0, r=4.188702165799558), "ground", "j0"),
+         Element("e1", _hb(1.0023052380778996, 0.2766720230509037, 0.3), "ground", "m1"),
+         Element("e2", get_law("bingham").bind(gamma=0.9999769744141629,
+                                               tau=0.21148509565329432), "j0", "m2"),
+         Element("e3", _hb(0.2541925035541346, 0.04027863975236504, 2.0), "ground", "j0")],
+        {"m1": SineBurst(amplitude=-12.713856305975922, omega=13.666925321491332,
+                         t_off=math.inf)})
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_break_out_decided_by_a_long_probe_keeps_the_junction_at_t(compiled):
+    """At ``t = 0.0015924`` the load on m1 reaches e1's yield force; probes of ``3e-10``
+    and ``3e-7`` s read e1 still stuck (the load beyond the yield force is below their
+    round-off), the one of ``3e-4`` s reads it slipping. That probe's junction velocity
+    is j0's at ``t + 3e-4`` (``0.05388`` against ``0.05399`` at ``t``), which the state
+    at ``t`` took: the forces at j0 jumped by ``4.5e-4`` at the step's start, every step
+    was rejected down to the step floor and backward Euler bridged it. The mode a long
+    probe decides now takes its junction velocities and forces from the first probe's
+    size (:func:`lumped.solvers.modes.mode_guess.probe_state`)."""
+    sc = _break_out_beside_a_slipping_junction()
+    sol = simulate(sc, method="radau5", dt=0.01463386938139617 / 4, t_end=0.5121854283488659,
+                   rtol=1e-10, atol=1e-13, compiled=compiled)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message
+    assert sol.events[0].element == "e1" and sol.events[0].t == pytest.approx(0.0015924, abs=1e-7)
+    # j0's balance at every output point: e0 (slipping at tau) + e3 = e2
+    F = {e: np.asarray(sol.F[e]) for e in ("e0", "e2", "e3")}
+    np.testing.assert_allclose(F["e0"] + F["e3"], F["e2"], rtol=0.0, atol=1e-9)
