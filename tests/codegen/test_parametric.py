@@ -96,19 +96,25 @@ def _check_as_from_scratch(law, values: dict) -> None:
     assert got.branch.__source__ == want.branch.__source__
     for i in range(want.count):
         _same_kernel(got.stage_kernel_for(i), want.stage_kernel_for(i))
-        assert got.stage_guards_for(i).codes == want.stage_guards_for(i).codes
+        g, w = got.stage_guards_for(i), want.stage_guards_for(i)
+        assert g.codes == w.codes
+        for q, F in POINTS:
+            assert all(map(_same, g(q, F), w(q, F))), (i, q, F)
     assert law_template(bound) == template_from_scratch(bound, want)
 
 
 magnitudes = st.floats(1e-3, 1e3).filter(lambda v: not v.is_integer() and v != 0.5)
 
 
-@settings(max_examples=25, deadline=None)
-@given(gamma=magnitudes, tau=magnitudes, k=magnitudes, c=magnitudes, r=magnitudes)
-def test_random_numbers_as_from_scratch(gamma, tau, k, c, r) -> None:
+@settings(max_examples=60, deadline=None)
+@given(gamma=magnitudes, tau=magnitudes, k=magnitudes, c=magnitudes, r=magnitudes,
+       n=st.floats(0.2, 3.0).filter(lambda v: not v.is_integer() and v != 0.5))
+def test_random_numbers_as_from_scratch(gamma, tau, k, c, r, n) -> None:
     """Random numbers of the built-in laws a class takes (and Bingham's steep ones, which
-    it leaves to a derivation): what a law gets is what a derivation from scratch gives."""
+    it leaves to a derivation; Herschel-Bulkley, whose stage guards read the rate where a
+    branch is flat at its end): what a law gets is what a derivation from scratch gives."""
     _check_as_from_scratch(get_law("bingham"), {"gamma": gamma, "tau": tau})
+    _check_as_from_scratch(get_law("herschel_bulkley"), {"gamma": gamma, "tau": tau, "n": n})
     _check_as_from_scratch(get_law("coulomb"), {"tau": tau, "r": r})
     _check_as_from_scratch(get_law("linear_spring"), {"k": k})
     _check_as_from_scratch(get_law("newtonian"), {"c": c})

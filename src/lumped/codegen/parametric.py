@@ -317,8 +317,10 @@ class ReboundBranches(LawBranches):
         return self._guard(self._check(i))
 
     def stage_guards_for(self, i: int) -> Callable:
+        # the class's law has its own stage guards where LawBranches.stage_guards_for
+        # made them (a steep branch's inverse form, a branch flat at its end)
         i = self._check(i)
-        return self._guard(i if self.info[i].stage is None else -1 - i)
+        return self._guard(-1 - i if -1 - i in self._rebound.cls._d.guards else i)
 
     def _guard(self, key: int) -> Callable:
         hit = self._guards.get(key)
