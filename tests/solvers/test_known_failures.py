@@ -1,74 +1,10 @@
 """Known failures, kept as strict expected failures so that a fix shows (XPASS fails the
-run: then drop the marker). Each names its diagnosis; see CHANGELOG "Known issues"."""
+run: then drop the marker and move the test beside its subject). Each names its
+diagnosis; see CHANGELOG "Known issues".
 
-from __future__ import annotations
-
-import pytest
-
-from lumped import simulate
-from lumped.laws import get_law
-from lumped.scene import Element, Junction, Mass, Scene
-
-
-def _string_beside_a_flat_herschel_bulkley_link() -> Scene:
-    # the random-network strategy's seed 274 (issue 29): a loaded mass m0 tied to m1 by a
-    # string (e3) beside a shear-thickening Herschel-Bulkley link (e1, n = 2)
-    hb = get_law("herschel_bulkley")
-    return Scene(
-        [Mass("m0", m=1.0, x0=-0.37624293996242686, v0=-1.77269902465682),
-         Mass("m1", m=0.9999999999999686, x0=0.3280626156988069, v0=1.1860400812457152e-233)],
-        [Element("e0", get_law("implicit_spring").bind(k=1.0, L0=0.46991011312735004,
-                                                       F0=2.4975923322238236), "ground", "m0"),
-         Element("e1", hb.bind(gamma=0.26969640567091646, tau=0.10816107742637955, n=2.0),
-                 "m0", "m1"),
-         Element("e2", hb.bind(gamma=0.6471675365679924, tau=0.9906610524904494, n=1.5),
-                 "m1", "ground"),
-         Element("e3", get_law("string_spring").bind(k=3.6150856881332056,
-                                                     L=0.8043055556612337), "m0", "m1")],
-        {"m0": 1.638745886928079})
-
-
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "radau5 at rtol 1e-10: from t = 0.0729808197 the string e3 sits at its length with "
-    "the force k L and e1 at its yield force; the mode alternates between the string taut "
-    "and elastic (and e1 slipping and stuck), with accepted steps of 1e-12 s between, not "
-    "at one t, until the accumulation test stops the run and backward Euler bridges it to "
-    "0.0729813 (before the fix of issue 29's alternation at one t: a stop at the step "
-    "floor, bridged over the same span); not diagnosed further"))
-def test_radau5_on_a_string_at_its_length_beside_a_yielding_link_needs_no_bridge():
-    sol = simulate(_string_beside_a_flat_herschel_bulkley_link(), method="radau5",
-                   dt=0.025 / 4, t_end=0.5, rtol=1e-10, atol=1e-13, compiled=False)
-    assert sol.ok, sol.message
-    assert sol.stats.get("bridges", 0) == 0, sol.message
-
-
-def _flat_yield_at_the_start() -> Scene:
-    # test_random_network_tight_tolerance[radau5] at LUMPED_LARGE=1 (session 17; the same
-    # on 6b2aee5): a mass nearly at rest (v0 = 1.1e-113) on a Herschel-Bulkley n = 2
-    # dashpot (e2) under a load past its yield force
-    hb = get_law("herschel_bulkley")
-    return Scene(
-        [Mass("m0", m=0.18010497895494063, x0=0.0416411306426292, v0=1.1477939384387031e-113),
-         Junction("j1", x0=0.23379658006202875)],
-        [Element("e0", get_law("implicit_spring").bind(k=19.303734428944384,
-                                                       L0=0.0015697662087493529,
-                                                       F0=92.53060181319749), "ground", "m0"),
-         Element("e1", get_law("newtonian").bind(c=0.025233070555820285), "ground", "j1"),
-         Element("e2", hb.bind(gamma=0.48901320843087076, tau=0.9999999999976974, n=2.0),
-                 "ground", "m0"),
-         Element("e3", get_law("linear_spring").bind(k=1.0), "ground", "m0"),
-         Element("e4", hb.bind(gamma=1.0, tau=0.056060389109965476, n=1.5), "m0", "j1")],
-        {"m0": -1.1716411679615943})
-
-
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "the consistent initial state gives the Herschel-Bulkley n = 2 dashpot e2, slipping "
-    "from rest, the force -1.0000766 against its yield force 1 at a rate of about 0 (row "
-    "0 only; later rows are right): its forward form q = gamma (|F| - tau)^2 is flat in F "
-    "at the yield force, so Newton's residual test fixes F only to sqrt(tol / gamma); not "
-    "fixed (a law-wise polish of the initial forces, or the inverse form there)"))
-def test_the_initial_force_of_a_dashpot_slipping_from_rest_is_its_yield_force():
-    sol = simulate(_flat_yield_at_the_start(), method="radau5", t_end=0.05, rtol=1e-10,
-                   atol=1e-13)
-    assert sol.ok
-    assert abs(sol.F["e2"][0]) == pytest.approx(0.9999999999976974, rel=1e-9)
+None at present: the two kept here last (a dashpot slipping from rest at a force past its
+yield force, and ``radau5`` bridging a string at its length beside a yielding link, whose
+start took that force) are fixed and live in
+``tests/solvers/test_initial_slip_from_rest.py`` and
+``tests/solvers/test_network_regressions.py``.
+"""
