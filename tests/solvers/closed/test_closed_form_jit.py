@@ -22,7 +22,7 @@ from lumped.solvers.closed.integrate import integrate
 
 def compiled(osc, x0, v0, forcing, dt, n, method):
     F0 = forcing(0.0) if forcing is not None else 0.0
-    Fd0 = initial_dashpot_force(osc, x0, v0, F0)
+    Fd0 = initial_dashpot_force(osc, x0, v0, F0, h=1e-20 * dt)  # (as integrate)
     return J.compiled_columns(osc.m, osc.k, osc.gamma, osc.tau, forcing, x0, v0, Fd0,
                               dt, n, method)
 

@@ -54,7 +54,8 @@ def integrate(
         Mass, spring and dashpot parameters.
     x0, v0 : float
         Initial displacement and velocity; the initial forces are made consistent
-        (``F_s = k x0``, ``F_d`` from :func:`initial_dashpot_force`).
+        (``F_s = k x0``, ``F_d`` from :func:`initial_dashpot_force` with the limit step
+        ``h = 1e-20 dt``).
     forcing : callable
         ``F(t) -> float``.
     dt : float
@@ -97,7 +98,7 @@ def integrate(
         raise ValueError(f"`engine` must be one of {ENGINES}, got {engine!r}")
 
     F0 = checked_force(forcing, 0.0)
-    Fd0 = initial_dashpot_force(osc, x0, v0, F0)
+    Fd0 = initial_dashpot_force(osc, x0, v0, F0, h=1e-20 * dt)  # (a limit step, as bdf's)
     if engine == "compiled" or (engine == "auto" and _have_numba() and (
             n >= COMPILED_MIN_STEPS or "lumped.solvers.closed.closed_form_jit" in sys.modules)):
         from .closed_form_jit import compiled_columns
