@@ -43,15 +43,17 @@ from ...scene import Mass, Scene
 __all__ = ["rates_below_resolution", "settle_on_rest_set"]
 
 
-def _known_rate_dashpots(scene: Scene) -> list[int]:
-    """The dashpots whose rate at ``t = 0`` is the masses' ``v_b(0) - v_a(0)``: each end a
-    mass or ground, none on a moving support."""
-    nodes = scene.nodes
+def _known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
+    """Those of ``candidates`` that are dashpots whose rate at ``t = 0`` is the masses'
+    ``v_b(0) - v_a(0)``: each end a mass or ground, none on a moving support."""
+    if not candidates:
+        return []
+    nodes, ea, eb = scene.nodes, scene.elem_a, scene.elem_b
     on_support = {end.element for end in scene.support_ends}
-    return [e for e, (el, a, b) in enumerate(zip(scene.elements, scene.elem_a, scene.elem_b,
-                                                  strict=True))
-            if el.kind == "dashpot" and e not in on_support
-            and all(i < 0 or isinstance(nodes[i], Mass) for i in (a, b))]
+    return [e for e in candidates
+            if e not in on_support and scene.elements[e].kind == "dashpot"
+            and (ea[e] < 0 or isinstance(nodes[ea[e]], Mass))
+            and (eb[e] < 0 or isinstance(nodes[eb[e]], Mass))]
 
 
 def rates_below_resolution(scene: Scene, pinned: list[float | None], q0: list[float],
@@ -79,16 +81,17 @@ def rates_below_resolution(scene: Scene, pinned: list[float | None], q0: list[fl
         ``dR/dF = 0``) and whose rate ``fl(q_0 + eps (a_b - a_a))`` is 0 or of the other
         sign than ``q_0`` (see the module notes): it starts at rest.
     """
-    nodes = scene.nodes
-    net = scene.net_forces(0.0, F)
-    acc = [net[i] / nd.m if isinstance(nd, Mass) else 0.0 for i, nd in enumerate(nodes)]
-    out = []
-    for e in _known_rate_dashpots(scene):
-        if pinned[e] is None or q0[e] == 0.0:
-            continue
+    out: list[int] = []
+    acc: list[float] = []
+    for e in _known_rate_dashpots(scene, [e for e, Fp in enumerate(pinned)
+                                          if Fp is not None and q0[e] != 0.0]):
         R, _, RF = scene.elements[e].law.kernel(0.0, 0.0)
         if not (R == 0.0 and RF == 0.0):
             continue  # a law that fixes the force at rest (newtonian): continuous in q
+        if not acc:
+            net = scene.net_forces(0.0, F)
+            acc = [net[i] / nd.m if isinstance(nd, Mass) else 0.0
+                   for i, nd in enumerate(scene.nodes)]
         a, b = scene.elem_a[e], scene.elem_b[e]
         q = q0[e] + eps * ((acc[b] if b >= 0 else 0.0) - (acc[a] if a >= 0 else 0.0))
         if q == 0.0 or (q > 0.0) != (q0[e] > 0.0):
@@ -96,21 +99,25 @@ def rates_below_resolution(scene: Scene, pinned: list[float | None], q0: list[fl
     return out
 
 
-def settle_on_rest_set(scene: Scene, q0: list[float], F: list[float]) -> list[float]:
+def settle_on_rest_set(scene: Scene, pinned: list[float | None], q0: list[float],
+                       F: list[float]) -> list[float]:
     r"""``F`` with each dashpot at rest at ``t = 0`` on its law's set at rest.
 
     A dashpot whose rate at ``t = 0`` is known and 0 (``q0[e] == 0``, see the module
-    notes) and whose force misses its law there, ``R(0, F_e) != 0`` (it slips from rest:
-    the limit system read it at the rate ``eps (a_b - a_a)``), takes the edge of the set
-    ``{F : R(0, F) = 0}`` nearest ``F_e`` on the segment from 0 (in the set) to ``F_e``:
-    the float ``F*`` with ``R(0, F*) = 0`` next to one with ``R != 0``, by bisection
-    (at most ~1100 kernel calls, ~60 for forces of order 1). For the yield laws,
-    ``F* = sgn(F_e) tau``. A law with ``R(0, 0) != 0`` is left as it is.
+    notes), whose force its law leaves to the limit system and misses its law there,
+    ``R(0, F_e) != 0`` (it slips from rest: the limit system read it at the rate
+    ``eps (a_b - a_a)``), takes the edge of the set ``{F : R(0, F) = 0}`` nearest ``F_e``
+    on the segment from 0 (in the set) to ``F_e``: the float ``F*`` with ``R(0, F*) = 0``
+    next to one with ``R != 0``, by bisection (at most ~1100 kernel calls, ~60 for
+    forces of order 1). For the yield laws, ``F* = sgn(F_e) tau``. A law with
+    ``R(0, 0) != 0`` is left as it is.
 
     Parameters
     ----------
     scene : Scene
         The scene.
+    pinned : list of float or None
+        The forces the laws fix at ``q_0`` alone (``None``: left to the limit system).
     q0 : list of float
         The elements' initial elongations or the masses' part of their rates (0 for a
         dashpot that starts at rest).
@@ -123,9 +130,10 @@ def settle_on_rest_set(scene: Scene, q0: list[float], F: list[float]) -> list[fl
         The forces, those of the dashpots slipping from rest moved to their yield forces.
     """
     out = list(F)
-    for e in _known_rate_dashpots(scene):
+    for e in _known_rate_dashpots(scene, [e for e, Fp in enumerate(pinned)
+                                          if Fp is None and q0[e] == 0.0]):
         kernel = scene.elements[e].law.kernel
-        if q0[e] != 0.0 or not math.isfinite(out[e]) or kernel(0.0, out[e])[0] == 0.0 \
+        if not math.isfinite(out[e]) or kernel(0.0, out[e])[0] == 0.0 \
                 or kernel(0.0, 0.0)[0] != 0.0:
             continue
         inside, outside = 0.0, out[e]

@@ -155,7 +155,7 @@ def consistent_initial_state(
             pinned[e], q0[e] = None, 0.0
         if not reversed_:
             break
-    F = settle_on_rest_set(scene, q0, F)  # a slip from rest: its yield force at t = 0
+    F = settle_on_rest_set(scene, pinned, q0, F)  # a slip from rest: its yield force at t = 0
     F = taut_on_supports(scene, 0.0, x0, v, F)  # a lock moving with a support: its force
     F = apply_user_forces(scene, x0, v, F, f)  # (checked against the laws, balances)
     return v, F, stats
