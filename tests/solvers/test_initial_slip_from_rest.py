@@ -57,6 +57,16 @@ def _row0(scene: Scene, key: str, t_end: float = 2e-3) -> tuple[float, float]:
     return float(sol.F["d"][0]), float(sol.F["d"][1])
 
 
+def _law_holds(kernel, q: float, F: float) -> bool:
+    """``R(q, F) = 0``, or its root in ``F`` within 2 ulps of ``F`` (a sign change)."""
+    R = kernel(q, F)[0]
+    if R == 0.0:
+        return True
+    lo = math.nextafter(math.nextafter(F, -math.inf), -math.inf)
+    hi = math.nextafter(math.nextafter(F, math.inf), math.inf)
+    return any((kernel(q, G)[0] > 0.0) != (R > 0.0) for G in (lo, hi))
+
+
 def _one_mass(law, *, v0: float, x0: float = 0.1, k: float = 4.0, m: float = 0.5,
               pull: float) -> Scene:
     """A mass on a yield dashpot ``d`` and a spring to ground, loaded so that the
@@ -111,9 +121,12 @@ def test_a_dashpot_slipping_from_rest_starts_at_its_yield_force(key, law_key, v0
     # a pull of 3 tau the other way than a tiny v0: the slip that follows is downward
     name, params = LAWS[law_key]
     law = get_law(name).bind(tau=1.0, **params)
-    F0, F1 = _row0(_one_mass(law, v0=v0, pull=-3.0), key)
+    scene = _one_mass(law, v0=v0, pull=-3.0)
+    F0, F1 = _row0(scene, key)
     assert F0 == pytest.approx(-1.0, rel=4e-16, abs=0.0)
     assert F1 <= F0
+    v, _, _ = consistent_initial_state(scene, time_scale=1e-3)
+    assert v == [0.0]  # the mass starts at rest: row 0 holds the law (q = 0, |F| <= tau)
 
 
 @pytest.mark.parametrize("key", sorted(METHODS))
@@ -172,7 +185,9 @@ def test_the_initial_force_is_in_the_yield_band_with_the_sign_of_the_slip(
     t_end = 1e-6 if method == "radau5" else 2e-3
     sol = simulate(scene, method=method, t_end=t_end, **kwargs)
     assert sol.ok, sol.message
-    F0 = float(sol.F["d"][0])
+    F0, v_row0 = float(sol.F["d"][0]), float(sol.v["m"][0])
+    # row 0 holds the law (a v0 the first instant reverses starts at rest, v = 0)
+    assert v_row0 in (0.0, v0) and _law_holds(bound.kernel, v_row0, F0), (v_row0, F0)
     ulps = 4.0 * math.ulp(max(tau, abs(scene.external_forces(0.0)[0]), k * abs(x0)))
     assert abs(F0) <= tau + 4.0 * math.ulp(tau), (F0, tau)  # in the yield band
     if ratio > 1.0:  # it slips, the way of F~, from its yield force (a Coulomb law's

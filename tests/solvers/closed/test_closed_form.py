@@ -19,6 +19,7 @@ from lumped.solvers.closed.closed_form import (
     bdf2_step,
     correct,
     initial_dashpot_force,
+    initial_velocity,
     steps_for,
 )
 from lumped.solvers.closed.integrate import integrate
@@ -313,9 +314,14 @@ def test_initial_dashpot_force_of_a_rate_the_limit_step_reverses_is_at_rest():
     assert initial_dashpot_force(osc, 0.0, 1e-113, -0.5, h=1e-23) == -0.5
     assert initial_dashpot_force(osc, 0.0, 1e-113, -3.0) == 1.0
     assert initial_dashpot_force(osc, 0.0, 1e-3, -3.0, h=1e-23) == 1.0 + 5e-4
+    # the mass starts at rest then (row 0 holds law (6)); one the step keeps moves
+    assert initial_velocity(osc, 0.0, 1e-113, -3.0, h=1e-23) == 0.0
+    assert initial_velocity(osc, 0.0, 1e-113, -3.0) == 1e-113
+    assert initial_velocity(osc, 0.0, 1e-3, -3.0, h=1e-23) == 1e-3
     sol = simulate(Scene([Mass("m", 1.0, x0=0.0, v0=1e-113)],
                          [Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m"),
                           Element("d", get_law("bingham").bind(gamma=2.0, tau=1.0),
                                   "ground", "m")], {"m": -3.0}),
                    method="closed-bdf1", dt=1e-3, t_end=1e-2)
     assert sol.F["d"][0] == pytest.approx(-1.0, rel=1e-15)
+    assert sol.v["m"][0] == 0.0

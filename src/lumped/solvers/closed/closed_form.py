@@ -43,6 +43,7 @@ __all__ = [
     "bdf1_step",
     "bdf2_step",
     "initial_dashpot_force",
+    "initial_velocity",
     "steps_for",
     "CLOSED_METHODS",
     "run_bdf1_loop",
@@ -164,12 +165,20 @@ def initial_dashpot_force(osc: BinghamOscillator, x0: float, v0: float, F0: floa
     way), counts as rest: the force is that of the slip or the stick that follows, with
     the sign of relation (16) (:mod:`lumped.solvers.implicit.initial_slip`).
     """
-    if v0 != 0.0:
-        slip = math.copysign(osc.tau, v0) + v0 / osc.gamma
-        v_h = v0 + h * (F0 - osc.k * x0 - slip) / osc.m
-        if h == 0.0 or (v_h != 0.0 and (v_h > 0.0) == (v0 > 0.0)):
-            return slip
+    if initial_velocity(osc, x0, v0, F0, h) != 0.0:
+        return math.copysign(osc.tau, v0) + v0 / osc.gamma
     return min(max(F0 - osc.k * x0, -osc.tau), osc.tau)
+
+
+def initial_velocity(osc: BinghamOscillator, x0: float, v0: float, F0: float,
+                     h: float = 0.0) -> float:
+    """``v0``, or 0 when the limit step ``h > 0`` reverses or stops it (see
+    :func:`initial_dashpot_force`): the mass then starts at rest, a change of ``v0``
+    below ``h |a|``, so that row 0 holds law (6)."""
+    if v0 == 0.0 or h == 0.0:
+        return v0
+    v_h = v0 + h * (F0 - osc.k * x0 - (math.copysign(osc.tau, v0) + v0 / osc.gamma)) / osc.m
+    return v0 if v_h != 0.0 and (v_h > 0.0) == (v0 > 0.0) else 0.0
 
 
 _Columns = tuple[list[float], list[float], list[float], list[float]]

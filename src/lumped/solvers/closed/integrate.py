@@ -19,6 +19,7 @@ from .closed_form import (
     BinghamOscillator,
     checked_force,
     initial_dashpot_force,
+    initial_velocity,
     run_bdf1_loop,
     run_bdf2_loop,
 )
@@ -98,7 +99,8 @@ def integrate(
         raise ValueError(f"`engine` must be one of {ENGINES}, got {engine!r}")
 
     F0 = checked_force(forcing, 0.0)
-    Fd0 = initial_dashpot_force(osc, x0, v0, F0, h=1e-20 * dt)  # (a limit step, as bdf's)
+    v0 = initial_velocity(osc, x0, v0, F0, h=1e-20 * dt)  # (a limit step, as bdf's)
+    Fd0 = initial_dashpot_force(osc, x0, v0, F0)
     if engine == "compiled" or (engine == "auto" and _have_numba() and (
             n >= COMPILED_MIN_STEPS or "lumped.solvers.closed.closed_form_jit" in sys.modules)):
         from .closed_form_jit import compiled_columns

@@ -16,7 +16,9 @@ is known (each end a mass or ground, none on a moving support):
 
    (a mass at ``v_0 = 1e-113`` under a load past the yield force), that force has the
    wrong sign for the slip that follows, or holds a mass that sticks: the dashpot starts
-   at rest (``q_0 = 0``) and the limit system solves its force again. Its sign is then
+   at rest (``q_0 = 0``) and the limit system solves its force again; a mass at its end
+   whose own ``v_0`` the step reverses starts at rest, ``v(0) = 0`` (a change below
+   ``eps |a|``), so that row 0 holds the laws. Its sign is then
    the load's, ``sgn F_d = sgn F~`` (the paper's relation (16), ``F~ = m v_0 / h + F -
    F_s`` with ``m v_0 / h`` negligible).
 2. :func:`settle_on_rest_set`. A dashpot at rest at ``t = 0`` (``q_0 = 0``) that slips
@@ -57,8 +59,10 @@ def _known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
 
 
 def rates_below_resolution(scene: Scene, pinned: list[float | None], q0: list[float],
-                           F: list[float], eps: float) -> list[int]:
-    r"""The dashpots pinned by a rate ``q_0 != 0`` that the limit step reverses or stops.
+                           F: list[float], eps: float) -> tuple[list[int], list[int]]:
+    r"""The dashpots with a rate ``q_0 != 0`` that the limit step reverses or stops (their
+    forces pinned by it, as a rule), and the masses at their ends whose velocities it
+    reverses or stops.
 
     Parameters
     ----------
@@ -76,15 +80,22 @@ def rates_below_resolution(scene: Scene, pinned: list[float | None], q0: list[fl
 
     Returns
     -------
-    list of int
-        Each pinned dashpot whose law is set-valued at rest (``R(0, 0) = 0``,
+    dashpots : list of int
+        Each such dashpot whose law is set-valued at rest (``R(0, 0) = 0``,
         ``dR/dF = 0``) and whose rate ``fl(q_0 + eps (a_b - a_a))`` is 0 or of the other
         sign than ``q_0`` (see the module notes): it starts at rest.
+    masses : list of int
+        The nodes at their ends whose ``v_0 != 0`` the step reverses or stops,
+        ``fl(v_0 + eps a_i)`` 0 or of the other sign: they start at rest (``v(0) = 0``,
+        a change below ``eps |a_i|``), so that row 0 holds the laws (``q = 0``, ``F``
+        within the set at rest).
     """
     out: list[int] = []
+    masses: list[int] = []
     acc: list[float] = []
-    for e in _known_rate_dashpots(scene, [e for e, Fp in enumerate(pinned)
-                                          if Fp is not None and q0[e] != 0.0]):
+    # (a law can leave the force free at a rate below its round-off, e.g. Coulomb's
+    # F + r q at q = -5e-324: the limit system read it, its masses start at rest too)
+    for e in _known_rate_dashpots(scene, [e for e in range(len(pinned)) if q0[e] != 0.0]):
         R, _, RF = scene.elements[e].law.kernel(0.0, 0.0)
         if not (R == 0.0 and RF == 0.0):
             continue  # a law that fixes the force at rest (newtonian): continuous in q
@@ -96,7 +107,12 @@ def rates_below_resolution(scene: Scene, pinned: list[float | None], q0: list[fl
         q = q0[e] + eps * ((acc[b] if b >= 0 else 0.0) - (acc[a] if a >= 0 else 0.0))
         if q == 0.0 or (q > 0.0) != (q0[e] > 0.0):
             out.append(e)
-    return out
+            for i in (a, b):
+                v0 = scene.nodes[i].v0 if i >= 0 else 0.0
+                v = v0 + eps * acc[i] if i >= 0 else 0.0
+                if v0 != 0.0 and (v == 0.0 or (v > 0.0) != (v0 > 0.0)) and i not in masses:
+                    masses.append(i)
+    return out, masses
 
 
 def settle_on_rest_set(scene: Scene, pinned: list[float | None], q0: list[float],

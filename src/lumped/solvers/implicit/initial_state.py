@@ -60,7 +60,7 @@ def consistent_initial_state(
 ) -> tuple[list[float], list[float], dict]:
     """Initial velocities of all nodes and forces of all elements at ``t = 0``.
 
-    Masses keep their given ``v0``. Then:
+    Masses keep their given ``v0`` (but see step 3). Then:
 
     1. every element whose ``q`` is known at ``t = 0`` (all springs; dashpots between
        masses and ground) gets its force from its own law, ``R(q0, F) = 0``, if the law
@@ -76,7 +76,8 @@ def consistent_initial_state(
     3. the force of ``t = 0``, not the step's, for a dashpot between masses (or a mass
        and ground) that slips from rest (:mod:`lumped.solvers.implicit.initial_slip`): a
        rate ``q0 != 0`` that the step reverses or stops (``v0 = 1e-113`` under a load past
-       the yield force) counts as rest and step 2 is solved again; a dashpot at rest
+       the yield force) counts as rest, so does the mass's ``v0`` (``v(0) = 0``), and step
+       2 is solved again; a dashpot at rest
        whose force misses its law at rate 0 takes the nearest force its law admits
        there, its yield force ``sgn(F) tau`` with the slip's sign (the paper's (16)).
 
@@ -141,6 +142,7 @@ def consistent_initial_state(
     accelerating = getattr(scene, "support_frame", None) is not None and any(
         r != 0.0 and el.kind == "dashpot"
         for r, el in zip(support_rates(scene, 0.0), elements, strict=True))
+    stopped: list[int] = []  # masses whose v0 the limit step reverses: at rest
     for _ in range(2):  # again once, with the rates the limit step reverses at rest
         F_rest = initial_rest_forces(scene, pinned, q0, f) \
             if all(is_mass) and not accelerating else None
@@ -150,11 +152,14 @@ def consistent_initial_state(
                      "factorizations": 0}
         else:
             v, F, stats = _limit_system(scene, pinned, q0, f, eps, options)
-        reversed_ = rates_below_resolution(scene, pinned, q0, F, eps)  # (initial_slip)
+        reversed_, masses = rates_below_resolution(scene, pinned, q0, F, eps)  # initial_slip
         for e in reversed_:
             pinned[e], q0[e] = None, 0.0
+        stopped += masses
         if not reversed_:
             break
+    for i in stopped:
+        v[i] = 0.0
     F = settle_on_rest_set(scene, pinned, q0, F)  # a slip from rest: its yield force at t = 0
     F = taut_on_supports(scene, 0.0, x0, v, F)  # a lock moving with a support: its force
     F = apply_user_forces(scene, x0, v, F, f)  # (checked against the laws, balances)
