@@ -58,8 +58,8 @@ def _known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
             and (eb[e] < 0 or isinstance(nodes[eb[e]], Mass))]
 
 
-def rates_below_resolution(scene: Scene, pinned: list[float | None], q0: list[float],
-                           F: list[float], eps: float) -> tuple[list[int], list[int]]:
+def rates_below_resolution(scene: Scene, q0: list[float], F: list[float],
+                           eps: float) -> tuple[list[int], list[int]]:
     r"""The dashpots with a rate ``q_0 != 0`` that the limit step reverses or stops (their
     forces pinned by it, as a rule), and the masses at their ends whose velocities it
     reverses or stops.
@@ -68,8 +68,6 @@ def rates_below_resolution(scene: Scene, pinned: list[float | None], q0: list[fl
     ----------
     scene : Scene
         The scene.
-    pinned : list of float or None
-        The forces the laws fix at ``q_0`` alone (``None``: left to the limit system).
     q0 : list of float
         The elements' initial elongations or the masses' part of their rates.
     F : list of float
@@ -95,7 +93,7 @@ def rates_below_resolution(scene: Scene, pinned: list[float | None], q0: list[fl
     acc: list[float] = []
     # (a law can leave the force free at a rate below its round-off, e.g. Coulomb's
     # F + r q at q = -5e-324: the limit system read it, its masses start at rest too)
-    for e in _known_rate_dashpots(scene, [e for e in range(len(pinned)) if q0[e] != 0.0]):
+    for e in _known_rate_dashpots(scene, [e for e in range(len(q0)) if q0[e] != 0.0]):
         R, _, RF = scene.elements[e].law.kernel(0.0, 0.0)
         if not (R == 0.0 and RF == 0.0):
             continue  # a law that fixes the force at rest (newtonian): continuous in q

@@ -152,7 +152,7 @@ def consistent_initial_state(
                      "factorizations": 0}
         else:
             v, F, stats = _limit_system(scene, pinned, q0, f, eps, options)
-        reversed_, masses = rates_below_resolution(scene, pinned, q0, F, eps)  # initial_slip
+        reversed_, masses = rates_below_resolution(scene, q0, F, eps)  # initial_slip
         for e in reversed_:
             pinned[e], q0[e] = None, 0.0
         stopped += masses
