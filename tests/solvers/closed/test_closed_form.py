@@ -10,13 +10,16 @@ from _helpers import log_uniform
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from lumped.scene import SineBurst, zero_forcing
+from lumped import simulate
+from lumped.laws import get_law
+from lumped.scene import Element, Mass, Scene, SineBurst, zero_forcing
 from lumped.solvers.closed.closed_form import (
     BinghamOscillator,
     bdf1_step,
     bdf2_step,
     correct,
     initial_dashpot_force,
+    initial_velocity,
     steps_for,
 )
 from lumped.solvers.closed.integrate import integrate
@@ -300,3 +303,25 @@ def test_bdf2_first_step_is_bdf1_and_steps_are_pure(osc, x0, v0, forcing, dt):
     # the step functions are pure: the same inputs give the same outputs
     args = (osc.m, osc.k, 1 / osc.gamma, osc.tau, dt, x0, v0, x0, v0, forcing(dt))
     assert bdf2_step(*args) == bdf2_step(*args)
+
+
+def test_initial_dashpot_force_of_a_rate_the_limit_step_reverses_is_at_rest():
+    # v0 = 1e-113 against a pull past tau: the slip that follows, -tau (relation (16));
+    # against one within tau: the stick that follows, the pull held; with h = 0 (t = 0
+    # itself) and for a rate the step keeps, the law (6) at v0
+    osc = BinghamOscillator(1.0, 10.0, 2.0, 1.0)
+    assert initial_dashpot_force(osc, 0.0, 1e-113, -3.0, h=1e-23) == -1.0
+    assert initial_dashpot_force(osc, 0.0, 1e-113, -0.5, h=1e-23) == -0.5
+    assert initial_dashpot_force(osc, 0.0, 1e-113, -3.0) == 1.0
+    assert initial_dashpot_force(osc, 0.0, 1e-3, -3.0, h=1e-23) == 1.0 + 5e-4
+    # the mass starts at rest then (row 0 holds law (6)); one the step keeps moves
+    assert initial_velocity(osc, 0.0, 1e-113, -3.0, h=1e-23) == 0.0
+    assert initial_velocity(osc, 0.0, 1e-113, -3.0) == 1e-113
+    assert initial_velocity(osc, 0.0, 1e-3, -3.0, h=1e-23) == 1e-3
+    sol = simulate(Scene([Mass("m", 1.0, x0=0.0, v0=1e-113)],
+                         [Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m"),
+                          Element("d", get_law("bingham").bind(gamma=2.0, tau=1.0),
+                                  "ground", "m")], {"m": -3.0}),
+                   method="closed-bdf1", dt=1e-3, t_end=1e-2)
+    assert sol.F["d"][0] == pytest.approx(-1.0, rel=1e-15)
+    assert sol.v["m"][0] == 0.0

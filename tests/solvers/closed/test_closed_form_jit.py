@@ -16,12 +16,17 @@ from hypothesis import strategies as st
 
 from lumped.scene import SineBurst, paper_F1, paper_F2, zero_forcing
 from lumped.solvers.closed import closed_form_jit as J
-from lumped.solvers.closed.closed_form import BinghamOscillator, initial_dashpot_force
+from lumped.solvers.closed.closed_form import (
+    BinghamOscillator,
+    initial_dashpot_force,
+    initial_velocity,
+)
 from lumped.solvers.closed.integrate import integrate
 
 
 def compiled(osc, x0, v0, forcing, dt, n, method):
     F0 = forcing(0.0) if forcing is not None else 0.0
+    v0 = initial_velocity(osc, x0, v0, F0, h=1e-20 * dt)  # (as integrate)
     Fd0 = initial_dashpot_force(osc, x0, v0, F0)
     return J.compiled_columns(osc.m, osc.k, osc.gamma, osc.tau, forcing, x0, v0, Fd0,
                               dt, n, method)

@@ -71,7 +71,11 @@ def test_a_long_probe_looking_past_the_break_out_does_not_start_a_cycle():
     # and the short probe from there read both stuck again: 50 events at t = 0.0396 and
     # a backward-Euler bridge over [0.0396, 0.127] (positions 1.7e-5 off a tight run at
     # rtol = dt^2). Back at the stuck mode the choice holds it: one break-out, at the
-    # tight run's time.
+    # tight run's time. (m0's v0 = 1.2e-210 stops at once under no load: both start
+    # stuck with no force, not e0 at its yield force as before the fix of the slip from
+    # rest; the split of the load between e0 and e1, locks in parallel, is then the
+    # solver's, and at rtol 1e-10 e0 reaches its yield force at t = 0.04374 while e1
+    # still holds the mass: a switch without motion, before the joint break-out.)
     scene = Scene(
         [Mass("m0", m=0.7515144379113692, x0=-7.91271658498692e-124,
               v0=1.1799647503738502e-210),
@@ -92,9 +96,11 @@ def test_a_long_probe_looking_past_the_break_out_does_not_start_a_cycle():
         ("", "time"), ("e0", "switch"), ("e1", "switch")], sol.events  # (was 51)
     tight = simulate(scene, method="radau5", dt=dt, t_end=0.5, rtol=1e-10, atol=1e-13,
                      compiled=False)
-    assert abs(sol.events[0].t - tight.events[0].t) < 1e-6  # the break-out
-    assert abs(tight.events[0].t - 0.0444657) < 1e-6
+    assert len(tight.events) <= 5 and tight.stats.get("bridges", 0) == 0, tight.events
+    t_out = max(ev.t for ev in tight.events if ev.element == "e1")  # the joint break-out
+    assert abs(sol.events[0].t - t_out) < 1e-6
+    assert abs(t_out - 0.0444657) < 1e-6
     for name in ("e0", "e1"):
         (t0, t1), = sol.stick_intervals(name)
-        assert t0 == 0.0 and abs(t1 - tight.events[0].t) < 1e-6
+        assert t0 == 0.0 and abs(t1 - t_out) < 1e-6
     assert np.abs(_positions(sol, scene) - _positions(tight, scene)).max() < 1e-6

@@ -43,6 +43,7 @@ __all__ = [
     "bdf1_step",
     "bdf2_step",
     "initial_dashpot_force",
+    "initial_velocity",
     "steps_for",
     "CLOSED_METHODS",
     "run_bdf1_loop",
@@ -148,17 +149,36 @@ def bdf2_step(
     return x_hat + h * v, v, F_d, F_tilde
 
 
-def initial_dashpot_force(osc: BinghamOscillator, x0: float, v0: float, F0: float) -> float:
+def initial_dashpot_force(osc: BinghamOscillator, x0: float, v0: float, F0: float,
+                          h: float = 0.0) -> float:
     """The consistent ``F_d(0)`` that the limit ``dt -> 0`` of the steps selects.
 
     Slipping (``v0 != 0``): ``F_d = sgn(v0) tau + v0 / gamma`` from eq. (6).
     At rest the law only asks ``|F_d| <= tau``; we take the force that keeps the
     mass at rest if it can, ``clip(F(0) - k x0, -tau, tau)``.  (The paper's choice
     ``F_d(0) = 0`` is also admissible; it agrees with ours whenever ``F(0) = k x0``.)
+
+    With a limit step ``h > 0`` (``integrate`` passes ``1e-20 dt``, as
+    :func:`lumped.solvers.implicit.initial_state.consistent_initial_state` does), a
+    ``v0`` that the step reverses or stops, ``fl(v0 + h a)`` 0 or of the other sign with
+    ``a = (F(0) - k x0 - F_d) / m`` (``v0 = 1e-113`` under a load past ``tau`` the other
+    way), counts as rest: the force is that of the slip or the stick that follows, with
+    the sign of relation (16) (:mod:`lumped.solvers.implicit.initial_slip`).
     """
-    if v0 != 0.0:
+    if initial_velocity(osc, x0, v0, F0, h) != 0.0:
         return math.copysign(osc.tau, v0) + v0 / osc.gamma
     return min(max(F0 - osc.k * x0, -osc.tau), osc.tau)
+
+
+def initial_velocity(osc: BinghamOscillator, x0: float, v0: float, F0: float,
+                     h: float = 0.0) -> float:
+    """``v0``, or 0 when the limit step ``h > 0`` reverses or stops it (see
+    :func:`initial_dashpot_force`): the mass then starts at rest, a change of ``v0``
+    below ``h |a|``, so that row 0 holds law (6)."""
+    if v0 == 0.0 or h == 0.0:
+        return v0
+    v_h = v0 + h * (F0 - osc.k * x0 - (math.copysign(osc.tau, v0) + v0 / osc.gamma)) / osc.m
+    return v0 if v_h != 0.0 and (v_h > 0.0) == (v0 > 0.0) else 0.0
 
 
 _Columns = tuple[list[float], list[float], list[float], list[float]]

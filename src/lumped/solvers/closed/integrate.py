@@ -19,6 +19,7 @@ from .closed_form import (
     BinghamOscillator,
     checked_force,
     initial_dashpot_force,
+    initial_velocity,
     run_bdf1_loop,
     run_bdf2_loop,
 )
@@ -54,7 +55,8 @@ def integrate(
         Mass, spring and dashpot parameters.
     x0, v0 : float
         Initial displacement and velocity; the initial forces are made consistent
-        (``F_s = k x0``, ``F_d`` from :func:`initial_dashpot_force`).
+        (``F_s = k x0``, ``F_d`` from :func:`initial_dashpot_force` with the limit step
+        ``h = 1e-20 dt``).
     forcing : callable
         ``F(t) -> float``.
     dt : float
@@ -97,6 +99,7 @@ def integrate(
         raise ValueError(f"`engine` must be one of {ENGINES}, got {engine!r}")
 
     F0 = checked_force(forcing, 0.0)
+    v0 = initial_velocity(osc, x0, v0, F0, h=1e-20 * dt)  # (a limit step, as bdf's)
     Fd0 = initial_dashpot_force(osc, x0, v0, F0)
     if engine == "compiled" or (engine == "auto" and _have_numba() and (
             n >= COMPILED_MIN_STEPS or "lumped.solvers.closed.closed_form_jit" in sys.modules)):

@@ -4,5 +4,6 @@
 fold test of a non-monotone law; compiled: :mod:`.branch_check_jit`), :mod:`.globalize`
 (the globalised Newton of a hard step), :mod:`.force_projection` (nonlinear elimination of
 forces by their laws), :mod:`.balance_sweeps`, and the consistent initial state
-(:mod:`.initial_state`, :mod:`.initial_rest`).
+(:mod:`.initial_state`, :mod:`.initial_rest`, :mod:`.initial_slip`,
+:mod:`.initial_user_forces`).
 """

@@ -11,7 +11,10 @@ follow from the laws.
 
 This module owns :func:`consistent_initial_state` and its limit system solved by Newton
 with its restarts; the shortcut without Newton when every node is a mass and the cluster
-guesses of the last restarts are in :mod:`lumped.solvers.implicit.initial_rest`.
+guesses of the last restarts are in :mod:`lumped.solvers.implicit.initial_rest`, the
+forces of dashpots slipping from rest at ``t = 0`` (not at ``t = eps``) in
+:mod:`lumped.solvers.implicit.initial_slip`, the check of the user's forces in
+:mod:`lumped.solvers.implicit.initial_user_forces`.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ import itertools
 import math
 from functools import lru_cache
 
-from ...scene import Junction, Mass, Scene
+from ...scene import Mass, Scene
 from ...scene.supports import support_rates
 from ..newton.criteria import residual_ok
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
@@ -28,8 +31,10 @@ from ..newton.scalar_root import scalar_root
 from ..newton.semismooth import newton_solve
 from ..nonsmooth.junction_balance import refuse_unbalanced_junctions
 from ..nonsmooth.lock_forces import taut_on_supports
-from ..status import InconsistentInitialForce, SolverError
+from ..status import SolverError
 from .initial_rest import cluster_guesses, initial_rest_forces
+from .initial_slip import rates_below_resolution, settle_on_rest_set
+from .initial_user_forces import apply_user_forces
 from .step_system import EPS, law_scale, newton_failure
 
 __all__ = ["consistent_initial_state"]
@@ -55,7 +60,7 @@ def consistent_initial_state(
 ) -> tuple[list[float], list[float], dict]:
     """Initial velocities of all nodes and forces of all elements at ``t = 0``.
 
-    Masses keep their given ``v0``. Then:
+    Masses keep their given ``v0`` (but see step 3). Then:
 
     1. every element whose ``q`` is known at ``t = 0`` (all springs; dashpots between
        masses and ground) gets its force from its own law, ``R(q0, F) = 0``, if the law
@@ -67,7 +72,14 @@ def consistent_initial_state(
        A stuck dashpot thus takes the force that keeps its mass at rest if its law
        admits it, else the nearest admissible one (for the paper's scene
        ``clip(F(0) - k x0, -tau, tau)``, as
-       :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`).
+       :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`);
+    3. the force of ``t = 0``, not the step's, for a dashpot between masses (or a mass
+       and ground) that slips from rest (:mod:`lumped.solvers.implicit.initial_slip`): a
+       rate ``q0 != 0`` that the step reverses or stops (``v0 = 1e-113`` under a load past
+       the yield force) counts as rest, so does the mass's ``v0`` (``v(0) = 0``), and step
+       2 is solved again; a dashpot at rest
+       whose force misses its law at rate 0 takes the nearest force its law admits
+       there, its yield force ``sgn(F) tau`` with the slip's sign (the paper's (16)).
 
     User forces ``Element.F0`` are checked against the law at the initial state (and the
     junction balances), then replace the computed ones.
@@ -130,37 +142,27 @@ def consistent_initial_state(
     accelerating = getattr(scene, "support_frame", None) is not None and any(
         r != 0.0 and el.kind == "dashpot"
         for r, el in zip(support_rates(scene, 0.0), elements, strict=True))
-    F_rest = initial_rest_forces(scene, pinned, q0, f) \
-        if all(is_mass) and not accelerating else None
-    if F_rest is not None:  # at rest, the load held by locks: no Newton
-        v, F = list(v0), F_rest
-        stats = {"newton_iterations": 0, "residual_evals": 0, "jacobian_evals": 0,
-                 "factorizations": 0}
-    else:
-        v, F, stats = _limit_system(scene, pinned, q0, f, eps, options)
+    stopped: list[int] = []  # masses whose v0 the limit step reverses: at rest
+    for _ in range(2):  # again once, with the rates the limit step reverses at rest
+        F_rest = initial_rest_forces(scene, pinned, q0, f) \
+            if all(is_mass) and not accelerating else None
+        if F_rest is not None:  # at rest, the load held by locks: no Newton
+            v, F = list(v0), F_rest
+            stats = {"newton_iterations": 0, "residual_evals": 0, "jacobian_evals": 0,
+                     "factorizations": 0}
+        else:
+            v, F, stats = _limit_system(scene, pinned, q0, f, eps, options)
+        reversed_, masses = rates_below_resolution(scene, q0, F, eps)  # initial_slip
+        for e in reversed_:
+            pinned[e], q0[e] = None, 0.0
+        stopped += masses
+        if not reversed_:
+            break
+    for i in stopped:
+        v[i] = 0.0
+    F = settle_on_rest_set(scene, pinned, q0, F)  # a slip from rest: its yield force at t = 0
     F = taut_on_supports(scene, 0.0, x0, v, F)  # a lock moving with a support: its force
-    user = [e for e, el in enumerate(elements) if el.F0 is not None]
-    if user:
-        q_init = scene.elongations(x0, v)
-        for e in user:
-            el = elements[e]
-            R, Rq, RF = el.law.kernel(q_init[e], el.F0)
-            tol = 1e-9 * (abs(Rq * q_init[e]) + abs(RF * el.F0)) + 1e-12
-            if not abs(R) <= tol:
-                raise InconsistentInitialForce(
-                    f"initial force F0 = {el.F0!r} of element {el.name!r} breaks its law "
-                    f"{el.law_name!r}: R(q={q_init[e]!r}, F={el.F0!r}) = {R!r} != 0"
-                )
-            F[e] = el.F0
-        net = scene.net_forces(0.0, F)
-        for i, node in enumerate(nodes):
-            if isinstance(node, Junction):
-                scale = abs(f[i]) + sum(abs(F[e]) for e in range(E) if i in (ea[e], eb[e]))
-                if not abs(net[i]) <= 1e-9 * scale + 1e-12:
-                    raise InconsistentInitialForce(
-                        f"initial forces break the force balance of junction {node.name!r}: "
-                        f"net force {net[i]!r} != 0"
-                    )
+    F = apply_user_forces(scene, x0, v, F, f)  # (checked against the laws, balances)
     return v, F, stats
 
 
