@@ -342,38 +342,3 @@ def test_coulomb_beside_a_stuck_dashpot_stays_within_its_yield_force():
     assert sol.ok
     tau = 0.9999769744141629
     assert np.abs(sol.F["e2"]).max() <= tau * (1 + 1e-10) + 1e-12
-
-
-def _string_beside_a_flat_herschel_bulkley_link() -> Scene:
-    # the random-network strategy's seed 274 (issue 29): a loaded mass m0 tied to m1 by a
-    # string (e3) beside a shear-thickening Herschel-Bulkley link (e1, n = 2)
-    hb = get_law("herschel_bulkley")
-    return Scene(
-        [Mass("m0", m=1.0, x0=-0.37624293996242686, v0=-1.77269902465682),
-         Mass("m1", m=0.9999999999999686, x0=0.3280626156988069, v0=1.1860400812457152e-233)],
-        [Element("e0", get_law("implicit_spring").bind(k=1.0, L0=0.46991011312735004,
-                                                       F0=2.4975923322238236), "ground", "m0"),
-         Element("e1", hb.bind(gamma=0.26969640567091646, tau=0.10816107742637955, n=2.0),
-                 "m0", "m1"),
-         Element("e2", hb.bind(gamma=0.6471675365679924, tau=0.9906610524904494, n=1.5),
-                 "m1", "ground"),
-         Element("e3", get_law("string_spring").bind(k=3.6150856881332056,
-                                                     L=0.8043055556612337), "m0", "m1")],
-        {"m0": 1.638745886928079})
-
-
-def test_radau5_on_a_string_at_its_length_beside_a_yielding_link_needs_no_bridge():
-    """A strict expected failure before: from t = 0.0729808197 the string e3 sits at its
-    length with the force k L and e1 at its yield force, and the mode alternated between
-    the string taut and elastic (e1 slipping and stuck), 1e-12 s apart, until backward
-    Euler bridged it to 0.0729813. The run started from e2's force 0.99066325, the mode
-    probe's 2.2e-6 beyond its yield force (m1's v0 = 1.2e-233 pinned the yield force of
-    the other sign, which the chosen mode's law missed); from the yield force itself (as
-    before with m1's v0 of the other sign) it runs through in 471 steps and 2 events.
-    """
-    sol = simulate(_string_beside_a_flat_herschel_bulkley_link(), method="radau5",
-                   dt=0.025 / 4, t_end=0.5, rtol=1e-10, atol=1e-13, compiled=False)
-    assert sol.ok, sol.message
-    assert sol.stats.get("bridges", 0) == 0, sol.message
-    # e2 (m1 to ground) starts at its yield force with the slip's sign
-    assert sol.F["e2"][0] == pytest.approx(0.9906610524904494, rel=1e-15)

@@ -33,6 +33,19 @@ def _string_beside_a_flat_herschel_bulkley_link() -> Scene:
         {"m0": 1.638745886928079})
 
 
+def test_the_string_beside_a_flat_yielding_link_starts_from_the_yield_force():
+    """The run of seed 274 started from e2's force 0.99066325, the mode probe's 2.2e-6
+    beyond its yield force (m1's v0 = 1.2e-233 pinned the yield force of the other sign,
+    which the chosen mode's law missed; :mod:`lumped.solvers.implicit.initial_slip`): e2
+    (m1 to ground) starts at its yield force with the slip's sign, and the run needs no
+    bridge."""
+    sol = simulate(_string_beside_a_flat_herschel_bulkley_link(), method="radau5",
+                   dt=0.025 / 4, t_end=0.5, rtol=1e-10, atol=1e-13, compiled=False)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message
+    assert sol.F["e2"][0] == pytest.approx(0.9906610524904494, rel=1e-15)
+
+
 @pytest.mark.parametrize("compiled", [False, True])
 def test_a_string_that_impacts_beside_a_flat_yielding_link_goes_slack_at_once(compiled):
     """At ``t = 0.0729808183`` the string e3 reaches its length while its ends separate: a

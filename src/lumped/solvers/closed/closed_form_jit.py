@@ -184,8 +184,16 @@ def summary_one(m, k, inv_gamma, tau, dt, n, bdf2, x0, v0, kind, p0, p1, p2, out
     stops there and counts the remaining steps as stuck (no events, no work). The
     summary is exactly the one of stepping to the end; only the time differs.
     """
+    empty = np.empty(0)
     x = x0
     v = v0
+    if v0 != 0.0:  # a v0 the limit step 1e-20 dt reverses or stops starts at rest, as in
+        # integrate (closed_form.initial_velocity)
+        h = 1e-20 * dt
+        v_h = v0 + h * (_force(kind, p0, p1, p2, empty, 0, 0.0) - k * x0
+                        - (math.copysign(tau, v0) + v0 * inv_gamma)) / m
+        if v_h == 0.0 or (v_h > 0.0) != (v0 > 0.0):
+            v = 0.0
     x_prev = x
     v_prev = v
     F_d_last = 0.0
@@ -194,7 +202,6 @@ def summary_one(m, k, inv_gamma, tau, dt, n, bdf2, x0, v0, kind, p0, p1, p2, out
     events = 0
     work = 0.0
     done = n
-    empty = np.empty(0)
     for i in range(1, n + 1):
         t = i * dt
         F = _force(kind, p0, p1, p2, empty, i, t)
