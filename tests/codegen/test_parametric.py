@@ -218,3 +218,21 @@ def test_steepness_function_as_the_branch_steepness(gamma, tau) -> None:
     steepness = affine_steepness_function(q - g * (F - t), [g, t])
     leaf = q - sp.Float(gamma) * (F - sp.Float(tau))
     assert steepness(gamma, tau) == pytest.approx(affine_steepness(leaf), rel=1e-14)
+
+
+def test_two_laws_with_the_same_numbers_make_no_class() -> None:
+    """A string bound twice with ``k = 1e-8, L = 0.1`` (a scene and its support's shifted
+    view) made a class whose literal ``1/k = 1e8`` passed for a constant: every later
+    string took ``k = 1e-8, L = 0.1`` (a taut string to a held junction ended at 5.4 m/s
+    instead of rest, after tests/scene/test_support_strings.py). A class is checked only
+    against a law that differs in every number."""
+    from lumped import Element, Mass, Scene, simulate
+    from lumped.scene import GroundMotion
+
+    law = get_law("string_spring")
+    rope = law.bind(k=1e-8, L=0.1)
+    simulate(Scene([Mass("m", 2.0)], [Element("rope", rope, "m", "belt")],
+                   supports={"belt": GroundMotion(velocity=0.5)}),
+             method="bdf1", dt=1e-3, t_end=0.5)  # (taut at t = 0.2: an impact)
+    _check_as_from_scratch(law, {"k": 0.19164306754609922, "L": 0.22357337016105375})
+    _check_as_from_scratch(law, {"k": 0.3316, "L": 0.517})

@@ -379,6 +379,11 @@ def _rebound(bound) -> Rebound | None:
     if not own.steep:
         if first is None:
             _PENDING[key] = own
+        elif any(abs(a) == abs(b) for a, b in zip(first.values, values, strict=True)):
+            # a number shared by both laws cannot tell a parameter's recipe from a
+            # number made of it (1/k, n - 1) or from a constant: not a check; the first
+            # law waits for one that differs in every number
+            pass
         else:
             try:
                 first.check(own, floats)
