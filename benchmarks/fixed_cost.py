@@ -13,7 +13,12 @@ tolerances: what ``simulate(scene, t_end=...)`` runs, ``radau5`` at its defaults
 ``radau5`` at ``rtol`` 1e-7 and ``radau5`` at ``rtol`` 1e-7 with ``compiled=True`` (the
 bench's setting), and, where the run at rest
 (:mod:`lumped.solvers.eventdriven.at_rest`) exists, ``auto`` through the general driver
-(the run at rest switched off in this process, for comparison).
+(the run at rest switched off in this process, for comparison). Two more rows time what a
+user gets from a scene just written: ``auto`` on a **new scene object** at every call
+(the same numbers, built before the timer) and on **new numbers** at every call (every
+spring's ``k`` times a factor never run before in the process,
+:func:`lumped.bench.new_numbers.scene_with_new_numbers`); nothing kept per scene object
+helps those.
 
 Each case is the CPU time (:func:`time.process_time`) of ``--calls`` calls, repeated
 ``--repeats`` times interleaved with the yardstick (:func:`lumped.bench.measure_unit`'s
@@ -31,6 +36,7 @@ import statistics
 import time
 
 from lumped import simulate
+from lumped.bench.new_numbers import scene_with_new_numbers
 from lumped.bench.scenes import PAPER_SCENES, YARDSTICK_ITERATIONS, generic_scene
 from lumped.bench.timing import yardstick
 
@@ -71,6 +77,20 @@ def _time(fn, calls: int) -> float:
     return (time.process_time() - t0) / calls
 
 
+class _Fresh:
+    """``simulate`` on a scene object made by ``make()`` for each call, the scenes made
+    before the timer starts (:meth:`ready`)."""
+
+    def __init__(self, make, t_end: float) -> None:
+        self.make, self.t_end, self.scenes = make, t_end, []
+
+    def ready(self, calls: int) -> None:
+        self.scenes = [self.make() for _ in range(calls)]
+
+    def __call__(self) -> None:
+        simulate(self.scenes.pop(), t_end=self.t_end)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=7)
@@ -89,8 +109,14 @@ def main() -> None:
         if off is not None:
             runs[(name, "auto, general driver")] = (lambda sc=scene, t=bench.t_end:
                                                     simulate(sc, t_end=t), off)
+        runs[(name, "auto, new scene object")] = (
+            _Fresh(lambda b=bench: generic_scene(b), bench.t_end), None)
+        runs[(name, "auto, new numbers")] = (
+            _Fresh(lambda sc=scene: scene_with_new_numbers(sc), bench.t_end), None)
     for fn, off in runs.values():  # warm: structure, kernels, compiled parts
         for _ in range(3):
+            if isinstance(fn, _Fresh):
+                fn.ready(1)
             if off is None:
                 fn()
             else:
@@ -106,6 +132,8 @@ def main() -> None:
         unit = (time.process_time() - t0) / YARDSTICK_ITERATIONS
         units.append(unit)
         for key, (fn, off) in runs.items():
+            if isinstance(fn, _Fresh):
+                fn.ready(args.calls)
             if off is None:
                 sec = _time(fn, args.calls)
             else:
