@@ -45,7 +45,7 @@ _EPS = 2.220446049250313e-16
 
 #: A held interval: its static balance, output rows (after its start), forces at its
 #: end, and the elements whose forces are not unique there.
-Held = tuple[StaticHold, np.ndarray, list[float], list[str]]
+_Held = tuple[StaticHold, np.ndarray, list[float], list[str]]
 
 
 def burst_intervals(scene: Scene, plan, settings, opts: dict, start: RestStart,
@@ -110,7 +110,7 @@ def _hold_of(scene: Scene, plan, start: RestStart, F: list[float]) -> StaticHold
 
 
 def _after_bursts(scene: Scene, plan, start: RestStart, F: list[float], t: float,
-                  t1: float) -> Held | None:
+                  t1: float) -> _Held | None:
     """The held interval ``[t, t1]`` from the forces ``F`` once every burst has ended
     (``t >= start.last_off``): the forcing is steady, so every sample of the scan has the
     same forces, those of the balance (its verdict and those forces kept on ``start`` per
@@ -130,7 +130,7 @@ def _after_bursts(scene: Scene, plan, start: RestStart, F: list[float], t: float
 
 
 def _held(scene: Scene, plan, start: RestStart, hold: StaticHold | None, t: float,
-          t1: float, fast) -> Held | None:
+          t1: float, fast) -> _Held | None:
     """The held interval ``[t, t1]`` of ``hold``, or ``None`` when there is none or its
     scan finds a guard crossed (as :func:`lumped.solvers.modes.stuck.hold_interval`)."""
     if hold is None:
