@@ -66,8 +66,7 @@ def holds_at(plan, modes: tuple[int, ...], q: list[float], F: list[float], eleme
         margin = MARGIN * guard_tolerance(qe, Fe)
         if any(not g > margin for g in guards[e](qe, Fe)):
             return False
-        R, Rq, RF = kernels[e](qe, Fe)
-        if not abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe)):
+        if not law_holds(kernels[e], qe, Fe):
             return False
     return True
 
@@ -76,11 +75,14 @@ def laws_hold(kernels: list, q: list[float], F: list[float]) -> bool:
     """Whether every element's law holds at ``(q_e, F_e)`` on its branch (``kernels``:
     the stage kernels of the mode, :func:`mode_parts`), to ``1e-8`` relative to the size
     of its terms."""
-    for kernel, qe, Fe in zip(kernels, q, F, strict=True):
-        R, Rq, RF = kernel(qe, Fe)
-        if not abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe)):
-            return False
-    return True
+    return all(law_holds(kernel, qe, Fe) for kernel, qe, Fe in zip(kernels, q, F, strict=True))
+
+
+def law_holds(kernel, qe: float, Fe: float) -> bool:
+    """Whether one element's law holds at ``(q_e, F_e)`` on its branch (``kernel``), to
+    ``1e-8`` relative to the size of its terms: the test of :func:`laws_hold`."""
+    R, Rq, RF = kernel(qe, Fe)
+    return abs(R) <= 1e-8 * (1.0 + abs(Rq * qe) + abs(RF * Fe))
 
 
 def mode_parts(plan, modes: tuple[int, ...]) -> tuple[list, list, list[int], int]:
