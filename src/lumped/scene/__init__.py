@@ -2,8 +2,9 @@
 ground motion (:mod:`.ground`)."""
 
 from .forcing import SineBurst, paper_F1, paper_F2, zero_forcing
+from .forcing_spec import as_forcing
 from .ground import GroundMotion
-from .network import GROUND, Element, Junction, Mass, Scene, as_forcing
+from .network import GROUND, Element, Junction, Mass, Scene
 from .oscillator import bingham_oscillator
 
 __all__ = [

@@ -4,7 +4,7 @@ A node's forcing is a kind and three parameters:
 
 * :data:`FORCE_NONE` (0): no force;
 * :data:`FORCE_CONSTANT` (1): ``F = p0`` (a number given as a forcing,
-  :class:`lumped.scene.network.ConstantForce`);
+  :class:`lumped.scene.forcing_spec.ConstantForce`);
 * :data:`FORCE_SINE` (2): the sine burst ``F = p0 sin(p1 t)`` for ``t <= p2``, ``0`` after
   (:class:`lumped.scene.SineBurst`);
 * :data:`FORCE_TABLE` (3): any other callable, sampled in Python on the step grid into a
@@ -154,7 +154,7 @@ def forcing_code(forcing: Callable[[float], float] | None) -> tuple[int, float, 
     it on its grid.
     """
     from .forcing import SineBurst, zero_forcing
-    from .network import ConstantForce
+    from .forcing_spec import ConstantForce
 
     if forcing is None or forcing is zero_forcing:
         return FORCE_NONE, 0.0, 0.0, 0.0
@@ -204,7 +204,7 @@ def forcing_arrays(scene: Scene, dt: float, n_steps: int, *, linear: bool = Fals
 
 def _constant(fn) -> bool:
     """A constant force of :func:`lumped.scene.as_forcing` (``fn.value`` for every ``t``)."""
-    from .network import ConstantForce
+    from .forcing_spec import ConstantForce
 
     return type(fn) is ConstantForce
 

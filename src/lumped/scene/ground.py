@@ -264,7 +264,7 @@ def _symbolic_motion(spec: object, quantity: str, v0: float, x0: float):
 def _acceleration_forcing(spec: object, quantity: str, a_expr) -> Callable[[float], float]:
     """``a_g`` as a forcing: a SineBurst where it is one (exact on every compiled path),
     a constant, else the compiled expression of :func:`lumped.scene.as_forcing`."""
-    from .network import as_forcing
+    from .forcing_spec import as_forcing
 
     if isinstance(spec, SineBurst):
         if quantity == "acceleration":

@@ -90,7 +90,7 @@ def inertial_forcing(m: float, ground: GroundMotion) -> Callable[[float], float]
     """The inertial force ``-m a_g(t)`` of a mass in the frame of the ground: a
     :class:`SineBurst` or a constant where ``a_g`` is one (so the compiled and closed
     forms take it exactly), else ``-m`` times ``a_g``."""
-    from .network import ConstantForce
+    from .forcing_spec import ConstantForce
 
     a = ground.acceleration
     if isinstance(a, SineBurst):
@@ -105,7 +105,7 @@ def combine_forcing(applied: Callable[[float], float] | None,
     """``applied + inertial``: merged into one :class:`SineBurst` (same ``omega`` and
     ``t_off``) or one constant where both are, else a sum keeping both breakpoints."""
     from .forcing import zero_forcing
-    from .network import ConstantForce
+    from .forcing_spec import ConstantForce
 
     if applied is None or applied is zero_forcing:
         return inertial
