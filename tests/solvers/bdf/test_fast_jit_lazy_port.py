@@ -1,0 +1,45 @@
+"""The faithful port of ``jit-bdf1``/``jit-bdf2`` is compiled only when the fast loop
+hands a step over (issue 27: a first run on a fresh machine). It is numba's largest
+shared loop (about 30 s of CPU to compile, once per machine); a run the scene's fast loop
+takes whole must not ask for it. Counted, not timed: the port's getter is replaced by one
+that records its calls."""
+
+from __future__ import annotations
+
+import pytest
+
+from lumped import simulate
+from lumped.scenarios import scenario_scene
+from lumped.solvers.bdf import core_jit
+
+
+@pytest.fixture
+def port_calls(monkeypatch):
+    calls: list[int] = []
+    real = core_jit.compiled_run_bdf_core
+
+    def counted():
+        calls.append(1)
+        return real()
+
+    monkeypatch.setattr(core_jit, "compiled_run_bdf_core", counted)
+    return calls
+
+
+@pytest.mark.parametrize("method", ["jit-bdf1", "jit-bdf2"])
+def test_a_run_the_fast_loop_takes_whole_never_asks_for_the_faithful_port(method,
+                                                                          port_calls):
+    sol = simulate(scenario_scene("forcing-F2"), method=method, dt=1e-3, t_end=2.0,
+                   fast=True)
+    assert sol.ok, sol.message
+    assert sol.stats["handovers"] == 0
+    assert sol.stats["fast_steps"] == sol.stats["steps"] == 2000
+    assert port_calls == []
+
+
+def test_a_hand_over_still_gets_the_faithful_port(port_calls):
+    # fast=False: the faithful port alone (the same getter)
+    sol = simulate(scenario_scene("forcing-F2"), method="jit-bdf2", dt=1e-3, t_end=0.5,
+                   fast=False)
+    assert sol.ok, sol.message
+    assert port_calls == [1]
