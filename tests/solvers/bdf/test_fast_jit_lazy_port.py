@@ -43,3 +43,33 @@ def test_a_hand_over_still_gets_the_faithful_port(port_calls):
                    fast=False)
     assert sol.ok, sol.message
     assert port_calls == [1]
+
+
+@pytest.mark.parametrize("cached", [False, True])
+def test_a_short_run_takes_the_fast_loop_where_the_port_was_never_compiled(cached,
+                                                                           monkeypatch):
+    # fast=None below FAST_MIN_STEPS steps, a structure whose fast loop is not cached:
+    # the faithful port if numba's disk cache has it, else the fast loop (a few seconds
+    # to compile, against about 30 s for the port on a fresh machine)
+    from lumped.solvers.bdf import fast_codegen
+
+    monkeypatch.setattr(core_jit, "port_cached", lambda: cached)
+    monkeypatch.setattr(fast_codegen, "fast_module_cached", lambda scene, key=None: False)
+    sol = simulate(scenario_scene("forcing-F2"), method="jit-bdf2", dt=1e-2, t_end=5.0)
+    assert sol.ok, sol.message
+    assert sol.stats["steps"] == 500
+    assert ("fast_steps" in sol.stats) is (not cached)
+
+
+def test_the_port_is_not_cached_on_a_fresh_machine(tmp_path):
+    # numba's cache directory empty: no index for the port (a fresh process, nothing run)
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    code = ("from lumped.solvers.bdf.core_jit import port_cached; "
+            "print(port_cached())")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, check=True)
+    assert out.stdout.strip() == "False"

@@ -118,11 +118,15 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
     ``fast=False``, or a step system of more than
     :data:`~lumped.solvers.bdf.fast_codegen.MAX_FAST_UNKNOWNS` unknowns, the faithful port alone
     runs: the reference's numbers and counters bit for bit. ``fast=None`` (the default)
-    is ``True`` for runs of at least :data:`FAST_MIN_STEPS` steps, and for every run of a
-    structure whose fast loop exists (loaded, or in the disk cache): the fast loop is
-    compiled once per structure (the laws' expressions and the topology; a few seconds
-    the first time on a machine), which a short run of a new structure does not pay
-    back; the laws' numbers are run-time data, so new numbers compile nothing.
+    is ``True`` for runs of at least :data:`FAST_MIN_STEPS` steps, for every run of a
+    structure whose fast loop exists (loaded, or in the disk cache), and for every run
+    on a machine where the faithful port was never compiled
+    (:func:`~lumped.solvers.bdf.core_jit.port_cached`: about 30 s of CPU, once per
+    machine, against a few seconds for a structure's fast loop); else ``False``: the
+    fast loop is compiled once per structure (the laws' expressions and the topology),
+    which a short run of a new structure does not pay back when the port loads from
+    numba's disk cache in about 0.4 s. The laws' numbers are run-time data, so new
+    numbers compile nothing.
 
     Raises
     ------
@@ -144,9 +148,11 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
     from .fast_codegen import MAX_FAST_UNKNOWNS, fast_module_cached
 
     if fast is None:
+        from .core_jit import port_cached
+
         fast = n_steps >= FAST_MIN_STEPS or (
             len(scene.nodes) + len(scene.elements) <= MAX_FAST_UNKNOWNS
-            and fast_module_cached(scene))
+            and (fast_module_cached(scene) or not port_cached()))
 
     if fast and len(scene.nodes) + len(scene.elements) <= MAX_FAST_UNKNOWNS:
         from .fast_jit import run_fast_path
