@@ -15,9 +15,16 @@ The round-off of an unknown ``u_j`` read from a row ``r`` of the stage system is
 ``ROUNDOFF (sum_u |J_ru| |U_u|) / |J_rj|``: the rounding of the row's terms over the
 row's sensitivity to ``u_j`` (a law in its inverse form ``F - tau - (q/gamma)^(1/n)``:
 ``ROUNDOFF (|F| + |dG/dq| |q|) / |dG/dq| = ROUNDOFF (|q| + |F| dq/dF)``). The best row
-(the least round-off) sets it. :func:`roundoff_worst` floors the tolerance of each
-junction velocity at that level when only junction velocities fail the test: a
-correction at the round-off of the laws is converged. The compiled twin is
+of a law in the rate (a dashpot's: the least round-off) sets it. :func:`roundoff_worst`
+floors the tolerance of each junction velocity at that level when only junction
+velocities fail the test: a correction at the round-off of the laws is converged.
+
+A spring's row is not read: it holds the velocity through ``h sum_l a_kl V_l``, and the
+velocity it fixes carries the positions' rounding over ``h`` (``ulp(x) / h``, ``1e-7`` at
+``h = 1e-10``), which on a short step after an impact would pass a junction velocity
+still jumping within the step (a string taut between a junction and a mass whose
+velocity the impact changed: the junction follows at once); such a step fails as before,
+and the event is taken at its start. The compiled twin is
 :func:`lumped.solvers.radau.stage_jit.roundoff_worst_jit` (the same operations in the same
 order, bit for bit).
 """
@@ -28,7 +35,7 @@ from collections.abc import Sequence
 
 from ..newton.criteria import ROUNDOFF
 
-__all__ = ["junction_columns", "roundoff_worst"]
+__all__ = ["junction_columns", "rate_rows", "roundoff_worst"]
 
 
 def junction_columns(masses: Sequence[float], n: int) -> list[bool]:
@@ -38,14 +45,22 @@ def junction_columns(masses: Sequence[float], n: int) -> list[bool]:
     return [j % n < N and masses[j % n] == 0.0 for j in range(3 * n)]
 
 
+def rate_rows(N: int, spring: Sequence[bool]) -> list[bool]:
+    """Per stage row (``3 n``): whether it is the law of an element in the rate (a
+    dashpot: ``spring[e]`` false)."""
+    n = N + len(spring)
+    return [r % n >= N and not spring[r % n - N] for r in range(3 * n)]
+
+
 def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence[float]],
-                   scale: Sequence[float], junction: Sequence[bool], tol: float,
-                   worst: float) -> float:
+                   scale: Sequence[float], junction: Sequence[bool], rate: Sequence[bool],
+                   tol: float, worst: float) -> float:
     r"""The largest ``|du_j| / scale_j`` of a Newton correction ``du`` (``worst``, as the
     caller found it), with the tolerance of a junction's velocity floored at its
     round-off: ``max(scale_j, rho_j / tol)``, ``rho_j = ROUNDOFF min_r (sum_u |J_ru|
-    |U_u|) / |J_rj|`` over the rows ``r`` that hold ``u_j`` (see the module notes), at the
-    iterate ``U`` and its Jacobian ``J``.
+    |U_u|) / |J_rj|`` over the rows ``r`` of laws in the rate (``rate[r]``,
+    :func:`rate_rows`) that hold ``u_j`` (see the module notes), at the iterate ``U`` and
+    its Jacobian ``J``; no floor where none does.
 
     ``worst`` is returned as it is when it is within ``tol`` or when another unknown fails
     the test (only a junction's velocity at its round-off is let through).
@@ -65,8 +80,8 @@ def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence
         if not junction[j]:
             continue
         rho = 0.0
-        for row in J:
-            c = abs(row[j])
+        for r, row in enumerate(J):
+            c = abs(row[j]) if rate[r] else 0.0
             if c > 0.0:
                 s = 0.0
                 for u in range(len(U)):

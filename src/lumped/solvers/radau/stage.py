@@ -43,7 +43,7 @@ from collections.abc import Callable, Sequence
 
 from .cone_split import cone_solver, linear_solver, row_scale, solves
 from .error import ErrorEstimate
-from .roundoff import junction_columns, roundoff_worst
+from .roundoff import junction_columns, rate_rows, roundoff_worst
 from .tableau import END_SLOPES, A, C, W
 
 __all__ = ["DAMPED_AFTER", "MAX_NEWTON", "STALL_PASSES", "StageSystem"]
@@ -94,6 +94,7 @@ class StageSystem(ErrorEstimate):
         self.ea = list(elem_a)
         self.eb = list(elem_b)
         self.spring = list(spring)
+        self.rate = rate_rows(self.N, self.spring)  # (a dashpot's law)
         #: the :class:`~lumped.scene.supports.SupportFrame` of a scene with moving
         #: supports (the kernels read its offsets), else None; ``t_n`` the step's start
         self.frame = None
@@ -291,7 +292,7 @@ class StageSystem(ErrorEstimate):
             if not math.isfinite(worst):
                 return None, it, nfac
             G, J2 = self.evaluate(U, h, x_n, v_n, f, kernels)
-            worst = roundoff_worst(du, U, J2, scale, self.junction, tol, worst)
+            worst = roundoff_worst(du, U, J2, scale, self.junction, self.rate, tol, worst)
             if worst <= tol:
                 # the pseudo-inverse of the cone split converges to a least-squares point
                 # when the locks cannot carry the load together: only a root is a solution
@@ -322,8 +323,8 @@ class StageSystem(ErrorEstimate):
         1/2, ...`` until the merit ``phi = max_i |G_i| / S_i``, ``S_i = sum_j |J_ij|
         scale_j`` (the rows' change per tolerance of the unknowns, fixed within one line
         search), falls by at least ``1e-4 lam``; it stops when the correction is within the
-        convergence test, and :meth:`solve` then converges from there by its own test (the stage this
-        returns is one :meth:`solve` accepts). Returns ``(U or None, iterations,
+        convergence test, and :meth:`solve` then converges from there by its own test (the
+        stage this returns is one :meth:`solve` accepts). Returns ``(U or None, iterations,
         factorisations)``.
         """
         its = 0

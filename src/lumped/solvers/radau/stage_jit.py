@@ -118,11 +118,11 @@ def stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W
 
 
 @njit(cache=True)
-def roundoff_worst_jit(du, U, J, scale, masses, tol, worst) -> float:
+def roundoff_worst_jit(du, U, J, scale, masses, spring, tol, worst) -> float:
     """:func:`lumped.solvers.radau.roundoff.roundoff_worst` (read it for the maths), the
-    junction's velocities read from ``masses`` (``m_i = 0``): the largest ``|du_j| /
-    scale_j`` with a junction velocity's tolerance floored at its round-off, when only
-    junction velocities fail the test."""
+    junction's velocities read from ``masses`` (``m_i = 0``), the dashpots' rows from
+    ``spring``: the largest ``|du_j| / scale_j`` with a junction velocity's tolerance
+    floored at its round-off, when only junction velocities fail the test."""
     if worst <= tol:
         return worst
     N = masses.shape[0]
@@ -144,7 +144,8 @@ def roundoff_worst_jit(du, U, J, scale, masses, tol, worst) -> float:
             continue
         rho = 0.0
         for row in range(size):
-            c = abs(J[row, j])
+            e = row % n - N
+            c = abs(J[row, j]) if e >= 0 and not spring[e] else 0.0
             if c > 0.0:
                 s = 0.0
                 for u in range(size):
@@ -193,7 +194,7 @@ def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U
             return True
         stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n,
                        v_n, f, G, J)
-        worst = roundoff_worst_jit(du, U, J, scale, masses, tol, worst)
+        worst = roundoff_worst_jit(du, U, J, scale, masses, spring, tol, worst)
         if worst <= tol:  # (a junction's velocity at its round-off)
             return True
         if worst > 0.5 * prev:
