@@ -12,7 +12,7 @@ import pytest
 
 from lumped import simulate
 from lumped.laws import get_law
-from lumped.scene import Element, Mass, Scene
+from lumped.scene import Element, Junction, Mass, Scene, SineBurst
 
 
 def _string_beside_a_flat_herschel_bulkley_link() -> Scene:
@@ -197,3 +197,104 @@ def test_a_break_out_decided_by_a_long_probe_keeps_the_junction_at_t(compiled):
     # j0's balance at every output point: e0 (slipping at tau) + e3 = e2
     F = {e: np.asarray(sol.F[e]) for e in ("e0", "e2", "e3")}
     np.testing.assert_allclose(F["e0"] + F["e3"], F["e2"], rtol=0.0, atol=1e-9)
+
+
+def _junction_stopping_on_two_steep_dashpots() -> Scene:
+    # seed 374: the junction j1 held to ground by two Herschel-Bulkley n = 0.3 dashpots
+    # (e1, e3) and pulled by m2 through an implicit spring (e2), under a sine burst on m2;
+    # m0 is apart, on dashpots only
+    hb = get_law("herschel_bulkley")
+    return Scene(
+        [Mass("m0", m=6.122963612261025, x0=0.6730236746110743, v0=-1.1065805147941068),
+         Junction("j1", x0=-0.4997121867720419),
+         Mass("m2", m=1.8171502897752574, x0=0.8468161039641338, v0=-1.2590352377112737)],
+        [Element("e0", get_law("newtonian").bind(c=0.48247348595466244), "ground", "m0"),
+         Element("e1", hb.bind(gamma=1.8727634113838452, tau=0.014397551368561884, n=0.3),
+                 "ground", "j1"),
+         Element("e2", get_law("implicit_spring").bind(k=1.0, L0=0.006542981771376858,
+                                                       F0=1.0), "j1", "m2"),
+         Element("e3", hb.bind(gamma=2.8170994613045766, tau=0.03153653723592915, n=0.3),
+                 "j1", "ground"),
+         Element("e4", get_law("bingham").bind(gamma=0.22544630146946573,
+                                               tau=0.10174688416237884), "m0", "ground"),
+         Element("e5", get_law("newtonian").bind(c=0.025579307286359657), "ground", "m0")],
+        {"m2": SineBurst(amplitude=-0.6476809727668699, omega=1.0,
+                         t_off=0.4958712796291407)})
+
+
+def test_radau5_lands_on_a_junction_stopping_on_steep_dashpots_without_a_bridge():
+    """The spring e2 pulling j1 falls to the sum of its two dashpots' yield forces at
+    ``1.5 N/s``: j1 stops in finite time at ``t* = 0.46528152``, its velocity set by its
+    balance through the dashpots' inverse forms, ``v ~ (F - tau)^0.3``. Near ``t*`` the
+    forces' round-off (``7e-18``) moved that velocity by ``1e-14 .. 4e-14`` (``dv/dF =
+    0.3 v / (F - tau) = 2000``), above the stage Newton's velocity test ``1e-3 (atol +
+    rtol |v|) = 5e-15``: from ``5e-6`` s before ``t*`` every stage solve failed at its
+    round-off (the corrections cycling there), the step fell to its floor and backward
+    Euler bridged twice (a strict expected failure before). A junction's velocity now
+    passes the test at the round-off its laws amplify
+    (:mod:`lumped.solvers.radau.roundoff`); the run lands on the stop. Both loops, the
+    same numbers bit for bit."""
+    scene = _junction_stopping_on_two_steep_dashpots()
+    runs = [simulate(scene, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-10,
+                     atol=1e-13, compiled=compiled) for compiled in (False, True)]
+    for sol in runs:
+        assert sol.ok, sol.message
+        assert sol.stats.get("bridges", 0) == 0, sol.message
+    sol, fast = runs
+    for name in ("m0", "j1", "m2"):
+        np.testing.assert_array_equal(np.asarray(fast.x[name]), np.asarray(sol.x[name]))
+    # the stop: e3 sticks where the spring's force reaches the yield forces' sum
+    stop = next(ev for ev in sol.events if ev.kind == "switch")
+    assert stop.element == "e3" and stop.t == pytest.approx(0.46528152, abs=1e-8)
+    t = np.asarray(sol.t)
+    F = {e: np.asarray(sol.F[e]) for e in ("e1", "e2", "e3")}
+    np.testing.assert_allclose(F["e1"] - F["e3"], F["e2"], rtol=0.0, atol=1e-12)
+    after = (t > stop.t) & (t < 0.4958712796291407)
+    assert after.sum() >= 4 and np.all(np.asarray(sol.v["j1"])[after] == 0.0)
+
+
+def test_the_stop_of_a_junction_on_steep_dashpots_agrees_with_bdf2():
+    # bdf2 at dt / 32 and dt / 64 (its own error at dt / 64: their difference, 4e-6 at
+    # j1, whose velocity ~ (t* - t)^0.3 bdf2 follows at first order, 4e-8 at the masses)
+    scene = _junction_stopping_on_two_steep_dashpots()
+    dt = 0.025 / 4
+    sol = simulate(scene, method="radau5", dt=dt, t_end=0.5, rtol=1e-10, atol=1e-13)
+    fine, finer = (simulate(scene, method="bdf2", dt=dt / s, t_end=0.5) for s in (32, 64))
+    for name in ("m0", "j1", "m2"):
+        own = np.max(np.abs(np.asarray(fine.x[name])[::32] - np.asarray(finer.x[name])[::64]))
+        err = np.max(np.abs(np.asarray(sol.x[name]) - np.asarray(finer.x[name])[::64]))
+        assert err <= own, (name, err, own)
+
+
+def _junction_on_a_steep_dashpot_beside_a_bingham_junction() -> Scene:
+    # seed 23: the junction j1 tied to m0 by a stiff implicit spring (e4) beside a
+    # Herschel-Bulkley n = 0.3 dashpot (e1), m2 on a string under a sine burst, and the
+    # junction j3 on a Bingham dashpot to ground
+    return Scene(
+        [Mass("m0", m=0.6601110606232546, x0=-0.0, v0=0.15806686887346055),
+         Junction("j1", x0=0.49707607189094394),
+         Mass("m2", m=6.163150560766638, x0=-0.43821309624802296, v0=-1.2711194010762457),
+         Junction("j3", x0=1e-09)],
+        [Element("e0", get_law("string_spring").bind(k=1.0, L=0.017161581244293563),
+                 "ground", "m0"),
+         Element("e1", get_law("herschel_bulkley").bind(gamma=1.1020425416966608, tau=0.1,
+                                                        n=0.3), "m0", "j1"),
+         Element("e2", get_law("string_spring").bind(k=22.428124246808057,
+                                                     L=0.36395261778210747), "ground", "m2"),
+         Element("e3", get_law("bingham").bind(gamma=0.9999999999999942,
+                                               tau=0.5195164908099175), "ground", "j3"),
+         Element("e4", get_law("implicit_spring").bind(k=5.240614430488878,
+                                                       L0=0.8088635680026663,
+                                                       F0=49.43323562011863), "m0", "j1"),
+         Element("e5", get_law("linear_spring").bind(k=0.2944512267678015), "m2", "j3")],
+        {"m2": SineBurst(amplitude=14.110867222515967, omega=7.410325461732834,
+                         t_off=0.19027617256588175)})
+
+
+def test_radau5_follows_a_junction_on_a_steep_dashpot_without_a_bridge():
+    """Seed 23, the same kind as seed 374 above: 12 bridges, then a stop at the step floor
+    after 64 s of CPU before the round-off test of a junction's velocity."""
+    sol = simulate(_junction_on_a_steep_dashpot_beside_a_bingham_junction(), method="radau5",
+                   dt=0.025 / 4, t_end=0.5, rtol=1e-10, atol=1e-13, compiled=False)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message

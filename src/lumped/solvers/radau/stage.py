@@ -43,6 +43,7 @@ from collections.abc import Callable, Sequence
 
 from .cone_split import cone_solver, linear_solver, row_scale, solves
 from .error import ErrorEstimate
+from .roundoff import junction_columns, rate_rows, roundoff_worst
 from .tableau import END_SLOPES, A, C, W
 
 __all__ = ["DAMPED_AFTER", "MAX_NEWTON", "STALL_PASSES", "StageSystem"]
@@ -84,15 +85,16 @@ class StageSystem(ErrorEstimate):
         self.n = self.N + self.E
         #: the last :meth:`solve` failed because the locks in parallel cannot carry the
         #: load together (a least-squares point, not a root): a lock must break
-        self.infeasible = False
-        self._least_squares = False
+        self.infeasible = self._least_squares = False
         #: after :meth:`solve` held a force of ``cones`` at its bound: the stage values of
         #: the split before any was held (:mod:`lumped.solvers.modes.split_kink`), else None
         self.free_split: list[float] | None = None
         self.m = [float(mi) for mi in masses]
+        self.junction = junction_columns(self.m, self.n)  # (a junction's velocity)
         self.ea = list(elem_a)
         self.eb = list(elem_b)
         self.spring = list(spring)
+        self.rate = rate_rows(self.N, self.spring)  # (a dashpot's law)
         #: the :class:`~lumped.scene.supports.SupportFrame` of a scene with moving
         #: supports (the kernels read its offsets), else None; ``t_n`` the step's start
         self.frame = None
@@ -111,11 +113,9 @@ class StageSystem(ErrorEstimate):
         string) is held on the velocity level: its branch is affine in ``q`` with constant
         coefficients, and its residual is taken as ``R(L) + dR/dq h sum_l a_kl (V_l,b -
         V_l,a)``, not ``R(X_k,b - X_k,a)``: the positions carry their rounding, ``ulp(x)``,
-        which the
-        lock would turn into rates of ``ulp(x) / h`` and forces of ``m ulp(x) / h^2``,
-        so that on a short step Newton cycled at round-off and the step size fell to its
-        floor. The positions still follow the velocities, so ``q`` stays at ``L`` to
-        their rounding.
+        which the lock would turn into rates of ``ulp(x) / h`` and forces of ``m ulp(x) /
+        h^2``, so that on a short step Newton cycled at round-off and the step fell to its
+        floor. The positions still follow the velocities (``q`` at ``L`` to their rounding).
         """
         N, E, n = self.N, self.E, self.n
         m, ea, eb, spring = self.m, self.ea, self.eb, self.spring
@@ -207,7 +207,8 @@ class StageSystem(ErrorEstimate):
               least_squares: bool = False) -> tuple[list[float] | None, int, int]:
         """Newton on the stage system from the guess ``U`` (modified in place).
 
-        Converged when ``max_j |dU_j| / scale_j <= tol``; the Jacobian is refactored when
+        Converged when ``max_j |dU_j| / scale_j <= tol`` (a junction's velocity also at its
+        round-off, :mod:`~lumped.solvers.radau.roundoff`); the Jacobian is refactored when
         the contraction rate exceeds 1/2 (simplified Newton otherwise). Returns
         ``(U or None, iterations, factorisations)``; ``None`` when Newton failed
         (non-finite or no convergence): the caller shrinks the step.  A singular Jacobian
@@ -291,6 +292,7 @@ class StageSystem(ErrorEstimate):
             if not math.isfinite(worst):
                 return None, it, nfac
             G, J2 = self.evaluate(U, h, x_n, v_n, f, kernels)
+            worst = roundoff_worst(du, U, J2, scale, self.junction, self.rate, tol, worst)
             if worst <= tol:
                 # the pseudo-inverse of the cone split converges to a least-squares point
                 # when the locks cannot carry the load together: only a root is a solution
@@ -321,9 +323,8 @@ class StageSystem(ErrorEstimate):
         1/2, ...`` until the merit ``phi = max_i |G_i| / S_i``, ``S_i = sum_j |J_ij|
         scale_j`` (the rows' change per tolerance of the unknowns, fixed within one line
         search), falls by at least ``1e-4 lam``; it stops when the correction is within the
-        convergence test,
-        and :meth:`solve` then converges from there by its own test (the stage this
-        returns is one :meth:`solve` accepts). Returns ``(U or None, iterations,
+        convergence test, and :meth:`solve` then converges from there by its own test (the
+        stage this returns is one :meth:`solve` accepts). Returns ``(U or None, iterations,
         factorisations)``.
         """
         its = 0

@@ -10,9 +10,10 @@ F_k,e`` for an element (``n = N + E``, stages ``k = 0, 1, 2``)::
                                      - net_i(t_n + c_k h, F_k) = 0   (junctions)
     R_e^{(b_e)}(q_e(X_k, V_k), F_k,e) = 0,   X_k = x_n + h sum_l a_kl V_l
 
-and simplified Newton on it (converged when ``max_j |dU_j| / scale_j <= tol``; the
-Jacobian refactored when the contraction rate exceeds 1/2). Same LU as the reference
-(singleton rows first), so the two give the same numbers bit for bit.
+and simplified Newton on it (converged when ``max_j |dU_j| / scale_j <= tol``, a junction's
+velocity also at its round-off, :func:`roundoff_worst_jit`; the Jacobian refactored when
+the contraction rate exceeds 1/2). Same LU as the reference (singleton rows first), so
+the two give the same numbers bit for bit.
 
 The scene's branch kernels come in as a function pointer, ``branch_law(e, i, q, F, lawc)`` of
 the scene's generated module (:mod:`lumped.codegen.jit`), so the step is compiled once
@@ -28,6 +29,7 @@ import numpy as np
 
 from ...codegen.function_types import BRANCH_LAW_TYPE
 from ...codegen.jit import njit, numba_enabled
+from ..newton.criteria import ROUNDOFF
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 
 __all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_solve"]
@@ -115,6 +117,48 @@ def stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W
                     J[col, base + a] -= Rq
 
 
+@njit(cache=True)
+def roundoff_worst_jit(du, U, J, scale, masses, spring, tol, worst) -> float:
+    """:func:`lumped.solvers.radau.roundoff.roundoff_worst` (read it for the maths), the
+    junction's velocities read from ``masses`` (``m_i = 0``), the dashpots' rows from
+    ``spring``: the largest ``|du_j| / scale_j`` with a junction velocity's tolerance
+    floored at its round-off, when only junction velocities fail the test."""
+    if worst <= tol:
+        return worst
+    N = masses.shape[0]
+    size = U.shape[0]
+    n = size // 3
+    other = 0.0
+    for j in range(size):
+        i = j % n
+        if not (i < N and masses[i] == 0.0):
+            r = abs(du[j]) / scale[j]
+            if not r <= other:
+                other = r
+    if not other <= tol:
+        return worst
+    worst = other
+    for j in range(size):
+        i = j % n
+        if not (i < N and masses[i] == 0.0):
+            continue
+        rho = 0.0
+        for row in range(size):
+            e = row % n - N
+            c = abs(J[row, j]) if e >= 0 and not spring[e] else 0.0
+            if c > 0.0:
+                s = 0.0
+                for u in range(size):
+                    s += abs(J[row, u]) * abs(U[u])
+                s = s / c
+                if rho == 0.0 or s < rho:
+                    rho = s
+        r = abs(du[j]) / max(scale[j], ROUNDOFF * rho / tol)
+        if not r <= worst:
+            worst = r
+    return worst
+
+
 def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n, f,
                 scale, tol, max_iters, G, J, LU, perm, b, du, out) -> bool:
     """Simplified Newton on the stage system from ``U`` (overwritten); ``out`` receives
@@ -150,6 +194,9 @@ def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U
             return True
         stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n,
                        v_n, f, G, J)
+        worst = roundoff_worst_jit(du, U, J, scale, masses, spring, tol, worst)
+        if worst <= tol:  # (a junction's velocity at its round-off)
+            return True
         if worst > 0.5 * prev:
             ok = lu_factor_into(J, LU, perm)
             nfac += 1

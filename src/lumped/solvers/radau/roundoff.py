@@ -1,0 +1,95 @@
+r"""The stage Newton's convergence test of a junction's velocity at its round-off.
+
+A junction (a massless node) has no inertia: its stage velocity ``V_k,i`` is set by the
+laws of the elements at it through the junction's force balance, and so carries the
+round-off of their forces magnified by ``dq/dF``. A junction held by two
+Herschel-Bulkley ``n = 0.3`` dashpots slowing to a stop in finite time (the spring
+pulling it falls to the sum of their yield forces) has ``q = gamma (F - tau)^n``, so
+``dq/dF = n q / (F - tau)`` grows without bound: at ``q = 0.04``, ``F - tau = 6e-6``,
+``dq/dF = 2000``, and one ulp of the forces (``7e-18``) moves the velocity by ``1.4e-14``
+(measured: the corrections cycled at ``1e-14 .. 4e-14``), above the test's ``tol
+(atol + rtol |v|) = 5e-15`` at ``rtol = 1e-10``. Every stage solve then failed, the
+step fell to its floor and backward Euler bridged the stop (issue 29).
+
+The round-off of an unknown ``u_j`` read from a row ``r`` of the stage system is
+``ROUNDOFF (sum_u |J_ru| |U_u|) / |J_rj|``: the rounding of the row's terms over the
+row's sensitivity to ``u_j`` (a law in its inverse form ``F - tau - (q/gamma)^(1/n)``:
+``ROUNDOFF (|F| + |dG/dq| |q|) / |dG/dq| = ROUNDOFF (|q| + |F| dq/dF)``). The best row
+of a law in the rate (a dashpot's: the least round-off) sets it. :func:`roundoff_worst`
+floors the tolerance of each junction velocity at that level when only junction
+velocities fail the test: a correction at the round-off of the laws is converged.
+
+A spring's row is not read: it holds the velocity through ``h sum_l a_kl V_l``, and the
+velocity it fixes carries the positions' rounding over ``h`` (``ulp(x) / h``, ``1e-7`` at
+``h = 1e-10``), which on a short step after an impact would pass a junction velocity
+still jumping within the step (a string taut between a junction and a mass whose
+velocity the impact changed: the junction follows at once); such a step fails as before,
+and the event is taken at its start. The compiled twin is
+:func:`lumped.solvers.radau.stage_jit.roundoff_worst_jit` (the same operations in the same
+order, bit for bit).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from ..newton.criteria import ROUNDOFF
+
+__all__ = ["junction_columns", "rate_rows", "roundoff_worst"]
+
+
+def junction_columns(masses: Sequence[float], n: int) -> list[bool]:
+    """Per stage unknown (``3 n`` of them, see :mod:`lumped.solvers.radau.stage`): whether it
+    is a junction's velocity (``m_i = 0``)."""
+    N = len(masses)
+    return [j % n < N and masses[j % n] == 0.0 for j in range(3 * n)]
+
+
+def rate_rows(N: int, spring: Sequence[bool]) -> list[bool]:
+    """Per stage row (``3 n``): whether it is the law of an element in the rate (a
+    dashpot: ``spring[e]`` false)."""
+    n = N + len(spring)
+    return [r % n >= N and not spring[r % n - N] for r in range(3 * n)]
+
+
+def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence[float]],
+                   scale: Sequence[float], junction: Sequence[bool], rate: Sequence[bool],
+                   tol: float, worst: float) -> float:
+    r"""The largest ``|du_j| / scale_j`` of a Newton correction ``du`` (``worst``, as the
+    caller found it), with the tolerance of a junction's velocity floored at its
+    round-off: ``max(scale_j, rho_j / tol)``, ``rho_j = ROUNDOFF min_r (sum_u |J_ru|
+    |U_u|) / |J_rj|`` over the rows ``r`` of laws in the rate (``rate[r]``,
+    :func:`rate_rows`) that hold ``u_j`` (see the module notes), at the iterate ``U`` and
+    its Jacobian ``J``; no floor where none does.
+
+    ``worst`` is returned as it is when it is within ``tol`` or when another unknown fails
+    the test (only a junction's velocity at its round-off is let through).
+    """
+    if worst <= tol:
+        return worst
+    other = 0.0
+    for j in range(len(du)):
+        if not junction[j]:
+            r = abs(du[j]) / scale[j]
+            if not r <= other:
+                other = r
+    if not other <= tol:
+        return worst
+    worst = other
+    for j in range(len(du)):
+        if not junction[j]:
+            continue
+        rho = 0.0
+        for r, row in enumerate(J):
+            c = abs(row[j]) if rate[r] else 0.0
+            if c > 0.0:
+                s = 0.0
+                for u in range(len(U)):
+                    s += abs(row[u]) * abs(U[u])
+                s = s / c
+                if rho == 0.0 or s < rho:
+                    rho = s
+        r = abs(du[j]) / max(scale[j], ROUNDOFF * rho / tol)
+        if not r <= worst:
+            worst = r
+    return worst

@@ -1,0 +1,81 @@
+"""The stage Newton's test of a junction's velocity at the round-off of its laws
+(:mod:`lumped.solvers.radau.roundoff`), and its compiled twin, bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lumped.solvers.newton.criteria import ROUNDOFF
+from lumped.solvers.radau.roundoff import junction_columns, rate_rows, roundoff_worst
+from lumped.solvers.radau.stage_jit import roundoff_worst_jit
+
+# a mass (node 0) and a junction (node 1) on one element (n = 3 unknowns a stage, 9 in
+# all): the junction's balance row at each stage holds the element's force, the
+# element's row the junction's velocity with the small coefficient of a law flat in it
+# (an inverse form F - tau - (q / gamma)^(1/n) near its stop: dG/dq = 1e-3) and its
+# force with 1
+MASSES = [1.0, 0.0]
+SPRING = [False]
+N_UNK = 3
+TOL = 1e-3
+
+
+def _system():
+    size = 3 * N_UNK
+    J = np.eye(size)
+    for k in range(3):
+        J[k * N_UNK + 1, k * N_UNK + 1] = 0.0
+        J[k * N_UNK + 1, k * N_UNK + 2] = 1.0
+        J[k * N_UNK + 2, k * N_UNK + 1] = -1e-3
+    U = np.array([0.5, 0.04, 0.03] * 3)
+    scale = np.array([1e-13 + 1e-10 * 0.5, 1e-13 + 1e-10 * 0.04, 1e-10 * 0.03] * 3)
+    return J, U, scale
+
+
+def _both(du, J, U, scale, spring=SPRING):
+    worst = float(np.max(np.abs(du) / scale))  # (the plain test, as the Newton finds it)
+    py = roundoff_worst(list(du), list(U), J.tolist(), list(scale),
+                        junction_columns(MASSES, N_UNK), rate_rows(2, spring), TOL, worst)
+    jit = roundoff_worst_jit(du, U, J, scale, np.array(MASSES), np.array(spring), TOL, worst)
+    assert py == jit
+    return py
+
+
+def test_the_junction_columns_are_the_massless_nodes_velocities():
+    assert junction_columns(MASSES, N_UNK) == [False, True, False] * 3
+    assert rate_rows(2, SPRING) == [False, False, True] * 3
+    assert rate_rows(2, [True]) == [False] * 9
+
+
+def test_a_junction_velocity_correction_at_its_laws_round_off_is_converged():
+    J, U, scale = _system()
+    # the junction's velocity read from its law's row: ROUNDOFF (|F| + 1e-3 |v|) / 1e-3
+    rho = ROUNDOFF * (0.03 + 1e-3 * 0.04) / 1e-3
+    du = np.zeros(9)
+    du[1 + N_UNK] = 0.5 * rho  # (1.3e-14: 3 times the plain test's 4e-15)
+    assert abs(du[1 + N_UNK]) / scale[1 + N_UNK] > TOL
+    assert _both(du, J, U, scale) == pytest.approx(0.5 * TOL, rel=1e-12)
+    # ... beyond it, not
+    du[1 + N_UNK] = 2.0 * rho
+    assert _both(du, J, U, scale) > TOL
+
+
+def test_a_springs_row_sets_no_floor():
+    # a spring's row holds the velocity through h A V: its rounding is the positions'
+    # over h, not a law's; the same correction fails the test
+    J, U, scale = _system()
+    du = np.zeros(9)
+    du[1 + N_UNK] = 0.5 * ROUNDOFF * (0.03 + 1e-3 * 0.04) / 1e-3
+    worst = abs(du[1 + N_UNK]) / scale[1 + N_UNK]
+    assert _both(du, J, U, scale, spring=[True]) == worst > TOL
+
+
+def test_the_floor_is_the_junctions_alone():
+    J, U, scale = _system()
+    du = np.zeros(9)
+    du[0] = 2.0 * TOL * scale[0]  # a mass's velocity: no floor
+    assert _both(du, J, U, scale) == pytest.approx(2.0 * TOL, rel=1e-12)
+    # ... and while another unknown fails, a junction's velocity keeps its plain test
+    du[1] = 1e-14
+    assert _both(du, J, U, scale) == pytest.approx(1e-14 / scale[1], rel=1e-12)
