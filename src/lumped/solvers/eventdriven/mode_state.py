@@ -19,6 +19,7 @@ from ...scene import Mass, Scene
 from ...scene.supports import support_time
 from ..implicit.initial_slip import start_at_known_rates
 from ..modes.choice import select_modes
+from ..modes.force_bounds import onto_slip_ends
 from ..modes.lock_events import (
     apply_impacts,
     hold_impacted_locks,
@@ -184,6 +185,8 @@ class ModeState:
                 F[:] = F_p
             if cause == "start":
                 v[:], F[:] = start_at_known_rates(scene, v, F, v_p, F_p)
+            elif cause == "guard":  # (a yield dashpot at rate ~0 switching: at its edge)
+                F[:] = onto_slip_ends(scene, modes, new, v, F, scale_v)
         back = self.left.get(tuple(new))
         if back is not None:
             # back to a mode held at t (no accepted step since): the switches since then

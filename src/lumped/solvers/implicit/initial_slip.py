@@ -44,10 +44,11 @@ from collections.abc import Callable
 from ...scene import Mass, Scene
 from ..newton.scalar_root import scalar_root
 
-__all__ = ["rates_below_resolution", "settle_on_rest_set", "start_at_known_rates"]
+__all__ = ["known_rate_dashpots", "rates_below_resolution", "rest_edge",
+           "settle_on_rest_set", "start_at_known_rates"]
 
 
-def _known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
+def known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
     """Those of ``candidates`` that are dashpots whose rate at ``t = 0`` is the masses'
     ``v_b(0) - v_a(0)``: each end a mass or ground, none on a moving support."""
     if not candidates:
@@ -80,7 +81,7 @@ def _reversed(scene: Scene, q0: list[float], q_after: Callable[[int], float],
     turns (``v_after(i)``): see :func:`rates_below_resolution`."""
     out: list[int] = []
     masses: list[int] = []
-    for e in _known_rate_dashpots(scene, [e for e in range(len(q0)) if q0[e] != 0.0]):
+    for e in known_rate_dashpots(scene, [e for e in range(len(q0)) if q0[e] != 0.0]):
         if not _set_valued_at_rest(scene.elements[e].law.kernel):
             continue  # a law that fixes the force at rest (newtonian): continuous in q
         if _turned(q0[e], q_after(e)):
@@ -170,13 +171,13 @@ def settle_on_rest_set(scene: Scene, pinned: list[float | None], q0: list[float]
         The forces, those of the dashpots slipping from rest moved to their yield forces.
     """
     out = list(F)
-    for e in _known_rate_dashpots(scene, [e for e, Fp in enumerate(pinned)
+    for e in known_rate_dashpots(scene, [e for e, Fp in enumerate(pinned)
                                           if Fp is None and q0[e] == 0.0]):
-        out[e] = _rest_edge(scene.elements[e].law.kernel, out[e])
+        out[e] = rest_edge(scene.elements[e].law.kernel, out[e])
     return out
 
 
-def _rest_edge(kernel, F: float) -> float:
+def rest_edge(kernel, F: float) -> float:
     """``F`` if ``R(0, F) = 0`` (or ``F`` not finite, or ``R(0, 0) != 0``), else the float
     ``F*`` on the segment from 0 to ``F`` with ``R(0, F*) = 0`` next to one with
     ``R != 0``, by bisection (see :func:`settle_on_rest_set`)."""
@@ -235,7 +236,7 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
     """
     v, F = list(v), list(F)
     ea, eb = scene.elem_a, scene.elem_b
-    known = _known_rate_dashpots(scene, list(range(len(F))))
+    known = known_rate_dashpots(scene, list(range(len(F))))
     q0 = [0.0] * len(F)
     for e in known:
         q0[e] = (v[eb[e]] if eb[e] >= 0 else 0.0) - (v[ea[e]] if ea[e] >= 0 else 0.0)
@@ -255,5 +256,5 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
         if fixed and math.isfinite(root):
             F[e] = root
         elif q == 0.0:
-            F[e] = _rest_edge(kernel, start)
+            F[e] = rest_edge(kernel, start)
     return v, F
