@@ -103,7 +103,10 @@ def test_locks_in_parallel_at_their_joint_bound_go_on_it():
 def test_a_flat_dashpot_switching_at_a_vanishing_rate_takes_its_yield_force():
     scene = _flat_dashpot_under_a_sine()
     F = [0.98937, -0.4000024190362437]
-    assert onto_slip_ends(scene, [0, 0], [0, 1], [2.1e-15], F, 1e-13) == [0.98937, -0.4]
-    # a rate beyond the tolerance, or no switch: the force stays
-    assert onto_slip_ends(scene, [0, 0], [0, 1], [2.1e-12], F, 1e-13) == F
-    assert onto_slip_ends(scene, [0, 1], [0, 1], [2.1e-15], F, 1e-13) == F
+    assert onto_slip_ends(scene, [0, 0], [0, 1], [2.1e-15], F, 1e-13, RTOL) == [0.98937, -0.4]
+    # a rate beyond the tolerance, no switch, or a force far from the yield force (more
+    # than sqrt(rtol) of it): the force stays
+    assert onto_slip_ends(scene, [0, 0], [0, 1], [2.1e-12], F, 1e-13, RTOL) == F
+    assert onto_slip_ends(scene, [0, 1], [0, 1], [2.1e-15], F, 1e-13, RTOL) == F
+    far = [0.98937, -0.41]
+    assert onto_slip_ends(scene, [0, 0], [0, 1], [2.1e-15], far, 1e-13, RTOL) == far

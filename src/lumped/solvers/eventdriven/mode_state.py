@@ -186,7 +186,7 @@ class ModeState:
             if cause == "start":
                 v[:], F[:] = start_at_known_rates(scene, v, F, v_p, F_p)
             elif cause == "guard":  # (a yield dashpot at rate ~0 switching: at its edge)
-                F[:] = onto_slip_ends(scene, modes, new, v, F, scale_v)
+                F[:] = onto_slip_ends(scene, modes, new, v, F, scale_v, rtol)
         back = self.left.get(tuple(new))
         if back is not None:
             # back to a mode held at t (no accepted step since): the switches since then

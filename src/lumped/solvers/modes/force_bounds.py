@@ -28,6 +28,7 @@ r"""Forces the stage Newton leaves off the bounds their laws put them on, put ba
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from ...scene import Scene
@@ -63,11 +64,14 @@ def onto_joint_bounds(scene: Scene, cones: dict[int, tuple[float, float, float, 
 
 
 def onto_slip_ends(scene: Scene, old: Sequence[int], new: Sequence[int], v: list[float],
-                   F: list[float], tol: float) -> list[float]:
+                   F: list[float], tol: float, rtol: float) -> list[float]:
     """``F`` with each yield dashpot between masses and ground that switches from branch
-    ``old[e]`` to ``new[e]`` at a rate ``|v_b - v_a| <= tol`` on the edge of its set at
-    rest nearest ``F_e`` (see the module notes; a force within that set stays); a new
-    list."""
+    ``old[e]`` to ``new[e]`` at a rate ``|v_b - v_a| <= tol`` on the edge ``F*`` of its set
+    at rest nearest ``F_e`` (see the module notes; a force within that set stays), when
+    that moves it by at most ``sqrt(rtol) (1 + |F*|)``: the resolution of a force on a
+    branch flat at its end (``q ~ (|F| - tau)^2``) from rates known to ``rtol``. A larger
+    move is no probe's artefact (a steep law whose rate is within ``tol`` of 0 but whose
+    force is not its yield force) and is left alone. A new list."""
     out = list(F)
     for e in known_rate_dashpots(scene, [e for e in range(len(F)) if new[e] != old[e]]):
         a, b = scene.elem_a[e], scene.elem_b[e]
@@ -75,5 +79,7 @@ def onto_slip_ends(scene: Scene, old: Sequence[int], new: Sequence[int], v: list
             kernel = scene.elements[e].law.kernel
             R, _, RF = kernel(0.0, 0.0)
             if R == 0.0 and RF == 0.0:  # (a yield law: set-valued at rest)
-                out[e] = rest_edge(kernel, F[e])
+                edge = rest_edge(kernel, F[e])
+                if abs(edge - F[e]) <= math.sqrt(rtol) * (1.0 + abs(edge)):
+                    out[e] = edge
     return out
