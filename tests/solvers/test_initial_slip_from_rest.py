@@ -79,10 +79,11 @@ def _one_mass(law, *, v0: float, x0: float = 0.1, k: float = 4.0, m: float = 0.5
                  {"m": k * x0 + pull})
 
 
-def _flat_yield_at_the_start() -> Scene:
-    # test_random_network_tight_tolerance[radau5] at LUMPED_LARGE=1 (session 17): a mass
-    # nearly at rest (v0 = 1.1e-113) on a Herschel-Bulkley n = 2 dashpot (e2) under a
-    # load past its yield force; the dashpot d = e2 (tau = 0.9999999999976974)
+def _drawn_network(d: str, e3: Element, e4: Element, load: float) -> Scene:
+    """The mass m0 (``v0 = 1.1e-113``) and junction j1 of two draws of the property run,
+    an implicit spring e0 to m0 and a newtonian dashpot e1 to j1, the Herschel-Bulkley
+    ``n = 2`` dashpot ``d`` (``tau = 0.9999999999976974``) ground -> m0, the draw's ``e3``
+    and ``e4``, and the constant ``load`` on m0."""
     hb = get_law("herschel_bulkley")
     return Scene(
         [Mass("m0", m=0.18010497895494063, x0=0.0416411306426292, v0=1.1477939384387031e-113),
@@ -91,11 +92,21 @@ def _flat_yield_at_the_start() -> Scene:
                                                        L0=0.0015697662087493529,
                                                        F0=92.53060181319749), "ground", "m0"),
          Element("e1", get_law("newtonian").bind(c=0.025233070555820285), "ground", "j1"),
-         Element("d", hb.bind(gamma=0.48901320843087076, tau=0.9999999999976974, n=2.0),
+         Element(d, hb.bind(gamma=0.48901320843087076, tau=0.9999999999976974, n=2.0),
                  "ground", "m0"),
-         Element("e3", get_law("linear_spring").bind(k=1.0), "ground", "m0"),
-         Element("e4", hb.bind(gamma=1.0, tau=0.056060389109965476, n=1.5), "m0", "j1")],
-        {"m0": -1.1716411679615943})
+         e3, e4],
+        {"m0": load})
+
+
+def _flat_yield_at_the_start() -> Scene:
+    # test_random_network_tight_tolerance[radau5] at LUMPED_LARGE=1 (session 17): a mass
+    # nearly at rest (v0 = 1.1e-113) on a Herschel-Bulkley n = 2 dashpot (e2) under a
+    # load past its yield force; the dashpot d = e2 (tau = 0.9999999999976974)
+    return _drawn_network(
+        "d", Element("e3", get_law("linear_spring").bind(k=1.0), "ground", "m0"),
+        Element("e4", get_law("herschel_bulkley").bind(gamma=1.0, tau=0.056060389109965476,
+                                                       n=1.5), "m0", "j1"),
+        -1.1716411679615943)
 
 
 def test_the_initial_force_of_a_dashpot_slipping_from_rest_is_its_yield_force():
@@ -147,20 +158,10 @@ def _slipping_at_a_tiny_rate() -> Scene:
     # mass at v0 = 1.1e-113 with the load's sign (not reversed: not a start from rest),
     # two Herschel-Bulkley dashpots to ground (e2: n = 2, flat in F at its yield force
     # 0.9999999999976974; e3: n = 0.3), a junction between two newtonian dashpots
-    hb = get_law("herschel_bulkley")
-    return Scene(
-        [Mass("m0", m=0.18010497895494063, x0=0.0416411306426292, v0=1.1477939384387031e-113),
-         Junction("j1", x0=0.23379658006202875)],
-        [Element("e0", get_law("implicit_spring").bind(k=19.303734428944384,
-                                                       L0=0.0015697662087493529,
-                                                       F0=92.53060181319749), "ground", "m0"),
-         Element("e1", get_law("newtonian").bind(c=0.025233070555820285), "ground", "j1"),
-         Element("e2", hb.bind(gamma=0.48901320843087076, tau=0.9999999999976974, n=2.0),
-                 "ground", "m0"),
-         Element("e3", hb.bind(gamma=0.9935784273530724, tau=0.37431600847960106, n=0.3),
-                 "ground", "m0"),
-         Element("e4", get_law("newtonian").bind(c=1.0), "m0", "j1")],
-        {"m0": 12.43229108131224})
+    return _drawn_network(
+        "e2", Element("e3", get_law("herschel_bulkley").bind(
+            gamma=0.9935784273530724, tau=0.37431600847960106, n=0.3), "ground", "m0"),
+        Element("e4", get_law("newtonian").bind(c=1.0), "m0", "j1"), 12.43229108131224)
 
 
 @pytest.mark.parametrize("key", sorted(METHODS))
