@@ -164,8 +164,10 @@ def _slipping_at_a_tiny_rate() -> Scene:
         Element("e4", get_law("newtonian").bind(c=1.0), "m0", "j1"), 12.43229108131224)
 
 
-@pytest.mark.parametrize("key", sorted(METHODS))
+@pytest.mark.parametrize("key", ["bdf1", "bdf2", "radau5-compiled", "radau5-python"])
 def test_dashpots_at_a_tiny_known_rate_start_on_their_laws_in_every_method(key):
+    # (jit-bdf1/2 start from bdf1/2's consistent_initial_state and read tau too; left out
+    # here, as their compile of this scene costs ~10 s)
     # row 0 holds e2's and e3's laws at q = v0 = 1.1e-113: F = tau + (v0 / gamma)^(1/n),
     # tau to round-off. Before: radau5 (both loops) read e2 at 1.000241 at t_end = 0.5,
     # the force of its start probe (1e-9 t_end = 5e-10 s, rate 2.9e-8), kept because the
