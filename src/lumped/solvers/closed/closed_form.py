@@ -44,6 +44,7 @@ __all__ = [
     "bdf2_step",
     "initial_dashpot_force",
     "initial_velocity",
+    "limit_step_velocity",
     "steps_for",
     "CLOSED_METHODS",
     "run_bdf1_loop",
@@ -174,10 +175,25 @@ def initial_velocity(osc: BinghamOscillator, x0: float, v0: float, F0: float,
                      h: float = 0.0) -> float:
     """``v0``, or 0 when the limit step ``h > 0`` reverses or stops it (see
     :func:`initial_dashpot_force`): the mass then starts at rest, a change of ``v0``
-    below ``h |a|``, so that row 0 holds law (6)."""
+    below ``h |a|``, so that row 0 holds law (6). The rule is
+    :func:`limit_step_velocity`'s."""
+    return limit_step_velocity(osc.m, osc.k, 1.0 / osc.gamma, osc.tau, x0, v0, F0, h)
+
+
+def limit_step_velocity(m: float, k: float, inv_gamma: float, tau: float, x0: float,
+                        v0: float, F0: float, h: float) -> float:
+    r"""``v0``, or 0 when the limit step ``h > 0`` reverses or stops it:
+
+    .. math:: v_h = \operatorname{fl}\Bigl(v_0 + h\,\frac{F(0) - k x_0 - (\operatorname{sgn}(v_0)
+              \tau + v_0 / \gamma)}{m}\Bigr) = 0 \ \text{ or }\ \operatorname{sgn} v_h
+              \ne \operatorname{sgn} v_0
+
+    (``F0`` the forcing at ``t = 0``; ``inv_gamma = 1 / gamma``). The one rule of
+    :func:`initial_velocity` and of the compiled summaries
+    (:func:`lumped.solvers.closed.closed_form_jit.summary_one` compiles this code)."""
     if v0 == 0.0 or h == 0.0:
         return v0
-    v_h = v0 + h * (F0 - osc.k * x0 - (math.copysign(osc.tau, v0) + v0 / osc.gamma)) / osc.m
+    v_h = v0 + h * (F0 - k * x0 - (math.copysign(tau, v0) + v0 * inv_gamma)) / m
     return v0 if v_h != 0.0 and (v_h > 0.0) == (v0 > 0.0) else 0.0
 
 

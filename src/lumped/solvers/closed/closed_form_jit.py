@@ -127,6 +127,18 @@ def _compile_reference_steps():
 _bdf1_step, _bdf2_step = _compile_reference_steps()
 
 
+def _compile_reference_rule():
+    """numba-compile the reference's own
+    :func:`~lumped.solvers.closed.closed_form.limit_step_velocity` (a ``v0`` the limit
+    step reverses or stops starts at rest): one source for the rule."""
+    from . import closed_form as reference
+
+    return njit(cache=True, nogil=True, inline="always")(reference.limit_step_velocity)
+
+
+_limit_step_velocity = _compile_reference_rule()
+
+
 @njit(cache=True, nogil=True, inline="always")
 def _step(m, k, inv_gamma, tau, dt, bdf2, x, v, x_prev, v_prev, F_next):
     """One step: BDF2 from ``(x, v)`` and ``(x_prev, v_prev)`` if ``bdf2``, else BDF1.
@@ -188,12 +200,9 @@ def summary_one(m, k, inv_gamma, tau, dt, n, bdf2, x0, v0, kind, p0, p1, p2, out
     x = x0
     v = v0
     if v0 != 0.0:  # a v0 the limit step 1e-20 dt reverses or stops starts at rest, as in
-        # integrate (closed_form.initial_velocity)
-        h = 1e-20 * dt
-        v_h = v0 + h * (_force(kind, p0, p1, p2, empty, 0, 0.0) - k * x0
-                        - (math.copysign(tau, v0) + v0 * inv_gamma)) / m
-        if v_h == 0.0 or (v_h > 0.0) != (v0 > 0.0):
-            v = 0.0
+        # integrate (closed_form.initial_velocity: the same compiled rule)
+        v = _limit_step_velocity(m, k, inv_gamma, tau, x0, v0,
+                                 _force(kind, p0, p1, p2, empty, 0, 0.0), 1e-20 * dt)
     x_prev = x
     v_prev = v
     F_d_last = 0.0

@@ -17,7 +17,9 @@ from collections import deque
 
 from ...scene import Mass, Scene
 from ...scene.supports import support_time
+from ..implicit.initial_slip import start_at_known_rates
 from ..modes.choice import select_modes
+from ..modes.force_bounds import onto_slip_ends
 from ..modes.lock_events import (
     apply_impacts,
     hold_impacted_locks,
@@ -26,12 +28,7 @@ from ..modes.lock_events import (
     snap_to_locks,
 )
 from ..modes.mode_guess import probe_state, try_modes
-from ..nonsmooth.locks import (
-    IntervalLog,
-    indeterminate_elements,
-    lock_parallel_rates,
-    prefer_locks,
-)
+from ..nonsmooth.locks import IntervalLog, indeterminate_elements, lock_parallel_rates, prefer_locks
 from ..status import Event, Status
 from .mode_parts import laws_hold, mode_cones, mode_parts
 from .setup import accumulating, too_many
@@ -181,10 +178,15 @@ class ModeState:
                     v[p] = v_p[p]
             # at t = 0 the consistent initial forces stay, unless they miss a law at the
             # probe's junction velocities (the initial state can leave a junction between
-            # two slipping dashpots unresolved)
+            # two slipping dashpots unresolved); dashpots at known rates then take their
+            # laws' forces at t = 0, not the probe's (implicit.initial_slip)
             if cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
                                                  scene.elongations(x, v), F):
                 F[:] = F_p
+            if cause == "start":
+                v[:], F[:] = start_at_known_rates(scene, v, F, v_p, F_p)
+            elif cause == "guard":  # (a yield dashpot at rate ~0 switching: at its edge)
+                F[:] = onto_slip_ends(scene, modes, new, v, F, scale_v, rtol)
         back = self.left.get(tuple(new))
         if back is not None:
             # back to a mode held at t (no accepted step since): the switches since then

@@ -39,13 +39,16 @@ balance reads them (the masses' accelerations do, which the initial state does n
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 from ...scene import Mass, Scene
+from ..newton.scalar_root import scalar_root
 
-__all__ = ["rates_below_resolution", "settle_on_rest_set"]
+__all__ = ["known_rate_dashpots", "rates_below_resolution", "rest_edge",
+           "settle_on_rest_set", "start_at_known_rates"]
 
 
-def _known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
+def known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
     """Those of ``candidates`` that are dashpots whose rate at ``t = 0`` is the masses'
     ``v_b(0) - v_a(0)``: each end a mass or ground, none on a moving support."""
     if not candidates:
@@ -56,6 +59,38 @@ def _known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
             if e not in on_support and scene.elements[e].kind == "dashpot"
             and (ea[e] < 0 or isinstance(nodes[ea[e]], Mass))
             and (eb[e] < 0 or isinstance(nodes[eb[e]], Mass))]
+
+
+def _set_valued_at_rest(kernel) -> bool:
+    """``R(0, 0) = 0`` with ``dR/dF = 0``: the law leaves the force free at rest (a yield
+    law), rather than fixing it continuously in ``q`` (newtonian)."""
+    R, _, RF = kernel(0.0, 0.0)
+    return R == 0.0 and RF == 0.0
+
+
+def _turned(before: float, after: float) -> bool:
+    """A rate ``before != 0`` that ``after`` stops (0) or reverses."""
+    return after == 0.0 or (after > 0.0) != (before > 0.0)
+
+
+def _reversed(scene: Scene, q0: list[float], q_after: Callable[[int], float],
+              v0: list[float], v_after: Callable[[int], float]
+              ) -> tuple[list[int], list[int]]:
+    """The set-valued dashpots at known rates ``q0[e] != 0`` that a step turns
+    (``q_after(e)``), and the masses at their ends whose velocities ``v0[i] != 0`` it
+    turns (``v_after(i)``): see :func:`rates_below_resolution`."""
+    out: list[int] = []
+    masses: list[int] = []
+    for e in known_rate_dashpots(scene, [e for e in range(len(q0)) if q0[e] != 0.0]):
+        if not _set_valued_at_rest(scene.elements[e].law.kernel):
+            continue  # a law that fixes the force at rest (newtonian): continuous in q
+        if _turned(q0[e], q_after(e)):
+            out.append(e)
+            for i in (scene.elem_a[e], scene.elem_b[e]):
+                if i >= 0 and i not in masses and v0[i] != 0.0 \
+                        and _turned(v0[i], v_after(i)):
+                    masses.append(i)
+    return out, masses
 
 
 def rates_below_resolution(scene: Scene, q0: list[float], F: list[float],
@@ -88,29 +123,21 @@ def rates_below_resolution(scene: Scene, q0: list[float], F: list[float],
         a change below ``eps |a_i|``), so that row 0 holds the laws (``q = 0``, ``F``
         within the set at rest).
     """
-    out: list[int] = []
-    masses: list[int] = []
-    acc: list[float] = []
     # (a law can leave the force free at a rate below its round-off, e.g. Coulomb's
     # F + r q at q = -5e-324: the limit system read it, its masses start at rest too)
-    for e in _known_rate_dashpots(scene, [e for e in range(len(q0)) if q0[e] != 0.0]):
-        R, _, RF = scene.elements[e].law.kernel(0.0, 0.0)
-        if not (R == 0.0 and RF == 0.0):
-            continue  # a law that fixes the force at rest (newtonian): continuous in q
+    acc: list[float] = []
+
+    def a(i: int) -> float:
         if not acc:
             net = scene.net_forces(0.0, F)
-            acc = [net[i] / nd.m if isinstance(nd, Mass) else 0.0
-                   for i, nd in enumerate(scene.nodes)]
-        a, b = scene.elem_a[e], scene.elem_b[e]
-        q = q0[e] + eps * ((acc[b] if b >= 0 else 0.0) - (acc[a] if a >= 0 else 0.0))
-        if q == 0.0 or (q > 0.0) != (q0[e] > 0.0):
-            out.append(e)
-            for i in (a, b):
-                v0 = scene.nodes[i].v0 if i >= 0 else 0.0
-                v = v0 + eps * acc[i] if i >= 0 else 0.0
-                if v0 != 0.0 and (v == 0.0 or (v > 0.0) != (v0 > 0.0)) and i not in masses:
-                    masses.append(i)
-    return out, masses
+            acc.extend(net[j] / nd.m if isinstance(nd, Mass) else 0.0
+                       for j, nd in enumerate(scene.nodes))
+        return acc[i] if i >= 0 else 0.0
+
+    ea, eb = scene.elem_a, scene.elem_b
+    v0 = [nd.v0 if isinstance(nd, Mass) else 0.0 for nd in scene.nodes]
+    return _reversed(scene, q0, lambda e: q0[e] + eps * (a(eb[e]) - a(ea[e])), v0,
+                     lambda i: v0[i] + eps * a(i))
 
 
 def settle_on_rest_set(scene: Scene, pinned: list[float | None], q0: list[float],
@@ -144,20 +171,90 @@ def settle_on_rest_set(scene: Scene, pinned: list[float | None], q0: list[float]
         The forces, those of the dashpots slipping from rest moved to their yield forces.
     """
     out = list(F)
-    for e in _known_rate_dashpots(scene, [e for e, Fp in enumerate(pinned)
+    for e in known_rate_dashpots(scene, [e for e, Fp in enumerate(pinned)
                                           if Fp is None and q0[e] == 0.0]):
-        kernel = scene.elements[e].law.kernel
-        if not math.isfinite(out[e]) or kernel(0.0, out[e])[0] == 0.0 \
-                or kernel(0.0, 0.0)[0] != 0.0:
-            continue
-        inside, outside = 0.0, out[e]
-        while True:
-            mid = 0.5 * (inside + outside)
-            if mid in (inside, outside):
-                break
-            if kernel(0.0, mid)[0] == 0.0:
-                inside = mid
-            else:
-                outside = mid
-        out[e] = inside
+        out[e] = rest_edge(scene.elements[e].law.kernel, out[e])
     return out
+
+
+def rest_edge(kernel, F: float) -> float:
+    """``F`` if ``R(0, F) = 0`` (or ``F`` not finite, or ``R(0, 0) != 0``), else the float
+    ``F*`` on the segment from 0 to ``F`` with ``R(0, F*) = 0`` next to one with
+    ``R != 0``, by bisection (see :func:`settle_on_rest_set`)."""
+    if not math.isfinite(F) or kernel(0.0, F)[0] == 0.0 or kernel(0.0, 0.0)[0] != 0.0:
+        return F
+    inside, outside = 0.0, F
+    while True:
+        mid = 0.5 * (inside + outside)
+        if mid in (inside, outside):
+            return inside
+        if kernel(0.0, mid)[0] == 0.0:
+            inside = mid
+        else:
+            outside = mid
+
+
+def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
+                         v_probe: list[float], F_probe: list[float]
+                         ) -> tuple[list[float], list[float]]:
+    r"""Row 0 of the adaptive method: the dashpots at known rates on their laws at
+    ``t = 0``, after its mode choice by a probe step of length ``h_p`` (``1e-9`` of the
+    run, far longer than the initial state's ``eps``).
+
+    Where the probe's state is taken at ``t = 0`` (the consistent initial forces miss a
+    law at the probe's junction velocities), a dashpot between masses and ground would
+    keep the probe's force: read at the rate ``q_0 + h_p (a_b - a_a)``, a Herschel-Bulkley
+    ``n = 2`` dashpot at ``v_0 = 1e-113`` then takes ``tau + sqrt(h_p |a| / gamma)``
+    (``2.4e-4`` beyond ``tau`` at ``h_p = 5e-10``), off its law at ``q_0``. Here, as in
+    :func:`rates_below_resolution` with the probe for the limit step:
+
+    1. a set-valued dashpot whose rate ``q_0 != 0`` the probe reverses or stops starts
+       at rest: each mass at its end whose ``v_0`` the probe reverses or stops gets
+       ``v(0) = 0`` (a change below ``h_p |a|``), and the dashpot the edge of its set at
+       rest nearest the probe's force (its yield force with the sign of the slip that
+       follows, the paper's (16));
+    2. every other dashpot at a known rate ``q = v_b(0) - v_a(0)`` whose law fixes its
+       force there gets the root of ``R(q, F) = 0``
+       (:func:`lumped.solvers.newton.scalar_root.scalar_root`, a sign change between
+       neighbouring floats at worst: ``tau`` itself at ``q = 1e-113``); at rest
+       (``q = 0``) a force off the set at rest takes that set's edge nearest it.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene.
+    v, F : list of float
+        The node velocities and element forces of row 0 so far (the consistent initial
+        ones, or the probe's where its state was taken).
+    v_probe, F_probe : list of float
+        The velocities and forces of the probe step that chose the mode.
+
+    Returns
+    -------
+    v, F : list of float
+        The velocities (masses stopped by rule 1) and forces of row 0.
+    """
+    v, F = list(v), list(F)
+    ea, eb = scene.elem_a, scene.elem_b
+    known = known_rate_dashpots(scene, list(range(len(F))))
+    q0 = [0.0] * len(F)
+    for e in known:
+        q0[e] = (v[eb[e]] if eb[e] >= 0 else 0.0) - (v[ea[e]] if ea[e] >= 0 else 0.0)
+    turned, stopped = _reversed(
+        scene, q0, lambda e: (v_probe[eb[e]] if eb[e] >= 0 else 0.0)
+        - (v_probe[ea[e]] if ea[e] >= 0 else 0.0), v, lambda i: v_probe[i])
+    for i in stopped:
+        v[i] = 0.0
+    for e in known:
+        kernel = scene.elements[e].law.kernel
+        q = (v[eb[e]] if eb[e] >= 0 else 0.0) - (v[ea[e]] if ea[e] >= 0 else 0.0)
+        start = F_probe[e] if e in turned else F[e]
+        try:
+            root, fixed = scalar_root(kernel, q, start)
+        except ValueError:
+            continue
+        if fixed and math.isfinite(root):
+            F[e] = root
+        elif q == 0.0:
+            F[e] = rest_edge(kernel, start)
+    return v, F

@@ -41,6 +41,7 @@ from ...scene import Scene
 from ..newton.criteria import ROUNDOFF
 from ..nonsmooth.rest_balance import rest_inverse
 from ..radau.rows import row_of
+from .force_bounds import onto_joint_bounds
 from .guards import guard_tolerance
 
 __all__ = ["StaticHold", "equilibrium_hold", "static_hold", "forcing_kinds"]
@@ -304,10 +305,22 @@ def equilibrium_hold(scene: Scene, ms, t: float, x: list[float], v: list[float],
     which :func:`static_hold` leaves to the steps: e.g. a mass on two stuck Bingham
     dashpots loaded by exactly the sum of their yield forces, both forces on their
     bounds, where the stage forces scatter around the bounds by the stage Newton's
-    tolerance and each step read a crossing (38 loop passes an accepted step).
+    tolerance and each step read a crossing (38 loop passes an accepted step). Such
+    forces within ``rtol`` of a joint bound are put on it first (:mod:`.force_bounds`).
     """
     if fkind is None or (fkind == 2).any() or any(vi != 0.0 for vi in v):
         return None
+    snapped = onto_joint_bounds(scene, ms.cones, F, ms.rtol)  # (a load at their joint bound)
+    hold = _equilibrium_hold(scene, ms, t, x, v, snapped, fkind, fpar)
+    return hold if hold is not None or snapped == F else \
+        _equilibrium_hold(scene, ms, t, x, v, F, fkind, fpar)
+
+
+def _equilibrium_hold(scene: Scene, ms, t: float, x: list[float], v: list[float],
+                      F: list[float], fkind: np.ndarray, fpar: np.ndarray | None
+                      ) -> StaticHold | None:
+    """:func:`equilibrium_hold` at the forces ``F`` (the nodes at rest, the forcing
+    constant)."""
     N = len(v)
     net = scene.net_forces(t, F)
     scale = [abs(fi) for fi in scene.external_forces(t)]
