@@ -15,8 +15,10 @@ The interval up to the first time event reads nothing of the run but its end: it
 on the run's :class:`~lumped.solvers.eventdriven.rest_start.RestStart` (its rows, forces
 and verdict). Once every burst has ended the forcing is steady: the balance from a force
 state (the probe's) has the same forces at every later time, and its forces and verdict
-are kept there too, per force state, bit for bit. Repeated runs of one scene redo the
-start probe's check, the time events' probes and the rows of their own samples.
+are kept there too, per force state, bit for bit. A time event's probe reads the start,
+its time, the run's first step size ``h``, the forces it starts from and whether it runs
+compiled: its forces (or its refusal) are kept there per those. Repeated runs of one
+scene redo the start probe's check and the rows of their own samples.
 """
 
 from __future__ import annotations
@@ -72,7 +74,11 @@ def burst_intervals(scene: Scene, plan, settings, opts: dict, start: RestStart,
         if t > 0.0:  # a time event: the full laws choose the mode (the probe's forces)
             events.append(Event(t, "", "time", -1, -1))
             h = h or _first_step(settings, opts, start, t_final)
-            F = _kept_at_time_event(scene, plan, modes, t, h, x, v, F, fast)
+            # (the probe reads the start, t, h, F and which probe runs: kept per those)
+            F = start.kept_interval(
+                ("probe", t, h, struct.pack(f"{len(F)}d", *F), fast is not None),
+                lambda t=t, h=h, F=F: _kept_at_time_event(scene, plan, modes, t, h, x, v,
+                                                          F, fast))
             if F is None:
                 return None
             if log is not None:
