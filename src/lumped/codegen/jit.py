@@ -125,11 +125,19 @@ def njit(*args, **kwargs):
 
 
 def cache_dir() -> Path:
-    """The on-disk cache root (see the module notes); created on demand by the writers."""
-    env = os.environ.get("LUMPED_CACHE_DIR")
+    """The on-disk cache root (see the module notes); created on demand by the writers.
+    (Read from the environment at every call; the path is made once per value.)"""
+    environ = os.environ
+    return _cache_dir(environ.get("LUMPED_CACHE_DIR"), environ.get("XDG_CACHE_HOME"),
+                      environ.get("HOME"))
+
+
+@functools.lru_cache(maxsize=16)
+def _cache_dir(env: str | None, xdg: str | None, home: str | None) -> Path:
+    """:func:`cache_dir` for these values of ``LUMPED_CACHE_DIR``, ``XDG_CACHE_HOME`` and
+    ``HOME`` (which :meth:`pathlib.Path.home` reads)."""
     if env:
         return Path(env)
-    xdg = os.environ.get("XDG_CACHE_HOME")
     base = Path(xdg) if xdg else Path.home() / ".cache"
     return base / "lumped"
 
