@@ -179,7 +179,8 @@ _SOURCES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 def scene_source(scene) -> SceneSource:
     """The generated module of ``scene`` (see :class:`SceneSource`); kept per scene
-    object."""
+    object, its text per structure (:func:`_structure_key`: one text for every value of
+    the numbers, made once)."""
     try:
         hit = _SOURCES.get(scene)
     except TypeError:  # not weakly referenceable: no memo

@@ -17,8 +17,9 @@ and verdict). Once every burst has ended the forcing is steady: the balance from
 state (the probe's) has the same forces at every later time, and its forces and verdict
 are kept there too, per force state, bit for bit. A time event's probe reads the start,
 its time, the run's first step size ``h``, the forces it starts from and whether it runs
-compiled: its forces (or its refusal) are kept there per those. Repeated runs of one
-scene redo the start probe's check and the rows of their own samples.
+compiled: its forces (or its refusal) are kept there per those; so are the forcing's time
+events and the start probe's verdict per end of the run, and ``h`` per tolerances, first
+step and end. Repeated runs of one scene make the rows of their own samples.
 """
 
 from __future__ import annotations
@@ -58,13 +59,17 @@ def burst_intervals(scene: Scene, plan, settings, opts: dict, start: RestStart,
     ``log``: ``(data, dense output, intervals)``, or ``None`` when the general driver
     must run (a guard crossed in a scan, a mode not confirmed at a time event, a kink of
     the forcing, as many time events as ``zeno_events``)."""
-    breaks, kinks = time_events(scene, t_final)
+    # (the forcing's time events and the start probe's verdict read the start and the
+    # run's end only: kept on the start per end)
+    breaks, kinks = start.kept_interval(("events", t_final),
+                                        lambda: time_events(scene, t_final))
     if any(kinks) or len(breaks) >= opts["zeno_events"]:
         return None
     x, v, modes = start.x, start.v, start.modes
     # the start's probe reads the mode at the balance under the load at its end (the
     # probe's forces are those to round-off, which the margin covers)
-    if not _start_probe_holds(scene, plan, start, start.hold.balance(1e-9 * t_final)):
+    if not start.kept_interval(("start probe", t_final), lambda: _start_probe_holds(
+            scene, plan, start, start.hold.balance(1e-9 * t_final))):
         return None
     fast = _rest_loop(scene, plan, opts["compiled"])
     dense = DenseOutput(len(x), len(start.F))
@@ -73,7 +78,9 @@ def burst_intervals(scene: Scene, plan, settings, opts: dict, start: RestStart,
     for t1 in [*breaks, t_final]:
         if t > 0.0:  # a time event: the full laws choose the mode (the probe's forces)
             events.append(Event(t, "", "time", -1, -1))
-            h = h or _first_step(settings, opts, start, t_final)
+            h = h or start.kept_interval(
+                ("h", settings.rtol, settings.atol, opts["first_step"], t_final),
+                lambda: _first_step(settings, opts, start, t_final))
             # (the probe reads the start, t, h, F and which probe runs: kept per those)
             F = start.kept_interval(
                 ("probe", t, h, struct.pack(f"{len(F)}d", *F), fast is not None),
