@@ -70,3 +70,22 @@ def test_another_structure_gets_another_text():
          Element("c", CUBIC.bind(k=3.5, c=0.25), "ground", "n")],
     )
     assert scene_source(flipped).source != base
+
+
+def test_a_branchs_stage_root_is_read_once(monkeypatch):
+    from lumped.codegen import branches
+
+    calls = []
+    flat_root = branches.flat_root
+    monkeypatch.setattr(branches, "flat_root", lambda r: calls.append(r) or flat_root(r))
+    residual = get_law("herschel_bulkley").bind(gamma=3.0, tau=2.0, n=2.0).kernel.expressions[0]
+    lb = branches.LawBranches(residual)
+    first = [lb.stage_guards_for(i) for i in range(lb.count)]
+    read = len(calls)
+    assert read >= 1  # (a branch without an inverse form reads its flat root)
+    again = [lb.stage_guards_for(i) for i in range(lb.count)]
+    assert len(calls) == read and all(a is b for a, b in zip(first, again, strict=True))
+    fresh = branches.LawBranches(residual)  # from scratch: the same guards' values
+    for q, F in ((0.1, 2.5), (-0.3, -2.2), (0.0, 0.5)):
+        assert [fresh.stage_guards_for(i)(q, F) for i in range(lb.count)] == [
+            g(q, F) for g in again]

@@ -149,3 +149,19 @@ def test_the_shared_plans_are_bounded():
     for i in range(setup.SHARED_PLANS + 5):
         scene_plan(_oscillator(k=100.0 + i))
     assert len(setup._SHARED) == setup.SHARED_PLANS
+
+
+def test_the_time_events_and_the_first_step_are_kept_per_end_and_tolerances(monkeypatch):
+    events, steps = [], []
+    time_events, first_step = rest_bursts.time_events, rest_bursts._first_step
+    monkeypatch.setattr(rest_bursts, "time_events",
+                        lambda scene, t: events.append(t) or time_events(scene, t))
+    monkeypatch.setattr(rest_bursts, "_first_step",
+                        lambda s, o, st, t: steps.append((s.rtol, t)) or first_step(s, o, st, t))
+    force = SineBurst(0.25, 7.0, 0.5)
+    runs = [simulate(_oscillator(force=force), t_end=2.0, rtol=1e-7) for _ in range(2)]
+    assert events == [2.0] and steps == [(1e-7, 2.0)]
+    _same_run(*runs)
+    simulate(_oscillator(force=force), t_end=2.5, rtol=1e-7)
+    simulate(_oscillator(force=force), t_end=2.5, rtol=1e-5)
+    assert events == [2.0, 2.5] and steps == [(1e-7, 2.0), (1e-7, 2.5), (1e-5, 2.5)]
