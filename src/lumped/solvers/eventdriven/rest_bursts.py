@@ -128,18 +128,25 @@ def _after_bursts(scene: Scene, plan, start: RestStart, F: list[float], t: float
     (``t >= start.last_off``): the forcing is steady, so every sample of the scan has the
     same forces, those of the balance (its verdict and those forces kept on ``start`` per
     ``F``, bit for bit: the balance reads nothing else); the rows at the scan's samples
-    (:meth:`~lumped.solvers.modes.stuck.StaticHold.samples`) are made per run."""
+    (:meth:`~lumped.solvers.modes.stuck.StaticHold.samples`) are kept there per ``F``,
+    ``t`` and ``t1`` (only read: the run's ``data`` is a copy)."""
     key = ("after", struct.pack(f"{len(F)}d", *F))
     got = start.kept_interval(key, lambda: _held(scene, plan, start,
                                                  _hold_of(scene, plan, start, F), t, t1, None))
     if got is None:
         return None
     hold, block, F1, free = got
+    return hold, start.kept_interval((*key, t, t1), lambda: _rows(hold, block, t, t1)), F1, free
+
+
+def _rows(hold: StaticHold, block: np.ndarray, t: float, t1: float) -> np.ndarray:
+    """The rows of a steady held interval ``[t, t1]`` at its scan's samples: the last row
+    of ``block`` at each sample's time."""
     times = [s for s in hold.samples(t, t1) if s < t1] + [t1]
     rows = np.empty((len(times), block.shape[1]))
     rows[:] = block[-1]
     rows[:, 0] = times
-    return hold, rows, F1, free
+    return rows
 
 
 def _held(scene: Scene, plan, start: RestStart, hold: StaticHold | None, t: float,
