@@ -17,8 +17,11 @@ bench's setting), and, where the run at rest
 user gets from a scene just written: ``auto`` on a **new scene object** at every call
 (the same numbers, built before the timer) and on **new numbers** at every call (every
 spring's ``k`` times a factor never run before in the process,
-:func:`lumped.bench.new_numbers.scene_with_new_numbers`); nothing kept per scene object
-helps those.
+:func:`lumped.bench.new_numbers.scene_with_new_numbers`). Nothing kept per scene object
+helps those; what is kept per scene content (the plan and the start at rest of
+:mod:`lumped.solvers.eventdriven.setup`, keyed by
+:func:`lumped.codegen.scene_key.scene_key`) serves the new object with the same numbers,
+and only what is kept per structure or per law serves new numbers.
 
 Each case is the CPU time (:func:`time.process_time`) of ``--calls`` calls, repeated
 ``--repeats`` times interleaved with the yardstick (:func:`lumped.bench.measure_unit`'s

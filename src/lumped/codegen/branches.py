@@ -193,14 +193,18 @@ class LawBranches:
         branch flat at its end (``p > 1``, :func:`~lumped.codegen.stage_forms.flat_root`),
         whose force a stage solve fixes only to its Newton tolerance."""
         i = self._check(i)
-        info = self.info[i]
-        root = info.stage[3:] if info.stage is not None else (
-            None if info.locks else flat_root(info.residual))
+        # (the root is read off the branch's residual once per branch: a sympy traversal)
+        roots = self.__dict__.setdefault("_stage_roots", {})
+        root = roots.get(i, False)
+        if root is False:
+            info = self.info[i]
+            root = roots[i] = info.stage[3:] if info.stage is not None else (
+                None if info.locks else flat_root(info.residual))
         if root is None:
             return self.guards_for(i)
         hit = self._guards.get(-1 - i)
         if hit is None:
-            hit = self._guards[-1 - i] = compile_guards(info.path, root)
+            hit = self._guards[-1 - i] = compile_guards(self.info[i].path, root)
         return hit
 
     def guards_for(self, i: int) -> Callable[[float, float], tuple[float, ...]]:

@@ -17,6 +17,8 @@ every value of them.
 
 from __future__ import annotations
 
+import functools
+
 from .jit import numba_module
 
 __all__ = ["BRANCH_LAW_TYPE", "function_at", "law_type", "guards_type", "branch_type"]
@@ -61,13 +63,16 @@ def law_type():
     return BRANCH_LAW_TYPE
 
 
+@functools.cache
 def guards_type():
-    """The numba function type of ``branch_guards(e, i, q, F, out, c) -> count``."""
+    """The numba function type of ``branch_guards(e, i, q, F, out, c) -> count`` (made
+    once: a run's compiled parts ask for it per scene)."""
     f8 = _T.float64
     return _T.FunctionType(_T.int64(_T.int64, _T.int64, f8, f8, f8[::1], f8[::1]))
 
 
+@functools.cache
 def branch_type():
-    """The numba function type of ``active_branch(e, q, F, c) -> int``."""
+    """The numba function type of ``active_branch(e, q, F, c) -> int`` (made once)."""
     f8 = _T.float64
     return _T.FunctionType(_T.int64(_T.int64, f8, f8, f8[::1]))

@@ -152,18 +152,34 @@ class LawTemplate:
 
 
 _TEMPLATES: dict[tuple, LawTemplate] = {}
+#: :func:`law_template` per bound law's content (:func:`lumped.codegen.scene_key.law_key`).
+_BY_LAW: dict[tuple, LawTemplate] = {}
+#: Bound laws remembered with their templates (the oldest half forgotten past it).
+_REMEMBERED = 4096
 
 
 def law_template(bound) -> LawTemplate:
     """The :class:`LawTemplate` of a bound law given as a sympy residual (memoised by
     its generated sources; a law of a class :mod:`lumped.codegen.parametric` derives
-    once gets the class's template with its own numbers)."""
+    once gets the class's template with its own numbers). Kept per bound law's content
+    (its law object and the bits of its numbers, :func:`~lumped.codegen.scene_key.
+    law_key`), so that a law whose numbers have no class (an integral ``k``, ``tau = 1``)
+    is derived from scratch once per process, not at every scene built with it."""
     from lumped.codegen.parametric import law_class
+    from lumped.codegen.scene_key import law_key
 
-    hit = law_class(bound)
+    key = law_key(bound)
+    hit = _BY_LAW.get(key) if key is not None else None
     if hit is not None:
-        return hit.template()
-    return template_from_scratch(bound)
+        return hit
+    rebound = law_class(bound)
+    hit = rebound.template() if rebound is not None else template_from_scratch(bound)
+    if key is not None:
+        if len(_BY_LAW) >= _REMEMBERED:
+            for old in list(_BY_LAW)[:_REMEMBERED // 2]:
+                _BY_LAW.pop(old, None)
+        _BY_LAW[key] = hit
+    return hit
 
 
 def template_from_scratch(bound, lb=None) -> LawTemplate:

@@ -13,8 +13,8 @@ confirms the mode read off the state, the locks keep it) and holds it
 finds no guard crossed and the full laws keep the mode at each time event.
 
 :func:`rest_run` builds that run directly: the same start
-(:func:`~lumped.solvers.eventdriven.rest_start.rest_start`, kept per scene), the same
-static balance (:func:`~lumped.solvers.modes.stuck.static_hold`: its break-out scan,
+(:func:`~lumped.solvers.eventdriven.rest_start.rest_start`, kept per scene content), the
+same static balance (:func:`~lumped.solvers.modes.stuck.static_hold`: its break-out scan,
 dense segments and output rows), the same time events (each with the driver's mode probe
 on the mode held, :func:`~lumped.solvers.modes.mode_guess.try_modes`, whose forces the
 next interval holds; :mod:`lumped.solvers.eventdriven.rest_bursts`), the same counters;

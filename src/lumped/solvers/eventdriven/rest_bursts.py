@@ -15,8 +15,11 @@ The interval up to the first time event reads nothing of the run but its end: it
 on the run's :class:`~lumped.solvers.eventdriven.rest_start.RestStart` (its rows, forces
 and verdict). Once every burst has ended the forcing is steady: the balance from a force
 state (the probe's) has the same forces at every later time, and its forces and verdict
-are kept there too, per force state, bit for bit. Repeated runs of one scene redo the
-start probe's check, the time events' probes and the rows of their own samples.
+are kept there too, per force state, bit for bit. A time event's probe reads the start,
+its time, the run's first step size ``h``, the forces it starts from and whether it runs
+compiled: its forces (or its refusal) are kept there per those; so are the forcing's time
+events and the start probe's verdict per end of the run, and ``h`` per tolerances, first
+step and end. Repeated runs of one scene make the rows of their own samples.
 """
 
 from __future__ import annotations
@@ -56,13 +59,17 @@ def burst_intervals(scene: Scene, plan, settings, opts: dict, start: RestStart,
     ``log``: ``(data, dense output, intervals)``, or ``None`` when the general driver
     must run (a guard crossed in a scan, a mode not confirmed at a time event, a kink of
     the forcing, as many time events as ``zeno_events``)."""
-    breaks, kinks = time_events(scene, t_final)
+    # (the forcing's time events and the start probe's verdict read the start and the
+    # run's end only: kept on the start per end)
+    breaks, kinks = start.kept_interval(("events", t_final),
+                                        lambda: time_events(scene, t_final))
     if any(kinks) or len(breaks) >= opts["zeno_events"]:
         return None
     x, v, modes = start.x, start.v, start.modes
     # the start's probe reads the mode at the balance under the load at its end (the
     # probe's forces are those to round-off, which the margin covers)
-    if not _start_probe_holds(scene, plan, start, start.hold.balance(1e-9 * t_final)):
+    if not start.kept_interval(("start probe", t_final), lambda: _start_probe_holds(
+            scene, plan, start, start.hold.balance(1e-9 * t_final))):
         return None
     fast = _rest_loop(scene, plan, opts["compiled"])
     dense = DenseOutput(len(x), len(start.F))
@@ -71,8 +78,14 @@ def burst_intervals(scene: Scene, plan, settings, opts: dict, start: RestStart,
     for t1 in [*breaks, t_final]:
         if t > 0.0:  # a time event: the full laws choose the mode (the probe's forces)
             events.append(Event(t, "", "time", -1, -1))
-            h = h or _first_step(settings, opts, start, t_final)
-            F = _kept_at_time_event(scene, plan, modes, t, h, x, v, F, fast)
+            h = h or start.kept_interval(
+                ("h", settings.rtol, settings.atol, opts["first_step"], t_final),
+                lambda: _first_step(settings, opts, start, t_final))
+            # (the probe reads the start, t, h, F and which probe runs: kept per those)
+            F = start.kept_interval(
+                ("probe", t, h, struct.pack(f"{len(F)}d", *F), fast is not None),
+                lambda t=t, h=h, F=F: _kept_at_time_event(scene, plan, modes, t, h, x, v,
+                                                          F, fast))
             if F is None:
                 return None
             if log is not None:
@@ -115,18 +128,25 @@ def _after_bursts(scene: Scene, plan, start: RestStart, F: list[float], t: float
     (``t >= start.last_off``): the forcing is steady, so every sample of the scan has the
     same forces, those of the balance (its verdict and those forces kept on ``start`` per
     ``F``, bit for bit: the balance reads nothing else); the rows at the scan's samples
-    (:meth:`~lumped.solvers.modes.stuck.StaticHold.samples`) are made per run."""
+    (:meth:`~lumped.solvers.modes.stuck.StaticHold.samples`) are kept there per ``F``,
+    ``t`` and ``t1`` (only read: the run's ``data`` is a copy)."""
     key = ("after", struct.pack(f"{len(F)}d", *F))
     got = start.kept_interval(key, lambda: _held(scene, plan, start,
                                                  _hold_of(scene, plan, start, F), t, t1, None))
     if got is None:
         return None
     hold, block, F1, free = got
+    return hold, start.kept_interval((*key, t, t1), lambda: _rows(hold, block, t, t1)), F1, free
+
+
+def _rows(hold: StaticHold, block: np.ndarray, t: float, t1: float) -> np.ndarray:
+    """The rows of a steady held interval ``[t, t1]`` at its scan's samples: the last row
+    of ``block`` at each sample's time."""
     times = [s for s in hold.samples(t, t1) if s < t1] + [t1]
     rows = np.empty((len(times), block.shape[1]))
     rows[:] = block[-1]
     rows[:, 0] = times
-    return hold, rows, F1, free
+    return rows
 
 
 def _held(scene: Scene, plan, start: RestStart, hold: StaticHold | None, t: float,

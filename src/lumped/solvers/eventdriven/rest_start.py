@@ -1,4 +1,4 @@
-r"""The start of a run at rest, made once per scene (:func:`rest_start`).
+r"""The start of a run at rest, made once per scene content (:func:`rest_start`).
 
 A run at rest (:mod:`lumped.solvers.eventdriven.at_rest`) starts from the consistent
 initial state, reads the mode off it (:func:`~lumped.solvers.eventdriven.mode_parts.
@@ -11,8 +11,11 @@ initial state's time scale only sizes the vanishing step of its Newton system), 
 Newton options, not the tolerances. They are then kept on the scene's
 :class:`~lumped.solvers.eventdriven.setup.ScenePlan`, which is made again whenever the
 scene's nodes, elements or forcing objects are other objects (all immutable: frozen
-dataclasses and bound laws), so that a scene with other numbers never reads them. An
-initial state that took Newton (its counters not zero) is made again for every run.
+dataclasses and bound laws) of another content, and shared by the scene objects of one
+content (:func:`lumped.codegen.scene_key.scene_key`: the bits of every number, the names,
+ends, law objects and forcings), so that a scene with other numbers never reads them and
+a new scene object with the same numbers does. An initial state that took Newton (its
+counters not zero) is made again for every run.
 
 Under a steady forcing (absent or constant) the forces of the static balance are the
 same at every time, so the balance's verdict is kept too: whether the scene stays at rest
@@ -110,7 +113,7 @@ class RestStart:
         got = self.kept.get(key, False)
         if got is False:
             got = make()
-            if len(self.kept) >= 16:  # (runs to many ends, or many probe sizes)
+            if len(self.kept) >= 64:  # (runs to many ends, or many probe sizes)
                 self.kept.clear()
             self.kept[key] = got
         return got

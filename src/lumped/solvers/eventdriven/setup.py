@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 import threading
 import weakref
-from collections import deque
+from collections import OrderedDict, deque
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -17,7 +17,8 @@ from ...scene.forcing import jumps
 from ...scene.supports import support_time_events
 
 __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "time_events", "step_floor",
-           "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "structure",
+           "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "clear_plans",
+           "SHARED_PLANS", "structure",
            "accumulating",
            "too_many"]
 
@@ -68,8 +69,9 @@ def read_options(settings) -> dict:
     return out
 
 
-def scope_error(scene: Scene) -> str | None:
-    """Why ``radau5`` does not take ``scene``, or ``None`` when it does.
+def scope_error(scene: Scene, branches: list | None = None) -> str | None:
+    """Why ``radau5`` does not take ``scene``, or ``None`` when it does (``branches``:
+    the elements' :func:`~lumped.scene.shifted_laws.branches_of` when already made).
 
     A scene with moving supports (:mod:`lumped.scene.supports`) is taken, a string on a
     support too; its laws read ``q + o_e(t)`` at the time of every system solved (see
@@ -86,8 +88,9 @@ def scope_error(scene: Scene) -> str | None:
     """
     from ...scene.shifted_laws import branches_of
 
-    for el in scene.elements:
-        lb = branches_of(el.law)
+    if branches is None:
+        branches = [branches_of(el.law) for el in scene.elements]
+    for el, lb in zip(scene.elements, branches, strict=True):
         for info in lb.info:
             if info.steep and info.stage is None:
                 return (f"method 'radau5' does not take element {el.name!r}: branch "
@@ -185,44 +188,91 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
 @dataclass
 class ScenePlan:
     """What ``radau5`` reads from a scene's structure and laws before it steps, kept per
-    scene object (:func:`scene_plan`): the refusal (:func:`scope_error`), the laws'
+    scene content (:func:`scene_plan`): the refusal (:func:`scope_error`), the laws'
     branches, the elements whose law needs the fold check (not a known monotone one),
     the elements on cycles of the network, ``fast`` (the compiled loop's parts or why
     there is none, :mod:`lumped.solvers.eventdriven.fast`) and ``module_loaded`` (its
-    generated module was loaded in this process when the plan was first asked)."""
+    generated module was loaded in this process when the plan was first asked).
+    ``key`` is the scene's content key (:func:`lumped.codegen.scene_key.scene_key`), or
+    ``None`` for a plan kept per scene object only."""
 
     refused: str | None
     branches: list
     checked: list[int]
     cyclic: tuple[int, ...]
-    key: tuple
+    key: tuple | None
     fast: object = None
     module_loaded: bool | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)
 
 
+#: scene object -> (its nodes, elements, forcing ids, forcing, plan) when the plan was
+#: asked: the plan holds while those are the same objects.
 _PLANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: content key -> (plan, the objects the key names by id), the last :data:`SHARED_PLANS`
+#: asked (least recently used first).
+_SHARED: OrderedDict = OrderedDict()
+_SHARED_LOCK = threading.Lock()
+#: How many plans are kept by content (a sweep of new numbers makes a plan per point;
+#: only a repeat of recent content finds one).
+SHARED_PLANS = 64
 
 
 def scene_plan(scene: Scene) -> ScenePlan:
-    """The :class:`ScenePlan` of ``scene``, made once per scene object (the nodes,
-    elements and forcing it was made from must be the same objects), so that repeated
-    runs of one scene (a benchmark, a study) skip this set-up."""
-    plan = _PLANS.get(scene)
-    if plan is not None and plan.key[0] is scene.nodes and plan.key[1] is scene.elements \
-            and (plan.key[3] is scene.forcing
-                 or plan.key[2] == tuple(id(f) for f in scene.forcing)):
-        return plan
-    key = (scene.nodes, scene.elements, tuple(id(f) for f in scene.forcing), scene.forcing)
+    """The :class:`ScenePlan` of ``scene``, made once per scene content: kept per scene
+    object (while its nodes, elements and forcing are the objects it was made from) and,
+    for a scene with a content key (:func:`lumped.codegen.scene_key.scene_key`: every
+    number, name, end, law and forcing a run reads), shared by every scene object with
+    that key, the last :data:`SHARED_PLANS` of them, so that repeated runs of one scene
+    and a new scene object with the same numbers (a user's script run again, a study)
+    skip this set-up and what the runs keep on the plan. Everything kept on a plan is a
+    function of that content alone (the runs' arguments are keys of what they keep)."""
+    got = _PLANS.get(scene)
+    if got is not None and got[0] is scene.nodes and got[1] is scene.elements \
+            and (got[3] is scene.forcing or got[2] == tuple(id(f) for f in scene.forcing)):
+        return got[4]
+    from ...codegen.scene_key import scene_key
+
+    keyed = scene_key(scene)
+    key = None if keyed is None else keyed[0]
+    plan = None
+    if key is not None:
+        with _SHARED_LOCK:
+            got = _SHARED.get(key)
+            if got is not None:
+                _SHARED.move_to_end(key)
+                plan = got[0]
+    if plan is None:
+        plan = _new_plan(scene, key)
+        if keyed is not None:
+            with _SHARED_LOCK:  # (the plan and the objects the key names by id)
+                plan = _SHARED.setdefault(key, (plan, keyed[1]))[0]
+                while len(_SHARED) > SHARED_PLANS:
+                    _SHARED.popitem(last=False)
+    _PLANS[scene] = (scene.nodes, scene.elements, tuple(id(f) for f in scene.forcing),
+                     scene.forcing, plan)
+    return plan
+
+
+def _new_plan(scene: Scene, key: tuple | None) -> ScenePlan:
+    """A new :class:`ScenePlan` of ``scene`` (``key``: its content key or ``None``)."""
     from ...scene.shifted_laws import branches_of
     from ..implicit.branch_check import known_monotone
     from ..nonsmooth.locks import cyclic_elements
 
-    plan = ScenePlan(scope_error(scene), [branches_of(el.law) for el in scene.elements],
-                     [e for e, el in enumerate(scene.elements) if not known_monotone(el.law)],
+    branches = [branches_of(el.law) for el in scene.elements]
+    return ScenePlan(scope_error(scene, branches), branches,
+                     [e for e, el in enumerate(scene.elements)
+                      if not known_monotone(el.law)],
                      cyclic_elements(scene), key)
-    _PLANS[scene] = plan
-    return plan
+
+
+def clear_plans() -> None:
+    """Forget every kept plan (per object and per content): the next run of any scene
+    makes its plan from scratch (tests compare the two)."""
+    with _SHARED_LOCK:
+        _SHARED.clear()
+        _PLANS.clear()
 
 
 def structure(scene: Scene, plan) -> tuple[list[bool], tuple[float, ...], list[bool],
