@@ -19,8 +19,10 @@ sympy residuals (a hand-written kernel cannot be compiled: ``ValueError``), exce
 scenes with a position lock (a spring law with a branch on which the force is free,
 such as a taut string), refused with a ``ValueError``: the event model of impacts is
 not part of this compiled port. (Through :func:`lumped.simulate`, ``method="jit-bdf1"`` or
-``"jit-bdf2"`` runs such a scene whole on the reference solver instead, and so a run whose
-compiled Newton fails; ``stats["fallback"]`` says so.)
+``"jit-bdf2"`` runs such a scene's plain steps on this loop and its impacts and
+indeterminate forces on the reference, :mod:`lumped.solvers.bdf.lock_handover`; a run of
+another scene whose compiled Newton fails runs whole on the reference solver,
+``stats["fallback"]`` says so.)
 
 The consistent initial state is computed by the reference in Python (once per run).
 Forcing: ``None``, constants and :class:`~lumped.scene.forcing.SineBurst` are evaluated

@@ -1,29 +1,31 @@
 r"""``jit-bdf1``/``jit-bdf2`` on a scene with position locks (taut strings): the compiled
-loop while every lock is slack, the Python reference across impacts and locks.
+loop for the plain steps, the Python reference across impacts and indeterminate forces.
 
 The compiled loops (:mod:`lumped.solvers.bdf.core_jit`, the faithful port, and the
 generated fast loop of :mod:`lumped.solvers.bdf.fast_jit`) have no event model: no
 impact located inside a step, no impulse, no minimum-norm split of indeterminate forces.
-While no spring-like element is on a locking branch, though, a step of the reference
-:func:`lumped.solvers.bdf.fixed_step.run_bdf` is the plain step the compiled loops take
-(the reference's impact test fires only when a step *ends* on a locking branch). So
-:func:`run_locked` runs, in turn:
+Most steps of the reference :func:`lumped.solvers.bdf.fixed_step.run_bdf` need none of
+it, though: a step that ends with no new lock and with fewer than two force-free
+elements on cycles is the plain step the compiled loops take, a taut string held
+through the step included (its locking branch ``q = L`` is a branch of its law like any
+other). So :func:`run_locked` runs, in turn:
 
 * **compiled**, a chunk of steps from the last good sample ``n`` (the state at ``n`` and
   ``n - 1``, the BDF2 history, are rows of the sample arrays), then the guard
-  :func:`lumped.solvers.bdf.lock_guard_jit.first_locked_row` over the new samples: the
-  samples before the first one that ends on a locking branch are kept (so are all of
-  them, if none does), and the chunk doubles (:data:`FIRST_CHUNK`, 2x, ...) while no
-  lock is found; a step the compiled Newton cannot take, a fold or a bad force also
-  ends the chunk at the sample before it;
+  :func:`lumped.solvers.bdf.lock_guard_jit.first_unkept_row` over the new samples: the
+  samples before the first one the reference would not have taken as a plain step (a
+  new lock: an impact; two force-free elements on cycles: indeterminate forces) are
+  kept (so are all of them, if there is none), and the chunk doubles
+  (:data:`FIRST_CHUNK`, 2x, ...) while none is found; a step the compiled Newton cannot
+  take, a fold or a bad force also ends the chunk at the sample before it;
 * **reference**, a :class:`~lumped.solvers.bdf.step_loop.StepLoop` resumed at the last
   good sample (its locks, BDF2 history and fold-check point are those of the state
   there): it redoes the step the compiled chunk could not keep -- locates the impact in
-  the step, applies the impulse, restarts BDF2 with a BDF1 step -- and goes on through
-  the locked phase (indeterminate forces split by minimum norm and logged) until every
-  lock has been slack, with no restart pending, for ``handback`` consecutive steps
-  (:data:`HISTORY` = 2, the BDF2 history; doubled, up to :data:`MAX_HANDBACK`, each time
-  the compiled loop finds a lock again within ``handback`` steps of taking over, so a
+  the step, applies the impulse, restarts BDF2 with a BDF1 step; splits indeterminate
+  forces by minimum norm and logs them -- and goes on until ``handback`` consecutive
+  steps were plain (no restart pending, no indeterminate forces possible;
+  :data:`HISTORY` = 2, the BDF2 history; doubled, up to :data:`MAX_HANDBACK`, each time
+  the compiled loop stops again within ``handback`` steps of taking over, so a
   rattling string does not hand over at every step). A failed step is reported by the
   reference, exactly as ``bdf1``/``bdf2`` report it.
 
@@ -44,6 +46,7 @@ from ...scene import Scene
 from ...scene.supports import solver_view
 from ..newton.options import NewtonOptions
 from ..nonsmooth.impacts import lockable_elements
+from ..nonsmooth.locks import cyclic_elements
 from ..status import RawRun, Status
 from .fixed_step import RunResult
 from .fixed_step_jit import JIT_METHODS, loop_arguments, takes_fast_path
@@ -53,10 +56,10 @@ __all__ = ["FIRST_CHUNK", "HISTORY", "MAX_HANDBACK", "run_locked"]
 
 #: Compiled steps of the first chunk after a hand-back (then 2x, 4x, ... while slack).
 FIRST_CHUNK = 64
-#: Consecutive slack steps (no lock held, no restart pending) before the compiled loop
-#: takes over again: the BDF2 history.
+#: Consecutive plain steps (no restart pending, no indeterminate forces possible) before
+#: the compiled loop takes over again: the BDF2 history.
 HISTORY = 2
-#: The most slack steps the reference waits for before handing back.
+#: The most plain steps the reference waits for before handing back.
 MAX_HANDBACK = 256
 
 _COUNTERS = ("newton_iterations", "residual_evals", "jacobian_evals", "factorizations")
@@ -67,14 +70,15 @@ def run_locked(scene: Scene, *, method: str, dt: float, n_steps: int,
                fast: bool | None = None) -> RawRun:
     """Run ``scene`` (a spring law with a locking branch, no moving supports) by
     ``method`` (``jit-bdf1``/``jit-bdf2``) for ``n_steps`` steps of ``dt``: the compiled
-    loop while every lock is slack, the reference across locks (see the module notes).
+    loop for the plain steps, the reference across impacts and indeterminate forces (see
+    the module notes).
 
     ``fast`` as in :func:`lumped.solvers.bdf.fixed_step_jit.run_bdf_jit`. On a failed
     step: raise (``throw=True``) or return the samples so far with the status, as
     ``bdf1``/``bdf2`` do (restitution 0).
     """
     from .core_jit import compiled_run_bdf_core
-    from .lock_guard_jit import compiled_first_locked_row
+    from .lock_guard_jit import compiled_first_unkept_row
 
     if method not in JIT_METHODS:
         raise ValueError(f"`method` must be one of {tuple(JIT_METHODS)}, got {method!r}")
@@ -90,13 +94,15 @@ def run_locked(scene: Scene, *, method: str, dt: float, n_steps: int,
     ref = StepLoop(scene, view, clock, law_q, method=formula, dt=dt, options=options,
                    throw=throw, restitution=0.0, t0=0.0, x=x0.tolist(), v=v0.tolist(),
                    F=F0.tolist())
-    core, guard = compiled_run_bdf_core(), compiled_first_locked_row()
+    core, guard = compiled_run_bdf_core(), compiled_first_unkept_row()
     lockable = np.array(lockable_elements(scene), dtype=np.int64)
+    cyclic = np.array(cyclic_elements(scene), dtype=np.int64)
+    was_locked = np.zeros(len(lockable), dtype=np.bool_)
     law, lawc = js.module.element_law, js.consts
     counts = dict.fromkeys(_COUNTERS, 0)
     max_it = compiled = handovers = fast_steps = 0
     chunk, handback, since = FIRST_CHUNK, HISTORY, 0
-    row, on_ref = 0, bool(ref.locked)
+    row, on_ref = 0, False
     while row < n_steps:
         if on_ref:
             if ref.step != row:
@@ -127,11 +133,12 @@ def run_locked(scene: Scene, *, method: str, dt: float, n_steps: int,
             for k, key in enumerate(_COUNTERS):
                 counts[key] += int(info[4 + k])
             max_it = max(max_it, int(info[8]))
-        good = guard(law, lawc, js.ea, js.eb, lockable, xs, Fs, row + 1, filled) - 1
+        good = guard(law, lawc, js.ea, js.eb, js.spring, lockable, cyclic, was_locked, xs,
+                     vs, Fs, row + 1, filled) - 1
         compiled += good - row
         since += good - row
         row = good
-        if row < stop:  # a lock, or a step the compiled loop could not take
+        if row < stop:  # a new lock, indeterminate forces, a step it could not take
             # a lock again soon after the hand-back: wait longer on the reference
             handback = min(2 * handback, MAX_HANDBACK) if since < handback else HISTORY
             chunk = FIRST_CHUNK

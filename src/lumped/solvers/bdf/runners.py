@@ -6,9 +6,10 @@ reference, :func:`lumped.solvers.bdf.fixed_step.run_bdf`) and ``jit-bdf1``, ``ji
 A compiled run hands the whole run to the reference where it cannot go on: a scene with
 moving supports (:mod:`lumped.scene.supports`), or a step its Newton cannot take;
 ``stats["fallback"]`` says why. A scene with a position lock (a taut string: impacts,
-indeterminate forces) runs compiled while every lock is slack and on the reference's
-steps across locks (:mod:`lumped.solvers.bdf.lock_handover`; ``stats`` counts
-``compiled_steps``, ``reference_steps`` and ``handovers``).
+indeterminate forces) runs its plain steps compiled, a taut string held through a
+step included, and the reference's steps across impacts and indeterminate forces
+(:mod:`lumped.solvers.bdf.lock_handover`; ``stats`` counts ``compiled_steps``,
+``reference_steps`` and ``handovers``).
 """
 
 from __future__ import annotations
@@ -61,8 +62,8 @@ def _run_jit(method: str) -> Runner:
                                  f"moving supports ({', '.join(sorted(scene.supports))}) "
                                  "compiled")
         if position_lock(scene, method) is not None:
-            # the compiled loop while every lock is slack, the reference's steps (impact
-            # located in the step, indeterminate forces split) across locks
+            # the compiled loop for the plain steps, the reference's steps (impact located
+            # in the step, indeterminate forces split) across impacts and indeterminacy
             from .lock_handover import run_locked
 
             return run_locked(scene, method=method, dt=dt, n_steps=n_steps,

@@ -19,7 +19,8 @@ So a run can be split into ranges of steps with other code in between:
 reference would hold it there when it computed the same samples itself -- the locks
 at ``t_n`` are a function of the state, and the BDF2 history is the two samples -- and
 :meth:`StepLoop.advance` then takes steps ``n + 1 ..``, optionally stopping as soon as
-every lock has been slack, with BDF2 history, for ``handback`` consecutive steps.
+``handback`` consecutive steps were plain steps (no impact or restart, no indeterminate
+forces possible), so that the BDF2 history is plain too.
 """
 
 from __future__ import annotations
@@ -108,9 +109,10 @@ class StepLoop:
 
     def advance(self, last: int, handback: int = 0) -> int:
         """Take steps ``self.step + 1 .. last``; with ``handback > 0`` stop after the
-        first step that ends ``handback`` consecutive steps with no position lock held
-        and no restart pending. Return the last step taken (``self.step``); on a failed
-        step raise (``throw``) or set ``status``, ``message`` and stop before it."""
+        first step that ends ``handback`` consecutive *plain* steps: no restart pending
+        (no impact, no substeps) and fewer than two force-free elements on cycles (no
+        indeterminate forces possible). Return the last step taken (``self.step``); on a
+        failed step raise (``throw``) or set ``status``, ``message`` and stop before it."""
         scene, source, clock, law_q = self.scene, self.source, self.clock, self.law_q
         dt, t0, options, throw = self.dt, self.t0, self.options, self.throw
         restitution = self.restitution
@@ -258,12 +260,14 @@ class StepLoop:
             if status is not Status.SUCCESS:
                 F = F_prev  # (the sample at the last step taken)
                 break
+            free = False  # two force-free elements on cycles: forces may be indeterminate
             if cyclic:
                 # force-free elements: dR/dF = 0 on the diagonal of the step's Jacobian
                 if J_acc is not None and sum(J_acc[N + e][N + e] == 0.0 for e in cyclic) < 2:
                     if log.open:
                         log.mark(t0 + (step - 1) * dt, t, ())
                 else:
+                    free = True
                     q_acc = scene.elongations(x_new, v_new)
                     log.mark(t0 + (step - 1) * dt, t,
                              [scene.elements[e].name for e in
@@ -274,7 +278,7 @@ class StepLoop:
             Fs += F
             done_step = step
             if handback:
-                slack = 0 if (locked or restart) else slack + 1
+                slack = 0 if (free or restart) else slack + 1
                 if slack >= handback:
                     break
         self.counts = [total_it, res_ev, jac_ev, facts, max_it]
