@@ -1,11 +1,14 @@
 """``jit-bdf1``/``jit-bdf2`` on scenes with position locks (issue 27, "Locks compiled too").
 
-A scene with a string runs its compiled loop while every lock is slack and the
-reference's steps across impacts and locks (:mod:`lumped.solvers.bdf.lock_handover`),
-never whole on the reference (``stats["fallback"]``). The faithful port (``fast=False``)
-then gives ``bdf1``/``bdf2``'s numbers bit for bit on these scenes (at most 8 unknowns:
-the same LU), and its impacts and intervals of indeterminate forces; the fast loop
-agrees to the Newton tolerance. Each test asserts that the compiled loop took steps.
+A scene with a string runs its plain steps on the compiled loop and the reference's
+steps across impacts and indeterminate forces (:mod:`lumped.solvers.bdf.lock_handover`),
+never whole on the reference (``stats["fallback"]``): the bench's impact and lock scenes
+(``examples/impact.toml``, ``examples/lock.toml``), a pulled string, a string beside a
+Bingham dashpot, a taut string released, random networks with a string. The faithful
+port (``fast=False``) then gives ``bdf1``/``bdf2``'s numbers bit for bit on these scenes
+(at most 8 unknowns: the same LU), and its impacts and intervals of indeterminate
+forces; the fast loop agrees to the Newton tolerance. Each test asserts that the
+compiled loop took steps.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from hypothesis import strategies as st
 from solvers.test_random_networks import grid, networks
 
 from lumped import Element, Mass, Scene, simulate
+from lumped.bench.impact_scenes import impact_scene, lock_scene
 from lumped.laws import get_law
 from lumped.scene.forcing import SineBurst
 
@@ -57,7 +61,8 @@ def _check_compiled(sol, ref):
 
 
 @pytest.mark.parametrize("formula", FORMULAS)
-@pytest.mark.parametrize("make, t_end", [(pulled_string, 1.5), (string_beside_bingham, 2.0)])
+@pytest.mark.parametrize("make, t_end", [(impact_scene, 3.0), (lock_scene, 3.0),
+                                         (pulled_string, 1.5), (string_beside_bingham, 2.0)])
 def test_locked_scenes_agree_bit_for_bit_with_the_reference(formula, make, t_end):
     ref = simulate(make(), method=formula, dt=1e-3, t_end=t_end)
     sol = simulate(make(), method="jit-" + formula, dt=1e-3, t_end=t_end, fast=False)
