@@ -41,12 +41,17 @@ import numpy as np
 __all__ = ["run_fast_path"]
 
 
-def run_fast_path(scene, js, args: tuple) -> tuple[int, dict]:
+def run_fast_path(scene, js, args: tuple, start: int = 0,
+                  stop: int | None = None) -> tuple[int, dict]:
     """Fill ``xs, vs, Fs, info, finfo`` of ``args`` (the arguments of
     :func:`~lumped.solvers.bdf.core_jit.run_bdf_core` after its callbacks, from
     :func:`lumped.solvers.bdf.fixed_step_jit.loop_arguments`) by the fast path with
     hand-over; return the rows filled and the counters (the reference's names, plus
-    ``fast_steps`` and ``handovers``)."""
+    ``fast_steps`` and ``handovers``).
+
+    Steps ``start + 1 .. stop`` (``stop=None``: to the last step), from the state at row
+    ``start`` (and ``start - 1``, the BDF2 history) of ``xs, vs, Fs``; ``start = 0``
+    writes the initial state ``x0, v0, F0`` of ``args`` there first."""
     from .core_jit import compiled_run_bdf_core
     from .fast_codegen import MAX_FAST_ITERATIONS, fast_module
 
@@ -63,7 +68,9 @@ def run_fast_path(scene, js, args: tuple) -> tuple[int, dict]:
     work = args[24:]
     N, E = xs.shape[1], Fs.shape[1]
     n = N + E
-    xs[0], vs[0], Fs[0] = x0, v0, F0
+    if start == 0:
+        xs[0], vs[0], Fs[0] = x0, v0, F0
+    last = n_steps if stop is None else stop
     Jm = np.zeros((n, n))
     LU = np.zeros((n, n))
     P = np.zeros(n, dtype=np.int64)
@@ -74,32 +81,32 @@ def run_fast_path(scene, js, args: tuple) -> tuple[int, dict]:
     # never more iterations than the caller's budget allows the reference (plus the
     # confirming evaluation)
     max_it = min(MAX_FAST_ITERATIONS, max_iters + 1)
-    step, chunk, handovers = 0, 1, 0
-    rows = 1
+    step, chunk, handovers = start, 1, 0
+    rows = start + 1
     while True:
-        nxt = fm.run_fast(masses, dt, n_steps, bdf2, step, rtol, atol, max_it, fkind, fpar, ftab,
+        nxt = fm.run_fast(masses, dt, last, bdf2, step, rtol, atol, max_it, fkind, fpar, ftab,
                           xs, vs, Fs, Jm, LU, P, np.zeros((n, n)), b, np.zeros(n),
                           counts, js.consts)
         rows = nxt
-        if nxt > n_steps:
+        if nxt > last:
             break
         chunk = chunk * 2 if nxt == step + 1 and handovers else 1
-        start = nxt - 1
-        stop = min(n_steps, start + chunk)
+        begin = nxt - 1
+        end = min(last, begin + chunk)
         if loop is None:
             loop = compiled_run_bdf_core()
         rows = loop(js.module.evaluate, js.module.element_law, masses, ea, eb, spring,
-                    checked, xs[start].copy(), vs[start].copy(), Fs[start].copy(), dt,
+                    checked, xs[begin].copy(), vs[begin].copy(), Fs[begin].copy(), dt,
                     n_steps, bdf2, rtol, atol, max_iters, max_backtracks, free_steps, fkind,
-                    fpar, ftab, xs, vs, Fs, info, finfo, *work, start, stop)
+                    fpar, ftab, xs, vs, Fs, info, finfo, *work, begin, end)
         handovers += 1
         slow[:4] += info[4:8]
         slow[4] = max(slow[4], info[8])
-        if info[0] != 0 or stop >= n_steps:
+        if info[0] != 0 or end >= last:
             break
-        step = stop
+        step = end
     stats = {
-        "steps": rows - 1,
+        "steps": rows - 1 - start,
         "newton_iterations": int(counts[0] + slow[0]),
         "residual_evals": int(counts[1] + slow[1]),
         "jacobian_evals": int(counts[2] + slow[2]),

@@ -19,8 +19,10 @@ sympy residuals (a hand-written kernel cannot be compiled: ``ValueError``), exce
 scenes with a position lock (a spring law with a branch on which the force is free,
 such as a taut string), refused with a ``ValueError``: the event model of impacts is
 not part of this compiled port. (Through :func:`lumped.simulate`, ``method="jit-bdf1"`` or
-``"jit-bdf2"`` runs such a scene whole on the reference solver instead, and so a run whose
-compiled Newton fails; ``stats["fallback"]`` says so.)
+``"jit-bdf2"`` runs such a scene's plain steps on this loop and its impacts and
+indeterminate forces on the reference, :mod:`lumped.solvers.bdf.lock_handover`; a run of
+another scene whose compiled Newton fails runs whole on the reference solver,
+``stats["fallback"]`` says so.)
 
 The consistent initial state is computed by the reference in Python (once per run).
 Forcing: ``None``, constants and :class:`~lumped.scene.forcing.SineBurst` are evaluated
@@ -40,7 +42,7 @@ from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..status import BranchError, RawRun, Status
 
 __all__ = ["JIT_METHODS", "FAST_MIN_STEPS", "run_bdf_jit", "loop_arguments",
-           "refuse_position_locks"]
+           "position_lock", "refuse_position_locks", "takes_fast_path"]
 
 #: Compiled method name -> step formula.
 JIT_METHODS = {"jit-bdf1": "bdf1", "jit-bdf2": "bdf2"}
@@ -105,6 +107,22 @@ def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,
     return js, args, ic_stats
 
 
+def takes_fast_path(scene: Scene, n_steps: int, fast: bool | None) -> bool:
+    """Whether a run of ``n_steps`` steps takes the generated fast loop (see
+    :func:`run_bdf_jit` for ``fast``); ``TypeError`` for a ``fast`` not a bool or None."""
+    if fast is not None and not isinstance(fast, bool):
+        raise TypeError(f"`fast` must be True, False or None, got {fast!r}")
+    from .fast_codegen import MAX_FAST_UNKNOWNS, fast_module_cached
+
+    small = len(scene.nodes) + len(scene.elements) <= MAX_FAST_UNKNOWNS
+    if fast is None:
+        from .core_jit import port_cached
+
+        fast = n_steps >= FAST_MIN_STEPS or (
+            small and (fast_module_cached(scene) or not port_cached()))
+    return fast and small
+
+
 def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
                 options: NewtonOptions | None = None, throw: bool = True,
                 fast: bool | None = None) -> RawRun:
@@ -142,24 +160,13 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
     options = options or NewtonOptions()
     from .core_jit import compiled_run_bdf_core
 
-    if fast is not None and not isinstance(fast, bool):
-        raise TypeError(f"`fast` must be True, False or None, got {fast!r}")
     js, args, ic_stats = loop_arguments(scene, JIT_METHODS[method], dt, n_steps, options)
-    from .fast_codegen import MAX_FAST_UNKNOWNS, fast_module_cached
-
-    if fast is None:
-        from .core_jit import port_cached
-
-        fast = n_steps >= FAST_MIN_STEPS or (
-            len(scene.nodes) + len(scene.elements) <= MAX_FAST_UNKNOWNS
-            and (fast_module_cached(scene) or not port_cached()))
-
-    if fast and len(scene.nodes) + len(scene.elements) <= MAX_FAST_UNKNOWNS:
+    fast = takes_fast_path(scene, n_steps, fast)
+    if fast:
         from .fast_jit import run_fast_path
 
         rows, stats = run_fast_path(scene, js, args)
     else:
-        fast = False
         rows = compiled_run_bdf_core()(js.module.evaluate, js.module.element_law, *args, 0,
                                        -1)
     N, E = len(scene.nodes), len(scene.elements)

@@ -4,9 +4,12 @@ reference, :func:`lumped.solvers.bdf.fixed_step.run_bdf`) and ``jit-bdf1``, ``ji
 ``runner(scene, settings) -> RawRun`` (see :mod:`lumped.solvers.registry`).
 
 A compiled run hands the whole run to the reference where it cannot go on: a scene with
-a position lock (a taut string: impacts, indeterminate forces) or with moving supports
-(:mod:`lumped.scene.supports`), or a step its Newton cannot take; ``stats["fallback"]``
-says why.
+moving supports (:mod:`lumped.scene.supports`), or a step its Newton cannot take;
+``stats["fallback"]`` says why. A scene with a position lock (a taut string: impacts,
+indeterminate forces) runs its plain steps compiled, a taut string held through a
+step included, and the reference's steps across impacts and indeterminate forces
+(:mod:`lumped.solvers.bdf.lock_handover`; ``stats`` counts ``compiled_steps``,
+``reference_steps`` and ``handovers``).
 """
 
 from __future__ import annotations
@@ -53,15 +56,18 @@ def _run_jit(method: str) -> Runner:
 
         dt, n_steps = fixed_step_grid(method, settings, ("fast",))
         fast = settings.extra.get("fast")
-        locked = position_lock(scene, method)
         if getattr(scene, "support_ends", ()):  # no compiled offsets: the reference solver
-            locked = (f"method {method!r} does not take moving supports "
-                      f"({', '.join(sorted(scene.supports))}) compiled")
-        if locked is not None:
-            # impacts and locks are not compiled: the whole run on the reference solver,
-            # which locates the impact in the step and splits indeterminate forces
             return _on_reference(scene, method, dt, n_steps, settings,
-                                 "reference solver: " + locked)
+                                 f"reference solver: method {method!r} does not take "
+                                 f"moving supports ({', '.join(sorted(scene.supports))}) "
+                                 "compiled")
+        if position_lock(scene, method) is not None:
+            # the compiled loop for the plain steps, the reference's steps (impact located
+            # in the step, indeterminate forces split) across impacts and indeterminacy
+            from .lock_handover import run_locked
+
+            return run_locked(scene, method=method, dt=dt, n_steps=n_steps,
+                              options=settings.options, throw=settings.throw, fast=fast)
         raw = run_bdf_jit(scene, method=method, dt=dt, n_steps=n_steps,
                           options=settings.options, throw=False, fast=fast)
         if raw.status in _NEWTON_FAILURES:
