@@ -32,7 +32,7 @@ import struct
 from ..laws import BoundLaw
 from ..scene import Element, Junction, Mass, Scene
 from ..scene.forcing import SineBurst
-from ..scene.network import ConstantForce
+from ..scene.forcing_spec import ConstantForce
 
 __all__ = ["law_key", "scene_key"]
 
