@@ -8,14 +8,13 @@ else ``~/.cache/lumped``; numba's cache of the shared loops beside the package, 
 (``[0, 5 dt]``, ``dt`` the file's ``[solver] dt`` or 1e-3) -- ``radau5`` with
 ``compiled=True``, ``jit-bdf1``/``jit-bdf2`` with the fast path and then the faithful
 port -- and prints, per method, what runs compiled (or that this scene runs on a Python
-loop, e.g. a taut string) and the CPU seconds it took (a warm cache takes a fraction of
-a second). Exit code 0 when every method ran, 1 when one failed (it says why); a bad
+loop, e.g. moving supports) and the CPU seconds it took (a warm cache takes a fraction
+of a second). Exit code 0 when every method ran, 1 when one failed (it says why); a bad
 file exits with 2 and a message naming it.
 
-Until the compiled code takes the laws' parameters at run time, the generated module of
-a scene is keyed by its numbers too: a file whose numbers change compiles that module
-again (a second or two), while the shared loops (most of a first use on a machine) stay
-warm.
+The generated modules are keyed by the scene's structure (the laws' expressions, the
+topology, the kinds of forcing), not its numbers: a file whose numbers change compiles
+nothing new.
 """
 
 from __future__ import annotations
@@ -93,7 +92,7 @@ def _warm(scene, method: str, dt: float, tol: dict) -> str:
             return f"the Python loop runs this scene: {loop or 'no loop named'}"
         return "the event-driven Radau IIA loop"
     sol = simulate(scene, method=method, dt=dt, t_end=t_end, fast=True)
-    if "fallback" in sol.stats:  # e.g. a position lock: the Python reference runs it
+    if "fallback" in sol.stats:  # e.g. moving supports: the Python reference runs it
         return f"runs on the Python solver: {sol.stats['fallback']}"
     parts = ["the fast loop" if "fast_steps" in sol.stats else None]
     simulate(scene, method=method, dt=dt, t_end=t_end, fast=False)
