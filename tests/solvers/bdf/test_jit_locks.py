@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from solvers.test_random_networks import grid, networks
 
@@ -125,7 +125,11 @@ def networks_with_a_string(draw):
 def test_random_networks_with_strings_agree_with_the_reference(scene, formula):
     dt, t_end = grid(scene)
     dt /= 4.0  # (the suite's coarsest grid, 40 steps at most, refined)
-    ref = simulate(scene, method=formula, dt=dt, t_end=t_end)
+    try:
+        ref = simulate(scene, method=formula, dt=dt, t_end=t_end)
+    except ValueError as err:  # a draw no law admits is refused by name, as in the suite
+        assume("inconsistent initial state" not in str(err))
+        raise
     sol = simulate(scene, method="jit-" + formula, dt=dt, t_end=t_end, fast=False)
     st_ = sol.stats
     assert "fallback" not in st_ and st_["compiled_steps"] > 0

@@ -48,7 +48,7 @@ def _free(RF) -> bool:
 
 def first_unkept_row(element_law, lawc, ea, eb, spring, lockable, cyclic, was_locked, xs,
                      vs, Fs, r0: int, r1: int) -> int:
-    """The first row ``r`` in ``r0 .. r1 - 1`` of the samples ``xs, vs`` (node
+    """The first row ``r0 <= r < r1`` of the samples ``xs, vs`` (node
     displacements and velocities) and ``Fs`` (element forces) at which an element of
     ``lockable`` is locked that was not at row ``r - 1``, or two elements of ``cyclic``
     are force-free (see the module notes); ``r1`` if none (``r0 >= 1``). ``was_locked``
