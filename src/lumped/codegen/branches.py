@@ -157,6 +157,8 @@ class LawBranches:
             _decision_tree(residual), number)
         self._kernels: dict[tuple, Callable | None] = {}
         self._guards: dict[int, Callable] = {}
+        #: branch -> its stage root or None, read once (:meth:`stage_guards_for`)
+        self._stage_roots: dict[int, tuple | None] = {}
 
     def kernel_for(self, i: int) -> Callable[[float, float], tuple[float, float, float]]:
         """``kernel(q, F) -> (R_i, dR_i/dq, dR_i/dF)`` of branch ``i`` alone.
@@ -193,12 +195,11 @@ class LawBranches:
         branch flat at its end (``p > 1``, :func:`~lumped.codegen.stage_forms.flat_root`),
         whose force a stage solve fixes only to its Newton tolerance."""
         i = self._check(i)
-        # (the root is read off the branch's residual once per branch: a sympy traversal)
-        roots = self.__dict__.setdefault("_stage_roots", {})
-        root = roots.get(i, False)
-        if root is False:
+        if i in self._stage_roots:
+            root = self._stage_roots[i]
+        else:
             info = self.info[i]
-            root = roots[i] = info.stage[3:] if info.stage is not None else (
+            root = self._stage_roots[i] = info.stage[3:] if info.stage is not None else (
                 None if info.locks else flat_root(info.residual))
         if root is None:
             return self.guards_for(i)
