@@ -45,7 +45,7 @@ from ...scene import Mass, Scene
 from ..newton.scalar_root import scalar_root
 
 __all__ = ["known_rate_dashpots", "rates_below_resolution", "rest_edge",
-           "settle_on_rest_set", "start_at_known_rates"]
+           "set_valued_at_rest", "settle_on_rest_set", "start_at_known_rates"]
 
 
 def known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
@@ -61,7 +61,7 @@ def known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
             and (eb[e] < 0 or isinstance(nodes[eb[e]], Mass))]
 
 
-def _set_valued_at_rest(kernel) -> bool:
+def set_valued_at_rest(kernel) -> bool:
     """``R(0, 0) = 0`` with ``dR/dF = 0``: the law leaves the force free at rest (a yield
     law), rather than fixing it continuously in ``q`` (newtonian)."""
     R, _, RF = kernel(0.0, 0.0)
@@ -82,7 +82,7 @@ def _reversed(scene: Scene, q0: list[float], q_after: Callable[[int], float],
     out: list[int] = []
     masses: list[int] = []
     for e in known_rate_dashpots(scene, [e for e in range(len(q0)) if q0[e] != 0.0]):
-        if not _set_valued_at_rest(scene.elements[e].law.kernel):
+        if not set_valued_at_rest(scene.elements[e].law.kernel):
             continue  # a law that fixes the force at rest (newtonian): continuous in q
         if _turned(q0[e], q_after(e)):
             out.append(e)

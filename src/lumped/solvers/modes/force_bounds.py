@@ -32,7 +32,7 @@ import math
 from collections.abc import Sequence
 
 from ...scene import Scene
-from ..implicit.initial_slip import known_rate_dashpots, rest_edge
+from ..implicit.initial_slip import known_rate_dashpots, rest_edge, set_valued_at_rest
 
 __all__ = ["onto_joint_bounds", "onto_slip_ends"]
 
@@ -77,8 +77,7 @@ def onto_slip_ends(scene: Scene, old: Sequence[int], new: Sequence[int], v: list
         a, b = scene.elem_a[e], scene.elem_b[e]
         if abs((v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)) <= tol:
             kernel = scene.elements[e].law.kernel
-            R, _, RF = kernel(0.0, 0.0)
-            if R == 0.0 and RF == 0.0:  # (a yield law: set-valued at rest)
+            if set_valued_at_rest(kernel):  # (a yield law)
                 edge = rest_edge(kernel, F[e])
                 if abs(edge - F[e]) <= math.sqrt(rtol) * (1.0 + abs(edge)):
                     out[e] = edge
