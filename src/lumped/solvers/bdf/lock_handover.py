@@ -94,7 +94,7 @@ def run_locked(scene: Scene, *, method: str, dt: float, n_steps: int,
     ref = StepLoop(scene, view, clock, law_q, method=formula, dt=dt, options=options,
                    throw=throw, restitution=0.0, t0=0.0, x=x0.tolist(), v=v0.tolist(),
                    F=F0.tolist())
-    core, guard = compiled_run_bdf_core(), compiled_first_unkept_row()
+    guard = compiled_first_unkept_row()
     lockable = np.array(lockable_elements(scene), dtype=np.int64)
     cyclic = np.array(cyclic_elements(scene), dtype=np.int64)
     was_locked = np.zeros(len(lockable), dtype=np.bool_)
@@ -127,8 +127,8 @@ def run_locked(scene: Scene, *, method: str, dt: float, n_steps: int,
             for key in _COUNTERS:
                 counts[key] += st[key]
             max_it = max(max_it, st["max_newton_iterations"])
-        else:
-            filled = core(js.module.evaluate, law, *args[:5], xs[row].copy(),
+        else:  # (the faithful port: compiled only where it runs, as in run_fast_path)
+            filled = compiled_run_bdf_core()(js.module.evaluate, law, *args[:5], xs[row].copy(),
                           vs[row].copy(), Fs[row].copy(), *args[8:], row, stop)
             for k, key in enumerate(_COUNTERS):
                 counts[key] += int(info[4 + k])
