@@ -19,7 +19,7 @@ the compiled loop are in the disk cache (its time is printed: a few seconds when
 are already there, the first compile otherwise), so the sweeps run on a **warm cache**.
 For each sweep, in this process (``n_jobs=1``): CPU seconds, wall seconds, the steps of
 all scenes (``stats["steps"]``) and steps per CPU second, and how many generated modules
-this process loaded (``len(lumped.codegen.jit.LOADED_MODULES)`` before and after); then
+this process loaded (``len(lumped.codegen.module_cache.LOADED_MODULES)`` before and after); then
 with ``--jobs`` worker processes (spawned: each imports lumped and loads the module from
 the disk cache): wall seconds, the CPU of this process and its workers, steps per wall
 second. Last, ``--python-points`` scenes of each sweep run one by one with
@@ -71,10 +71,10 @@ def _cpu_children() -> float:
 
 def sweep(grid: dict, n_jobs: int) -> dict:
     """One ``simulate_many`` call, measured."""
-    from lumped.codegen import jit
+    from lumped.codegen import module_cache
     from lumped.sweep import simulate_many
 
-    loaded = len(jit.LOADED_MODULES)
+    loaded = len(module_cache.LOADED_MODULES)
     children = _cpu_children()
     wall, cpu = time.perf_counter(), time.process_time()
     res = simulate_many(chain, grid, method="radau5", rtol=RTOL, t_end=T_END,
@@ -86,7 +86,7 @@ def sweep(grid: dict, n_jobs: int) -> dict:
             "cpu_children": _cpu_children() - children,
             "steps": int(table["steps"].sum()), "ok": bool(res.ok),
             "methods": sorted(set(table["method"])),
-            "modules": (loaded, len(jit.LOADED_MODULES))}
+            "modules": (loaded, len(module_cache.LOADED_MODULES))}
 
 
 def python_loop(values: list[dict]) -> tuple[float, int]:
@@ -113,19 +113,19 @@ def main() -> None:
     args = parser.parse_args()
 
     from lumped import simulate
-    from lumped.codegen import jit
+    from lumped.codegen import jit, module_cache
 
     unit = measure_unit()
     print(f"yardstick: {unit * 1e3:.1f} ms ({unit / YARDSTICK_ITERATIONS * 1e9:.1f} ns an "
           f"iteration); load average {os.getloadavg()[0]:.1f}; {os.cpu_count()} cores")
-    cached = jit.module_cached(jit.scene_source(chain({})).source)
-    before = len(jit.LOADED_MODULES)
+    cached = module_cache.module_cached(jit.scene_source(chain({})).source)
+    before = len(module_cache.LOADED_MODULES)
     t0 = time.process_time()
     sol = simulate(chain({}), method="radau5", rtol=RTOL, t_end=T_END, compiled=True)
     print(f"warm-up (compiled=True; structure module {'in' if cached else 'not in'} the "
           f"disk cache before): {time.process_time() - t0:.2f} s CPU, loop "
           f"{sol.stats['loop']!r}, {sol.stats['steps']} steps, {sol.stats['events']} events; "
-          f"modules loaded {before} -> {len(jit.LOADED_MODULES)}")
+          f"modules loaded {before} -> {len(module_cache.LOADED_MODULES)}")
 
     n = args.points
     grids = {"(a) amplitude": {"amplitude": np.linspace(2.0, 6.0, n)},

@@ -16,7 +16,8 @@ from hypothesis import strategies as st
 
 from lumped import Element, Mass, Scene
 from lumped.codegen.branches import law_branches
-from lumped.codegen.jit import _write_once, cache_dir, jit_scene, scene_source
+from lumped.codegen.jit import jit_scene, scene_source
+from lumped.codegen.module_cache import _write_once, cache_dir
 from lumped.laws import ElementLaw, get_law
 
 CUBIC = ElementLaw("cubic", "spring", "F = k*q + c*q**3", ["k", "c"])
@@ -172,7 +173,7 @@ def test_cache_dir_from_environment(monkeypatch, tmp_path):
 
 
 def test_a_generated_module_exists_when_loaded_or_on_disk(js, monkeypatch, tmp_path):
-    from lumped.codegen.jit import generated_module_exists, module_cached, module_name
+    from lumped.codegen.module_cache import generated_module_exists, module_cached, module_name
 
     source = scene_source(js[0]).source
     name = module_name(source)

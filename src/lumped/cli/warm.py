@@ -43,7 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Warm the cache for each method; see the module notes for the exit codes."""
-    from ..codegen.jit import cache_dir
+    from ..codegen.module_cache import cache_dir
     from ..io.scenefile import load_scene
 
     try:

@@ -215,7 +215,7 @@ def test_by_default_a_new_structure_compiles_once_then_every_run_is_compiled(
     ``COMPILE_AFTER`` steps, seamlessly (the same run as the Python loop's); a short run
     stays in Python; then every run of that structure, with any numbers, starts compiled,
     and new numbers build no module."""
-    from lumped.codegen import jit
+    from lumped.codegen import jit, module_cache
     from lumped.solvers.eventdriven import fast as adaptive_fast
 
     COMPILE_AFTER = 200  # a shorter run than the default's
@@ -233,9 +233,9 @@ def test_by_default_a_new_structure_compiles_once_then_every_run_is_compiled(
     assert short.stats["loop"] == "python: not compiled yet (a short run)"
     kw = dict(method="radau5", t_end=3.0, rtol=1e-9, atol=1e-12)
     ref = simulate(first, compiled=False, **kw)
-    modules = len(jit.LOADED_MODULES)
+    modules = len(module_cache.LOADED_MODULES)
     lazy = simulate(first, **kw)
-    assert len(jit.LOADED_MODULES) == modules + 1  # the structure's one module
+    assert len(module_cache.LOADED_MODULES) == modules + 1  # the structure's one module
     assert ref.stats["steps"] > COMPILE_AFTER + 50
     assert lazy.stats["loop"] == f"compiled from step {COMPILE_AFTER}"
     assert np.array_equal(lazy.data, ref.data) and lazy.stats["nfev"] == ref.stats["nfev"]
@@ -251,7 +251,7 @@ def test_by_default_a_new_structure_compiles_once_then_every_run_is_compiled(
         assert new.stats["loop"] == "compiled"
         assert np.array_equal(new.data, simulate(other, method="radau5", t_end=0.2,
                                                  rtol=1e-6, compiled=False).data)
-    assert len(jit.LOADED_MODULES) == modules + 1
+    assert len(module_cache.LOADED_MODULES) == modules + 1
     assert {name: len(getattr(module, name).signatures) for name in signatures} == signatures
 
 

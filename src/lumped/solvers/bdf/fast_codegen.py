@@ -72,14 +72,8 @@ import hashlib
 from collections.abc import Callable
 from types import ModuleType
 
-from ...codegen.jit import (
-    LOADED_MODULES,
-    MODULE_LOCK,
-    end_values_source,
-    import_generated,
-    loaded_key,
-    scene_templates,
-)
+from ...codegen.jit import end_values_source, scene_templates
+from ...codegen.module_cache import LOADED_MODULES, MODULE_LOCK, import_generated, loaded_key
 
 __all__ = ["MAX_FAST_ITERATIONS", "MAX_FAST_UNKNOWNS", "fast_source", "fast_module",
            "fast_module_cached"]
@@ -316,7 +310,7 @@ def fast_module_cached(scene, key: tuple | None = None) -> bool:
     """The scene's fast-path module exists: loaded in this process (under ``key`` or its
     source) or in the disk cache. Its source does not depend on the laws' numbers, so any
     earlier run of the same structure built it."""
-    from ...codegen.jit import cache_dir, generated_module_exists
+    from ...codegen.module_cache import cache_dir, generated_module_exists
 
     if key is not None and (str(cache_dir()), key) in _BY_KEY:
         return True
@@ -332,7 +326,7 @@ def fast_module(scene, key: tuple | None = None) -> ModuleType:
     topology, and the structure arrays); a later call with an equal key returns the
     module without generating the source again (about 0.4 ms of sympy printing, 8 ns a
     step on a run of 50 000 steps)."""
-    from ...codegen.jit import cache_dir
+    from ...codegen.module_cache import cache_dir
 
     if key is not None:
         key = (str(cache_dir()), key)  # (as the modules: per cache directory)

@@ -70,7 +70,7 @@ def _loaded(scene: Scene, plan) -> bool:
     """The scene's structure has its generated module already, loaded in this process or
     in the disk cache (an earlier run of the same laws and topology, with any numbers,
     compiled it): nothing left to compile. Checked once per plan."""
-    from ...codegen import jit
+    from ...codegen import jit, module_cache
 
     if getattr(plan, "module_loaded", None) is None:
         try:
@@ -78,7 +78,7 @@ def _loaded(scene: Scene, plan) -> bool:
         except ValueError:  # a hand-written kernel: _parts says why
             plan.module_loaded = True
         else:
-            plan.module_loaded = jit.module_cached(source)
+            plan.module_loaded = module_cache.module_cached(source)
     return plan.module_loaded
 
 
