@@ -195,6 +195,9 @@ def summary_one(m, k, inv_gamma, tau, dt, n, bdf2, x0, v0, kind, p0, p1, p2, out
     step receives the same inputs and returns the same outputs, bit for bit; the loop
     stops there and counts the remaining steps as stuck (no events, no work). The
     summary is exactly the one of stepping to the end; only the time differs.
+
+    ``kind`` is never :data:`FORCE_SAMPLED` here: the summary has no samples (the
+    sweep's plan, :func:`lumped.sweep.closed.plan_closed`, refuses such a forcing).
     """
     empty = np.empty(0)
     x = x0
