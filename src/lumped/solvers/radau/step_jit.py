@@ -87,8 +87,8 @@ def _left_branch(branch_law, lawc, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) 
     :mod:`lumped.solvers.implicit.branch_check`) on element ``e``'s branch ``mode``."""
     s0 = abs(Rq0) + abs(RF0)
     s1 = abs(Rq1) + abs(RF1)
-    mq = sign_bit(dead_band_sign(Rq0, s0)) | sign_bit(dead_band_sign(Rq1, s1))
-    mf = sign_bit(dead_band_sign(RF0, s0)) | sign_bit(dead_band_sign(RF1, s1))
+    mq = _bit(Rq0, s0) | _bit(Rq1, s1)
+    mf = _bit(RF0, s0) | _bit(RF1, s1)
     if mq == 3 or mf == 3:
         return True
     dq = q1 - q0
@@ -105,11 +105,19 @@ def _left_branch(branch_law, lawc, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) 
     for s in (0.25, 0.5, 0.75):
         _, Rq, RF = branch_law(e, mode, q0 + s * dq, F0 + s * dF, lawc)
         sc = abs(Rq) + abs(RF)
-        mq |= sign_bit(dead_band_sign(Rq, sc))
-        mf |= sign_bit(dead_band_sign(RF, sc))
+        mq |= _bit(Rq, sc)
+        mf |= _bit(RF, sc)
         if mq == 3 or mf == 3:
             return True
     return False
+
+
+@njit(cache=True)
+def _bit(x, scale) -> int:
+    """The sign bit of ``x`` with a dead band (``sign_bit(dead_band_sign(x, scale))``),
+    called: its two helpers are inlined at numba's IR level, once here rather than at
+    each of :func:`_left_branch`'s ten uses (a second of a first run's compile)."""
+    return sign_bit(dead_band_sign(x, scale))
 
 
 @njit(cache=True)
@@ -179,8 +187,10 @@ def error_norm(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h
             M[N + a, col] -= 1.0
         if b >= 0:
             M[N + b, col] += 1.0
-        q_e = (_elem_at(spring[e], A, h, x_n, v_n, U, n, b, -1)
-               - _elem_at(spring[e], A, h, x_n, v_n, U, n, a, -1))
+        # the element's q at the step's start (_elem_at at k = -1, written out: a literal
+        # -1 there would compile a second _elem_at for the literal)
+        y_n = x_n if spring[e] else v_n
+        q_e = (y_n[b] if b >= 0 else 0.0) - (y_n[a] if a >= 0 else 0.0)
         _R, Rq, RF = branch_law(e, modes[e], q_e, F_n[e], lawc)
         off = 0 if spring[e] else N
         if b >= 0:
