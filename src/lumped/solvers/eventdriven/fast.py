@@ -20,9 +20,10 @@ import numpy as np
 from ...codegen.function_types import branch_type, guards_type, law_type
 from ...scene import Scene
 from ..modes.mode_guess_jit import compiled_probe_modes, probe_workspace
+from ..modes.on_demand import OnDemand
 from ..modes.stuck_jit import compiled_breakout_root, compiled_breakout_scan
 from . import loop_jit as L
-from .step import creep_floor
+from .step import NOT_SOUGHT, creep_floor
 
 __all__ = ["CompiledLoop", "compiled_loop"]
 
@@ -106,8 +107,7 @@ def _parts(scene: Scene, plan) -> tuple | str:
         return f"python: {err}"
     return (js, _pointer(js.module.branch_law, law_type()),
             _pointer(js.module.branch_guards, guards_type()), fkind, fpar,
-            np.array(plan.checked, dtype=np.int64),
-            _pointer(js.module.active_branch, branch_type()))
+            np.array(plan.checked, dtype=np.int64), js.module.active_branch)
 
 
 def _locks_in_parallel(scene: Scene, lbs: list, cyclic) -> bool:
@@ -162,12 +162,10 @@ class CompiledLoop:
 
     def __init__(self, js, law, guards, fkind: np.ndarray, fpar: np.ndarray,
                  checked: np.ndarray, branch) -> None:
-        self.js, self.law, self.guards, self.branch = js, law, guards, branch
+        # (``branch``: the scene's ``active_branch``, compiled for the probe only)
+        self.js, self.law, self.guards, self._branch = js, law, guards, branch
         self._probe: tuple | None = None
         self.fn = L.compiled_advance()
-        # the break-out of a stuck interval, compiled (used by modes.stuck's StaticHold)
-        self.breakout_scan = compiled_breakout_scan()
-        self.breakout_root = compiled_breakout_root()
         self.fkind, self.fpar, self.checked = fkind, fpar, checked
         self.A, self.W = _butcher()
         self.N, self.E = len(js.masses), len(js.ea)
@@ -234,6 +232,32 @@ class CompiledLoop:
         row (a run writes its steps in place, :meth:`run`)."""
         self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(self.N, self.E, self.E, 1)
 
+    @property
+    def breakout_scan(self):
+        """:func:`lumped.solvers.modes.stuck_jit.breakout_scan` compiled, or ``None`` (the
+        Python reference then, the same numbers) while it is not compiled on this machine
+        (:class:`~lumped.solvers.modes.on_demand.OnDemand`); used by the break-out of a
+        stuck interval (:class:`lumped.solvers.modes.stuck.StaticHold`)."""
+        return _SCAN.get()
+
+    @property
+    def breakout_root(self):
+        """:func:`lumped.solvers.modes.stuck_jit.breakout_root` compiled, or ``None``, as
+        :attr:`breakout_scan`."""
+        return _ROOT.get()
+
+    def can_probe(self) -> bool:
+        """:meth:`probe_modes` may run (its compiled probe is compiled on this machine,
+        :class:`~lumped.solvers.modes.on_demand.OnDemand`); else the caller runs the
+        Python probe of :func:`lumped.solvers.modes.mode_guess.try_modes` (the same
+        numbers)."""
+        if self._probe is None:
+            fn = _PROBE.get()
+            if fn is None:
+                return False
+            self._probe = (fn, *probe_workspace(self.N, self.E))
+        return True
+
     def probe_modes(self, candidates, current, f: list[float], x: list[float],
                     v: list[float], F: list[float], h_p: float) -> tuple[int, np.ndarray]:
         """:func:`lumped.solvers.modes.mode_guess_jit.probe_modes` on the scene's kernels:
@@ -245,7 +269,8 @@ class CompiledLoop:
         js = self.js
         cands = np.array(candidates, dtype=np.int64).reshape(len(candidates), self.E)
         cur = _NO_MODE if current is None else np.array(current, dtype=np.int64)
-        k = fn(self.law.addr, self.branch.addr, js.consts, js.masses, js.ea, js.eb, js.spring,
+        branch = _pointer(self._branch, branch_type())
+        k = fn(self.law.addr, branch.addr, js.consts, js.masses, js.ea, js.eb, js.spring,
                cands, cur, np.array(f, dtype=float), np.array(x, dtype=float),
                np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
         return k, out
@@ -260,7 +285,8 @@ class CompiledLoop:
         """One step of size ``h`` from ``t``, not accepted: ``(U or None, its, nfac,
         err_norm, F_seen, hit)`` as the Python loop computes them (``hit``: ``(s, (w, j))``,
         the first guard crossing on the step, :func:`lumped.solvers.modes.crossing_root.
-        first_root`, or ``None``), or ``None`` when a Jacobian is
+        first_root`, or ``None``, or :data:`~lumped.solvers.eventdriven.step.NOT_SOUGHT`
+        while its compiled root finder is not compiled), or ``None`` when a Jacobian is
         singular (the Python loop's minimum-norm solve must run).
 
         The state lists are converted to arrays once while they are the same objects
@@ -288,8 +314,17 @@ class CompiledLoop:
         if ok < 0:
             return None
         U = self.ws[0, :3 * (self.N + self.E)].tolist() if ok else None
-        hit = ((float(fst[L.A_ROOT]), (int(ist[L.A_W]), int(ist[L.A_J])))
-               if ok and ist[L.A_HIT] else None)
+        hit = None
+        if ok and watched:  # the first crossing's root, compiled once compiled
+            root = _ATTEMPT_ROOT.get()
+            if root is None:
+                hit = NOT_SOUGHT
+            else:
+                js = self.js
+                root(self.guards.addr, js.consts, js.ea, js.eb, js.spring, self.modes_a,
+                     self.watched_a, self.A, *self._arrays[:3], fst, ist, self.ws, self.wm)
+                if ist[L.A_HIT]:
+                    hit = (float(fst[L.A_ROOT]), (int(ist[L.A_W]), int(ist[L.A_J])))
         return (U, int(ist[L.A_ITS]), int(ist[L.A_NFAC]), float(fst[L.A_ERR]),
                 float(fst[L.F_SEEN]), hit)
 
@@ -341,6 +376,11 @@ class CompiledLoop:
 
 
 _NO_MODE = np.zeros(0, dtype=np.int64)
+# the shared compiled helpers of the events, compiled when a process needs them often
+_SCAN = OnDemand(compiled_breakout_scan)
+_ROOT = OnDemand(compiled_breakout_root)
+_PROBE = OnDemand(compiled_probe_modes)
+_ATTEMPT_ROOT = OnDemand(L.compiled_attempt_root)
 _BUTCHER: list = []
 
 
