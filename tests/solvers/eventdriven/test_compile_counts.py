@@ -2,7 +2,8 @@
 
 The shared loop (:mod:`lumped.solvers.eventdriven.loop_jit`) is compiled once per machine
 and takes a scene's generated kernels as addresses: new numbers compile nothing, a new
-structure compiles its own kernels only. The compiled helpers of the events (the mode
+structure compiles its own kernels only; the fold test of a law that is not a known
+monotone one is compiled for such a scene only. The compiled helpers of the events (the mode
 probe, the break-out scan and root of a stuck interval, an attempt's crossing root) are
 compiled only once a process needs them often (:mod:`lumped.solvers.modes.on_demand`),
 so a first run on a fresh machine does not pay for them; with or without them a run gives
@@ -108,6 +109,22 @@ def test_a_new_structure_compiles_its_own_kernels_only():
     ours = [n for n in names if n.startswith("lumped.")]
     assert ours == []
     assert all(n.startswith(("lumped_jit_", "numba.")) for n in names), names
+
+
+def test_the_fold_test_is_compiled_for_a_law_not_known_monotone_only(monkeypatch):
+    from lumped.solvers.radau import step_jit
+
+    monkeypatch.setattr(step_jit, "_FOLD", [])  # as in a process that never needed it
+    paper = simulate(_paper(), compiled=True, **KW)  # a linear spring and Bingham
+    assert paper.stats["loop"] == "compiled"
+    assert step_jit._FOLD == []
+    s_shaped = Scene([Mass("mass", m=0.01, x0=-6.0)],
+                     [Element("s", get_law("s_shaped").bind(q0=1.0, F0=1.0), "ground", "mass"),
+                      Element("damper", get_law("newtonian").bind(c=0.05), "ground", "mass")],
+                     {"mass": SineBurst(9.0, 0.25)})
+    got = simulate(s_shaped, method="radau5", t_end=8.0, rtol=1e-8, throw=False, compiled=True)
+    assert got.stats["loop"] == "compiled" and got.status.value == "branch_lost"
+    assert step_jit._FOLD != []
 
 
 @pytest.mark.parametrize("helpers", ["compiled", "python"])

@@ -22,6 +22,7 @@ from ...scene import Scene
 from ..modes.mode_guess_jit import compiled_probe_modes, probe_workspace
 from ..modes.on_demand import OnDemand
 from ..modes.stuck_jit import compiled_breakout_root, compiled_breakout_scan
+from ..radau.step_jit import fold_test
 from . import loop_jit as L
 from .step import NOT_SOUGHT, creep_floor
 
@@ -167,6 +168,7 @@ class CompiledLoop:
         self._probe: tuple | None = None
         self.fn = L.compiled_advance()
         self.fkind, self.fpar, self.checked = fkind, fpar, checked
+        self.fold = fold_test() if len(checked) else 0  # (for laws not known monotone)
         self.A, self.W = _butcher()
         self.N, self.E = len(js.masses), len(js.ea)
         self.outputs = self.ws = self.wm = self.iw = None  # on the first call
@@ -219,11 +221,11 @@ class CompiledLoop:
         return x, v, F, dF
 
     def _call(self, x, v, F, dF, T0, HS, Y0, D, ROWS) -> None:
-        self.fn(self.law.addr, self.guards.addr, self.js.consts, self.js.masses, self.js.ea,
-                self.js.eb, self.js.spring, self.js.lock_q, self.modes_a, self.watched_a,
-                self.checked, self.A, self.W, self.fkind, self.fpar, self.breaks, self.kinks,
-                x, v, F, dF, self.fst,
-                self.ist, T0, HS, Y0, D, ROWS, self.ws, self.wm, self.iw)
+        self.fn(self.law.addr, self.guards.addr, self.fold, self.js.consts, self.js.masses,
+                self.js.ea, self.js.eb, self.js.spring, self.js.lock_q, self.modes_a,
+                self.watched_a, self.checked, self.A, self.W, self.fkind, self.fpar,
+                self.breaks, self.kinks, x, v, F, dF, self.fst, self.ist, T0, HS, Y0, D, ROWS,
+                self.ws, self.wm, self.iw)
         self.calls += 1
 
     def _workspace(self) -> None:
@@ -234,10 +236,9 @@ class CompiledLoop:
 
     @property
     def breakout_scan(self):
-        """:func:`lumped.solvers.modes.stuck_jit.breakout_scan` compiled, or ``None`` (the
-        Python reference then, the same numbers) while it is not compiled on this machine
-        (:class:`~lumped.solvers.modes.on_demand.OnDemand`); used by the break-out of a
-        stuck interval (:class:`lumped.solvers.modes.stuck.StaticHold`)."""
+        """:func:`lumped.solvers.modes.stuck_jit.breakout_scan` compiled, or ``None`` while
+        not compiled (:class:`~lumped.solvers.modes.on_demand.OnDemand`; then the Python
+        reference of :class:`lumped.solvers.modes.stuck.StaticHold`, the same numbers)."""
         return _SCAN.get()
 
     @property
@@ -302,8 +303,7 @@ class CompiledLoop:
                             np.zeros(self.E) if dF_n is None else np.array(dF_n, dtype=float))
             self.modes_a = np.array(modes, dtype=np.int64)
             self.watched_a = np.array(watched, dtype=np.int64)
-        else:  # run() may have replaced the mode arrays with equal ones: keep them
-            pass
+        # (else: run() may have replaced the mode arrays with equal ones: kept)
         fst[L.T], fst[L.H], fst[L.F_SEEN], fst[L.PREV_BREAK] = t, h, F_seen, prev_break
         ist[L.SINGLE] = 1
         ist[L.HAVE_DF] = dF_n is not None

@@ -40,9 +40,8 @@ run there). With
 crossing's root is :func:`attempt_root`'s, compiled apart (only when needed).
 
 State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. CREEP_FLOOR``)
-and ``ist`` (ints, indices ``HAVE_ACC .. CREEPING``).  The forcing is ``(fkind, fpar)`` of
-:func:`lumped.scene.forcing_jit.forcing_into` (kinds 0 none, 1 constant, 2 sine burst;
-a tabulated forcing is not taken here).
+and ``ist`` (ints, indices ``HAVE_ACC .. CREEPING``). The forcing is ``(fkind, fpar)`` of
+:func:`lumped.scene.forcing_jit.forcing_into` (its kinds but a sampled table).
 """
 
 from __future__ import annotations
@@ -57,7 +56,7 @@ from ..modes.crossing_root import first_root
 from ..modes.on_demand import compiled_once
 from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.stage_jit import stage_solve
-from ..radau.step_jit import crossed, finite, folded, forces, step_error
+from ..radau.step_jit import FOLDED_TYPE, crossed, finite, forces, step_error
 from ..radau.tableau import END_SLOPES, C
 from .step import CREEP_STEPS
 
@@ -84,17 +83,18 @@ _S1, _S2, _S3 = END_SLOPES
 _stage = njit(cache=True)(stage_solve)
 
 
-def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, watched, checked,
-            A, W,
-            fkind,
-            fpar, breaks, kinks, x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
+def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock_q, modes,
+            watched, checked, A, W, fkind, fpar, breaks, kinks, x, v, F, dF, fst, ist, T0, HS,
+            Y0, D, ROWS, ws, wm, iw) -> None:
     """Steps with the modes held until a reason to return (see the module notes).
 
-    ``law_addr`` and ``guards_addr`` are the addresses of the scene's compiled
-    ``branch_law`` and ``branch_guards`` (:func:`law_type`, :func:`guards_type`; the
-    caller keeps them alive), ``lawc`` the scene's law constants they take: an integer
-    is passed in a few nanoseconds, where numba passes a first-class function argument
-    through two Python calls that unpickle its signature (about 3.5 us each, per call).
+    ``fold_addr``: the fold test's address (:func:`~lumped.solvers.radau.step_jit.fold_test`,
+    compiled for a law not known monotone only; 0 if ``checked`` is empty). ``law_addr``
+    and ``guards_addr`` are the addresses of the scene's compiled ``branch_law`` and
+    ``branch_guards`` (:func:`law_type`, :func:`guards_type`; the caller keeps them alive),
+    ``lawc`` the scene's law constants they take: an integer is passed in a few
+    nanoseconds, where numba passes a first-class function argument through two Python
+    calls that unpickle its signature (about 3.5 us each, per call).
     ``breaks`` are the forcing's breakpoints and ``kinks`` (1 or 0) whether each is a
     kink (:func:`~lumped.solvers.eventdriven.setup.time_events`): a step that ends on a
     kink goes on to the next breakpoint, as the Python loop does, instead of returning;
@@ -236,8 +236,8 @@ def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, 
             continue
         hit = watched.shape[0] > 0 and crossed(branch_guards, lawc, ea, eb, spring, modes, watched,
                                                A, h, x, v, F, U, N, n, qn, Fn, gbuf)
-        if hit or (checked.shape[0] > 0 and folded(
-                branch_law, lawc, ea, eb, spring, modes, checked, A, h, x, v, F, U, N, n, qn[0],
+        if hit or (checked.shape[0] > 0 and _folded_at(fold_addr)(
+                law_addr, lawc, ea, eb, spring, modes, checked, A, h, x, v, F, U, N, n, qn[0],
                 Fn[0])):
             # Python redoes this pass (and lands on the event, or stops at the fold)
             ist[STALLED] -= 1
@@ -348,6 +348,7 @@ def attempt_root(guards_addr, lawc, ea, eb, spring, modes, watched, A, x, v, F, 
 if numba_enabled():
     _law_at = function_at(law_type())
     _guards_at = function_at(guards_type())
+    _folded_at = function_at(FOLDED_TYPE)
 
 _COMPILED: list = []
 _ROOT: list = []
@@ -379,7 +380,7 @@ def compiled_advance():
         f8 = T_.float64
         v, m, m3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
         iv = T_.int64[::1]
-        sig = T_.none(T_.int64, T_.int64, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
+        sig = T_.none(T_.int64, T_.int64, T_.int64, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
                       m,
                       iv, m, v, iv, v, v, v, v, v, iv, v, v, m, m3, m, m, m3,
                       T_.int64[:, ::1])

@@ -22,10 +22,12 @@ from ...codegen.jit import njit, numba_enabled
 __all__ = ["AFTER", "OnDemand", "compiled_once"]
 
 #: Calls of a shared helper that run its Python reference, in one process, before the
-#: helper is compiled (when numba's disk cache does not hold it): a run with this many
-#: events has spent about a tenth of a second in the references, the order of what its
-#: first compiled call would save over a long run; a helper costs 1-3 s of CPU to compile.
-AFTER = 200
+#: helper is compiled (when numba's disk cache does not hold it). A reference costs about
+#: 0.1-0.2 ms a call more than the compiled helper, which costs 1-3 s of CPU to compile,
+#: once per machine: after this many calls a process has spent about a tenth of that in
+#: the references. (The 3-mass chain of the benchmarks asks about 200 times a run for the
+#: crossing root of its landing attempts, 30 times for the probe.)
+AFTER = 1000
 
 
 def compiled_once(store: list, py_func: Callable, signature: Callable, compile: bool = True):

@@ -19,15 +19,16 @@ import math
 
 import numpy as np
 
-from ...codegen.jit import njit
+from ...codegen.function_types import function_at, law_type
+from ...codegen.jit import njit, numba_enabled
 from ...scene.forcing_jit import forcing_into
 from ..implicit.branch_check_jit import dead_band_sign, sign_bit
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 from .error import FORCE_TOL_FACTOR
 from .tableau import E_ERR, MU_REAL, SAMPLES, C
 
-__all__ = ["element_nodes", "folded", "crossed", "error_norm", "step_error", "forces",
-           "finite"]
+__all__ = ["element_nodes", "folded", "folded_at", "fold_test", "crossed", "error_norm",
+           "step_error", "forces", "finite"]
 
 _C0, _C1, _C2 = C
 _E0, _E1, _E2 = E_ERR
@@ -79,6 +80,40 @@ def folded(branch_law, lawc, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n
                 return True
             Rq0, RF0 = Rq1, RF1
     return False
+
+
+def folded_at(law_addr, lawc, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n, U, N, n, q,
+              F) -> bool:
+    """:func:`folded` on the scene's ``branch_law`` at ``law_addr``, compiled apart
+    (:func:`fold_test`): the compiled loop calls it through its address, so it is compiled
+    only for a scene with a law that is not a known monotone one."""
+    return folded(_law_at(law_addr), lawc, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n,
+                  U, N, n, q, F)
+
+
+if numba_enabled():
+    _law_at = function_at(law_type())
+    from numba import types as _T
+
+    _f8, _i8, _v = _T.float64, _T.int64, _T.float64[::1]
+    #: The numba function type of :func:`folded_at`.
+    FOLDED_TYPE = _T.FunctionType(_T.boolean(
+        _i8, _v, _i8[::1], _i8[::1], _T.boolean[::1], _i8[::1], _i8[::1], _f8[:, ::1], _f8, _v,
+        _v, _v, _v, _i8, _i8, _f8[:], _f8[:]))
+else:  # pragma: no cover - without numba
+    FOLDED_TYPE = None
+_FOLD: list = []
+
+
+def fold_test() -> int:
+    """The address of :func:`folded_at` compiled (once per process; numba's disk cache after
+    the first time on a machine), for :func:`lumped.solvers.eventdriven.loop_jit.advance`."""
+    if not _FOLD:
+        from numba.experimental.function_type import _get_wrapper_address
+
+        disp = njit(FOLDED_TYPE.signature, cache=True)(folded_at)
+        _FOLD.append((_get_wrapper_address(disp, FOLDED_TYPE.signature), disp))
+    return _FOLD[0][0]
 
 
 @njit(cache=True)
