@@ -19,7 +19,7 @@ from collections.abc import Callable
 
 from ...codegen.jit import njit, numba_enabled
 
-__all__ = ["AFTER", "OnDemand", "compiled_once"]
+__all__ = ["AFTER", "OnDemand", "compile_all", "compiled_once"]
 
 #: Calls of a shared helper that run its Python reference, in one process, before the
 #: helper is compiled (when numba's disk cache does not hold it). A reference costs about
@@ -77,6 +77,7 @@ class OnDemand:
         self.after = after
         self.calls = 0
         self.fn: Callable | None = None
+        _ALL.append(self)
 
     def get(self) -> Callable | None:
         fn = self.fn
@@ -86,3 +87,13 @@ class OnDemand:
             if self.calls == 1 or self.calls >= after:
                 fn = self.fn = self.make(self.calls >= after)
         return fn
+
+
+_ALL: list[OnDemand] = []
+
+
+def compile_all() -> None:
+    """Compile (or load from numba's disk cache) every shared helper made on demand, now
+    (``lumped warm``: a machine warmed ahead runs every later run fully compiled)."""
+    for helper in _ALL:
+        helper.fn = helper.make(True)
