@@ -6,9 +6,10 @@ else ``~/.cache/lumped``; numba's cache of the shared loops beside the package, 
 ``$NUMBA_CACHE_DIR``). This command pays that cost now: it runs each ``--method``
 (default ``radau5`` and ``jit-bdf2``; repeatable) on the scene for a few steps
 (``[0, 5 dt]``, ``dt`` the file's ``[solver] dt`` or 1e-3) -- ``radau5`` with
-``compiled=True``, ``jit-bdf1``/``jit-bdf2`` with the fast path and then the faithful
-port -- and prints, per method, what runs compiled (or that this scene runs on a Python
-loop, e.g. moving supports) and the CPU seconds it took (a warm cache takes a fraction
+``compiled=True`` and its event helpers (:mod:`lumped.solvers.modes.on_demand`),
+``jit-bdf1``/``jit-bdf2`` with the fast path and then the faithful port -- and prints,
+per method, what runs compiled (or that this scene runs on a Python loop, e.g. moving
+supports) and the CPU seconds it took (a warm cache takes a fraction
 of a second). Exit code 0 when every method ran, 1 when one failed (it says why); a bad
 file exits with 2 and a message naming it.
 
@@ -90,7 +91,10 @@ def _warm(scene, method: str, dt: float, tol: dict) -> str:
             loop = compiled_loop(scene, scene_plan(scene), True)[1]
         if not loop.startswith("compiled"):  # e.g. locked elements in parallel
             return f"the Python loop runs this scene: {loop or 'no loop named'}"
-        return "the event-driven Radau IIA loop"
+        from ..solvers.modes.on_demand import compile_all
+
+        compile_all()  # (a first run compiles them only once a process needs them often)
+        return "the event-driven Radau IIA loop and its event helpers"
     sol = simulate(scene, method=method, dt=dt, t_end=t_end, fast=True)
     if "fallback" in sol.stats:  # e.g. moving supports: the Python reference runs it
         return f"runs on the Python solver: {sol.stats['fallback']}"

@@ -20,9 +20,11 @@ import numpy as np
 from ...codegen.function_types import branch_type, guards_type, law_type
 from ...scene import Scene
 from ..modes.mode_guess_jit import compiled_probe_modes, probe_workspace
+from ..modes.on_demand import OnDemand
 from ..modes.stuck_jit import compiled_breakout_root, compiled_breakout_scan
+from ..radau.step_jit import fold_test
 from . import loop_jit as L
-from .step import creep_floor
+from .step import NOT_SOUGHT, creep_floor
 
 __all__ = ["CompiledLoop", "compiled_loop"]
 
@@ -106,8 +108,7 @@ def _parts(scene: Scene, plan) -> tuple | str:
         return f"python: {err}"
     return (js, _pointer(js.module.branch_law, law_type()),
             _pointer(js.module.branch_guards, guards_type()), fkind, fpar,
-            np.array(plan.checked, dtype=np.int64),
-            _pointer(js.module.active_branch, branch_type()))
+            np.array(plan.checked, dtype=np.int64), js.module.active_branch)
 
 
 def _locks_in_parallel(scene: Scene, lbs: list, cyclic) -> bool:
@@ -162,13 +163,12 @@ class CompiledLoop:
 
     def __init__(self, js, law, guards, fkind: np.ndarray, fpar: np.ndarray,
                  checked: np.ndarray, branch) -> None:
-        self.js, self.law, self.guards, self.branch = js, law, guards, branch
+        # (``branch``: the scene's ``active_branch``, compiled for the probe only)
+        self.js, self.law, self.guards, self._branch = js, law, guards, branch
         self._probe: tuple | None = None
         self.fn = L.compiled_advance()
-        # the break-out of a stuck interval, compiled (used by modes.stuck's StaticHold)
-        self.breakout_scan = compiled_breakout_scan()
-        self.breakout_root = compiled_breakout_root()
         self.fkind, self.fpar, self.checked = fkind, fpar, checked
+        self.fold = fold_test() if len(checked) else 0  # (for laws not known monotone)
         self.A, self.W = _butcher()
         self.N, self.E = len(js.masses), len(js.ea)
         self.outputs = self.ws = self.wm = self.iw = None  # on the first call
@@ -221,11 +221,11 @@ class CompiledLoop:
         return x, v, F, dF
 
     def _call(self, x, v, F, dF, T0, HS, Y0, D, ROWS) -> None:
-        self.fn(self.law.addr, self.guards.addr, self.js.consts, self.js.masses, self.js.ea,
-                self.js.eb, self.js.spring, self.js.lock_q, self.modes_a, self.watched_a,
-                self.checked, self.A, self.W, self.fkind, self.fpar, self.breaks, self.kinks,
-                x, v, F, dF, self.fst,
-                self.ist, T0, HS, Y0, D, ROWS, self.ws, self.wm, self.iw)
+        self.fn(self.law.addr, self.guards.addr, self.fold, self.js.consts, self.js.masses,
+                self.js.ea, self.js.eb, self.js.spring, self.js.lock_q, self.modes_a,
+                self.watched_a, self.checked, self.A, self.W, self.fkind, self.fpar,
+                self.breaks, self.kinks, x, v, F, dF, self.fst, self.ist, T0, HS, Y0, D, ROWS,
+                self.ws, self.wm, self.iw)
         self.calls += 1
 
     def _workspace(self) -> None:
@@ -233,6 +233,31 @@ class CompiledLoop:
         throughout makes none); the attempts write no output rows: their blocks hold one
         row (a run writes its steps in place, :meth:`run`)."""
         self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(self.N, self.E, self.E, 1)
+
+    @property
+    def breakout_scan(self):
+        """:func:`lumped.solvers.modes.stuck_jit.breakout_scan` compiled, or ``None`` while
+        not compiled (:class:`~lumped.solvers.modes.on_demand.OnDemand`; then the Python
+        reference of :class:`lumped.solvers.modes.stuck.StaticHold`, the same numbers)."""
+        return _SCAN.get()
+
+    @property
+    def breakout_root(self):
+        """:func:`lumped.solvers.modes.stuck_jit.breakout_root` compiled, or ``None``, as
+        :attr:`breakout_scan`."""
+        return _ROOT.get()
+
+    def can_probe(self) -> bool:
+        """:meth:`probe_modes` may run (its compiled probe is compiled on this machine,
+        :class:`~lumped.solvers.modes.on_demand.OnDemand`); else the caller runs the
+        Python probe of :func:`lumped.solvers.modes.mode_guess.try_modes` (the same
+        numbers)."""
+        if self._probe is None:
+            fn = _PROBE.get()
+            if fn is None:
+                return False
+            self._probe = (fn, *probe_workspace(self.N, self.E))
+        return True
 
     def probe_modes(self, candidates, current, f: list[float], x: list[float],
                     v: list[float], F: list[float], h_p: float) -> tuple[int, np.ndarray]:
@@ -245,7 +270,8 @@ class CompiledLoop:
         js = self.js
         cands = np.array(candidates, dtype=np.int64).reshape(len(candidates), self.E)
         cur = _NO_MODE if current is None else np.array(current, dtype=np.int64)
-        k = fn(self.law.addr, self.branch.addr, js.consts, js.masses, js.ea, js.eb, js.spring,
+        branch = _pointer(self._branch, branch_type())
+        k = fn(self.law.addr, branch.addr, js.consts, js.masses, js.ea, js.eb, js.spring,
                cands, cur, np.array(f, dtype=float), np.array(x, dtype=float),
                np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
         return k, out
@@ -260,7 +286,8 @@ class CompiledLoop:
         """One step of size ``h`` from ``t``, not accepted: ``(U or None, its, nfac,
         err_norm, F_seen, hit)`` as the Python loop computes them (``hit``: ``(s, (w, j))``,
         the first guard crossing on the step, :func:`lumped.solvers.modes.crossing_root.
-        first_root`, or ``None``), or ``None`` when a Jacobian is
+        first_root`, or ``None``, or :data:`~lumped.solvers.eventdriven.step.NOT_SOUGHT`
+        while its compiled root finder is not compiled), or ``None`` when a Jacobian is
         singular (the Python loop's minimum-norm solve must run).
 
         The state lists are converted to arrays once while they are the same objects
@@ -276,8 +303,7 @@ class CompiledLoop:
                             np.zeros(self.E) if dF_n is None else np.array(dF_n, dtype=float))
             self.modes_a = np.array(modes, dtype=np.int64)
             self.watched_a = np.array(watched, dtype=np.int64)
-        else:  # run() may have replaced the mode arrays with equal ones: keep them
-            pass
+        # (else: run() may have replaced the mode arrays with equal ones: kept)
         fst[L.T], fst[L.H], fst[L.F_SEEN], fst[L.PREV_BREAK] = t, h, F_seen, prev_break
         ist[L.SINGLE] = 1
         ist[L.HAVE_DF] = dF_n is not None
@@ -288,8 +314,17 @@ class CompiledLoop:
         if ok < 0:
             return None
         U = self.ws[0, :3 * (self.N + self.E)].tolist() if ok else None
-        hit = ((float(fst[L.A_ROOT]), (int(ist[L.A_W]), int(ist[L.A_J])))
-               if ok and ist[L.A_HIT] else None)
+        hit = None
+        if ok and watched:  # the first crossing's root, compiled once compiled
+            root = _ATTEMPT_ROOT.get()
+            if root is None:
+                hit = NOT_SOUGHT
+            else:
+                js = self.js
+                root(self.guards.addr, js.consts, js.ea, js.eb, js.spring, self.modes_a,
+                     self.watched_a, self.A, *self._arrays[:3], fst, ist, self.ws, self.wm)
+                if ist[L.A_HIT]:
+                    hit = (float(fst[L.A_ROOT]), (int(ist[L.A_W]), int(ist[L.A_J])))
         return (U, int(ist[L.A_ITS]), int(ist[L.A_NFAC]), float(fst[L.A_ERR]),
                 float(fst[L.F_SEEN]), hit)
 
@@ -341,6 +376,11 @@ class CompiledLoop:
 
 
 _NO_MODE = np.zeros(0, dtype=np.int64)
+# the shared compiled helpers of the events, compiled when a process needs them often
+_SCAN = OnDemand(compiled_breakout_scan)
+_ROOT = OnDemand(compiled_breakout_root)
+_PROBE = OnDemand(compiled_probe_modes)
+_ATTEMPT_ROOT = OnDemand(L.compiled_attempt_root)
 _BUTCHER: list = []
 
 

@@ -36,15 +36,12 @@ a step, accepted, before the controller sizes the next (:data:`CREEP`: Python st
 run there). With
 ``ist[SINGLE] = 1`` it makes one attempt of size ``h`` for the Python loop and returns
 (:data:`ATTEMPT`) its outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular),
-``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]``, ``ist[A_HIT]`` (1 when a guard is
-negative at a sample), the first crossing's root ``fst[A_ROOT]`` on guard ``ist[A_J]``
-of watched element ``ist[A_W]`` (:func:`lumped.solvers.modes.crossing_root.first_root`, the
-Python loop's algorithm) and the stage values in ``ws[0]``.
+``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]`` and the stage values in ``ws[0]``; the
+crossing's root is :func:`attempt_root`'s, compiled apart (only when needed).
 
 State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. CREEP_FLOOR``)
-and ``ist`` (ints, indices ``HAVE_ACC .. CREEPING``).  The forcing is ``(fkind, fpar)`` of
-:func:`lumped.scene.forcing_jit.forcing_into` (kinds 0 none, 1 constant, 2 sine burst;
-a tabulated forcing is not taken here).
+and ``ist`` (ints, indices ``HAVE_ACC .. CREEPING``). The forcing is ``(fkind, fpar)`` of
+:func:`lumped.scene.forcing_jit.forcing_into` (its kinds but a sampled table).
 """
 
 from __future__ import annotations
@@ -56,9 +53,10 @@ import numpy as np
 from ...codegen.function_types import function_at, guards_type, law_type
 from ...codegen.jit import njit, numba_enabled
 from ..modes.crossing_root import first_root
+from ..modes.on_demand import compiled_once
 from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.stage_jit import stage_solve
-from ..radau.step_jit import crossed, finite, folded, forces, step_error
+from ..radau.step_jit import FOLDED_TYPE, crossed, finite, forces, step_error
 from ..radau.tableau import END_SLOPES, C
 from .step import CREEP_STEPS
 
@@ -85,17 +83,18 @@ _S1, _S2, _S3 = END_SLOPES
 _stage = njit(cache=True)(stage_solve)
 
 
-def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, watched, checked,
-            A, W,
-            fkind,
-            fpar, breaks, kinks, x, v, F, dF, fst, ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
+def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock_q, modes,
+            watched, checked, A, W, fkind, fpar, breaks, kinks, x, v, F, dF, fst, ist, T0, HS,
+            Y0, D, ROWS, ws, wm, iw) -> None:
     """Steps with the modes held until a reason to return (see the module notes).
 
-    ``law_addr`` and ``guards_addr`` are the addresses of the scene's compiled
-    ``branch_law`` and ``branch_guards`` (:func:`law_type`, :func:`guards_type`; the
-    caller keeps them alive), ``lawc`` the scene's law constants they take: an integer
-    is passed in a few nanoseconds, where numba passes a first-class function argument
-    through two Python calls that unpickle its signature (about 3.5 us each, per call).
+    ``fold_addr``: the fold test's address (:func:`~lumped.solvers.radau.step_jit.fold_test`,
+    compiled for a law not known monotone only; 0 if ``checked`` is empty). ``law_addr``
+    and ``guards_addr`` are the addresses of the scene's compiled ``branch_law`` and
+    ``branch_guards`` (:func:`law_type`, :func:`guards_type`; the caller keeps them alive),
+    ``lawc`` the scene's law constants they take: an integer is passed in a few
+    nanoseconds, where numba passes a first-class function argument through two Python
+    calls that unpickle its signature (about 3.5 us each, per call).
     ``breaks`` are the forcing's breakpoints and ``kinks`` (1 or 0) whether each is a
     kink (:func:`~lumped.solvers.eventdriven.setup.time_events`): a step that ends on a
     kink goes on to the next breakpoint, as the Python loop does, instead of returning;
@@ -188,12 +187,7 @@ def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, 
                                          rhs, err, fst[TWO])
                 if fst[A_ERR] != -1.0:
                     ist[A_OK] = 1
-                    ist[A_HIT] = 0
-                    if watched.shape[0] > 0:  # the crossing's root too (the landing's)
-                        fst[A_ROOT] = first_root(branch_guards, lawc, ea, eb, spring, modes,
-                                                 watched, A, h, x, v, F, U, N, n, qn, Fn,
-                                                 gbuf, ist[A_W:A_J + 1])
-                        ist[A_HIT] = fst[A_ROOT] >= 0.0
+                    ist[A_HIT] = 0  # (the crossing's root: attempt_root, called after)
             break
         if not ok and out[2] == 1:
             if finite(J):
@@ -242,8 +236,8 @@ def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, 
             continue
         hit = watched.shape[0] > 0 and crossed(branch_guards, lawc, ea, eb, spring, modes, watched,
                                                A, h, x, v, F, U, N, n, qn, Fn, gbuf)
-        if hit or (checked.shape[0] > 0 and folded(
-                branch_law, lawc, ea, eb, spring, modes, checked, A, h, x, v, F, U, N, n, qn[0],
+        if hit or (checked.shape[0] > 0 and _folded_at(fold_addr)(
+                law_addr, lawc, ea, eb, spring, modes, checked, A, h, x, v, F, U, N, n, qn[0],
                 Fn[0])):
             # Python redoes this pass (and lands on the event, or stops at the fold)
             ist[STALLED] -= 1
@@ -334,11 +328,45 @@ def advance(law_addr, guards_addr, lawc, masses, ea, eb, spring, lock_q, modes, 
     ist[REASON] = reason
 
 
+def attempt_root(guards_addr, lawc, ea, eb, spring, modes, watched, A, x, v, F, fst, ist, ws,
+                 wm) -> None:
+    """After an attempt (``ist[SINGLE] = 1``, solved, ``ist[A_OK] = 1``): the first
+    crossing's root on the attempt's step into ``fst[A_ROOT]`` (``-1.0`` if none), on guard
+    ``ist[A_J]`` of watched element ``ist[A_W]``, and ``ist[A_HIT]``
+    (:func:`lumped.solvers.modes.crossing_root.first_root`, the Python loop's algorithm).
+    Apart from :func:`advance` (:func:`compiled_attempt_root`): compiled only when a
+    process lands often, the Python loop's own crossing test before."""
+    N = x.shape[0]
+    n = N + ea.shape[0]
+    nw = max(watched.shape[0], 1)
+    fst[A_ROOT] = first_root(_guards_at(guards_addr), lawc, ea, eb, spring, modes, watched, A,
+                             fst[H], x, v, F, ws[0, :3 * n], N, n, wm[5, :nw, :4],
+                             wm[6, :nw, :4], ws[8], ist[A_W:A_J + 1])
+    ist[A_HIT] = fst[A_ROOT] >= 0.0
+
+
 if numba_enabled():
     _law_at = function_at(law_type())
     _guards_at = function_at(guards_type())
+    _folded_at = function_at(FOLDED_TYPE)
 
 _COMPILED: list = []
+_ROOT: list = []
+
+
+def compiled_attempt_root(compile: bool = True):
+    """:func:`attempt_root` compiled once for every scene (numba's disk cache after the
+    first time on a machine), or ``None`` without numba; ``compile=False``: only if numba's
+    disk cache holds it (:func:`lumped.solvers.modes.on_demand.compiled_once`)."""
+    return compiled_once(_ROOT, attempt_root, _root_signature, compile)
+
+
+def _root_signature():
+    from numba import types as T_
+
+    f8, i8 = T_.float64, T_.int64
+    v, m, m3, iv = f8[::1], f8[:, ::1], f8[:, :, ::1], i8[::1]
+    return T_.none(i8, v, iv, iv, T_.boolean[::1], iv, iv, m, v, v, v, v, iv, m, m3)
 
 
 def compiled_advance():
@@ -352,7 +380,7 @@ def compiled_advance():
         f8 = T_.float64
         v, m, m3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
         iv = T_.int64[::1]
-        sig = T_.none(T_.int64, T_.int64, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
+        sig = T_.none(T_.int64, T_.int64, T_.int64, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
                       m,
                       iv, m, v, iv, v, v, v, v, v, iv, v, v, m, m3, m, m, m3,
                       T_.int64[:, ::1])

@@ -194,7 +194,7 @@ def _kept_at_time_event(scene: Scene, plan, modes: tuple[int, ...], t: float, h:
     :func:`~lumped.solvers.modes.mode_guess.try_modes` with one candidate and one size
     (a scene at rest has no moving supports to set the time of)."""
     h_p = max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t)))
-    if fast is None:
+    if fast is None or not fast.can_probe():  # (the compiled probe: once compiled)
         got = try_modes(scene, plan.branches, [list(modes)], t, x, v, F, h_p)
         return None if got is None else got[2]
     f = scene.external_forces(t + h_p)

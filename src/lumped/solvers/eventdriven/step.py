@@ -24,7 +24,7 @@ from ..status import Status
 from .landing import Landing
 from .setup import step_floor
 
-__all__ = ["CREEP_STEPS", "StepPass", "creep_floor", "creep_stop"]
+__all__ = ["CREEP_STEPS", "NOT_SOUGHT", "StepPass", "creep_floor", "creep_stop"]
 
 _EPS = 2.220446049250313e-16
 #: Accepted steps in a row shorter than the step floor after which a run that creeps
@@ -37,6 +37,10 @@ _CREEP_FRACTION = 1e-12
 #: Cuts of one step at kinks of the force split (:mod:`lumped.solvers.modes.split_kink`) before
 #: the step is taken as it is.
 _KINK_CUTS = 8
+#: A compiled attempt's crossing when its root was not sought (its compiled root finder,
+#: :func:`lumped.solvers.eventdriven.loop_jit.attempt_root`, is not compiled yet): the
+#: Python test runs, the same algorithm.
+NOT_SOUGHT = "not sought"
 
 
 class StepPass:
@@ -226,8 +230,8 @@ class StepPass:
         tangent, kept, target = self.tangent, self.kept, self.target
         # (the compiled attempt has found the crossing by the same algorithm; after an
         # event it saw the probe's forces: test here from the stage forces)
-        hit = self.crossing(sol, h) if in_python or self.ms.forces_from_probe or tangent \
-            else hit_c
+        hit = self.crossing(sol, h) if (in_python or self.ms.forces_from_probe or tangent
+                                         or hit_c is NOT_SOUGHT) else hit_c
         while kept and hit is not None and (hit[0] * h <= tiny or (
                 tangent and hit[0] <= 1.001 * C[0])):
             # the full laws kept the mode at t: a guard read crossed at t is a tangency

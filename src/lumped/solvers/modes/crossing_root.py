@@ -135,6 +135,7 @@ def first_root(branch_guards, lawc, ea, eb, spring, modes, watched, A, h, x_n, v
         if best < 0.0:
             which[0] = bw
             which[1] = bj
+            bj = which[1]  # (an int64: a literal 0 would compile a second _guard)
             e = watched[bw]
             qw, Fw = qn[bw], Fn[bw]
             a = prev

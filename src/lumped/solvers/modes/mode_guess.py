@@ -64,6 +64,8 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
     refusing the candidate. On a scene with moving supports the laws are read at
     ``t + h_p`` and the clock is set back to ``t`` on return. ``used`` (a list) gets the
     size of the probe that decided."""
+    if fast is not None and not fast.can_probe():  # (not compiled yet: the reference)
+        fast = None
     with support_time_restored(scene, t):  # (moving supports: the laws at t + h_p)
         for _ in range(longer):
             support_time(scene, t + h_p)

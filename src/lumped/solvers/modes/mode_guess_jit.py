@@ -20,6 +20,7 @@ import numpy as np
 from ...codegen.function_types import branch_type, function_at, law_type
 from ...codegen.jit import njit, numba_enabled
 from .mode_guess import REFUSED, UNDECIDED
+from .on_demand import compiled_once
 
 __all__ = ["probe_modes", "compiled_probe_modes", "CONFIRMED", "UNDECIDED",
            "REFUSED"]
@@ -175,20 +176,20 @@ if numba_enabled():
 _COMPILED: list = []
 
 
-def compiled_probe_modes():
+def compiled_probe_modes(compile: bool = True):
     """:func:`probe_modes` compiled once for every scene (numba's disk cache after the
-    first time on a machine), or ``None`` without numba."""
-    if not numba_enabled():
-        return None
-    if not _COMPILED:
-        from numba import types as T_
+    first time on a machine), or ``None`` without numba; ``compile=False``: only if
+    numba's disk cache holds it (:func:`lumped.solvers.modes.on_demand.compiled_once`)."""
+    return compiled_once(_COMPILED, probe_modes, _signature, compile)
 
-        f8, i8 = T_.float64, T_.int64
-        v, m = f8[::1], f8[:, ::1]
-        iv = i8[::1]
-        sig = i8(i8, i8, v, v, iv, iv, T_.boolean[::1], i8[:, ::1], iv, v, v, v, v, f8, v, m)
-        _COMPILED.append(njit(sig, cache=True)(probe_modes))
-    return _COMPILED[0]
+
+def _signature():
+    from numba import types as T_
+
+    f8, i8 = T_.float64, T_.int64
+    v, m = f8[::1], f8[:, ::1]
+    iv = i8[::1]
+    return i8(i8, i8, v, v, iv, iv, T_.boolean[::1], i8[:, ::1], iv, v, v, v, v, f8, v, m)
 
 
 def probe_workspace(N: int, E: int) -> tuple[np.ndarray, np.ndarray]:

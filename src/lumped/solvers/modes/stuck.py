@@ -174,10 +174,11 @@ class StaticHold:
         done: list[float] = []
         prev = t0
         samples = self.samples(t0, t1)
-        if fast is not None and self.varying and len(samples) > 2:
+        if (fast is not None and self.varying and len(samples) > 2
+                and (scan := fast.breakout_scan) is not None):
             # the samples' forces and guards in one compiled pass (the same numbers): the
             # loop below starts at the first sample where a guard fails, or ends the scan
-            k = self._scan(samples, fast, modes)
+            k = self._scan(samples, fast, modes, scan)
             if k < 0:
                 return None, samples[:-1]
             if k > 0:
@@ -199,17 +200,16 @@ class StaticHold:
             prev = s
         return None, done[:-1]
 
-    def _scan(self, samples: list[float], fast, modes: Sequence[int]) -> int:
+    def _scan(self, samples: list[float], fast, modes: Sequence[int], scan) -> int:
         """:func:`lumped.solvers.modes.stuck_jit.breakout_scan` on the samples: the index of the
         first one where a guard fails, or ``-1``; the forces of the samples it passed (and
         of the one where it stopped) are kept for :meth:`forces`."""
         y0, fkind, fpar, c, minv, free = self.arrays()
         ts = np.array(samples, dtype=float)
         out = np.empty((len(samples), len(self.F0)))
-        k = fast.breakout_scan(fast.guards.addr, fast.js.consts, free,
-                               np.array(modes, dtype=np.int64),
-                               np.array(self.q, dtype=float), fkind, fpar, c, minv,
-                               y0[len(y0) - len(self.F0):], ts, out, np.zeros(64))
+        k = scan(fast.guards.addr, fast.js.consts, free, np.array(modes, dtype=np.int64),
+                 np.array(self.q, dtype=float), fkind, fpar, c, minv,
+                 y0[len(y0) - len(self.F0):], ts, out, np.zeros(64))
         rows = out[:len(samples) if k < 0 else k + 1].tolist()
         for s, row in zip(samples, rows, strict=False):  # (rows: up to the stop)
             self._seen[s] = row
@@ -217,11 +217,12 @@ class StaticHold:
 
     def _root(self, e: int, j: int, guard, a: float, b: float,
               modes: Sequence[int] | None = None, fast=None) -> float:
-        if fast is not None:  # compiled, the same numbers (nan: the reference says why)
+        root = None if fast is None else fast.breakout_root  # (None: not compiled yet)
+        if root is not None:  # compiled, the same numbers (nan: the reference says why)
             _, fkind, fpar, c, minv, _ = self.arrays()
-            r = fast.breakout_root(fast.guards.addr, fast.js.consts, e, modes[e], j, self.q[e],
-                                 self.free.index(e), fkind, fpar, c, minv, a, b,
-                                 np.zeros(64))  # (the guard values)
+            r = root(fast.guards.addr, fast.js.consts, e, modes[e], j, self.q[e],
+                     self.free.index(e), fkind, fpar, c, minv, a, b,
+                     np.zeros(64))  # (the guard values)
             if r == r:
                 return r
 

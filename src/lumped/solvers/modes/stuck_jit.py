@@ -22,6 +22,7 @@ import numpy as np
 
 from ...codegen.function_types import function_at, guards_type
 from ...codegen.jit import njit, numba_enabled
+from .on_demand import compiled_once
 
 __all__ = ["breakout_root", "breakout_scan", "brent", "compiled_breakout_root",
            "compiled_breakout_scan"]
@@ -208,29 +209,32 @@ _COMPILED: list = []
 _SCAN: list = []
 
 
-def _compiled_once(store: list, fn, signature):
-    """``fn`` compiled with the signature ``signature(f8, i8)`` once per process (kept in
-    ``store``; numba's disk cache after the first time on a machine), or ``None``
-    without numba."""
-    if not numba_enabled():
-        return None
-    if not store:
-        from numba import types as T_
-
-        store.append(njit(signature(T_.float64, T_.int64), cache=True)(fn))
-    return store[0]
-
-
-def compiled_breakout_root():
+def compiled_breakout_root(compile: bool = True):
     """:func:`breakout_root` compiled once for every scene (numba's disk cache after the
-    first time on a machine), or ``None`` without numba."""
-    return _compiled_once(_COMPILED, breakout_root, lambda f8, i8: f8(
-        i8, f8[::1], i8, i8, i8, f8, i8, i8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8, f8, f8[::1]))
+    first time on a machine), or ``None`` without numba; ``compile=False``: only if
+    numba's disk cache holds it (:func:`lumped.solvers.modes.on_demand.compiled_once`)."""
+    return compiled_once(_COMPILED, breakout_root, _root_signature, compile)
 
 
-def compiled_breakout_scan():
+def compiled_breakout_scan(compile: bool = True):
     """:func:`breakout_scan` compiled once for every scene (numba's disk cache after the
-    first time on a machine), or ``None`` without numba."""
-    return _compiled_once(_SCAN, breakout_scan, lambda f8, i8: i8(
-        i8, f8[::1], i8[::1], i8[::1], f8[::1], i8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[::1],
-        f8[::1], f8[:, ::1], f8[::1]))
+    first time on a machine), or ``None`` without numba; ``compile=False`` as
+    :func:`compiled_breakout_root`."""
+    return compiled_once(_SCAN, breakout_scan, _scan_signature, compile)
+
+
+def _root_signature():
+    from numba import types as T_
+
+    f8, i8 = T_.float64, T_.int64
+    return f8(i8, f8[::1], i8, i8, i8, f8, i8, i8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8, f8,
+              f8[::1])
+
+
+def _scan_signature():
+    from numba import types as T_
+
+    f8, i8 = T_.float64, T_.int64
+    return i8(i8, f8[::1], i8[::1], i8[::1], f8[::1], i8[::1], f8[:, ::1], f8[::1], f8[:, ::1],
+              f8[::1], f8[::1], f8[:, ::1], f8[::1])
+

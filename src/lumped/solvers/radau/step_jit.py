@@ -19,15 +19,16 @@ import math
 
 import numpy as np
 
-from ...codegen.jit import njit
+from ...codegen.function_types import function_at, law_type
+from ...codegen.jit import njit, numba_enabled
 from ...scene.forcing_jit import forcing_into
 from ..implicit.branch_check_jit import dead_band_sign, sign_bit
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 from .error import FORCE_TOL_FACTOR
 from .tableau import E_ERR, MU_REAL, SAMPLES, C
 
-__all__ = ["element_nodes", "folded", "crossed", "error_norm", "step_error", "forces",
-           "finite"]
+__all__ = ["element_nodes", "folded", "folded_at", "fold_test", "crossed", "error_norm",
+           "step_error", "forces", "finite"]
 
 _C0, _C1, _C2 = C
 _E0, _E1, _E2 = E_ERR
@@ -81,14 +82,48 @@ def folded(branch_law, lawc, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n
     return False
 
 
+def folded_at(law_addr, lawc, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n, U, N, n, q,
+              F) -> bool:
+    """:func:`folded` on the scene's ``branch_law`` at ``law_addr``, compiled apart
+    (:func:`fold_test`): the compiled loop calls it through its address, so it is compiled
+    only for a scene with a law that is not a known monotone one."""
+    return folded(_law_at(law_addr), lawc, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_n,
+                  U, N, n, q, F)
+
+
+if numba_enabled():
+    _law_at = function_at(law_type())
+    from numba import types as _T
+
+    _f8, _i8, _v = _T.float64, _T.int64, _T.float64[::1]
+    #: The numba function type of :func:`folded_at`.
+    FOLDED_TYPE = _T.FunctionType(_T.boolean(
+        _i8, _v, _i8[::1], _i8[::1], _T.boolean[::1], _i8[::1], _i8[::1], _f8[:, ::1], _f8, _v,
+        _v, _v, _v, _i8, _i8, _f8[:], _f8[:]))
+else:  # pragma: no cover - without numba
+    FOLDED_TYPE = None
+_FOLD: list = []
+
+
+def fold_test() -> int:
+    """The address of :func:`folded_at` compiled (once per process; numba's disk cache after
+    the first time on a machine), for :func:`lumped.solvers.eventdriven.loop_jit.advance`."""
+    if not _FOLD:
+        from numba.experimental.function_type import _get_wrapper_address
+
+        disp = njit(FOLDED_TYPE.signature, cache=True)(folded_at)
+        _FOLD.append((_get_wrapper_address(disp, FOLDED_TYPE.signature), disp))
+    return _FOLD[0][0]
+
+
 @njit(cache=True)
 def _left_branch(branch_law, lawc, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) -> bool:
     """:func:`lumped.solvers.bdf.core_jit.left_branch` (the fold test of
     :mod:`lumped.solvers.implicit.branch_check`) on element ``e``'s branch ``mode``."""
     s0 = abs(Rq0) + abs(RF0)
     s1 = abs(Rq1) + abs(RF1)
-    mq = sign_bit(dead_band_sign(Rq0, s0)) | sign_bit(dead_band_sign(Rq1, s1))
-    mf = sign_bit(dead_band_sign(RF0, s0)) | sign_bit(dead_band_sign(RF1, s1))
+    mq = _bit(Rq0, s0) | _bit(Rq1, s1)
+    mf = _bit(RF0, s0) | _bit(RF1, s1)
     if mq == 3 or mf == 3:
         return True
     dq = q1 - q0
@@ -105,11 +140,19 @@ def _left_branch(branch_law, lawc, e, mode, q0, F0, Rq0, RF0, q1, F1, Rq1, RF1) 
     for s in (0.25, 0.5, 0.75):
         _, Rq, RF = branch_law(e, mode, q0 + s * dq, F0 + s * dF, lawc)
         sc = abs(Rq) + abs(RF)
-        mq |= sign_bit(dead_band_sign(Rq, sc))
-        mf |= sign_bit(dead_band_sign(RF, sc))
+        mq |= _bit(Rq, sc)
+        mf |= _bit(RF, sc)
         if mq == 3 or mf == 3:
             return True
     return False
+
+
+@njit(cache=True)
+def _bit(x, scale) -> int:
+    """The sign bit of ``x`` with a dead band (``sign_bit(dead_band_sign(x, scale))``),
+    called: its two helpers are inlined at numba's IR level, once here rather than at
+    each of :func:`_left_branch`'s ten uses (a second of a first run's compile)."""
+    return sign_bit(dead_band_sign(x, scale))
 
 
 @njit(cache=True)
@@ -179,8 +222,10 @@ def error_norm(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h
             M[N + a, col] -= 1.0
         if b >= 0:
             M[N + b, col] += 1.0
-        q_e = (_elem_at(spring[e], A, h, x_n, v_n, U, n, b, -1)
-               - _elem_at(spring[e], A, h, x_n, v_n, U, n, a, -1))
+        # the element's q at the step's start (_elem_at at k = -1, written out: a literal
+        # -1 there would compile a second _elem_at for the literal)
+        y_n = x_n if spring[e] else v_n
+        q_e = (y_n[b] if b >= 0 else 0.0) - (y_n[a] if a >= 0 else 0.0)
         _R, Rq, RF = branch_law(e, modes[e], q_e, F_n[e], lawc)
         off = 0 if spring[e] else N
         if b >= 0:

@@ -1,0 +1,154 @@
+"""What ``radau5``'s compiled loop compiles (counted with numba's event API, never timed).
+
+The shared loop (:mod:`lumped.solvers.eventdriven.loop_jit`) is compiled once per machine
+and takes a scene's generated kernels as addresses: new numbers compile nothing, a new
+structure compiles its own kernels only; the fold test of a law that is not a known
+monotone one is compiled for such a scene only. The compiled helpers of the events (the mode
+probe, the break-out scan and root of a stuck interval, an attempt's crossing root) are
+compiled only once a process needs them often (:mod:`lumped.solvers.modes.on_demand`),
+so a first run on a fresh machine does not pay for them; with or without them a run gives
+the Python loop's numbers.
+"""
+
+from __future__ import annotations
+
+import contextlib
+
+import numpy as np
+import pytest
+
+from lumped import Element, Mass, Scene, get_law, simulate
+from lumped.bench.impact_scenes import impact_scene
+from lumped.codegen.jit import numba_enabled
+from lumped.scene.forcing import SineBurst
+from lumped.solvers.eventdriven import fast as fast_mod
+from lumped.solvers.eventdriven import loop_jit
+from lumped.solvers.modes import mode_guess_jit, on_demand, stuck_jit
+
+pytestmark = pytest.mark.skipif(not numba_enabled(), reason="the compiled loop needs numba")
+
+KW = dict(method="radau5", t_end=3.0, rtol=1e-8, atol=1e-11)
+
+
+@contextlib.contextmanager
+def _compiles():
+    """The functions numba compiles in the block, as ``module.qualname`` (cache loads are
+    not compilations)."""
+    from numba.core import event
+
+    names: list[str] = []
+    with event.install_recorder("numba:compile") as rec:
+        yield names
+    for _, ev in rec.buffer:
+        if ev.is_start:
+            fn = ev.data["dispatcher"].py_func
+            names.append(f"{fn.__module__}.{fn.__qualname__}")
+
+
+def _same_run(got, ref) -> None:
+    """The Python loop's run: its steps, counters and events, its output to round-off (a
+    stuck element's force after an event, as in ``test_radau_loop_jit``)."""
+    for key in ("steps", "rejected", "newton_iterations", "factorizations", "events"):
+        assert got.stats[key] == ref.stats[key], key
+    assert [(e.element, e.kind, e.to_branch) for e in got.events] == [
+        (e.element, e.kind, e.to_branch) for e in ref.events]
+    scale = np.maximum(np.abs(ref.data).max(axis=0), 1e-300)
+    assert np.all(np.abs(got.data - ref.data) <= 1e-11 * scale)
+
+
+def _paper(k: float = 100.0, tau: float = 1.0) -> Scene:
+    return Scene([Mass("mass", m=1.0, x0=0.0)],
+                 [Element("spring", get_law("linear_spring").bind(k=k), "ground", "mass"),
+                  Element("dashpot", get_law("bingham").bind(gamma=1.0, tau=tau), "ground",
+                          "mass")],
+                 {"mass": SineBurst(10.0, 5.0 * np.pi, 1.0)})
+
+
+def _fresh_helpers(monkeypatch, cache_dir) -> None:
+    """The event helpers as on a machine that never compiled them: none in this process,
+    numba's disk cache for new dispatchers in ``cache_dir`` (empty)."""
+    from numba.core import config
+
+    for mod, name in ((stuck_jit, "_COMPILED"), (stuck_jit, "_SCAN"),
+                      (mode_guess_jit, "_COMPILED"), (loop_jit, "_ROOT")):
+        monkeypatch.setattr(mod, name, [], raising=False)
+    for name, make in (("_SCAN", "compiled_breakout_scan"), ("_ROOT", "compiled_breakout_root"),
+                       ("_PROBE", "compiled_probe_modes"),
+                       ("_ATTEMPT_ROOT", "compiled_attempt_root")):
+        owner = loop_jit if name == "_ATTEMPT_ROOT" else (
+            mode_guess_jit if name == "_PROBE" else stuck_jit)
+        monkeypatch.setattr(fast_mod, name, on_demand.OnDemand(getattr(owner, make)),
+                            raising=False)
+    monkeypatch.setattr(config, "CACHE_DIR", str(cache_dir))
+
+
+def test_a_compiled_run_with_few_events_compiles_none_of_the_event_helpers(
+        monkeypatch, tmp_path):
+    # the shared loop and this structure's kernels, once (the disk cache as a user has it)
+    warm = simulate(_paper(), compiled=True, **KW)
+    assert warm.stats["loop"] == "compiled"
+    ref = simulate(_paper(k=103.0, tau=1.1), compiled=False, **KW)
+    _fresh_helpers(monkeypatch, tmp_path)
+    with _compiles() as names:
+        got = simulate(_paper(k=103.0, tau=1.1), compiled=True, **KW)
+    # new numbers on a known structure: no compilation at all; the run's few events take
+    # the Python references of the probe and the break-out (before: about 5 s of CPU for
+    # them on a fresh machine)
+    assert names == []
+    assert got.stats["loop"] == "compiled" and got.ok
+    assert len(got.events) >= 2
+    _same_run(got, ref)
+
+
+def test_a_new_structure_compiles_its_own_kernels_only():
+    simulate(_paper(), compiled=True, **KW)  # the shared loop, compiled or loaded
+    lin, bing = get_law("linear_spring"), get_law("bingham")
+    # a structure no other test builds: four masses in a chain, the burst on the third
+    nodes = [Mass(f"q{i}", m=1.0 + 0.1 * i, x0=0.0) for i in range(4)]
+    elements = []
+    for i in range(4):
+        a = "ground" if i == 0 else f"q{i - 1}"
+        elements += [Element(f"k{i}", lin.bind(k=40.0 + i), a, f"q{i}"),
+                     Element(f"d{i}", bing.bind(gamma=1.0, tau=0.5 + 0.1 * i), a, f"q{i}")]
+    scene = Scene(nodes, elements, {"q2": SineBurst(6.0, 7.0, 0.8)})
+    with _compiles() as names:
+        got = simulate(scene, compiled=True, method="radau5", t_end=0.5, rtol=1e-6)
+    assert got.stats["loop"] == "compiled" and got.ok
+    # the shared code was compiled before and is taken as it is; the scene's generated
+    # module (``lumped_jit_<hash>``) is compiled, or loaded if an earlier run left it on disk
+    ours = [n for n in names if n.startswith("lumped.")]
+    assert ours == []
+    assert all(n.startswith(("lumped_jit_", "numba.")) for n in names), names
+
+
+def test_the_fold_test_is_compiled_for_a_law_not_known_monotone_only(monkeypatch):
+    from lumped.solvers.radau import step_jit
+
+    monkeypatch.setattr(step_jit, "_FOLD", [])  # as in a process that never needed it
+    paper = simulate(_paper(), compiled=True, **KW)  # a linear spring and Bingham
+    assert paper.stats["loop"] == "compiled"
+    assert step_jit._FOLD == []
+    s_shaped = Scene([Mass("mass", m=0.01, x0=-6.0)],
+                     [Element("s", get_law("s_shaped").bind(q0=1.0, F0=1.0), "ground", "mass"),
+                      Element("damper", get_law("newtonian").bind(c=0.05), "ground", "mass")],
+                     {"mass": SineBurst(9.0, 0.25)})
+    got = simulate(s_shaped, method="radau5", t_end=8.0, rtol=1e-8, throw=False, compiled=True)
+    assert got.stats["loop"] == "compiled" and got.status.value == "branch_lost"
+    assert step_jit._FOLD != []
+
+
+@pytest.mark.parametrize("helpers", ["compiled", "python"])
+def test_the_event_helpers_compiled_or_not_give_the_python_loop_run(monkeypatch, helpers):
+    if helpers == "compiled":
+        monkeypatch.setattr(on_demand, "AFTER", 1)  # compiled (or loaded) at the first call
+    else:
+        for name in ("_SCAN", "_ROOT", "_PROBE", "_ATTEMPT_ROOT"):
+            monkeypatch.setattr(fast_mod, name, on_demand.OnDemand(lambda compile: None))
+    scene = impact_scene()
+    kw = dict(method="radau5", t_end=1.5, rtol=1e-8, atol=1e-11)
+    ref = simulate(scene, compiled=False, **kw)
+    got = simulate(scene, compiled=True, **kw)
+    assert got.stats["loop"] == "compiled"
+    _same_run(got, ref)
+    if helpers == "compiled":
+        assert fast_mod._PROBE.fn is not None or fast_mod._SCAN.fn is not None
