@@ -51,9 +51,14 @@ def compiled_once(store: list, py_func: Callable, signature: Callable, compile: 
 def _from_disk(py_func: Callable, sig):
     """A dispatcher of ``py_func`` with the overload for ``sig`` loaded from numba's disk
     cache, as :meth:`numba.core.dispatcher.Dispatcher.compile` loads it, or ``None`` when
-    the cache does not hold it (then nothing is compiled)."""
+    the cache does not hold it (then nothing is compiled). These are numba's internal
+    calls: where a numba version lacks them, the answer is ``None`` (the reference runs,
+    and the helper is compiled at :data:`AFTER` calls as where the cache is empty)."""
     disp = njit(cache=True)(py_func)
-    cres = disp._cache.load_overload(sig, disp.targetctx)
+    try:
+        cres = disp._cache.load_overload(sig, disp.targetctx)
+    except (AttributeError, TypeError):  # numba's internals changed: compile later
+        return None
     if cres is None:
         return None
     disp.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
