@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import weakref
 from functools import lru_cache
 
 from ...scene import Mass, Scene
@@ -84,6 +85,10 @@ def consistent_initial_state(
     User forces ``Element.F0`` are checked against the law at the initial state (and the
     junction balances), then replace the computed ones.
 
+    The last result per scene object and arguments is kept (a scene is immutable; while
+    its nodes, elements and forcing are the same objects): a second call returns copies
+    of it, its counters those of the one solve.
+
     Returns
     -------
     v, F, stats
@@ -101,6 +106,33 @@ def consistent_initial_state(
         If the algebraic system has no solution Newton can find.
     """
     options = options or _DEFAULT_OPTIONS
+    try:
+        got = _LAST.get(scene)
+    except TypeError:  # not weakly referenceable: no memo
+        got = None
+    if got is not None and got[0] is scene.nodes and got[1] is scene.elements \
+            and got[2] is scene.forcing and got[3] == (time_scale, options):
+        v, F, stats = got[4]
+        return list(v), list(F), dict(stats)
+    v, F, stats = _initial_state(scene, time_scale, options)
+    try:
+        _LAST[scene] = (scene.nodes, scene.elements, scene.forcing, (time_scale, options),
+                        (tuple(v), tuple(F), dict(stats)))
+    except TypeError:
+        pass
+    return v, F, stats
+
+
+#: scene object -> (its nodes, elements and forcing, the arguments, the result) of its
+#: last :func:`consistent_initial_state`: a ``radau5`` run that tries its start at rest
+#: first (:mod:`lumped.solvers.eventdriven.rest_start`) and hands the scene to its
+#: general driver asks for the same state twice, with new numbers as with old ones.
+_LAST: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _initial_state(scene: Scene, time_scale: float, options: NewtonOptions
+                   ) -> tuple[list[float], list[float], dict]:
+    """:func:`consistent_initial_state` solved (not read from its memo)."""
     nodes, elements = scene.nodes, scene.elements
     E = len(elements)
     eps = 1e-20 * time_scale
