@@ -34,16 +34,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import sympy as sp
 
-from .branches import LawBranches
+from .branches import BranchInfo, LawBranches
 from .rebinding import LazyExpressions, Lifted, fill, float_ids, lift_source, lift_text, slots, swap
 from .stage_forms import STEEP_SPAN, affine_steepness, affine_steepness_function
 
-__all__ = ["LawClass", "Rebound", "ReboundBranches", "admitted", "class_key", "derivations",
-           "law_class"]
+__all__ = ["LawClass", "LazyBranchInfo", "Rebound", "ReboundBranches", "admitted", "class_key",
+           "derivations", "law_class"]
 
 _DERIVATIONS = [0]
 _CLASSES: dict[tuple, LawClass | None] = {}
@@ -299,7 +299,8 @@ class ReboundBranches(LawBranches):
     def __init__(self, rebound: Rebound) -> None:  # no derivation: made from the class
         d = rebound.cls._d
         self._rebound = rebound
-        self.info = rebound.cls.infos(rebound.atoms())
+        swapped = _Swapped(rebound.atoms)
+        self.info = tuple(LazyBranchInfo.of(info, swapped) for info in d.lb.info)
         self.count = d.lb.count
         self.branch = d.selector.build(rebound.values)
         self._kernels, self._guards = {}, {}
@@ -330,6 +331,56 @@ class ReboundBranches(LawBranches):
             hit = self._guards[key] = lifted.build(values)
             hit.codes = tuple(fill(text, slots(r, values)) for text, r in codes)
         return hit
+
+
+class _Swapped:
+    """One rebound law's :func:`~lumped.codegen.rebinding.swap` of its class's
+    expressions, with one memo for all of its branches (as :meth:`LawClass.infos`)."""
+
+    def __init__(self, atoms: Callable[[], dict]) -> None:
+        self.atoms, self.memo = atoms, {}
+
+    def __call__(self, expr: sp.Basic) -> sp.Basic:
+        return swap(expr, self.atoms(), self.memo)
+
+
+_LAZY = ("residual", "dR_dq", "dR_dF", "path")
+_FIELDS = tuple(f.name for f in fields(BranchInfo))
+
+
+class LazyBranchInfo(BranchInfo):
+    """A rebound law's :class:`~lumped.codegen.branches.BranchInfo`: ``index``,
+    ``locks``, ``lock_value``, ``steep`` and ``stage`` are its class's (the class fixes
+    them), and its sympy expressions ``residual``, ``dR_dq``, ``dR_dF`` and ``path`` are
+    the class's with the law's floats swapped in when first read (a run reads the
+    branches' flags and compiled functions, rarely their expressions; no sympy runs for
+    new numbers until then). Equal to the :class:`BranchInfo` of a derivation from
+    scratch where :meth:`LawClass.infos` is."""
+
+    @classmethod
+    def of(cls, info: BranchInfo, swapped: _Swapped) -> LazyBranchInfo:
+        out = object.__new__(cls)
+        for name in ("index", "locks", "lock_value", "steep", "stage"):
+            object.__setattr__(out, name, getattr(info, name))
+        object.__setattr__(out, "_source", info)
+        object.__setattr__(out, "_swapped", swapped)
+        return out
+
+    def __getattr__(self, name: str):  # only for attributes not set: the lazy ones
+        if name not in _LAZY or "_source" not in self.__dict__:
+            raise AttributeError(name)
+        value, swapped = getattr(self._source, name), self._swapped
+        value = tuple((swapped(c), w) for c, w in value) if name == "path" else swapped(value)
+        object.__setattr__(self, name, value)
+        return value
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, BranchInfo):
+            return NotImplemented
+        return all(getattr(self, f) == getattr(other, f) for f in _FIELDS)
+
+    def __hash__(self) -> int:
+        return hash(tuple(getattr(self, f) for f in _FIELDS))
 
 
 def _with_magnitude(pair: tuple[Lifted, Lifted], values: tuple[float, ...]) -> Callable:
