@@ -5,11 +5,15 @@ of a run from scratch, whatever ran before and in whatever order."""
 from __future__ import annotations
 
 import numpy as np
+import sympy as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from lumped import simulate
 from lumped.codegen import jit, parametric, templates
 from lumped.codegen.branches import LawBranches, law_branches
 from lumped.codegen.jit import jit_scene, position_locks
+from lumped.codegen.templates import law_template
 from lumped.laws import get_law
 from lumped.scene import Element, Mass, Scene
 from lumped.solvers.eventdriven.setup import clear_plans
@@ -119,3 +123,41 @@ def test_runs_with_new_numbers_in_any_order_as_from_scratch():
         scratch = simulate(make(), **kw)
         _same_run(forward[i], scratch)
         _same_run(backward[i], scratch)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(allow_nan=False, allow_infinity=False).filter(lambda x: x != 0.0))
+def test_the_class_key_reads_sympys_order_of_floats_in_plain_python(x):
+    assert parametric.float_content(x) == sp.Float(x)._hashable_content()
+
+
+def test_a_new_law_of_a_class_makes_no_sympy_float(monkeypatch):
+    """Binding new numbers finds the law's class in plain floats: its kernel, branches
+    and template make no sympy number (counted)."""
+    law = get_law("bingham")
+    for gamma in (3.3000001, 3.3000002):  # the class: its first two laws
+        bound = law.bind(gamma=gamma, tau=1.9)
+        law_template(bound), law_branches(bound).kernel_for(0), bound.kernel
+    made = []
+    real = sp.Float
+    monkeypatch.setattr(sp, "Float", lambda *a, **k: made.append(a) or real(*a, **k))
+    bound = law.bind(gamma=3.3000003, tau=1.9)
+    assert parametric.class_key(bound) is not None
+    law_template(bound), law_branches(bound).kernel_for(0), bound.kernel(0.1, 2.0)
+    assert not made
+
+
+def test_a_released_scene_reads_no_rest_mode(monkeypatch):
+    """A mass whose net force at t = 0 is no round-off is not at rest: the start at rest
+    stops there, before reading a mode (counted); the run is the general driver's."""
+    from lumped.solvers.eventdriven import rest_start
+
+    modes = []
+    real = rest_start.rest_mode
+    monkeypatch.setattr(rest_start, "rest_mode", lambda *a: modes.append(1) or real(*a))
+    sol = simulate(_released(10.000321), t_end=0.5, method="radau5", rtol=1e-6,
+                   compiled=False)
+    assert not modes and sol.stats["loop"] != "none: at rest throughout (no steps)"
+    at_rest = simulate(_released(10.000321, x0=0.01), t_end=0.5, method="radau5",
+                       rtol=1e-6, compiled=False)  # k x0 = 0.1 < tau: held, mode read
+    assert modes and at_rest.stats["loop"] == "none: at rest throughout (no steps)"

@@ -18,13 +18,16 @@ SPRINGS = ("linear_spring", "string_spring")
 
 
 def _with_newton(scene: Scene, time_scale: float):
-    """The initial state by the limit system's Newton (the shortcut off)."""
+    """The initial state by the limit system's Newton (the shortcut off; the state kept
+    for this scene object, the shortcut's, is not read and not kept)."""
     keep = initial_state.initial_rest_forces
     initial_state.initial_rest_forces = lambda *args: None
+    initial_state._LAST.pop(scene, None)
     try:
         return consistent_initial_state(scene, time_scale=time_scale)
     finally:
         initial_state.initial_rest_forces = keep
+        initial_state._LAST.pop(scene, None)
 
 
 def _same(a: list[float], b: list[float]) -> bool:
