@@ -137,9 +137,21 @@ def _key(law, values: tuple[float, ...]) -> tuple | None:
             _dense_ranks([float_content(x) for x in pm] + by_sympy))
 
 
+def sympy_float(x: float) -> sp.Float:
+    """``sympy.Float(x)`` of a finite nonzero float ``x``, made from its content
+    (:func:`float_content`) without sympy's parsing of the number (about 10 times
+    faster; the same object content)."""
+    mpf, prec = float_content(x)
+    return _FLOAT._new(mpf, prec, zero=False)
+
+
+_FLOAT = sp.Float
+
+
 def _floats(values: tuple[float, ...]) -> list:
-    """The sympy floats ``+v_j, -v_j`` of the parameters' ``values``, in the key's order."""
-    return [sp.Float(s * v) for v in values for s in (1.0, -1.0)]
+    """The sympy floats ``+v_j, -v_j`` of the parameters' ``values``, in the key's order
+    (finite and nonzero: :func:`_special` values have no class)."""
+    return [sympy_float(s * v) for v in values for s in (1.0, -1.0)]
 
 
 def class_key(bound) -> tuple | None:

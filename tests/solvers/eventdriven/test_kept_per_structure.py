@@ -161,3 +161,11 @@ def test_a_released_scene_reads_no_rest_mode(monkeypatch):
     at_rest = simulate(_released(10.000321, x0=0.01), t_end=0.5, method="radau5",
                        rtol=1e-6, compiled=False)  # k x0 = 0.1 < tau: held, mode read
     assert modes and at_rest.stats["loop"] == "none: at rest throughout (no steps)"
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(allow_nan=False, allow_infinity=False).filter(lambda x: x != 0.0))
+def test_a_sympy_float_made_from_its_content_is_sympys(x):
+    got, want = parametric.sympy_float(x), sp.Float(x)
+    assert type(got) is type(want) and got == want and float(got) == x
+    assert got._hashable_content() == want._hashable_content() and hash(got) == hash(want)
