@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import weakref
 from functools import lru_cache
 
 from ...scene import Mass, Scene
@@ -33,6 +32,7 @@ from ..newton.semismooth import newton_solve
 from ..nonsmooth.junction_balance import refuse_unbalanced_junctions
 from ..nonsmooth.lock_forces import taut_on_supports
 from ..status import SolverError
+from .initial_kept import kept_per_scene
 from .initial_rest import cluster_guesses, initial_rest_forces
 from .initial_slip import rates_below_resolution, settle_on_rest_set
 from .initial_user_forces import apply_user_forces
@@ -52,10 +52,7 @@ def _ic_options(options: NewtonOptions) -> NewtonOptions:
                          max_backtracks=options.max_backtracks, free_steps=options.free_steps)
 
 
-# ---------------------------------------------------------------------------------------
-# consistent initial state
-
-
+@kept_per_scene
 def consistent_initial_state(
     scene: Scene, *, time_scale: float = 1.0, options: NewtonOptions | None = None
 ) -> tuple[list[float], list[float], dict]:
@@ -83,11 +80,8 @@ def consistent_initial_state(
        there, its yield force ``sgn(F) tau`` with the slip's sign (the paper's (16)).
 
     User forces ``Element.F0`` are checked against the law at the initial state (and the
-    junction balances), then replace the computed ones.
-
-    The last result per scene object and arguments is kept (a scene is immutable; while
-    its nodes, elements and forcing are the same objects): a second call returns copies
-    of it, its counters those of the one solve.
+    junction balances), then replace the computed ones. The result is kept per scene
+    object and arguments (:mod:`lumped.solvers.implicit.initial_kept`).
 
     Returns
     -------
@@ -106,33 +100,6 @@ def consistent_initial_state(
         If the algebraic system has no solution Newton can find.
     """
     options = options or _DEFAULT_OPTIONS
-    try:
-        got = _LAST.get(scene)
-    except TypeError:  # not weakly referenceable: no memo
-        got = None
-    if got is not None and got[0] is scene.nodes and got[1] is scene.elements \
-            and got[2] is scene.forcing and got[3] == (time_scale, options):
-        v, F, stats = got[4]
-        return list(v), list(F), dict(stats)
-    v, F, stats = _initial_state(scene, time_scale, options)
-    try:
-        _LAST[scene] = (scene.nodes, scene.elements, scene.forcing, (time_scale, options),
-                        (tuple(v), tuple(F), dict(stats)))
-    except TypeError:
-        pass
-    return v, F, stats
-
-
-#: scene object -> (its nodes, elements and forcing, the arguments, the result) of its
-#: last :func:`consistent_initial_state`: a ``radau5`` run that tries its start at rest
-#: first (:mod:`lumped.solvers.eventdriven.rest_start`) and hands the scene to its
-#: general driver asks for the same state twice, with new numbers as with old ones.
-_LAST: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _initial_state(scene: Scene, time_scale: float, options: NewtonOptions
-                   ) -> tuple[list[float], list[float], dict]:
-    """:func:`consistent_initial_state` solved (not read from its memo)."""
     nodes, elements = scene.nodes, scene.elements
     E = len(elements)
     eps = 1e-20 * time_scale
