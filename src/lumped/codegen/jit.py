@@ -332,24 +332,51 @@ class JitScene:
 def jit_scene(scene) -> JitScene:
     """Generate (or load) ``scene``'s compiled module and collect its arrays.
 
-    A scene with moving supports is refused (``ValueError``): the compiled loops have no
-    support offsets (the runners send such scenes to the Python loop)."""
+    The arrays of the structure (``ea``, ``eb``, ``spring``, ``law_index``, ``offsets``
+    and where the springs' locking branches are) are made once per module text, the
+    same for every value of the numbers, and shared (they are only read); ``masses``,
+    ``consts`` and ``lock_q`` are the scene's numbers. A scene with moving supports is
+    refused (``ValueError``): the compiled loops have no support offsets (the runners
+    send such scenes to the Python loop)."""
     if getattr(scene, "support_ends", ()):
         raise ValueError(f"compiled loops do not take moving supports (scene supports: "
                          f"{', '.join(sorted(scene.supports))}); use 'bdf1' or 'bdf2'")
     module, generated = scene_module(scene)
-    law_index = generated.law_index
-    return JitScene(
-        module=module,
-        masses=np.array(scene.masses, dtype=float),
-        ea=np.array(scene.elem_a, dtype=np.int64),
-        eb=np.array(scene.elem_b, dtype=np.int64),
-        spring=np.array([el.kind == "spring" for el in scene.elements], dtype=np.bool_),
-        law_index=np.array(law_index, dtype=np.int64),
-        lock_q=position_locks(scene),
-        consts=generated.consts,
-        offsets=np.array(generated.offsets, dtype=np.int64),
-    )
+    arrays = _ARRAYS.get(generated.source)
+    if arrays is None:
+        arrays = _structure_arrays(scene, generated)
+        if len(_ARRAYS) >= _STRUCTURES_KEPT:
+            _ARRAYS.clear()
+        _ARRAYS[generated.source] = arrays
+    ea, eb, spring, law_index, offsets, locking, width = arrays
+    lock_q = np.full((len(scene.elements), width), np.nan)
+    if locking:
+        from lumped.codegen.branches import law_branches
+
+        for e, i in locking:
+            lock_q[e, i] = law_branches(scene.elements[e].law).info[i].lock_value
+    return JitScene(module=module, masses=np.array(scene.masses, dtype=float), ea=ea, eb=eb,
+                    spring=spring, law_index=law_index, lock_q=lock_q,
+                    consts=generated.consts, offsets=offsets)
+
+
+#: :func:`jit_scene`'s arrays of a structure, per module text.
+_ARRAYS: dict[str, tuple] = {}
+
+
+def _structure_arrays(scene, generated: SceneSource) -> tuple:
+    """``(ea, eb, spring, law_index, offsets, locking, width)`` of ``scene``'s structure:
+    ``locking`` the ``(e, i)`` of every spring's branch that locks a position (its
+    :attr:`~lumped.codegen.branches.BranchInfo.lock_value` a number), ``width`` the
+    columns of :func:`position_locks`. Branches, their locking and whether the lock
+    value is a constant are a law's code, which the module text holds."""
+    lock_q = position_locks(scene)
+    locking = tuple((int(e), int(i)) for e, i in zip(*np.nonzero(~np.isnan(lock_q)),
+                                                    strict=True))
+    return (np.array(scene.elem_a, dtype=np.int64), np.array(scene.elem_b, dtype=np.int64),
+            np.array([el.kind == "spring" for el in scene.elements], dtype=np.bool_),
+            np.array(generated.law_index, dtype=np.int64),
+            np.array(generated.offsets, dtype=np.int64), locking, lock_q.shape[1])
 
 
 def position_locks(scene) -> np.ndarray:

@@ -34,16 +34,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import sympy as sp
 
-from .branches import LawBranches
+from .branches import BranchInfo, LawBranches
 from .rebinding import LazyExpressions, Lifted, fill, float_ids, lift_source, lift_text, slots, swap
 from .stage_forms import STEEP_SPAN, affine_steepness, affine_steepness_function
 
-__all__ = ["LawClass", "Rebound", "ReboundBranches", "admitted", "class_key", "derivations",
-           "law_class"]
+__all__ = ["LawClass", "LazyBranchInfo", "Rebound", "ReboundBranches", "admitted", "class_key",
+           "derivations", "law_class"]
 
 _DERIVATIONS = [0]
 _CLASSES: dict[tuple, LawClass | None] = {}
@@ -90,8 +90,9 @@ def _lone_comparisons(law) -> bool:
 
 
 def _special(value: float) -> bool:
-    """A value sympy or the printer takes apart from the rest of its sign class."""
-    return float(value).is_integer() or abs(value) == 0.5
+    """A value sympy or the printer takes apart from the rest of its sign class (or not
+    finite: derived from scratch)."""
+    return not math.isfinite(value) or float(value).is_integer() or abs(value) == 0.5
 
 
 def _constants(law) -> tuple[sp.Float, ...]:
@@ -102,14 +103,55 @@ def _constants(law) -> tuple[sp.Float, ...]:
     return hit
 
 
-def _key_and_floats(law, values: tuple[float, ...]) -> tuple[tuple | None, list]:
+_CONSTANT_KEYS: dict[object, tuple[list, list]] = {}
+
+
+def _constant_keys(law) -> tuple[list, list]:
+    """The law's constants (:func:`_constants`) by value and by sympy's order (once)."""
+    hit = _CONSTANT_KEYS.get(law)
+    if hit is None:
+        consts = _constants(law)
+        hit = _CONSTANT_KEYS[law] = ([float(c) for c in consts],
+                                     [c._hashable_content() for c in consts])
+    return hit
+
+
+def float_content(x: float) -> tuple:
+    """``sympy.Float(x)._hashable_content()`` of a finite nonzero float ``x``, in plain
+    Python: ``((sign, man, exp, bc), 53)``, ``|x| = man 2^exp`` with ``man`` odd of ``bc``
+    bits (mpmath's normal form at the 53 bits of a double), what sympy orders its floats
+    by (:func:`class_key`)."""
+    n, d = abs(x).as_integer_ratio()  # d a power of 2
+    tz = (n & -n).bit_length() - 1
+    man = n >> tz
+    return (int(x < 0.0), man, tz - (d.bit_length() - 1), man.bit_length()), 53
+
+
+def _key(law, values: tuple[float, ...]) -> tuple | None:
+    """:func:`class_key` of ``law`` bound to ``values``, in plain floats (no sympy)."""
     if not admitted(law) or any(_special(v) for v in values):
-        return None, []
-    floats = [sp.Float(s * v) for v in values for s in (1.0, -1.0)]
-    atoms = floats + list(_constants(law))
-    return (law, tuple(math.copysign(1.0, v) for v in values),
-            _dense_ranks([float(a) for a in atoms]),
-            _dense_ranks([a._hashable_content() for a in atoms])), floats
+        return None
+    pm = [s * v for v in values for s in (1.0, -1.0)]
+    by_value, by_sympy = _constant_keys(law)
+    return (law, tuple(math.copysign(1.0, v) for v in values), _dense_ranks(pm + by_value),
+            _dense_ranks([float_content(x) for x in pm] + by_sympy))
+
+
+def sympy_float(x: float) -> sp.Float:
+    """``sympy.Float(x)`` of a finite nonzero float ``x``, made from its content
+    (:func:`float_content`) without sympy's parsing of the number (about 10 times
+    faster; the same object content)."""
+    mpf, prec = float_content(x)
+    return _FLOAT._new(mpf, prec, zero=False)
+
+
+_FLOAT = sp.Float
+
+
+def _floats(values: tuple[float, ...]) -> list:
+    """The sympy floats ``+v_j, -v_j`` of the parameters' ``values``, in the key's order
+    (finite and nonzero: :func:`_special` values have no class)."""
+    return [sympy_float(s * v) for v in values for s in (1.0, -1.0)]
 
 
 def class_key(bound) -> tuple | None:
@@ -123,7 +165,7 @@ def class_key(bound) -> tuple | None:
     if law is None or not isinstance(getattr(law, "residual", None), sp.Expr):
         return None
     params = bound.params
-    return _key_and_floats(law, tuple(params[p] for p in law.parameters))[0]
+    return _key(law, tuple(params[p] for p in law.parameters))
 
 
 def _dense_ranks(keys: list) -> tuple[int, ...]:
@@ -215,7 +257,7 @@ class LawClass:
         d = self._d = _Derivation(law, values)
         trees = list(d.expressions) + [e for info in d.lb.info for e in (
             info.residual, info.dR_dq, info.dR_dF, *(c for c, _ in info.path))]
-        self._ids = float_ids(trees, _key_and_floats(law, values)[1])
+        self._ids = float_ids(trees, _floats(values))
         self.steep = any(info.steep or info.stage is not None for info in d.lb.info)
         self.checked, self._steepness = False, []
 
@@ -267,12 +309,13 @@ class LawClass:
 class Rebound:
     """A bound law's results made from its :class:`LawClass` (see the module notes)."""
 
-    def __init__(self, cls: LawClass, values: tuple[float, ...], floats: list) -> None:
-        self.cls, self.values, self._floats, self._atoms = cls, values, floats, None
+    def __init__(self, cls: LawClass, values: tuple[float, ...]) -> None:
+        self.cls, self.values, self._atoms = cls, values, None
 
     def atoms(self) -> dict:
+        """The class's float nodes -> this law's sympy floats (made when first asked)."""
         if self._atoms is None:
-            self._atoms = self.cls.atoms(self._floats)
+            self._atoms = self.cls.atoms(_floats(self.values))
         return self._atoms
 
     def kernel(self) -> Callable:
@@ -299,7 +342,8 @@ class ReboundBranches(LawBranches):
     def __init__(self, rebound: Rebound) -> None:  # no derivation: made from the class
         d = rebound.cls._d
         self._rebound = rebound
-        self.info = rebound.cls.infos(rebound.atoms())
+        swapped = _Swapped(rebound.atoms)
+        self.info = tuple(LazyBranchInfo.of(info, swapped) for info in d.lb.info)
         self.count = d.lb.count
         self.branch = d.selector.build(rebound.values)
         self._kernels, self._guards = {}, {}
@@ -332,6 +376,56 @@ class ReboundBranches(LawBranches):
         return hit
 
 
+class _Swapped:
+    """One rebound law's :func:`~lumped.codegen.rebinding.swap` of its class's
+    expressions, with one memo for all of its branches (as :meth:`LawClass.infos`)."""
+
+    def __init__(self, atoms: Callable[[], dict]) -> None:
+        self.atoms, self.memo = atoms, {}
+
+    def __call__(self, expr: sp.Basic) -> sp.Basic:
+        return swap(expr, self.atoms(), self.memo)
+
+
+_LAZY = ("residual", "dR_dq", "dR_dF", "path")
+_FIELDS = tuple(f.name for f in fields(BranchInfo))
+
+
+class LazyBranchInfo(BranchInfo):
+    """A rebound law's :class:`~lumped.codegen.branches.BranchInfo`: ``index``,
+    ``locks``, ``lock_value``, ``steep`` and ``stage`` are its class's (the class fixes
+    them), and its sympy expressions ``residual``, ``dR_dq``, ``dR_dF`` and ``path`` are
+    the class's with the law's floats swapped in when first read (a run reads the
+    branches' flags and compiled functions, rarely their expressions; no sympy runs for
+    new numbers until then). Equal to the :class:`BranchInfo` of a derivation from
+    scratch where :meth:`LawClass.infos` is."""
+
+    @classmethod
+    def of(cls, info: BranchInfo, swapped: _Swapped) -> LazyBranchInfo:
+        out = object.__new__(cls)
+        for name in ("index", "locks", "lock_value", "steep", "stage"):
+            object.__setattr__(out, name, getattr(info, name))
+        object.__setattr__(out, "_source", info)
+        object.__setattr__(out, "_swapped", swapped)
+        return out
+
+    def __getattr__(self, name: str):  # only for attributes not set: the lazy ones
+        if name not in _LAZY or "_source" not in self.__dict__:
+            raise AttributeError(name)
+        value, swapped = getattr(self._source, name), self._swapped
+        value = tuple((swapped(c), w) for c, w in value) if name == "path" else swapped(value)
+        object.__setattr__(self, name, value)
+        return value
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, BranchInfo):
+            return NotImplemented
+        return all(getattr(self, f) == getattr(other, f) for f in _FIELDS)
+
+    def __hash__(self) -> int:
+        return hash(tuple(getattr(self, f) for f in _FIELDS))
+
+
 def _with_magnitude(pair: tuple[Lifted, Lifted], values: tuple[float, ...]) -> Callable:
     kernel, magnitude = pair
     fn = kernel.build(values)
@@ -362,12 +456,12 @@ def _rebound(bound) -> Rebound | None:
         return None
     params = bound.params
     values = tuple(params[p] for p in law.parameters)
-    key, floats = _key_and_floats(law, values)
+    key = _key(law, values)
     if key is None:
         return None
     cls = _CLASSES.get(key)
     if cls is not None:
-        return Rebound(cls, values, floats) if cls.forward(values) else None
+        return Rebound(cls, values) if cls.forward(values) else None
     if key in _CLASSES:  # given up: derived law by law
         return None
     try:
@@ -386,14 +480,14 @@ def _rebound(bound) -> Rebound | None:
             pass
         else:
             try:
-                first.check(own, floats)
+                first.check(own, _floats(values))
             except ValueError:  # the next law is checked against this one, _TRIES times
                 _PENDING[key] = own
                 _fail(key)
             else:
                 _CLASSES[key] = first
                 del _PENDING[key]
-    return Rebound(own, values, floats)
+    return Rebound(own, values)
 
 
 def _fail(key: tuple) -> None:

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from lumped.laws import get_law
 from lumped.scene import Element, Mass, Scene
-from lumped.solvers.implicit import initial_state
+from lumped.solvers.implicit import initial_kept, initial_state
 from lumped.solvers.implicit.initial_state import consistent_initial_state
 
 DASHPOTS = ("newtonian", "bingham", "coulomb", "herschel_bulkley")
@@ -18,13 +18,16 @@ SPRINGS = ("linear_spring", "string_spring")
 
 
 def _with_newton(scene: Scene, time_scale: float):
-    """The initial state by the limit system's Newton (the shortcut off)."""
+    """The initial state by the limit system's Newton (the shortcut off; the state kept
+    for this scene object, the shortcut's, is not read and not kept)."""
     keep = initial_state.initial_rest_forces
     initial_state.initial_rest_forces = lambda *args: None
+    initial_kept.forget(scene)
     try:
         return consistent_initial_state(scene, time_scale=time_scale)
     finally:
         initial_state.initial_rest_forces = keep
+        initial_kept.forget(scene)
 
 
 def _same(a: list[float], b: list[float]) -> bool:

@@ -32,6 +32,7 @@ from ..newton.semismooth import newton_solve
 from ..nonsmooth.junction_balance import refuse_unbalanced_junctions
 from ..nonsmooth.lock_forces import taut_on_supports
 from ..status import SolverError
+from .initial_kept import kept_per_scene
 from .initial_rest import cluster_guesses, initial_rest_forces
 from .initial_slip import rates_below_resolution, settle_on_rest_set
 from .initial_user_forces import apply_user_forces
@@ -51,10 +52,7 @@ def _ic_options(options: NewtonOptions) -> NewtonOptions:
                          max_backtracks=options.max_backtracks, free_steps=options.free_steps)
 
 
-# ---------------------------------------------------------------------------------------
-# consistent initial state
-
-
+@kept_per_scene
 def consistent_initial_state(
     scene: Scene, *, time_scale: float = 1.0, options: NewtonOptions | None = None
 ) -> tuple[list[float], list[float], dict]:
@@ -82,7 +80,8 @@ def consistent_initial_state(
        there, its yield force ``sgn(F) tau`` with the slip's sign (the paper's (16)).
 
     User forces ``Element.F0`` are checked against the law at the initial state (and the
-    junction balances), then replace the computed ones.
+    junction balances), then replace the computed ones. The result is kept per scene
+    object and arguments (:mod:`lumped.solvers.implicit.initial_kept`).
 
     Returns
     -------
