@@ -298,3 +298,53 @@ def test_radau5_follows_a_junction_on_a_steep_dashpot_without_a_bridge():
                    dt=0.025 / 4, t_end=0.5, rtol=1e-10, atol=1e-13, compiled=False)
     assert sol.ok, sol.message
     assert sol.stats.get("bridges", 0) == 0, sol.message
+
+
+def _two_strings_at_a_junction_on_a_dashpot() -> Scene:
+    # a LUMPED_LARGE=1 draw of test_random_network_tight_tolerance (after 2166 passes):
+    # the junction j0 held to ground by a light Newtonian dashpot (e0), met by two slack
+    # strings (e3 to m3, e4 from m2) and a spring (e5 from m2), a sine burst on m2
+    return Scene(
+        [Junction("j0", x0=0.6296010537391945), Junction("j1", x0=1e-09),
+         Mass("m2", m=1.0, x0=-2.225073858507203e-309, v0=3.901405947716668e-305),
+         Mass("m3", m=0.37903204152837305, x0=1.0, v0=0.7286770384113068)],
+        [Element("e0", get_law("newtonian").bind(c=0.04767909628035078), "ground", "j0"),
+         Element("e1", get_law("newtonian").bind(c=1.0), "ground", "j1"),
+         Element("e2", get_law("linear_spring").bind(k=1.0), "ground", "m2"),
+         Element("e3", get_law("string_spring").bind(k=1.0, L=1.3703989462608055),
+                 "j0", "m3"),
+         Element("e4", get_law("string_spring").bind(k=0.2814572724404816,
+                                                     L=1.6296010537391945), "m2", "j0"),
+         Element("e5", get_law("linear_spring").bind(k=1.0), "m2", "j0")],
+        {"m2": SineBurst(amplitude=1.6407286362202407, omega=1.0, t_off=math.inf)})
+
+
+def test_radau5_passes_a_junction_velocity_reversal_between_two_strings_without_a_bridge():
+    """j0's velocity, ``v = F_e0 / c``, reverses at ``t = 0.0713``: there the strings'
+    and the spring's forces (``0.59``, ``0.13``, ``0.46``) cancel at the junction to the
+    dashpot's ``F_e0 ~ 0``, so one ulp of the balance moves the velocity by ``ulp / c =
+    2.3e-15``. The stage Newton's corrections of j0's velocity cycled at ``1.16e-15``,
+    above the test ``1e-3 (atol + rtol |v|) = 6.6e-16``, and the round-off floor read
+    from the dashpot's row alone (``|F_e0| + c |v|``, near 0 there) did not lift it:
+    every stage solve failed, backward Euler bridged 12 times from ``t = 0.071388`` and
+    the run stopped at its step floor at ``t = 0.0720``. The dashpot's force is now taken
+    at the rounding of the junction's balance (:mod:`lumped.solvers.radau.roundoff`)."""
+    scene = _two_strings_at_a_junction_on_a_dashpot()
+    dt = 0.025 / 4
+    sol = simulate(scene, method="radau5", dt=dt, t_end=0.5, rtol=1e-10, atol=1e-13,
+                   compiled=False)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message
+    assert sol.stats["rejected"] == 0
+    v = np.asarray(sol.v["j0"])
+    assert v[0] < 0.0 < v[-1]  # (the reversal is passed)
+    # j0's balance: e0 = e3 - e4 - e5 (a force +F on a, -F on b; j0 is b of e0 and e4)
+    F = {e: np.asarray(sol.F[e]) for e in ("e0", "e3", "e4", "e5")}
+    np.testing.assert_allclose(F["e0"], F["e3"] - F["e4"] - F["e5"], rtol=0.0, atol=1e-12)
+    # ... and agrees with bdf2 at dt / 32 within its own error (against dt / 16: bdf2's
+    # error there is a third of it, second order)
+    fine, finer = (simulate(scene, method="bdf2", dt=dt / s, t_end=0.5) for s in (16, 32))
+    for name in ("j0", "m2", "m3"):
+        own = np.max(np.abs(np.asarray(fine.x[name])[::16] - np.asarray(finer.x[name])[::32]))
+        err = np.max(np.abs(np.asarray(sol.x[name]) - np.asarray(finer.x[name])[::32]))
+        assert err <= own, (name, err, own)
