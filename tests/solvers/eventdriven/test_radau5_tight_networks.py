@@ -348,3 +348,47 @@ def test_radau5_passes_a_junction_velocity_reversal_between_two_strings_without_
         own = np.max(np.abs(np.asarray(fine.x[name])[::16] - np.asarray(finer.x[name])[::32]))
         err = np.max(np.abs(np.asarray(sol.x[name]) - np.asarray(finer.x[name])[::32]))
         assert err <= own, (name, err, own)
+
+
+def _junction_on_a_stiff_spring_and_two_dashpots() -> Scene:
+    # seed 346: the junction j0 held to ground by a stiff spring (e5, k = 97) and a
+    # Herschel-Bulkley n = 1 dashpot (e0), pulled by m1 through a Newtonian dashpot (e1);
+    # m1 and m2 joined by a Bingham link and a string, a constant load on m1
+    return Scene(
+        [Junction("j0", x0=-0.20217138345871333),
+         Mass("m1", m=0.6311041379314297, x0=0.11140782311815767, v0=1.8234346782271862),
+         Mass("m2", m=1.0, x0=0.17630429650635038, v0=-1.373175342743421)],
+        [Element("e0", _hb(2.154434690031884, 0.1, 1.0), "ground", "j0"),
+         Element("e1", get_law("newtonian").bind(c=5.7985248430108065), "j0", "m1"),
+         Element("e2", get_law("bingham").bind(gamma=0.7414048798085399,
+                                               tau=0.33562481622494755), "m1", "m2"),
+         Element("e3", get_law("string_spring").bind(k=1.0, L=0.023594244663493184),
+                 "m2", "m1"),
+         Element("e4", get_law("coulomb").bind(tau=0.3635471438348037, r=1.0),
+                 "m2", "ground"),
+         Element("e5", get_law("linear_spring").bind(k=97.20928943554951), "j0", "ground")],
+        {"m1": -207.51238123919384})
+
+
+def test_radau5_stops_a_junction_between_large_cancelling_forces_without_a_bridge():
+    """Seed 346, the same cause as the reversal above: from ``t = 0.3617`` j0 slows to a
+    stop on e0 while e1 and e5 carry ``-180.5`` and ``180.4`` N, which cancel at j0 to
+    e0's ``-0.10``: the corrections of j0's velocity cycled at ``1e-15 .. 5e-15`` (the
+    balance's ulp, ``2.8e-14``, over e0's slope) above the test's ``1.2e-15``; 12 bridges,
+    then a stop at the step floor at ``t = 0.3671``."""
+    scene = _junction_on_a_stiff_spring_and_two_dashpots()
+    dt, t_end = 0.016032609881584677, 0.5130435162107096
+    sol = simulate(scene, method="radau5", dt=dt / 4, t_end=t_end, rtol=1e-10, atol=1e-13,
+                   compiled=False)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message
+    # e0 sticks (its branch 2, rate 0) and slips again (branch 0) in 0.362 .. 0.367
+    stops = [(ev.element, ev.to_branch) for ev in sol.events if 0.36 < ev.t < 0.37]
+    assert stops == [("e0", 2), ("e0", 0)], stops
+    F = {e: np.asarray(sol.F[e]) for e in ("e0", "e1", "e5")}
+    np.testing.assert_allclose(F["e1"] + F["e5"], F["e0"], rtol=0.0, atol=1e-9)
+    fine, finer = (simulate(scene, method="bdf2", dt=dt / s, t_end=t_end) for s in (16, 32))
+    for name in ("j0", "m1", "m2"):
+        own = np.max(np.abs(np.asarray(fine.x[name])[::4] - np.asarray(finer.x[name])[::8]))
+        err = np.max(np.abs(np.asarray(sol.x[name]) - np.asarray(finer.x[name])[::8]))
+        assert err <= own, (name, err, own)
