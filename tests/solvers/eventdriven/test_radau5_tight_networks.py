@@ -392,3 +392,32 @@ def test_radau5_stops_a_junction_between_large_cancelling_forces_without_a_bridg
         own = np.max(np.abs(np.asarray(fine.x[name])[::4] - np.asarray(finer.x[name])[::8]))
         err = np.max(np.abs(np.asarray(sol.x[name]) - np.asarray(finer.x[name])[::8]))
         assert err <= own, (name, err, own)
+
+
+def _mass_breaking_out_a_hair_from_the_origin() -> Scene:
+    # m1 of seed 68 alone: a constant load beyond the yield forces of a Coulomb element
+    # and a Herschel-Bulkley n = 1.5 dashpot, from rest a hair (2e-15) from the origin
+    return Scene(
+        [Mass("m1", m=0.24814255310164568, x0=2e-15, v0=0.0)],
+        [Element("e1", _hb(0.9999769744141629, 0.017172936580817665, 1.5), "ground", "m1"),
+         Element("e6", get_law("coulomb").bind(tau=0.9999999999999994, r=7.397929212653803),
+                 "m1", "ground")],
+        {"m1": 3.592123679239016})
+
+
+def test_radau5_starts_with_a_step_the_loop_takes():
+    """The first step's estimate (scipy's ``0.01 d0 / d1``) read the position ``2e-15``,
+    below its tolerance ``atol = 1e-13``, against the acceleration ``10.4 / atol``: a
+    step of ``3.0e-19``, below the step floor ``1.8e-18`` of a run to ``0.5``. The run
+    stopped before its first step, 12 times over (backward Euler bridging ``1e-22 ..
+    6e-20`` s each), then for good. The first step is now at least the floor."""
+    sol = simulate(_mass_breaking_out_a_hair_from_the_origin(), method="radau5",
+                   dt=0.025 / 4, t_end=0.5, rtol=1e-10, atol=1e-13, compiled=False)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message
+    # the mass slips from the start: m a = f - tau_c - F_e1, F_e1 -> its yield force
+    v = np.asarray(sol.v["m1"])
+    assert np.all(np.diff(v) > 0.0)
+    loose = simulate(_mass_breaking_out_a_hair_from_the_origin(), method="radau5",
+                     dt=0.025 / 4, t_end=0.5, rtol=1e-7, atol=1e-10)
+    np.testing.assert_allclose(sol.x["m1"], loose.x["m1"], rtol=0.0, atol=1e-6)
