@@ -33,11 +33,15 @@ def _system():
     return J, U, scale
 
 
-def _both(du, J, U, scale, spring=SPRING):
+def _both(du, J, U, scale, spring=SPRING, masses=MASSES, f=None):
     worst = float(np.max(np.abs(du) / scale))  # (the plain test, as the Newton finds it)
+    n = len(U) // 3
+    f = np.zeros((3, len(masses))) if f is None else f
     py = roundoff_worst(list(du), list(U), J.tolist(), list(scale),
-                        junction_columns(MASSES, N_UNK), rate_rows(2, spring), TOL, worst)
-    jit = roundoff_worst_jit(du, U, J, scale, np.array(MASSES), np.array(spring), TOL, worst)
+                        junction_columns(masses, n), rate_rows(len(masses), spring), f.tolist(),
+                        TOL, worst)
+    jit = roundoff_worst_jit(du, U, J, scale, np.array(masses), np.array(spring), f, TOL,
+                             worst)
     assert py == jit
     return py
 
@@ -79,3 +83,40 @@ def test_the_floor_is_the_junctions_alone():
     # ... and while another unknown fails, a junction's velocity keeps its plain test
     du[1] = 1e-14
     assert _both(du, J, U, scale) == pytest.approx(1e-14 / scale[1], rel=1e-12)
+
+
+def test_a_dashpots_force_at_a_junction_carries_the_rounding_of_the_balance():
+    # a mass (node 0) and a junction (node 1); e0 a Newtonian dashpot ground -> j (c =
+    # 0.05), e1 a spring m -> j, e2 a spring j -> ground (n = 5 a stage): the springs'
+    # forces 0.6 and 1.2 and a load 0.6 on the junction cancel at it to the dashpot's
+    # F_e0 ~ 0 (0 = f + F_e0 + F_e1 - F_e2). Its velocity F_e0 / c carries ulp(1.2) / c,
+    # not the rounding of the dashpot's row alone (|F_e0| + c |v| ~ 0): a correction of
+    # 1e-15 is converged (issue 29: two strings at a junction on a dashpot)
+    masses, spring, n, c = [1.0, 0.0], [False, True, True], 5, 0.05
+    J = np.eye(3 * n)
+    U = np.zeros(3 * n)
+    f = np.zeros((3, 2))
+    for k in range(3):
+        b, r = k * n + 1, k * n + 2  # j's balance row (its velocity's column), e0's row
+        J[b, b] = 0.0
+        J[b, r], J[b, r + 1], J[b, r + 2] = 1.0, 1.0, -1.0
+        J[r, b] = -c  # F - c v
+        U[k * n:(k + 1) * n] = [0.3, 2e-17, 1e-18, 0.6, 1.2]
+        f[k, 1] = 0.6
+    scale = 1e-13 + 1e-10 * np.abs(U)
+    du = np.zeros(3 * n)
+    du[n + 1] = 1e-15
+    # the plain test fails, and so would a floor read from the dashpot's row alone
+    assert du[n + 1] / scale[n + 1] > TOL
+    assert du[n + 1] > ROUNDOFF * (1e-18 + c * 2e-17) / c
+    bal = 0.6 + 1e-18 + 0.6 + 1.2  # |f| + the forces at the junction
+    rho = ROUNDOFF * (bal + c * 2e-17) / c
+    assert _both(du, J, U, scale, spring, masses, f) == pytest.approx(1e-15 / (rho / TOL),
+                                                                      rel=1e-12)
+    # ... the load's share counted: without it (f = 0) the floor is lower
+    without = _both(du, J, U, scale, spring, masses)
+    assert without == pytest.approx(1e-15 / (ROUNDOFF * (bal - 0.6 + c * 2e-17) / c / TOL),
+                                    rel=1e-12)
+    # ... and a correction beyond the balance's rounding still fails
+    du[n + 1] = 2.0 * rho
+    assert _both(du, J, U, scale, spring, masses, f) > TOL

@@ -270,12 +270,13 @@ def split_free_forces(scene: Scene, evaluate, project, u: list[float],
         a, b = force_range(scene.elements[k - N].law.kernel, q, u[k])
         lo.append(a - u[k])
         hi.append(b - u[k])
-    # a row with no terms yet (a junction whose forces are all zero so far) in the units
-    # of the forces it may receive: a weight of 1e300 would swamp every other row
+    # a row in the units of the larger of its terms and the forces it may receive: one
+    # with no terms yet (a junction whose forces are all zero so far), or only tiny ones
+    # (a spring at 4.8e-36 N from a drawn x0 = 4.8e-37), would otherwise swamp every other
+    # row (a weight of 1e300, or 2e35: the split left the other junction unbalanced)
     reach = [sum(abs(J[i][k]) * max((abs(u[k] + x) for x in (lo[j], hi[j]) if math.isfinite(x)),
                                     default=0.0) for j, k in enumerate(ks)) for i in rows]
-    w = np.array([1.0 / (S[i] if S[i] > 0.0 else max(r, 1e-300))
-                  for i, r in zip(rows, reach, strict=True)])
+    w = np.array([1.0 / max(S[i], r, 1e-300) for i, r in zip(rows, reach, strict=True)])
     with np.errstate(invalid="ignore", over="ignore"):  # (overflow: tested below)
         A = np.array([[J[i][k] for k in ks] for i in rows]) * w[:, None]
         rhs = -np.array([G[i] for i in rows]) * w

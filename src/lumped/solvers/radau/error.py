@@ -11,6 +11,7 @@ Owns :class:`ErrorEstimate` (the methods :meth:`~ErrorEstimate.error` and
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Sequence
 
 from .cone_split import linear_solver
@@ -122,7 +123,16 @@ class ErrorEstimate:
 
 
 def initial_step(x, v, acc, is_mass, rtol, atol, span) -> float:
-    """A first step from the sizes of the state and its derivative (as scipy does)."""
+    """A first step from the sizes of the state and its derivative (as scipy does), at
+    least the run's step floor at ``t = 0``, ``16 eps 1e-3 span``
+    (:func:`lumped.solvers.eventdriven.setup.step_floor`).
+
+    The estimate ``0.01 d0 / d1`` reads a state below its tolerance (``d0 < 1``: a mass at
+    ``x0 = 2e-15`` against ``atol = 1e-13``) against a large acceleration (``10 / atol``)
+    as a step of ``3e-19``, below the floor ``1.8e-18`` of a run to ``0.5``: the run
+    stopped before its first step and backward Euler bridged it (a mass breaking out
+    from rest under a load, ``rtol = 1e-10``). The floor is a step the loop takes.
+    """
     d0 = d1 = 0.0
     n = 0
     for i in range(len(x)):
@@ -137,4 +147,5 @@ def initial_step(x, v, acc, is_mass, rtol, atol, span) -> float:
             n += 1
     d0, d1 = math.sqrt(d0 / n), math.sqrt(d1 / n)
     h0 = 1e-6 * span if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-    return min(h0, 0.1 * span) * rtol ** 0.2 / 1e-6 ** 0.2 if h0 > 0 else 1e-6 * span
+    h = min(h0, 0.1 * span) * rtol ** 0.2 / 1e-6 ** 0.2 if h0 > 0 else 1e-6 * span
+    return max(h, 16.0 * sys.float_info.epsilon * (span * 1e-3))

@@ -19,6 +19,20 @@ of a law in the rate (a dashpot's: the least round-off) sets it. :func:`roundoff
 floors the tolerance of each junction velocity at that level when only junction
 velocities fail the test: a correction at the round-off of the laws is converged.
 
+The dashpot's force ``F_e`` in that row is itself read from the junction's balance
+``0 = f_i + sum_{a_e = i} F_e - sum_{b_e = i} F_e``: it carries the rounding of the
+balance's terms, ``ROUNDOFF B_i``, ``B_i = |f_i| + sum_e |F_e|`` over the elements at
+the junction, not of ``|F_e|`` alone. So the row's term of its own force is taken at
+``|J_rr| B_i`` (``B_i >= |F_e|``; equal for a junction on one element). Two strings
+meeting at a junction held by a Newtonian dashpot (``c = 0.048``) while its velocity
+crosses zero: the strings' forces ``0.59`` and ``0.13`` and a spring's ``0.46`` cancel
+to the dashpot's ``F_e ~ 0``, whose own terms ``|F_e| + c |v|`` set a round-off of
+``1e-18``, but one ulp of the balance (``1.1e-16``) moves the velocity by ``ulp / c =
+2.3e-15``: the corrections cycled at ``1.16e-15``, above the test's ``tol (atol + rtol
+|v|) = 6.6e-16`` at ``rtol = 1e-10``, and backward Euler bridged 12 times before the run
+stopped at its step floor (issue 29). With the balance's terms the floor is ``ROUNDOFF
+B_i / c = 2.2e-14``.
+
 A spring's row is not read: it holds the velocity through ``h sum_l a_kl V_l``, and the
 velocity it fixes carries the positions' rounding over ``h`` (``ulp(x) / h``, ``1e-7`` at
 ``h = 1e-10``), which on a short step after an impact would pass a junction velocity
@@ -54,13 +68,16 @@ def rate_rows(N: int, spring: Sequence[bool]) -> list[bool]:
 
 def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence[float]],
                    scale: Sequence[float], junction: Sequence[bool], rate: Sequence[bool],
-                   tol: float, worst: float) -> float:
+                   f: Sequence[Sequence[float]], tol: float, worst: float) -> float:
     r"""The largest ``|du_j| / scale_j`` of a Newton correction ``du`` (``worst``, as the
     caller found it), with the tolerance of a junction's velocity floored at its
-    round-off: ``max(scale_j, rho_j / tol)``, ``rho_j = ROUNDOFF min_r (sum_u |J_ru|
-    |U_u|) / |J_rj|`` over the rows ``r`` of laws in the rate (``rate[r]``,
-    :func:`rate_rows`) that hold ``u_j`` (see the module notes), at the iterate ``U`` and
-    its Jacobian ``J``; no floor where none does.
+    round-off: ``max(scale_j, rho_j / tol)``, ``rho_j = ROUNDOFF min_r (|J_rr| B_j +
+    sum_{u != r} |J_ru| |U_u|) / |J_rj|`` over the rows ``r`` of laws in the rate
+    (``rate[r]``, :func:`rate_rows`) that hold ``u_j``, ``r`` also the column of that
+    law's force, and ``B_j = |f_k,i| + sum_u |J_ju| |U_u|`` the terms of the junction's
+    balance (row ``j = k n + i``, ``f[k][i]`` the external force on it at stage ``k``; see
+    the module notes), at the iterate ``U`` and its Jacobian ``J``; no floor where no such
+    row holds ``u_j``.
 
     ``worst`` is returned as it is when it is within ``tol`` or when another unknown fails
     the test (only a junction's velocity at its round-off is let through).
@@ -76,16 +93,20 @@ def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence
     if not other <= tol:
         return worst
     worst = other
+    n = len(U) // 3
     for j in range(len(du)):
         if not junction[j]:
             continue
+        bal = abs(f[j // n][j % n])  # the junction's balance: row j
+        for u in range(len(U)):
+            bal += abs(J[j][u]) * abs(U[u])
         rho = 0.0
         for r, row in enumerate(J):
             c = abs(row[j]) if rate[r] else 0.0
             if c > 0.0:
                 s = 0.0
                 for u in range(len(U)):
-                    s += abs(row[u]) * abs(U[u])
+                    s += abs(row[u]) * (bal if u == r else abs(U[u]))
                 s = s / c
                 if rho == 0.0 or s < rho:
                     rho = s

@@ -118,11 +118,12 @@ def stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W
 
 
 @njit(cache=True)
-def roundoff_worst_jit(du, U, J, scale, masses, spring, tol, worst) -> float:
+def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst) -> float:
     """:func:`lumped.solvers.radau.roundoff.roundoff_worst` (read it for the maths), the
     junction's velocities read from ``masses`` (``m_i = 0``), the dashpots' rows from
-    ``spring``: the largest ``|du_j| / scale_j`` with a junction velocity's tolerance
-    floored at its round-off, when only junction velocities fail the test."""
+    ``spring``, ``f[k, i]`` the external forces: the largest ``|du_j| / scale_j`` with a
+    junction velocity's tolerance floored at its round-off (its dashpot's force at the
+    rounding of the junction's balance), when only junction velocities fail the test."""
     if worst <= tol:
         return worst
     N = masses.shape[0]
@@ -142,6 +143,9 @@ def roundoff_worst_jit(du, U, J, scale, masses, spring, tol, worst) -> float:
         i = j % n
         if not (i < N and masses[i] == 0.0):
             continue
+        bal = abs(f[j // n, i])  # the junction's balance: row j
+        for u in range(size):
+            bal += abs(J[j, u]) * abs(U[u])
         rho = 0.0
         for row in range(size):
             e = row % n - N
@@ -149,7 +153,7 @@ def roundoff_worst_jit(du, U, J, scale, masses, spring, tol, worst) -> float:
             if c > 0.0:
                 s = 0.0
                 for u in range(size):
-                    s += abs(J[row, u]) * abs(U[u])
+                    s += abs(J[row, u]) * (bal if u == row else abs(U[u]))
                 s = s / c
                 if rho == 0.0 or s < rho:
                     rho = s
@@ -194,7 +198,7 @@ def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U
             return True
         stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n,
                        v_n, f, G, J)
-        worst = roundoff_worst_jit(du, U, J, scale, masses, spring, tol, worst)
+        worst = roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst)
         if worst <= tol:  # (a junction's velocity at its round-off)
             return True
         if worst > 0.5 * prev:
