@@ -112,7 +112,7 @@ def fast_source(scene) -> str:
          "from lumped.solvers.newton.linalg_jit import inverse_into, lu_factor_into", ""]
     for j, t in enumerate(templates):
         law_text = t.source(j)[0]
-        L += ["", law_text.replace("@njit(cache=True)", '@njit(cache=True, inline="always")', 1)]
+        L += ["", law_text]
     L += ["", "@njit(cache=True)", "def element_law(e, q, F, c):"]
     L += [f"    if e == {e}:\n        return "
           f"{templates[law_index[e]].call('law', law_index[e], 'q, F', 'c', offsets[e])}"
@@ -127,18 +127,16 @@ def fast_source(scene) -> str:
         ya = f"{y}{a}" if a >= 0 else "0.0"
         return f"{yb} - {ya}"
 
-    LU = [[f"l{i}_{j}" for j in range(n)] for i in range(n)]
     L += ["@njit(cache=True)",
           "def run_fast(masses, dt, n_steps, bdf2, step0, rtol, atol, max_it, fkind, fpar, ftab,",
-          "             xs, vs, Fs, Jm, LU, P, Inv, b, y, counts, lawc):",
+          "             xs, vs, Fs, Jm, Jv, LU, P, Inv, Iv, key, b, y, counts, lawc):",
           "    h1 = dt", "    h2 = 2.0 * dt / 3.0", "    back = step0 - 1 if step0 >= 1 else 0"]
     for i in range(N):
         L += [f"    x{i} = xs[step0, {i}]", f"    v{i} = vs[step0, {i}]",
               f"    xp{i} = xs[back, {i}]", f"    vp{i} = vs[back, {i}]"]
     for e in range(E):
-        L += [f"    F{e} = Fs[step0, {e}]", f"    kRF{e} = 0.0", f"    kg{e} = 0.0"]
+        L += [f"    F{e} = Fs[step0, {e}]"]
         L += [f"    lc{e}_{m} = lawc[{offsets[e] + m}]" for m in range(slots[e])]
-    L += [f"    {LU[i][j]} = 0.0" for i in range(n) for j in range(n)]
     L += [f"    c{i}_0 = masses[{i}] / h1\n    c{i}_1 = masses[{i}] / h2"
           for i in range(N) if mass[i]]
     for e in checked:
@@ -165,9 +163,14 @@ def fast_source(scene) -> str:
     ind = "            "
     g_lines, s_lines = _evaluate_lines(scene, law_index, law_args, ind)
     gsum = " + ".join(f"G{r}" for r in range(n))
+    # conditions as ``&`` of comparisons, not ``and``: one basic block, not one a term
+    # (numba's compile time grows with its statements, and ``and`` adds blocks and copies)
     zero = " and ".join(f"G{r} == 0.0" for r in range(n))
     res_ok = " and ".join(f"abs(G{r}) <= rtol * S{r} + atol" for r in range(n))
-    same = " and ".join(f"RF{e} == kRF{e} and g{e} == kg{e}" for e in range(E)) or "True"
+    # the factor cache's key (dR/dF, h^s dR/dq of each element) is kept in ``key``, not in
+    # 2 E locals carried through both loops (each a copy at every join)
+    same = " & ".join(f"(RF{e} == key[{2 * e}]) & (g{e} == key[{2 * e + 1}])"
+                      for e in range(E)) or "True"
     L += g_lines
     L += [f"{ind}n_res += 1", f"{ind}same = valid and {same}",
           # a zero residual on the cached branch: the reference's tests hold, and its
@@ -179,22 +182,21 @@ def fast_source(scene) -> str:
     L += _matrix_lines(scene, f"{ind}    ")
     L += [f"{ind}    n_fact += 1", f"{ind}    valid = lu_factor_into(Jm, LU, P)",
           f"{ind}    if not valid:", f"{ind}        break"]
-    L += [f"{ind}    kRF{e} = RF{e}\n{ind}    kg{e} = g{e}" for e in range(E)]
+    L += [f"{ind}    key[{2 * e}] = RF{e}\n{ind}    key[{2 * e + 1}] = g{e}" for e in range(E)]
     L += [f"{ind}    inverse_into(LU, P, b, y, Inv)"]
-    L += [f"{ind}    {LU[r][c]} = Inv[{r}, {c}]" for r in range(n) for c in range(n)]
     L += _solve_lines(n, ind)
     dsum = " + ".join(f"d{r}" for r in range(n))
     upd = " and ".join(f"abs(d{r}) <= rtol * abs(u{r}) + atol" for r in range(n))
-    lock = " or ".join(f"RF{e} == 0.0" for e in range(E)) or "False"
+    lock = " | ".join(f"(RF{e} == 0.0)" for e in range(E)) or "False"
     L += [f"{ind}if not math.isfinite({dsum}):", f"{ind}    break",
           f"{ind}if ({res_ok}) and ({upd}):",
           # the reference's tests hold at u: it returns u - d; the fast path keeps u when
           # d is round-off (see the module notes)
           f"{ind}    done = True",
-          f"{ind}    if not (({zero}) or (it > 0 and same and not ({lock}))):"]
-    L += [f"{ind}        u{r} = u{r} - d{r}" for r in range(n)]
-    L += [f"{ind}    break"]
+          f"{ind}    if ({zero}) or (it > 0 and same and not ({lock})):",
+          f"{ind}        break"]
     L += [f"{ind}u{r} = u{r} - d{r}" for r in range(n)]
+    L += [f"{ind}if done:", f"{ind}    break"]
     ind = "        "
     L += [f"{ind}if not done:", f"{ind}    break"]
     L += [f"{ind}xn{i} = xh{i} + h * u{i}" for i in range(N)]
@@ -250,14 +252,17 @@ def _evaluate_lines(scene, law_index: list[int], law_args: Callable[[int], str],
     N = len(scene.nodes)
     GL: list[str] = []
     SL: list[str] = []
+    # each node row once, its terms in the order of evaluate's in-place sums (Python's
+    # left-to-right ``a + b + c`` is ``(a + b) + c``): one assignment a row
+    grow, srow = [], []
     for i, m in enumerate(scene.masses):
         if m != 0.0:
-            GL += [f"{ind}pp{i} = c{i} * u{i}", f"{ind}r{i} = c{i} * vh{i}",
-                   f"{ind}G{i} = (pp{i} - r{i}) - f{i}"]
-            SL += [f"{ind}S{i} = abs(pp{i}) + abs(r{i}) + abs(f{i})"]
+            GL += [f"{ind}pp{i} = c{i} * u{i}", f"{ind}r{i} = c{i} * vh{i}"]
+            grow.append(f"(pp{i} - r{i}) - f{i}")
+            srow.append(f"abs(pp{i}) + abs(r{i}) + abs(f{i})")
         else:
-            GL += [f"{ind}G{i} = -f{i}"]
-            SL += [f"{ind}S{i} = abs(f{i})"]
+            grow.append(f"-f{i}")
+            srow.append(f"abs(f{i})")
     for e, el in enumerate(scene.elements):
         k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
         qb, qa, dq = end_values_source(el.kind, a, b, lambda i: f"xh{i}", lambda i: f"u{i}")
@@ -266,31 +271,41 @@ def _evaluate_lines(scene, law_index: list[int], law_args: Callable[[int], str],
                f"{ind}g{e} = Rq{e} * {dq}"]
         SL += [f"{ind}S{k} = abs(Rq{e} * q{e}) + abs(RF{e} * u{k})"]
         if a >= 0:
-            GL += [f"{ind}G{a} -= u{k}"]
-            SL += [f"{ind}S{a} += abs(u{k})"]
+            grow[a] += f" - u{k}"
+            srow[a] += f" + abs(u{k})"
         if b >= 0:
-            GL += [f"{ind}G{b} += u{k}"]
-            SL += [f"{ind}S{b} += abs(u{k})"]
+            grow[b] += f" + u{k}"
+            srow[b] += f" + abs(u{k})"
+    GL += [f"{ind}G{i} = {grow[i]}" for i in range(N)]
+    SL += [f"{ind}S{i} = {srow[i]}" for i in range(N)]
     return GL, SL
 
 
 def _matrix_lines(scene, ind: str) -> list[str]:
-    """Fill ``Jm`` (zeroed by the caller; only structural entries are written)."""
+    """Fill ``Jm`` through its flat view ``Jv`` (zeroed by the caller; only structural
+    entries are written)."""
     N = len(scene.nodes)
-    L = [f"{ind}Jm[{i}, {i}] = c{i}" for i, m in enumerate(scene.masses) if m != 0.0]
+    n = N + len(scene.elements)
+
+    def at(r: int, c: int) -> str:
+        return f"{ind}Jv[{r * n + c}]"
+
+    L = [f"{at(i, i)} = c{i}" for i, m in enumerate(scene.masses) if m != 0.0]
     for e in range(len(scene.elements)):
         k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
-        L += [f"{ind}Jm[{k}, {k}] = RF{e}"]
+        L += [f"{at(k, k)} = RF{e}"]
         if a >= 0:
-            L += [f"{ind}Jm[{a}, {k}] = -1.0", f"{ind}Jm[{k}, {a}] = -g{e}"]
+            L += [f"{at(a, k)} = -1.0", f"{at(k, a)} = -g{e}"]
         if b >= 0:
-            L += [f"{ind}Jm[{b}, {k}] = 1.0", f"{ind}Jm[{k}, {b}] = g{e}"]
+            L += [f"{at(b, k)} = 1.0", f"{at(k, b)} = g{e}"]
     return L
 
 
 def _solve_lines(n: int, ind: str) -> list[str]:
-    """``d = J^{-1} G`` with the inverse held in locals ``l{r}_{c}``."""
-    return [f"{ind}d{r} = " + _tree([f"l{r}_{c} * G{c}" for c in range(n)]) for r in range(n)]
+    """``d = J^{-1} G``, each row a balanced tree of products, the inverse read from
+    ``Iv`` (``Inv`` flattened: one statement a read, where ``Inv[r, c]`` takes three)."""
+    return [f"{ind}d{r} = " + _tree([f"Iv[{r * n + c}] * G{c}" for c in range(n)])
+            for r in range(n)]
 
 
 def _tree(terms: list[str]) -> str:
