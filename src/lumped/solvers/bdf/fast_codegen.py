@@ -117,7 +117,8 @@ def fast_source(scene) -> str:
     L += [f"    if e == {e}:\n        return "
           f"{templates[law_index[e]].call('law', law_index[e], 'q, F', 'c', offsets[e])}"
           for e in range(E)]
-    L += ["    return math.nan, math.nan, math.nan", ""]
+    L += ["    return math.nan, math.nan, math.nan", "", "", _force_function(), "",
+          *_test_functions(n)]
 
     def elong(e: int, xs: str, vs: str) -> str:
         """Element ``e``'s elongation (spring) or rate (dashpot) from node names."""
@@ -163,10 +164,11 @@ def fast_source(scene) -> str:
     ind = "            "
     g_lines, s_lines = _evaluate_lines(scene, law_index, law_args, ind)
     gsum = " + ".join(f"G{r}" for r in range(n))
-    # conditions as ``&`` of comparisons, not ``and``: one basic block, not one a term
-    # (numba's compile time grows with its statements, and ``and`` adds blocks and copies)
-    zero = " and ".join(f"G{r} == 0.0" for r in range(n))
-    res_ok = " and ".join(f"abs(G{r}) <= rtol * S{r} + atol" for r in range(n))
+    # the tests of many rows are functions of their own (LLVM inlines them): their
+    # short-circuit ``and`` is a chain of blocks, and numba's SSA pass costs about the
+    # blocks times the variables of a function
+    Gs = ", ".join(f"G{r}" for r in range(n))
+    zero = f"all_zero({Gs})"
     # the factor cache's key (dR/dF, h^s dR/dq of each element) is kept in ``key``, not in
     # 2 E locals carried through both loops (each a copy at every join)
     same = " & ".join(f"(RF{e} == key[{2 * e}]) & (g{e} == key[{2 * e + 1}])"
@@ -186,10 +188,12 @@ def fast_source(scene) -> str:
     L += [f"{ind}    inverse_into(LU, P, b, y, Inv)"]
     L += _solve_lines(n, ind)
     dsum = " + ".join(f"d{r}" for r in range(n))
-    upd = " and ".join(f"abs(d{r}) <= rtol * abs(u{r}) + atol" for r in range(n))
+    conv = (f"converged(rtol, atol, {Gs}, " + ", ".join(f"S{r}" for r in range(n)) + ", "
+            + ", ".join(f"d{r}" for r in range(n)) + ", " + ", ".join(f"u{r}" for r in range(n))
+            + ")")
     lock = " | ".join(f"(RF{e} == 0.0)" for e in range(E)) or "False"
     L += [f"{ind}if not math.isfinite({dsum}):", f"{ind}    break",
-          f"{ind}if ({res_ok}) and ({upd}):",
+          f"{ind}if {conv}:",
           # the reference's tests hold at u: it returns u - d; the fast path keeps u when
           # d is round-off (see the module notes)
           f"{ind}    done = True",
@@ -222,25 +226,48 @@ def fast_source(scene) -> str:
 
 def _forcing_setup_lines(N: int) -> list[str]:
     """Each node's forcing kind and parameters, read once before the loop."""
-    return [f"    fk{i} = fkind[{i}]\n    fa{i} = fpar[{i}, 0]\n    fw{i} = fpar[{i}, 1]\n"
+    return ["    i0 = step0 - step0"] + [f"    fk{i} = fkind[{i}]\n    fa{i} = fpar[{i}, 0]\n    fw{i} = fpar[{i}, 1]\n"
             f"    ft{i} = fpar[{i}, 2]" for i in range(N)]
 
 
-def _forcing_lines(N: int, ind: str) -> list[str]:
-    """``f{i}``, the force on node ``i`` at ``t``: the arithmetic of
-    :func:`lumped.scene.forcing_jit.forcing_into`, in scalars; a non-finite force
-    ends the loop (the faithful port reports it)."""
+def _test_functions(n: int) -> list[str]:
+    """``all_zero(G...)`` (every residual row exactly zero) and ``converged(rtol, atol, G...,
+    S..., d..., u...)``, the reference's two tests at an iterate: ``|G_i| <= rtol S_i +
+    atol`` and ``|d_j| <= rtol |u_j| + atol`` for every row (short-circuit, in row order)."""
+    def names(x: str) -> str:
+        return ", ".join(f"{x}{r}" for r in range(n))
+
+    res_ok = " and ".join(f"abs(G{r}) <= rtol * S{r} + atol" for r in range(n))
+    upd = " and ".join(f"abs(d{r}) <= rtol * abs(u{r}) + atol" for r in range(n))
+    return ["@njit(cache=True)", f"def all_zero({names('G')}):",
+            "    return " + " and ".join(f"G{r} == 0.0" for r in range(n)), "", "",
+            "@njit(cache=True)",
+            f"def converged(rtol, atol, {names('G')}, {names('S')}, {names('d')}, {names('u')}):",
+            f"    return ({res_ok}) and ({upd})", "", ""]
+
+
+def _force_function() -> str:
+    """``force_at``, the force on node ``i`` at ``t``: the arithmetic of
+    :func:`lumped.scene.forcing_jit.forcing_into`. A function of its own, called once a
+    node (LLVM inlines it), so that its branches are compiled once, not once a node."""
     from ...scene.forcing_jit import FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE
 
-    L: list[str] = []
-    for i in range(N):
-        L += [f"{ind}if fk{i} == {FORCE_SINE}:",
-              f"{ind}    f{i} = 0.0 if t > ft{i} else fa{i} * math.sin(fw{i} * t)",
-              f"{ind}elif fk{i} == {FORCE_CONSTANT}:", f"{ind}    f{i} = fa{i}",
-              f"{ind}elif fk{i} == {FORCE_TABLE}:", f"{ind}    f{i} = ftab[step, {i}]",
-              f"{ind}else:", f"{ind}    f{i} = 0.0",
-              f"{ind}if not math.isfinite(f{i}):", f"{ind}    break"]
-    return L
+    return "\n".join([
+        "@njit(cache=True)", "def force_at(fk, fa, fw, ft, t, ftab, step, i):",
+        f"    if fk == {FORCE_SINE}:", "        return 0.0 if t > ft else fa * math.sin(fw * t)",
+        f"    if fk == {FORCE_CONSTANT}:", "        return fa",
+        f"    if fk == {FORCE_TABLE}:", "        return ftab[step, i]", "    return 0.0", ""])
+
+
+def _forcing_lines(N: int, ind: str) -> list[str]:
+    """``f{i}``, the force on node ``i`` at ``t``; a non-finite force ends the loop (the
+    faithful port reports it)."""
+    # the node's index as ``i0 + i``: an int64, not a literal (numba would compile one
+    # ``force_at`` for each literal value)
+    L = [f"{ind}f{i} = force_at(fk{i}, fa{i}, fw{i}, ft{i}, t, ftab, step, i0 + {i})"
+         for i in range(N)]
+    fsum = " + ".join(f"f{i}" for i in range(N))
+    return L + [f"{ind}if not math.isfinite({fsum}):", f"{ind}    break"]
 
 
 def _evaluate_lines(scene, law_index: list[int], law_args: Callable[[int], str],
@@ -302,10 +329,15 @@ def _matrix_lines(scene, ind: str) -> list[str]:
 
 
 def _solve_lines(n: int, ind: str) -> list[str]:
-    """``d = J^{-1} G``, each row a balanced tree of products, the inverse read from
-    ``Iv`` (``Inv`` flattened: one statement a read, where ``Inv[r, c]`` takes three)."""
-    return [f"{ind}d{r} = " + _tree([f"Iv[{r * n + c}] * G{c}" for c in range(n)])
-            for r in range(n)]
+    """``d = J^{-1} G``: ``G`` into ``b``, then a loop over the columns ``c`` of the
+    inverse (read from ``Iv``, ``Inv`` flattened) that adds ``Inv[r, c] G_c`` to each
+    ``d_r``: ``O(n)`` statements for numba to compile, not ``n^2`` (LLVM unrolls the
+    loop: its trip count is a constant)."""
+    L = [f"{ind}b[{c}] = G{c}" for c in range(n)]
+    L += [f"{ind}d{r} = 0.0" for r in range(n)]
+    L += [f"{ind}for c in range({n}):", f"{ind}    gc = b[c]"]
+    L += [f"{ind}    d{r} += Iv[c + {r * n}] * gc" for r in range(n)]
+    return L
 
 
 def _tree(terms: list[str]) -> str:
