@@ -65,9 +65,8 @@ print(t1 - t0, t2 - t1, time.perf_counter() - t2)
 
 
 def _scenes():
-    from lumped.io import load_scene
-
     from lumped.bench.network_scenes import bingham_chain
+    from lumped.io import load_scene
 
     root = Path(__file__).resolve().parents[1] / "examples"
     return {SCENE: scenario_scene(SCENE), "maxwell": load_scene(root / "maxwell.toml")[0],

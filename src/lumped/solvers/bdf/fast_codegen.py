@@ -117,8 +117,7 @@ def fast_source(scene) -> str:
     L += [f"    if e == {e}:\n        return "
           f"{templates[law_index[e]].call('law', law_index[e], 'q, F', 'c', offsets[e])}"
           for e in range(E)]
-    L += ["    return math.nan, math.nan, math.nan", "", "", _force_function(), "",
-          *_test_functions(n)]
+    L += ["    return math.nan, math.nan, math.nan", "", "", _force_function(), ""]
 
     def elong(e: int, xs: str, vs: str) -> str:
         """Element ``e``'s elongation (spring) or rate (dashpot) from node names."""
@@ -138,7 +137,7 @@ def fast_source(scene) -> str:
     for e in range(E):
         L += [f"    F{e} = Fs[step0, {e}]"]
         L += [f"    lc{e}_{m} = lawc[{offsets[e] + m}]" for m in range(slots[e])]
-    L += [f"    c{i}_0 = masses[{i}] / h1\n    c{i}_1 = masses[{i}] / h2"
+    L += [f"    m{i} = masses[{i}]\n    c{i} = 0.0"
           for i in range(N) if mass[i]]
     for e in checked:
         L += [f"    pq{e} = {elong(e, 'x', 'v')}",
@@ -149,26 +148,27 @@ def fast_source(scene) -> str:
     L += ["    for step in range(step0 + 1, n_steps + 1):",
           "        t = step * dt",
           "        k = 0 if (not bdf2 or step == 1) else 1",
-          "        if k != kc:", "            valid = False", "            kc = k",
-          "        h = h1 if k == 0 else h2"]
+          "        h = h1 if k == 0 else h2",
+          "        if k != kc:", "            valid = False", "            kc = k"]
+    # m_i / h, the reference's value, computed when the formula changes (on the chain of
+    # dependent operations at every step, a division would cost its latency)
+    L += [f"            c{i} = m{i} / h" for i in range(N) if mass[i]]
     L += _forcing_lines(N, "        ")
     L += ["        if k == 0:"]
     L += [f"            xh{i} = x{i}\n            vh{i} = v{i}" for i in range(N)]
     L += ["        else:"]
     L += [f"            xh{i} = x{i} + (x{i} - xp{i}) / 3.0\n"
           f"            vh{i} = v{i} + (v{i} - vp{i}) / 3.0" for i in range(N)]
-    L += [f"        c{i} = c{i}_0 if k == 0 else c{i}_1" for i in range(N) if mass[i]]
     L += [f"        u{i} = v{i}" for i in range(N)]
     L += [f"        u{N + e} = F{e}" for e in range(E)]
     L += ["        done = False", "        for it in range(max_it):"]
     ind = "            "
     g_lines, s_lines = _evaluate_lines(scene, law_index, law_args, ind)
     gsum = " + ".join(f"G{r}" for r in range(n))
-    # the tests of many rows are functions of their own (LLVM inlines them): their
-    # short-circuit ``and`` is a chain of blocks, and numba's SSA pass costs about the
-    # blocks times the variables of a function
-    Gs = ", ".join(f"G{r}" for r in range(n))
-    zero = f"all_zero({Gs})"
+    # ``&`` of comparisons where every term is evaluated anyway in the common case (one
+    # basic block; numba's compile time grows with blocks times variables), ``and`` where
+    # the first term usually decides (the convergence tests of a moving iterate)
+    zero = "(" + " & ".join(f"(G{r} == 0.0)" for r in range(n)) + ")"
     # the factor cache's key (dR/dF, h^s dR/dq of each element) is kept in ``key``, not in
     # 2 E locals carried through both loops (each a copy at every join)
     same = " & ".join(f"(RF{e} == key[{2 * e}]) & (g{e} == key[{2 * e + 1}])"
@@ -188,12 +188,11 @@ def fast_source(scene) -> str:
     L += [f"{ind}    inverse_into(LU, P, b, y, Inv)"]
     L += _solve_lines(n, ind)
     dsum = " + ".join(f"d{r}" for r in range(n))
-    conv = (f"converged(rtol, atol, {Gs}, " + ", ".join(f"S{r}" for r in range(n)) + ", "
-            + ", ".join(f"d{r}" for r in range(n)) + ", " + ", ".join(f"u{r}" for r in range(n))
-            + ")")
+    res_ok = " and ".join(f"abs(G{r}) <= rtol * S{r} + atol" for r in range(n))
+    upd = " and ".join(f"abs(d{r}) <= rtol * abs(u{r}) + atol" for r in range(n))
     lock = " | ".join(f"(RF{e} == 0.0)" for e in range(E)) or "False"
     L += [f"{ind}if not math.isfinite({dsum}):", f"{ind}    break",
-          f"{ind}if {conv}:",
+          f"{ind}if ({res_ok}) and ({upd}):",
           # the reference's tests hold at u: it returns u - d; the fast path keeps u when
           # d is round-off (see the module notes)
           f"{ind}    done = True",
@@ -226,24 +225,9 @@ def fast_source(scene) -> str:
 
 def _forcing_setup_lines(N: int) -> list[str]:
     """Each node's forcing kind and parameters, read once before the loop."""
-    return ["    i0 = step0 - step0"] + [f"    fk{i} = fkind[{i}]\n    fa{i} = fpar[{i}, 0]\n    fw{i} = fpar[{i}, 1]\n"
-            f"    ft{i} = fpar[{i}, 2]" for i in range(N)]
-
-
-def _test_functions(n: int) -> list[str]:
-    """``all_zero(G...)`` (every residual row exactly zero) and ``converged(rtol, atol, G...,
-    S..., d..., u...)``, the reference's two tests at an iterate: ``|G_i| <= rtol S_i +
-    atol`` and ``|d_j| <= rtol |u_j| + atol`` for every row (short-circuit, in row order)."""
-    def names(x: str) -> str:
-        return ", ".join(f"{x}{r}" for r in range(n))
-
-    res_ok = " and ".join(f"abs(G{r}) <= rtol * S{r} + atol" for r in range(n))
-    upd = " and ".join(f"abs(d{r}) <= rtol * abs(u{r}) + atol" for r in range(n))
-    return ["@njit(cache=True)", f"def all_zero({names('G')}):",
-            "    return " + " and ".join(f"G{r} == 0.0" for r in range(n)), "", "",
-            "@njit(cache=True)",
-            f"def converged(rtol, atol, {names('G')}, {names('S')}, {names('d')}, {names('u')}):",
-            f"    return ({res_ok}) and ({upd})", "", ""]
+    return ["    i0 = step0 - step0"] + [
+        f"    fk{i} = fkind[{i}]\n    fa{i} = fpar[{i}, 0]\n    fw{i} = fpar[{i}, 1]\n"
+        f"    ft{i} = fpar[{i}, 2]" for i in range(N)]
 
 
 def _force_function() -> str:
