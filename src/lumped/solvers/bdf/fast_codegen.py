@@ -4,10 +4,13 @@ r"""The fast path of the compiled generic BDF step: one loop generated per scene
 scene's step system through a function pointer: a faithful, general port of the
 reference solver, paid for with about 140 ns a step. :func:`fast_module` generates, per
 scene, a loop that does only what the common step needs, specialised to the scene's
-sizes and structure, with the laws' kernels inlined (``inline="always"``):
+sizes and structure, calling the laws' kernels (compiled once each; LLVM inlines them).
+Its code grows linearly in the unknowns ``n``: numba's compile time grows with the
+statements it types and lowers (about a millisecond each; its SSA pass with blocks times
+variables), and a first run of a new structure pays it (see ``docs/benchmarks.md`` 4c):
 
-* the forcing of :func:`lumped.scene.forcing_jit.forcing_into` in scalars (kind and
-  parameters read once before the loop);
+* the forcing of :func:`lumped.scene.forcing_jit.forcing_into`, a small function
+  ``force_at`` called for each node (kind and parameters read once before the loop);
 * the unknowns ``u = (v_0 .. v_{N-1}, F_0 .. F_{E-1})``, the residual ``G`` and its row
   scales ``S`` (the linearised scales, ``roundoff=False`` in :mod:`lumped.codegen.jit`)
   are scalar locals; the step system is unrolled, in the same arithmetic, term for term
@@ -19,10 +22,13 @@ sizes and structure, with the laws' kernels inlined (``inline="always"``):
   builds the matrix, factors it with :func:`lumped.solvers.newton.linalg_jit.lu_factor_into`
   (the reference's singleton-first pivots: the row ``v = 0`` of a stuck dashpot is a
   pivot of 1, so its column of the inverse is exact) and keeps ``J^{-1}`` (solved from
-  the factors, column by column) in ``n^2`` locals; a correction is then ``n^2``
-  independent products summed as a balanced tree (``J^{-1} G``), without the divisions
-  and the long dependent chain of a triangular solve -- a step is a short chain of
-  dependent operations, which is what its time is;
+  the factors, column by column) in the array ``Inv``, the key in the array ``key``; a
+  correction ``d = J^{-1} G`` is then ``n^2`` independent products, summed column by
+  column in a loop of constant trip count ``n`` over ``Inv`` (``O(n)`` statements; LLVM
+  unrolls it), without the divisions and the long dependent chain of a triangular solve
+  -- a step is a short chain of dependent operations, which is what its time is. (The
+  inverse used to be held in ``n^2`` unrolled locals: the same speed, but ``n^2`` code,
+  7 s of compile for the 9 unknowns of a 3-mass chain);
 * semismooth Newton from the previous step's solution: ``u <- u - J(u)^{-1} G(u)``,
   converged at an iterate ``u`` once ``|G_i| <= rtol S_i + atol`` and the correction
   ``d = J(u)^{-1} G(u)`` satisfies ``|d_j| <= rtol |u_j| + atol`` for all rows (the
@@ -56,10 +62,12 @@ reference's triangular solve round differently, so there a step may converge in 
 and not in the other.
 
 Signature of the generated ``run_fast(masses, dt, n_steps, bdf2, step0, rtol, atol,
-max_it, fkind, fpar, ftab, xs, vs, Fs, Jm, LU, P, Inv, b, y, counts, lawc) -> int``
+max_it, fkind, fpar, ftab, xs, vs, Fs, Jm, Jv, LU, P, Inv, Iv, key, b, y, counts, lawc)
+-> int``
 (``lawc``: the scene's law constants, :attr:`lumped.codegen.jit.JitScene.consts`, read
 into locals before the loop; the module is the same for every value of them)
-(``max_it``: Newton iterations per step before the hand-over; ``Jm .. y`` workspace): the
+(``max_it``: Newton iterations per step before the hand-over; ``Jm .. y`` workspace,
+``Jv`` and ``Iv`` flat views of ``Jm`` and ``Inv``, ``key`` of length ``2 E``): the
 state at step ``step0`` (and ``step0 - 1`` for BDF2) is read from rows of ``xs, vs,
 Fs``, and steps ``step0 + 1 ..`` are written to them; ``counts`` accumulates the Newton
 iterations, residual evaluations, Jacobian evaluations, factorisations, the largest
@@ -80,8 +88,8 @@ __all__ = ["MAX_FAST_ITERATIONS", "MAX_FAST_UNKNOWNS", "fast_source", "fast_modu
 
 #: Newton iterations the fast path tries before it hands the step over.
 MAX_FAST_ITERATIONS = 6
-#: Larger step systems run on the faithful port alone: the unrolled inverse holds
-#: ``n^2`` locals, and its code (and compile time) grows like ``n^2``.
+#: Larger step systems run on the faithful port alone (its ``n^2`` products a correction
+#: and the factorisation's ``n^3`` make the fast loop's advantage shrink).
 MAX_FAST_UNKNOWNS = 16
 
 #: ``fast_module``'s memo: caller's key -> module.
