@@ -320,11 +320,20 @@ def _matrix_lines(scene, ind: str) -> list[str]:
     return L
 
 
+#: Up to this many unknowns a correction is unrolled (``n^2`` products summed as balanced
+#: trees straight from ``G``, as little code as the loop's below); above it, a loop.
+UNROLLED_SOLVE = 4
+
+
 def _solve_lines(n: int, ind: str) -> list[str]:
-    """``d = J^{-1} G``: ``G`` into ``b``, then a loop over the columns ``c`` of the
-    inverse (read from ``Iv``, ``Inv`` flattened) that adds ``Inv[r, c] G_c`` to each
-    ``d_r``: ``O(n)`` statements for numba to compile, not ``n^2`` (LLVM unrolls the
-    loop: its trip count is a constant)."""
+    """``d = J^{-1} G``, the inverse read from ``Iv`` (``Inv`` flattened). For ``n <=``
+    :data:`UNROLLED_SOLVE` each row is a balanced tree of products of the locals ``G``;
+    above, ``G`` goes into ``b`` and a loop over the columns ``c`` adds ``Inv[r, c] G_c``
+    to each ``d_r``: ``O(n)`` statements for numba to compile, not ``n^2`` (LLVM unrolls
+    the loop: its trip count is a constant)."""
+    if n <= UNROLLED_SOLVE:
+        return [f"{ind}d{r} = " + _tree([f"Iv[{r * n + c}] * G{c}" for c in range(n)])
+                for r in range(n)]
     L = [f"{ind}b[{c}] = G{c}" for c in range(n)]
     L += [f"{ind}d{r} = 0.0" for r in range(n)]
     L += [f"{ind}for c in range({n}):", f"{ind}    gc = b[c]"]
