@@ -175,8 +175,8 @@ def fast_source(scene) -> str:
     gsum = " + ".join(f"G{r}" for r in range(n))
     # ``&`` of comparisons where every term is evaluated anyway in the common case (one
     # basic block; numba's compile time grows with blocks times variables), ``and`` where
-    # the first term usually decides (the convergence tests of a moving iterate)
-    zero = "(" + " & ".join(f"(G{r} == 0.0)" for r in range(n)) + ")"
+    # the first term usually decides (a moving iterate's residual and convergence tests)
+    zero = "(" + " and ".join(f"G{r} == 0.0" for r in range(n)) + ")"
     # the factor cache's key (dR/dF, h^s dR/dq of each element) is kept in ``key``, not in
     # 2 E locals carried through both loops (each a copy at every join)
     same = " & ".join(f"(RF{e} == key[{2 * e}]) & (g{e} == key[{2 * e + 1}])"
