@@ -23,11 +23,12 @@ variables), and a first run of a new structure pays it (see ``docs/benchmarks.md
   (the reference's singleton-first pivots: the row ``v = 0`` of a stuck dashpot is a
   pivot of 1, so its column of the inverse is exact) and keeps ``J^{-1}`` (solved from
   the factors, column by column) in the array ``Inv``, the key in the array ``key``; a
-  correction ``d = J^{-1} G`` is then ``n^2`` independent products, summed column by
-  column in a loop of constant trip count ``n`` over ``Inv`` (``O(n)`` statements; LLVM
-  unrolls it), without the divisions and the long dependent chain of a triangular solve
-  -- a step is a short chain of dependent operations, which is what its time is. (The
-  inverse used to be held in ``n^2`` unrolled locals: the same speed, but ``n^2`` code,
+  correction ``d = J^{-1} G`` is then ``n^2`` independent products (above
+  :data:`UNROLLED_SOLVE` unknowns summed column by column in a loop of constant trip
+  count ``n``: ``O(n)`` statements, which LLVM unrolls; below, balanced trees), without
+  the divisions and the long dependent chain of a triangular solve -- a step is a short
+  chain of dependent operations, which is what its time is. (The
+  inverse used to be held in ``n^2`` unrolled locals: about the same speed, ``n^2`` code,
   7 s of compile for the 9 unknowns of a 3-mass chain);
 * semismooth Newton from the previous step's solution: ``u <- u - J(u)^{-1} G(u)``,
   converged at an iterate ``u`` once ``|G_i| <= rtol S_i + atol`` and the correction
