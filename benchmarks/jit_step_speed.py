@@ -65,11 +65,13 @@ print(t1 - t0, t2 - t1, time.perf_counter() - t2)
 
 
 def _scenes():
+    from lumped.bench.network_scenes import bingham_chain
     from lumped.io import load_scene
 
     root = Path(__file__).resolve().parents[1] / "examples"
     return {SCENE: scenario_scene(SCENE), "maxwell": load_scene(root / "maxwell.toml")[0],
-            "two-masses": load_scene(root / "two-masses.toml")[0]}
+            "two-masses": load_scene(root / "two-masses.toml")[0],
+            "chain-3": bingham_chain(3)}
 
 
 def per_step(n: int, repeats: int) -> dict[str, float]:

@@ -4,10 +4,13 @@ r"""The fast path of the compiled generic BDF step: one loop generated per scene
 scene's step system through a function pointer: a faithful, general port of the
 reference solver, paid for with about 140 ns a step. :func:`fast_module` generates, per
 scene, a loop that does only what the common step needs, specialised to the scene's
-sizes and structure, with the laws' kernels inlined (``inline="always"``):
+sizes and structure, calling the laws' kernels (compiled once each; LLVM inlines them).
+Its code grows linearly in the unknowns ``n``: numba's compile time grows with the
+statements it types and lowers (about a millisecond each; its SSA pass with blocks times
+variables), and a first run of a new structure pays it (see ``docs/benchmarks.md`` 4c):
 
-* the forcing of :func:`lumped.scene.forcing_jit.forcing_into` in scalars (kind and
-  parameters read once before the loop);
+* the forcing of :func:`lumped.scene.forcing_jit.forcing_into`, a small function
+  ``force_at`` called for each node (kind and parameters read once before the loop);
 * the unknowns ``u = (v_0 .. v_{N-1}, F_0 .. F_{E-1})``, the residual ``G`` and its row
   scales ``S`` (the linearised scales, ``roundoff=False`` in :mod:`lumped.codegen.jit`)
   are scalar locals; the step system is unrolled, in the same arithmetic, term for term
@@ -19,10 +22,14 @@ sizes and structure, with the laws' kernels inlined (``inline="always"``):
   builds the matrix, factors it with :func:`lumped.solvers.newton.linalg_jit.lu_factor_into`
   (the reference's singleton-first pivots: the row ``v = 0`` of a stuck dashpot is a
   pivot of 1, so its column of the inverse is exact) and keeps ``J^{-1}`` (solved from
-  the factors, column by column) in ``n^2`` locals; a correction is then ``n^2``
-  independent products summed as a balanced tree (``J^{-1} G``), without the divisions
-  and the long dependent chain of a triangular solve -- a step is a short chain of
-  dependent operations, which is what its time is;
+  the factors, column by column) in the array ``Inv``, the key in the array ``key``; a
+  correction ``d = J^{-1} G`` is then ``n^2`` independent products (above
+  :data:`UNROLLED_SOLVE` unknowns summed column by column in a loop of constant trip
+  count ``n``: ``O(n)`` statements, which LLVM unrolls; below, balanced trees), without
+  the divisions and the long dependent chain of a triangular solve -- a step is a short
+  chain of dependent operations, which is what its time is. (The
+  inverse used to be held in ``n^2`` unrolled locals: about the same speed, ``n^2`` code,
+  7 s of compile for the 9 unknowns of a 3-mass chain);
 * semismooth Newton from the previous step's solution: ``u <- u - J(u)^{-1} G(u)``,
   converged at an iterate ``u`` once ``|G_i| <= rtol S_i + atol`` and the correction
   ``d = J(u)^{-1} G(u)`` satisfies ``|d_j| <= rtol |u_j| + atol`` for all rows (the
@@ -56,10 +63,12 @@ reference's triangular solve round differently, so there a step may converge in 
 and not in the other.
 
 Signature of the generated ``run_fast(masses, dt, n_steps, bdf2, step0, rtol, atol,
-max_it, fkind, fpar, ftab, xs, vs, Fs, Jm, LU, P, Inv, b, y, counts, lawc) -> int``
+max_it, fkind, fpar, ftab, xs, vs, Fs, Jm, Jv, LU, P, Inv, Iv, key, b, y, counts, lawc)
+-> int``
 (``lawc``: the scene's law constants, :attr:`lumped.codegen.jit.JitScene.consts`, read
 into locals before the loop; the module is the same for every value of them)
-(``max_it``: Newton iterations per step before the hand-over; ``Jm .. y`` workspace): the
+(``max_it``: Newton iterations per step before the hand-over; ``Jm .. y`` workspace,
+``Jv`` and ``Iv`` flat views of ``Jm`` and ``Inv``, ``key`` of length ``2 E``): the
 state at step ``step0`` (and ``step0 - 1`` for BDF2) is read from rows of ``xs, vs,
 Fs``, and steps ``step0 + 1 ..`` are written to them; ``counts`` accumulates the Newton
 iterations, residual evaluations, Jacobian evaluations, factorisations, the largest
@@ -80,8 +89,8 @@ __all__ = ["MAX_FAST_ITERATIONS", "MAX_FAST_UNKNOWNS", "fast_source", "fast_modu
 
 #: Newton iterations the fast path tries before it hands the step over.
 MAX_FAST_ITERATIONS = 6
-#: Larger step systems run on the faithful port alone: the unrolled inverse holds
-#: ``n^2`` locals, and its code (and compile time) grows like ``n^2``.
+#: Larger step systems run on the faithful port alone (its ``n^2`` products a correction
+#: and the factorisation's ``n^3`` make the fast loop's advantage shrink).
 MAX_FAST_UNKNOWNS = 16
 
 #: ``fast_module``'s memo: caller's key -> module.
@@ -112,12 +121,12 @@ def fast_source(scene) -> str:
          "from lumped.solvers.newton.linalg_jit import inverse_into, lu_factor_into", ""]
     for j, t in enumerate(templates):
         law_text = t.source(j)[0]
-        L += ["", law_text.replace("@njit(cache=True)", '@njit(cache=True, inline="always")', 1)]
+        L += ["", law_text]
     L += ["", "@njit(cache=True)", "def element_law(e, q, F, c):"]
     L += [f"    if e == {e}:\n        return "
           f"{templates[law_index[e]].call('law', law_index[e], 'q, F', 'c', offsets[e])}"
           for e in range(E)]
-    L += ["    return math.nan, math.nan, math.nan", ""]
+    L += ["    return math.nan, math.nan, math.nan", "", "", _force_function(), ""]
 
     def elong(e: int, xs: str, vs: str) -> str:
         """Element ``e``'s elongation (spring) or rate (dashpot) from node names."""
@@ -127,19 +136,17 @@ def fast_source(scene) -> str:
         ya = f"{y}{a}" if a >= 0 else "0.0"
         return f"{yb} - {ya}"
 
-    LU = [[f"l{i}_{j}" for j in range(n)] for i in range(n)]
     L += ["@njit(cache=True)",
           "def run_fast(masses, dt, n_steps, bdf2, step0, rtol, atol, max_it, fkind, fpar, ftab,",
-          "             xs, vs, Fs, Jm, LU, P, Inv, b, y, counts, lawc):",
+          "             xs, vs, Fs, Jm, Jv, LU, P, Inv, Iv, key, b, y, counts, lawc):",
           "    h1 = dt", "    h2 = 2.0 * dt / 3.0", "    back = step0 - 1 if step0 >= 1 else 0"]
     for i in range(N):
         L += [f"    x{i} = xs[step0, {i}]", f"    v{i} = vs[step0, {i}]",
               f"    xp{i} = xs[back, {i}]", f"    vp{i} = vs[back, {i}]"]
     for e in range(E):
-        L += [f"    F{e} = Fs[step0, {e}]", f"    kRF{e} = 0.0", f"    kg{e} = 0.0"]
+        L += [f"    F{e} = Fs[step0, {e}]"]
         L += [f"    lc{e}_{m} = lawc[{offsets[e] + m}]" for m in range(slots[e])]
-    L += [f"    {LU[i][j]} = 0.0" for i in range(n) for j in range(n)]
-    L += [f"    c{i}_0 = masses[{i}] / h1\n    c{i}_1 = masses[{i}] / h2"
+    L += [f"    m{i} = masses[{i}]\n    c{i} = 0.0"
           for i in range(N) if mass[i]]
     for e in checked:
         L += [f"    pq{e} = {elong(e, 'x', 'v')}",
@@ -150,24 +157,31 @@ def fast_source(scene) -> str:
     L += ["    for step in range(step0 + 1, n_steps + 1):",
           "        t = step * dt",
           "        k = 0 if (not bdf2 or step == 1) else 1",
-          "        if k != kc:", "            valid = False", "            kc = k",
-          "        h = h1 if k == 0 else h2"]
+          "        h = h1 if k == 0 else h2",
+          "        if k != kc:", "            valid = False", "            kc = k"]
+    # m_i / h, the reference's value, computed when the formula changes (on the chain of
+    # dependent operations at every step, a division would cost its latency)
+    L += [f"            c{i} = m{i} / h" for i in range(N) if mass[i]]
     L += _forcing_lines(N, "        ")
     L += ["        if k == 0:"]
     L += [f"            xh{i} = x{i}\n            vh{i} = v{i}" for i in range(N)]
     L += ["        else:"]
     L += [f"            xh{i} = x{i} + (x{i} - xp{i}) / 3.0\n"
           f"            vh{i} = v{i} + (v{i} - vp{i}) / 3.0" for i in range(N)]
-    L += [f"        c{i} = c{i}_0 if k == 0 else c{i}_1" for i in range(N) if mass[i]]
     L += [f"        u{i} = v{i}" for i in range(N)]
     L += [f"        u{N + e} = F{e}" for e in range(E)]
     L += ["        done = False", "        for it in range(max_it):"]
     ind = "            "
     g_lines, s_lines = _evaluate_lines(scene, law_index, law_args, ind)
     gsum = " + ".join(f"G{r}" for r in range(n))
-    zero = " and ".join(f"G{r} == 0.0" for r in range(n))
-    res_ok = " and ".join(f"abs(G{r}) <= rtol * S{r} + atol" for r in range(n))
-    same = " and ".join(f"RF{e} == kRF{e} and g{e} == kg{e}" for e in range(E)) or "True"
+    # ``&`` of comparisons where every term is evaluated anyway in the common case (one
+    # basic block; numba's compile time grows with blocks times variables), ``and`` where
+    # the first term usually decides (a moving iterate's residual and convergence tests)
+    zero = "(" + " and ".join(f"G{r} == 0.0" for r in range(n)) + ")"
+    # the factor cache's key (dR/dF, h^s dR/dq of each element) is kept in ``key``, not in
+    # 2 E locals carried through both loops (each a copy at every join)
+    same = " & ".join(f"(RF{e} == key[{2 * e}]) & (g{e} == key[{2 * e + 1}])"
+                      for e in range(E)) or "True"
     L += g_lines
     L += [f"{ind}n_res += 1", f"{ind}same = valid and {same}",
           # a zero residual on the cached branch: the reference's tests hold, and its
@@ -179,22 +193,22 @@ def fast_source(scene) -> str:
     L += _matrix_lines(scene, f"{ind}    ")
     L += [f"{ind}    n_fact += 1", f"{ind}    valid = lu_factor_into(Jm, LU, P)",
           f"{ind}    if not valid:", f"{ind}        break"]
-    L += [f"{ind}    kRF{e} = RF{e}\n{ind}    kg{e} = g{e}" for e in range(E)]
+    L += [f"{ind}    key[{2 * e}] = RF{e}\n{ind}    key[{2 * e + 1}] = g{e}" for e in range(E)]
     L += [f"{ind}    inverse_into(LU, P, b, y, Inv)"]
-    L += [f"{ind}    {LU[r][c]} = Inv[{r}, {c}]" for r in range(n) for c in range(n)]
     L += _solve_lines(n, ind)
     dsum = " + ".join(f"d{r}" for r in range(n))
+    res_ok = " and ".join(f"abs(G{r}) <= rtol * S{r} + atol" for r in range(n))
     upd = " and ".join(f"abs(d{r}) <= rtol * abs(u{r}) + atol" for r in range(n))
-    lock = " or ".join(f"RF{e} == 0.0" for e in range(E)) or "False"
+    lock = " | ".join(f"(RF{e} == 0.0)" for e in range(E)) or "False"
     L += [f"{ind}if not math.isfinite({dsum}):", f"{ind}    break",
           f"{ind}if ({res_ok}) and ({upd}):",
           # the reference's tests hold at u: it returns u - d; the fast path keeps u when
           # d is round-off (see the module notes)
           f"{ind}    done = True",
-          f"{ind}    if not (({zero}) or (it > 0 and same and not ({lock}))):"]
-    L += [f"{ind}        u{r} = u{r} - d{r}" for r in range(n)]
-    L += [f"{ind}    break"]
+          f"{ind}    if ({zero}) or (it > 0 and same and not ({lock})):",
+          f"{ind}        break"]
     L += [f"{ind}u{r} = u{r} - d{r}" for r in range(n)]
+    L += [f"{ind}if done:", f"{ind}    break"]
     ind = "        "
     L += [f"{ind}if not done:", f"{ind}    break"]
     L += [f"{ind}xn{i} = xh{i} + h * u{i}" for i in range(N)]
@@ -220,25 +234,33 @@ def fast_source(scene) -> str:
 
 def _forcing_setup_lines(N: int) -> list[str]:
     """Each node's forcing kind and parameters, read once before the loop."""
-    return [f"    fk{i} = fkind[{i}]\n    fa{i} = fpar[{i}, 0]\n    fw{i} = fpar[{i}, 1]\n"
-            f"    ft{i} = fpar[{i}, 2]" for i in range(N)]
+    return ["    i0 = step0 - step0"] + [
+        f"    fk{i} = fkind[{i}]\n    fa{i} = fpar[{i}, 0]\n    fw{i} = fpar[{i}, 1]\n"
+        f"    ft{i} = fpar[{i}, 2]" for i in range(N)]
+
+
+def _force_function() -> str:
+    """``force_at``, the force on node ``i`` at ``t``: the arithmetic of
+    :func:`lumped.scene.forcing_jit.forcing_into`. A function of its own, called once a
+    node (LLVM inlines it), so that its branches are compiled once, not once a node."""
+    from ...scene.forcing_jit import FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE
+
+    return "\n".join([
+        "@njit(cache=True)", "def force_at(fk, fa, fw, ft, t, ftab, step, i):",
+        f"    if fk == {FORCE_SINE}:", "        return 0.0 if t > ft else fa * math.sin(fw * t)",
+        f"    if fk == {FORCE_CONSTANT}:", "        return fa",
+        f"    if fk == {FORCE_TABLE}:", "        return ftab[step, i]", "    return 0.0", ""])
 
 
 def _forcing_lines(N: int, ind: str) -> list[str]:
-    """``f{i}``, the force on node ``i`` at ``t``: the arithmetic of
-    :func:`lumped.scene.forcing_jit.forcing_into`, in scalars; a non-finite force
-    ends the loop (the faithful port reports it)."""
-    from ...scene.forcing_jit import FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE
-
-    L: list[str] = []
-    for i in range(N):
-        L += [f"{ind}if fk{i} == {FORCE_SINE}:",
-              f"{ind}    f{i} = 0.0 if t > ft{i} else fa{i} * math.sin(fw{i} * t)",
-              f"{ind}elif fk{i} == {FORCE_CONSTANT}:", f"{ind}    f{i} = fa{i}",
-              f"{ind}elif fk{i} == {FORCE_TABLE}:", f"{ind}    f{i} = ftab[step, {i}]",
-              f"{ind}else:", f"{ind}    f{i} = 0.0",
-              f"{ind}if not math.isfinite(f{i}):", f"{ind}    break"]
-    return L
+    """``f{i}``, the force on node ``i`` at ``t``; a non-finite force ends the loop (the
+    faithful port reports it)."""
+    # the node's index as ``i0 + i``: an int64, not a literal (numba would compile one
+    # ``force_at`` for each literal value)
+    L = [f"{ind}f{i} = force_at(fk{i}, fa{i}, fw{i}, ft{i}, t, ftab, step, i0 + {i})"
+         for i in range(N)]
+    fsum = " + ".join(f"f{i}" for i in range(N))
+    return L + [f"{ind}if not math.isfinite({fsum}):", f"{ind}    break"]
 
 
 def _evaluate_lines(scene, law_index: list[int], law_args: Callable[[int], str],
@@ -250,14 +272,17 @@ def _evaluate_lines(scene, law_index: list[int], law_args: Callable[[int], str],
     N = len(scene.nodes)
     GL: list[str] = []
     SL: list[str] = []
+    # each node row once, its terms in the order of evaluate's in-place sums (Python's
+    # left-to-right ``a + b + c`` is ``(a + b) + c``): one assignment a row
+    grow, srow = [], []
     for i, m in enumerate(scene.masses):
         if m != 0.0:
-            GL += [f"{ind}pp{i} = c{i} * u{i}", f"{ind}r{i} = c{i} * vh{i}",
-                   f"{ind}G{i} = (pp{i} - r{i}) - f{i}"]
-            SL += [f"{ind}S{i} = abs(pp{i}) + abs(r{i}) + abs(f{i})"]
+            GL += [f"{ind}pp{i} = c{i} * u{i}", f"{ind}r{i} = c{i} * vh{i}"]
+            grow.append(f"(pp{i} - r{i}) - f{i}")
+            srow.append(f"abs(pp{i}) + abs(r{i}) + abs(f{i})")
         else:
-            GL += [f"{ind}G{i} = -f{i}"]
-            SL += [f"{ind}S{i} = abs(f{i})"]
+            grow.append(f"-f{i}")
+            srow.append(f"abs(f{i})")
     for e, el in enumerate(scene.elements):
         k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
         qb, qa, dq = end_values_source(el.kind, a, b, lambda i: f"xh{i}", lambda i: f"u{i}")
@@ -266,31 +291,55 @@ def _evaluate_lines(scene, law_index: list[int], law_args: Callable[[int], str],
                f"{ind}g{e} = Rq{e} * {dq}"]
         SL += [f"{ind}S{k} = abs(Rq{e} * q{e}) + abs(RF{e} * u{k})"]
         if a >= 0:
-            GL += [f"{ind}G{a} -= u{k}"]
-            SL += [f"{ind}S{a} += abs(u{k})"]
+            grow[a] += f" - u{k}"
+            srow[a] += f" + abs(u{k})"
         if b >= 0:
-            GL += [f"{ind}G{b} += u{k}"]
-            SL += [f"{ind}S{b} += abs(u{k})"]
+            grow[b] += f" + u{k}"
+            srow[b] += f" + abs(u{k})"
+    GL += [f"{ind}G{i} = {grow[i]}" for i in range(N)]
+    SL += [f"{ind}S{i} = {srow[i]}" for i in range(N)]
     return GL, SL
 
 
 def _matrix_lines(scene, ind: str) -> list[str]:
-    """Fill ``Jm`` (zeroed by the caller; only structural entries are written)."""
+    """Fill ``Jm`` through its flat view ``Jv`` (zeroed by the caller; only structural
+    entries are written)."""
     N = len(scene.nodes)
-    L = [f"{ind}Jm[{i}, {i}] = c{i}" for i, m in enumerate(scene.masses) if m != 0.0]
+    n = N + len(scene.elements)
+
+    def at(r: int, c: int) -> str:
+        return f"{ind}Jv[{r * n + c}]"
+
+    L = [f"{at(i, i)} = c{i}" for i, m in enumerate(scene.masses) if m != 0.0]
     for e in range(len(scene.elements)):
         k, a, b = N + e, scene.elem_a[e], scene.elem_b[e]
-        L += [f"{ind}Jm[{k}, {k}] = RF{e}"]
+        L += [f"{at(k, k)} = RF{e}"]
         if a >= 0:
-            L += [f"{ind}Jm[{a}, {k}] = -1.0", f"{ind}Jm[{k}, {a}] = -g{e}"]
+            L += [f"{at(a, k)} = -1.0", f"{at(k, a)} = -g{e}"]
         if b >= 0:
-            L += [f"{ind}Jm[{b}, {k}] = 1.0", f"{ind}Jm[{k}, {b}] = g{e}"]
+            L += [f"{at(b, k)} = 1.0", f"{at(k, b)} = g{e}"]
     return L
 
 
+#: Up to this many unknowns a correction is unrolled (``n^2`` products summed as balanced
+#: trees straight from ``G``, as little code as the loop's below); above it, a loop.
+UNROLLED_SOLVE = 4
+
+
 def _solve_lines(n: int, ind: str) -> list[str]:
-    """``d = J^{-1} G`` with the inverse held in locals ``l{r}_{c}``."""
-    return [f"{ind}d{r} = " + _tree([f"l{r}_{c} * G{c}" for c in range(n)]) for r in range(n)]
+    """``d = J^{-1} G``, the inverse read from ``Iv`` (``Inv`` flattened). For ``n <=``
+    :data:`UNROLLED_SOLVE` each row is a balanced tree of products of the locals ``G``;
+    above, ``G`` goes into ``b`` and a loop over the columns ``c`` adds ``Inv[r, c] G_c``
+    to each ``d_r``: ``O(n)`` statements for numba to compile, not ``n^2`` (LLVM unrolls
+    the loop: its trip count is a constant)."""
+    if n <= UNROLLED_SOLVE:
+        return [f"{ind}d{r} = " + _tree([f"Iv[{r * n + c}] * G{c}" for c in range(n)])
+                for r in range(n)]
+    L = [f"{ind}b[{c}] = G{c}" for c in range(n)]
+    L += [f"{ind}d{r} = 0.0" for r in range(n)]
+    L += [f"{ind}for c in range({n}):", f"{ind}    gc = b[c]"]
+    L += [f"{ind}    d{r} += Iv[c + {r * n}] * gc" for r in range(n)]
+    return L
 
 
 def _tree(terms: list[str]) -> str:

@@ -72,6 +72,8 @@ def run_fast_path(scene, js, args: tuple, start: int = 0,
         xs[0], vs[0], Fs[0] = x0, v0, F0
     last = n_steps if stop is None else stop
     Jm = np.zeros((n, n))
+    Inv = np.zeros((n, n))
+    key = np.zeros(2 * E)
     LU = np.zeros((n, n))
     P = np.zeros(n, dtype=np.int64)
     b = np.zeros(n)
@@ -85,8 +87,8 @@ def run_fast_path(scene, js, args: tuple, start: int = 0,
     rows = start + 1
     while True:
         nxt = fm.run_fast(masses, dt, last, bdf2, step, rtol, atol, max_it, fkind, fpar, ftab,
-                          xs, vs, Fs, Jm, LU, P, np.zeros((n, n)), b, np.zeros(n),
-                          counts, js.consts)
+                          xs, vs, Fs, Jm, Jm.reshape(-1), LU, P, Inv, Inv.reshape(-1), key,
+                          b, np.zeros(n), counts, js.consts)
         rows = nxt
         if nxt > last:
             break
