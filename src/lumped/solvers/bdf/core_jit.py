@@ -66,8 +66,9 @@ OK, NEWTON_FAILED, BRANCH_LOST, BAD_FORCE = 0, 1, 2, 3
 
 @njit(cache=True, inline="always")
 def fast_step(evaluate, p, u0, u, cJ, cLU, cperm, cvalid, wv, wm, rtol, atol) -> int:
-    """The common step (the reference's ``_fast_step``): returns the Newton iterations it
-    took (0 or 1) with the solution in ``u``, or -1 when full Newton must run."""
+    """The common step (the reference's :func:`lumped.solvers.bdf.step_loop.fast_step`):
+    returns the Newton iterations it took (0 or 1) with the solution in ``u``, or -1 when
+    full Newton must run."""
     n = u.shape[0]
     G, S, J, du = wv[WS_G], wv[WS_S], wm[WS_J], wv[WS_DU]
     evaluate(u0, p, G, J, S, False)

@@ -44,7 +44,6 @@ and records the impact.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 from ...scene import Mass, Scene
@@ -52,10 +51,9 @@ from ...scene.supports import clock_rates
 from ..implicit.globalize import solve_globalized
 from ..implicit.step_system import make_evaluate
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
-from ..newton.scalar_root import scalar_root
 from ..newton.semismooth import newton_solve
 from ..nonsmooth.impacts import impact_velocities, locking_elements, onto_locks
-from ..nonsmooth.lock_forces import forces_from_accelerations
+from ..nonsmooth.lock_forces import forces_with_held
 from ..status import Event
 
 __all__ = ["ImpactStep", "be_substep", "halved_steps", "impact_step", "impulse_is_negligible"]
@@ -306,22 +304,9 @@ def _forces_after(scene, t1, dt, x1, v1, F1, held, sub):
     if not still:
         return None
     v_stop = impact_velocities(scene, x1, v1, still, 0.0, forces=F2)[0]
-    q_old, q = scene.elongations(x1, v1), scene.elongations(x1, v_stop)
-    F = list(F1)
-    free = list(still)
-    for e, el in enumerate(scene.elements):
-        if e in still:
-            continue
-        kernel = el.law.kernel
-        if el.kind != "spring" and q[e] != q_old[e] and kernel(q[e], F[e])[2] != 0.0:
-            try:
-                F[e] = scalar_root(kernel, q[e], F[e])[0]
-            except ValueError:
-                return None
-        if kernel(q[e], F[e])[2] == 0.0:
-            free.append(e)
-    F_new = forces_from_accelerations(scene, t1, x1, v_stop, F, free)
-    if F_new is None or not all(map(math.isfinite, F_new)):
+    F_new = forces_with_held(scene, t1, x1, v_stop, F1, still,
+                             q_before=scene.elongations(x1, v1))
+    if F_new is None:
         return None
     return v_stop, F_new
 

@@ -267,8 +267,7 @@ def after_impact_forces(scene: Scene, t: float, x: Sequence[float], v: Sequence[
         boundary, the kink: it goes slack). ``(F, [])`` when no impacted element is at
         rest relative to its ends or the balances have no solution.
     """
-    from ..newton.scalar_root import scalar_root
-    from ..nonsmooth.lock_forces import forces_from_accelerations
+    from ..nonsmooth.lock_forces import forces_with_held
 
     ea, eb = scene.elem_a, scene.elem_b
     held = []
@@ -277,25 +276,12 @@ def after_impact_forces(scene: Scene, t: float, x: Sequence[float], v: Sequence[
         rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
         if abs(rate) <= threshold:
             held.append(e)
-    out = list(F)
     if not held:
-        return out, []
-    q = scene.elongations(x, v)
-    free = list(held)
-    for e, el in enumerate(scene.elements):
-        if e in held:
-            continue
-        kernel = el.law.kernel
-        if el.kind == "dashpot" and kernel(q[e], out[e])[2] != 0.0:
-            try:
-                out[e] = scalar_root(kernel, q[e], out[e])[0]
-            except ValueError:
-                return list(F), []
-        if kernel(q[e], out[e])[2] == 0.0:
-            free.append(e)
-    got = forces_from_accelerations(scene, t, x, v, out, free)
-    if got is None or not all(map(math.isfinite, got)):
         return list(F), []
+    got = forces_with_held(scene, t, x, v, F, held)
+    if got is None:
+        return list(F), []
+    q = scene.elongations(x, v)
     holding = []
     for e in held:
         R, _, RF = scene.elements[e].law.kernel(q[e], got[e])

@@ -34,6 +34,7 @@ again without it.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -41,7 +42,7 @@ import numpy as np
 from ...scene import Mass, Scene
 from ...scene.supports import support_accelerations
 
-__all__ = ["forces_from_accelerations", "taut_on_supports"]
+__all__ = ["forces_from_accelerations", "forces_with_held", "taut_on_supports"]
 
 #: Weight of a dashpot's force change against a lock's in the minimum-norm split.
 _DASHPOT_WEIGHT = 1e3
@@ -177,3 +178,45 @@ def taut_on_supports(scene: Scene, t: float, x: Sequence[float], v: Sequence[flo
         return list(F)
     got = forces_from_accelerations(scene, t, x, v, F, free)
     return list(F) if got is None else got
+
+
+def forces_with_held(scene: Scene, t: float, x: Sequence[float], v: Sequence[float],
+                     F: Sequence[float], held: Sequence[int],
+                     q_before: Sequence[float] | None = None) -> list[float] | None:
+    r"""The forces at ``(x, v)`` with the elements ``held`` keeping their relative motion.
+
+    Each dashpot not in ``held`` whose law fixes its force (``dR/dF != 0`` at ``(q,
+    F_e)``) takes the force its law gives at its rate ``q`` (a scalar root from ``F_e``;
+    with ``q_before``, only where its rate differs from ``q_before[e]``: elsewhere ``F_e``
+    is already the law's); then ``held`` and every element whose law leaves its force
+    free (``dR/dF = 0``: a stuck dashpot, another taut lock) take the forces of the
+    balance of accelerations (:func:`forces_from_accelerations`).
+
+    Returns
+    -------
+    list of float or None
+        The forces, or ``None`` when a dashpot's root fails or the balance has no finite
+        solution.
+    """
+    from ..newton.scalar_root import scalar_root
+
+    q = scene.elongations(x, v)
+    out = list(F)
+    free = list(held)
+    for e, el in enumerate(scene.elements):
+        if e in held:
+            continue
+        kernel = el.law.kernel
+        if (el.kind == "dashpot" and (q_before is None or q[e] != q_before[e])
+                and kernel(q[e], out[e])[2] != 0.0):
+            try:
+                out[e] = scalar_root(kernel, q[e], out[e])[0]
+            except ValueError:
+                return None
+        if kernel(q[e], out[e])[2] == 0.0:
+            free.append(e)
+    got = forces_from_accelerations(scene, t, x, v, out, free)
+    if got is None or not all(map(math.isfinite, got)):
+        return None
+    return got
+
