@@ -54,7 +54,13 @@ from sympy.core.parameters import distribute
 from .emit import KernelPrinter, build_kernel
 from .guards import compile_guards, feasible_path
 from .rewrite import magnitude_expression
-from .stage_forms import affine_inverse_form, flat_root, inverse_form, odd_continuation
+from .stage_forms import (
+    affine_inverse_form,
+    flat_inverse,
+    flat_root,
+    inverse_form,
+    odd_continuation,
+)
 
 __all__ = ["BranchInfo", "LawBranches", "law_branches", "leaves"]
 
@@ -207,6 +213,22 @@ class LawBranches:
         if hit is None:
             hit = self._guards[-1 - i] = compile_guards(self.info[i].path, root)
         return hit
+
+    def flat_start_for(self, i: int) -> Callable[[float, float], tuple[float, float]] | None:
+        """``start(q, F) -> (s F + d, G(q))`` of branch ``i`` when it is flat at its end
+        (:func:`~lumped.codegen.stage_forms.flat_inverse`: ``dR/dF = 0`` where the base
+        ``s F + d`` vanishes, the force ``G(q)`` on the branch at rate ``q``), else
+        ``None``. Read from the branch's expression (a locking branch has none)."""
+        i = self._check(i)
+        key = ("flat", i)
+        if key not in self._kernels:
+            info = self.info[i]
+            form = None if info.locks or info.stage is not None else flat_inverse(
+                info.residual)
+            with distribute(False):
+                self._kernels[key] = None if form is None else build_kernel(
+                    "flat_start", ["q", "F"], list(form), guard=True)
+        return self._kernels[key]
 
     def guards_for(self, i: int) -> Callable[[float, float], tuple[float, ...]]:
         """``guards(q, F) -> (g_1, ...)``: all ``> 0`` strictly inside branch ``i``, some

@@ -30,7 +30,8 @@ from collections.abc import Callable
 import sympy as sp
 
 __all__ = ["STEEP_SPAN", "affine_inverse_form", "affine_steepness",
-           "affine_steepness_function", "flat_root", "inverse_form", "odd_continuation"]
+           "affine_steepness_function", "flat_inverse", "flat_root", "inverse_form",
+           "odd_continuation"]
 
 _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 
@@ -112,6 +113,25 @@ def flat_root(expr: sp.Expr) -> tuple[sp.Expr, sp.Expr] | None:
     if shape is None or not shape[1] > 1:
         return None
     return shape[0], -shape[4] / shape[5]
+
+
+def flat_inverse(expr: sp.Expr) -> tuple[sp.Expr, sp.Expr] | None:
+    r"""``(s F + d, G(q))`` of a branch ``R = alpha(q) + beta (s F + d)^p`` flat at its
+    end (``p > 1``, :func:`flat_root`): the power's base and the branch solved for its
+    force, ``G(q) = (w^{1/p} - d) / s``, ``w = -alpha(q) / beta``, ``w^{1/p}`` continued
+    oddly to ``w < 0``. A stage that starts at the end (``s F + d = 0``, where ``dR/dF =
+    0``) takes its forces from ``G`` at predicted rates
+    (:mod:`lumped.solvers.radau.flat_start`): Newton from the end itself loads the whole
+    excess force onto the branch at its first iteration (Herschel-Bulkley ``n = 1.5``,
+    issue 29). ``None`` for any other shape."""
+    shape = _power_shape(expr)
+    if shape is None or not shape[1] > 1:
+        return None
+    base, p, slope, shift, alpha, beta = shape
+    w = -alpha / beta
+    r = 1 / p
+    root = sp.Piecewise((w ** r, w >= 0), (-((-w) ** r), True))
+    return base, (root - shift) / slope
 
 
 def odd_continuation(expr: sp.Expr, path: tuple = ()) -> sp.Expr:

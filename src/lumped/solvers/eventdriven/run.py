@@ -228,7 +228,7 @@ class Radau5Run(StepPass, StepChecks):
         estimate."""
         t, x, v, F, atol, rtol = self.t, self.x, self.v, self.F, self.atol, self.rtol
         fk = [self.scene.external_forces(t + C[k] * h) for k in range(3)]
-        self.U = (list(v) + list(F)) * 3
+        self.U = self.stage_guess(h, damped)  # (v_n, F_n), or on a flat end's branch
         # the force scale: the largest force or load met so far (never shrinks to 0)
         self.F_seen = max([self.F_seen] + [abs(Fe) for Fe in F] + [abs(fi) for fi in fk[2]])
         # ... and at least the force that changes the lightest mass's velocity by its

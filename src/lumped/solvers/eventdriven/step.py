@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 
 from ..modes.guards import fold_crossed
+from ..radau.flat_start import at_flat_end, flat_start
 from ..radau.rows import row_of
 from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.tableau import A as _A
@@ -90,7 +91,8 @@ class StepPass:
             return
         h = self.h
         # this attempt compiled (the same numbers), unless a Jacobian is singular
-        got = None if self.fast is None else self.fast.attempt(
+        # (a flat end's start is the Python loop's, not yet the compiled attempt's)
+        got = None if self.fast is None or self.flat_ends() else self.fast.attempt(
             t, h, self.x, self.v, self.F, self.dF_n, self.F_seen,
             self.breaks[self.bi - 1] if self.bi > 0 else math.nan, self.modes, self.watched)
         hit_c = None
@@ -181,6 +183,31 @@ class StepPass:
                 "solution continuous with the past beyond it")
             return
         self._accept(sol, h, t_stop if to_stop else t + h, to_stop, h_min, quot, err_norm)
+
+    def flat_ends(self) -> list[int]:
+        """The elements held on a branch flat at its end and starting at that end
+        (:func:`~lumped.solvers.radau.flat_start.at_flat_end`), none with moving supports."""
+        key = tuple(self.modes)
+        if getattr(self, "_flat_key", None) != key and self.frame is None:
+            self._flat_key, self._flat_starts = key, [
+                getattr(lb, "flat_start_for", lambda i: None)(i)
+                for lb, i in zip(self.lbs, key, strict=True)]
+        return [] if self.frame is not None or not any(self._flat_starts) else at_flat_end(
+            self._flat_starts, self.scene.elongations(self.x, self.v), self.F)
+
+    def stage_guess(self, h: float, damped: bool = False) -> list[float]:
+        """The stage guess of a step of size ``h``: ``(v_n, F_n)`` at every stage, or,
+        when a held branch starts at its flat end, on the branches
+        (:func:`~lumped.solvers.radau.flat_start.flat_start`; not for the line search)."""
+        U = (list(self.v) + list(self.F)) * 3
+        ends = [] if damped else self.flat_ends()
+        if ends:  # (the forcing's value just past a breakpoint at t, as the error's)
+            t, bi = self.t, self.bi
+            net_n = self.scene.net_forces(math.nextafter(t, math.inf) if (
+                bi > 0 and t == self.breaks[bi - 1]) else t, self.F)
+            flat_start(self.system, U, h, self.x, self.v, self.F, net_n, self._flat_starts,
+                       self.guards, ends)
+        return U
 
     def _failed(self, h: float, h_min: float) -> None:
         """A step of size ``h`` whose stage solve failed: the mode chosen again where the
