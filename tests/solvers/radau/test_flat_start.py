@@ -102,3 +102,15 @@ def test_radau5_starts_a_slip_at_a_flat_yield_force_without_a_bridge():
         own = np.max(np.abs(np.asarray(fine.x[name])[::s] - ref))
         err = np.max(np.abs(np.asarray(sol.x[name]) - ref))
         assert err <= own, (name, err, own)
+
+
+def test_both_loops_start_the_slip_at_the_flat_yield_force_alike():
+    """The step from the flat end is the Python loop's in both loops (the compiled loop
+    hands that pass over): the same numbers."""
+    scene = _flat_dashpot_on_a_mass_among_locks()
+    ours, fast = (simulate(scene, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=1e-10,
+                           atol=1e-13, compiled=c) for c in (False, True))
+    assert fast.ok and fast.stats.get("bridges", 0) == 0, fast.message
+    assert np.array_equal(ours.data, fast.data)
+    assert [(ev.t, ev.element, ev.kind) for ev in ours.events] == [
+        (ev.t, ev.element, ev.kind) for ev in fast.events]

@@ -327,7 +327,7 @@ class Radau5Run(StepPass, StepChecks):
                 if self.fast is not None:
                     self.fast.setup(self.t_final, self.rtol, self.atol, self.m_min)
             if self.fast is not None and self.target is None and not self.kept and \
-                    not self.ms.forces_from_probe and self._fast_steps():
+                    not self.ms.forces_from_probe and not self.flat_ends() and self._fast_steps():
                 continue
             tried = stats["steps"] + stats["rejected"]
             self._step()

@@ -91,7 +91,7 @@ class StepPass:
             return
         h = self.h
         # this attempt compiled (the same numbers), unless a Jacobian is singular
-        # (a flat end's start is the Python loop's, not yet the compiled attempt's)
+        # (a step from a flat end is Python's in both loops: its guess, .flat_start)
         got = None if self.fast is None or self.flat_ends() else self.fast.attempt(
             t, h, self.x, self.v, self.F, self.dF_n, self.F_seen,
             self.breaks[self.bi - 1] if self.bi > 0 else math.nan, self.modes, self.watched)
