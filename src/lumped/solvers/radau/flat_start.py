@@ -14,9 +14,12 @@ every step size down to the floor (issue 29: seed 191 of ``benchmarks/tight_hunt
 explicit predictor, ``V_k,i = v_n,i + c_k h net_i(t_n, F_n) / m_i`` (a junction keeps
 ``v_n,i``), and the force of each element at its flat end from the branch's inverse at the
 predicted rate, ``F_k = G(q_k)`` (:meth:`lumped.codegen.branches.LawBranches.
-flat_start_for`; ``tau + (q_k / gamma)^{1/n}``). The guess is kept only when it lies on
-the held branches (their stage guards ``>= 0`` at every stage): a load that drives the
-element back off its branch leaves the constant guess. Read from the law's branch, never
+flat_start_for`; ``tau + (q_k / gamma)^{1/n}``). The guess is kept only when each such
+element stays on its held branch (its stage guards ``>= 0`` at every stage): a load that
+drives it back off its branch leaves the constant guess. The other elements' guards are
+not read: the predictor moves each mass on its own, so a lock between two masses, or
+between a mass and a junction, reads a rate it does not hold (Newton restores it; seed
+191: a Coulomb element stuck between two masses read ``-6e-13``). Read from the law's branch, never
 from its name.
 """
 
@@ -57,7 +60,7 @@ def flat_start(system, U: list[float], h: float, x_n: list[float], v_n: list[flo
     system's, :class:`~lumped.solvers.radau.stage.StageSystem`) for a step of size ``h``
     from ``(x_n, v_n, F_n)``, ``net_n`` the nodes' net forces at ``t_n``, ``ends`` the
     elements at their flat ends (:func:`at_flat_end`). Returns whether it did; ``U`` is
-    unchanged when the guess leaves a held branch (or is not finite)."""
+    unchanged when the guess takes one of them off its held branch (or is not finite)."""
     N, n, m = system.N, system.n, system.m
     trial = list(U)
     for k in range(3):
@@ -68,7 +71,7 @@ def flat_start(system, U: list[float], h: float, x_n: list[float], v_n: list[flo
         q = system.element_nodes(trial, h, x_n, v_n, F_n, e)[0]
         for k in range(3):
             trial[k * n + N + e] = starts[e](q[k + 1], F_n[e])[1]
-    for e in range(system.E):
+    for e in ends:  # (the others' guards may read the predictor off their locks)
         q, F = system.element_nodes(trial, h, x_n, v_n, F_n, e)
         for k in range(1, 4):
             if not all(g >= 0.0 for g in guards[e](q[k], F[k])):  # (nan fails too)
