@@ -165,6 +165,8 @@ class LawBranches:
         self._guards: dict[int, Callable] = {}
         #: branch -> its stage root or None, read once (:meth:`stage_guards_for`)
         self._stage_roots: dict[int, tuple | None] = {}
+        #: branch -> its flat start or None (:meth:`flat_start_for`)
+        self._flats: dict[int, Callable | None] = {}
 
     def kernel_for(self, i: int) -> Callable[[float, float], tuple[float, float, float]]:
         """``kernel(q, F) -> (R_i, dR_i/dq, dR_i/dF)`` of branch ``i`` alone.
@@ -220,15 +222,14 @@ class LawBranches:
         ``s F + d`` vanishes, the force ``G(q)`` on the branch at rate ``q``), else
         ``None``. Read from the branch's expression (a locking branch has none)."""
         i = self._check(i)
-        key = ("flat", i)
-        if key not in self._kernels:
+        if i not in self._flats:
             info = self.info[i]
             form = None if info.locks or info.stage is not None else flat_inverse(
                 info.residual)
             with distribute(False):
-                self._kernels[key] = None if form is None else build_kernel(
+                self._flats[i] = None if form is None else build_kernel(
                     "flat_start", ["q", "F"], list(form), guard=True)
-        return self._kernels[key]
+        return self._flats[i]
 
     def guards_for(self, i: int) -> Callable[[float, float], tuple[float, ...]]:
         """``guards(q, F) -> (g_1, ...)``: all ``> 0`` strictly inside branch ``i``, some

@@ -193,10 +193,13 @@ class _Derivation:
                 lb.stage_source_for(i, guard=guard)
             lb.guards_for(i)
             lb.stage_guards_for(i)
+            lb.flat_start_for(i)
         self.kernel = self._pair(kernel)
         self.selector = lift_source(lb.branch.__source__, values)
         self.kernels = {key: self._pair(fn) for key, fn in lb._kernels.items()
                         if key[0] != "law"}
+        self.flats = {i: lift_source(fn.__source__, values)
+                      for i, fn in lb._flats.items() if fn is not None}
         self.guards = {key: (lift_source(fn.__source__, values),
                              tuple(lift_text(code, values) for code in fn.codes))
                        for key, fn in lb._guards.items()}
@@ -216,6 +219,7 @@ class _Derivation:
         return (sig(self.kernel[0]), sig(self.kernel[1]), sig(self.selector),
                 {k: (sig(a), sig(b)) for k, (a, b) in self.kernels.items()},
                 {k: (sig(a), codes) for k, (a, codes) in self.guards.items()},
+                {k: sig(a) for k, a in self.flats.items()},
                 self.template.functions, self.template_recipes)
 
     def bounds(self) -> list:
@@ -346,7 +350,7 @@ class ReboundBranches(LawBranches):
         self.info = tuple(LazyBranchInfo.of(info, swapped) for info in d.lb.info)
         self.count = d.lb.count
         self.branch = d.selector.build(rebound.values)
-        self._kernels, self._guards = {}, {}
+        self._kernels, self._guards, self._flats = {}, {}, {}
 
     def _kernel(self, i: int, *, guard: bool, stage: bool = False) -> Callable:
         key = (i, guard, stage and self.info[i].stage is not None)
@@ -359,6 +363,13 @@ class ReboundBranches(LawBranches):
 
     def guards_for(self, i: int) -> Callable:
         return self._guard(self._check(i))
+
+    def flat_start_for(self, i: int) -> Callable | None:
+        i = self._check(i)
+        if i not in self._flats:
+            lifted = self._rebound.cls._d.flats.get(i)
+            self._flats[i] = None if lifted is None else lifted.build(self._rebound.values)
+        return self._flats[i]
 
     def stage_guards_for(self, i: int) -> Callable:
         # the class's law has its own stage guards where LawBranches.stage_guards_for

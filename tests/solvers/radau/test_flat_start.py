@@ -114,3 +114,12 @@ def test_both_loops_start_the_slip_at_the_flat_yield_force_alike():
     assert np.array_equal(ours.data, fast.data)
     assert [(ev.t, ev.element, ev.kind) for ev in ours.events] == [
         (ev.t, ev.element, ev.kind) for ev in fast.events]
+
+
+def test_a_law_of_a_parametric_class_gets_its_flat_start_from_the_class():
+    hb = get_law("herschel_bulkley")
+    for gamma, tau in ((0.5, 0.25), (0.7, 0.3), (0.9, 0.11)):
+        lb = law_branches(hb.bind(gamma=gamma, tau=tau, n=1.5))
+        forces = [start(1e-3, tau)[1] for start in map(lb.flat_start_for, range(lb.count))
+                  if start is not None]
+        assert max(forces) == pytest.approx(tau + (1e-3 / gamma) ** (2 / 3), rel=1e-14)
