@@ -19,8 +19,8 @@ element stays on its held branch (its stage guards ``>= 0`` at every stage): a l
 drives it back off its branch leaves the constant guess. The other elements' guards are
 not read: the predictor moves each mass on its own, so a lock between two masses, or
 between a mass and a junction, reads a rate it does not hold (Newton restores it; seed
-191: a Coulomb element stuck between two masses read ``-6e-13``). Read from the law's branch, never
-from its name.
+191: a Coulomb element stuck between two masses read ``-6e-13``). Read from the law's
+branch, never from its name.
 """
 
 from __future__ import annotations
