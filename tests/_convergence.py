@@ -48,3 +48,18 @@ def assert_converges(sols: list, n_nodes: int, dt: float, vmax: float, scale: fl
         assert np.all(np.isfinite(finer.data))
         sols.append(finer)
     raise AssertionError(f"no convergence: {d0!r} -> {d1!r}")
+
+
+def assert_within_bdf2s_own_error(scene, sol, names, dt: float, t_end: float,
+                                  s: int) -> None:
+    """The displacements of ``sol`` (output every ``dt``) within those of ``bdf2`` at
+    ``dt / (2 s)`` by at most that run's own error, its distance to the run at ``dt /
+    s`` (second order: its error is a third of that)."""
+    from lumped import simulate
+
+    fine, finer = (simulate(scene, method="bdf2", dt=dt / k, t_end=t_end) for k in (s, 2 * s))
+    for name in names:
+        ref = np.asarray(finer.x[name])[::2 * s]
+        own = np.max(np.abs(np.asarray(fine.x[name])[::s] - ref))
+        err = np.max(np.abs(np.asarray(sol.x[name]) - ref))
+        assert err <= own, (name, err, own)

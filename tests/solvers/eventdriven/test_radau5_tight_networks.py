@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from _convergence import assert_within_bdf2s_own_error
 
 from lumped import simulate
 from lumped.laws import get_law
@@ -265,20 +266,7 @@ def test_the_stop_of_a_junction_on_steep_dashpots_agrees_with_bdf2():
     scene = _junction_stopping_on_two_steep_dashpots()
     dt = 0.025 / 4
     sol = simulate(scene, method="radau5", dt=dt, t_end=0.5, rtol=1e-10, atol=1e-13)
-    _assert_within_bdf2s_own_error(scene, sol, ("m0", "j1", "m2"), dt, 0.5, 32)
-
-
-def _assert_within_bdf2s_own_error(scene: Scene, sol, names, dt: float, t_end: float,
-                                   s: int) -> None:
-    """The displacements of ``sol`` (output every ``dt``) within those of ``bdf2`` at
-    ``dt / (2 s)`` by at most that run's own error, its distance to the run at ``dt /
-    s`` (second order: its error is a third of that)."""
-    fine, finer = (simulate(scene, method="bdf2", dt=dt / k, t_end=t_end) for k in (s, 2 * s))
-    for name in names:
-        ref = np.asarray(finer.x[name])[::2 * s]
-        own = np.max(np.abs(np.asarray(fine.x[name])[::s] - ref))
-        err = np.max(np.abs(np.asarray(sol.x[name]) - ref))
-        assert err <= own, (name, err, own)
+    assert_within_bdf2s_own_error(scene, sol, ("m0", "j1", "m2"), dt, 0.5, 32)
 
 
 def _junction_on_a_steep_dashpot_beside_a_bingham_junction() -> Scene:
@@ -357,7 +345,7 @@ def test_radau5_passes_a_junction_velocity_reversal_between_two_strings_without_
     F = {e: np.asarray(sol.F[e]) for e in ("e0", "e3", "e4", "e5")}
     np.testing.assert_allclose(F["e0"], F["e3"] - F["e4"] - F["e5"], rtol=0.0, atol=1e-12)
     # ... and agrees with bdf2 at dt / 32 within its own error
-    _assert_within_bdf2s_own_error(scene, sol, ("j0", "m2", "m3"), dt, 0.5, 16)
+    assert_within_bdf2s_own_error(scene, sol, ("j0", "m2", "m3"), dt, 0.5, 16)
 
 
 def _junction_on_a_stiff_spring_and_two_dashpots() -> Scene:
@@ -397,7 +385,7 @@ def test_radau5_stops_a_junction_between_large_cancelling_forces_without_a_bridg
     assert stops == [("e0", 2), ("e0", 0)], stops
     F = {e: np.asarray(sol.F[e]) for e in ("e0", "e1", "e5")}
     np.testing.assert_allclose(F["e1"] + F["e5"], F["e0"], rtol=0.0, atol=1e-9)
-    _assert_within_bdf2s_own_error(scene, sol, ("j0", "m1", "m2"), dt / 4, t_end, 4)
+    assert_within_bdf2s_own_error(scene, sol, ("j0", "m1", "m2"), dt / 4, t_end, 4)
 
 
 def _mass_breaking_out_a_hair_from_the_origin() -> Scene:

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
+from _convergence import assert_within_bdf2s_own_error
 
 from lumped import simulate
 from lumped.codegen.branches import law_branches
@@ -95,13 +96,7 @@ def test_radau5_starts_a_slip_at_a_flat_yield_force_without_a_bridge():
                    compiled=False)
     assert sol.ok, sol.message
     assert sol.stats.get("bridges", 0) == 0, sol.message
-    s = 8
-    fine, finer = (simulate(scene, method="bdf2", dt=dt / k, t_end=0.5) for k in (s, 2 * s))
-    for name in ("m1", "m3"):
-        ref = np.asarray(finer.x[name])[::2 * s]
-        own = np.max(np.abs(np.asarray(fine.x[name])[::s] - ref))
-        err = np.max(np.abs(np.asarray(sol.x[name]) - ref))
-        assert err <= own, (name, err, own)
+    assert_within_bdf2s_own_error(scene, sol, ("m1", "m3"), dt, 0.5, 8)
 
 
 def test_both_loops_start_the_slip_at_the_flat_yield_force_alike():
