@@ -22,9 +22,11 @@ What the event model and the adaptive method use:
   element's force is set by the rest of the system.  Detected from the law's expression,
   never from its name.
 
-The guards are built from the branch's conditions in :mod:`lumped.codegen.guards`, which
-also drops branches whose conditions contradict each other; the inverse form of a steep
-branch comes from :mod:`lumped.codegen.stage_forms`.
+The leaves and the selector come from the law's ``Piecewise`` tree
+(:mod:`lumped.codegen.piecewise_tree`); the guards are built from the branch's conditions
+in :mod:`lumped.codegen.guards`, which also drops branches whose conditions contradict
+each other; the inverse form of a steep branch comes from
+:mod:`lumped.codegen.stage_forms`.
 
 Examples
 --------
@@ -43,16 +45,16 @@ Examples
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import sympy as sp
 from sympy.core.parameters import distribute
 
-from .emit import KernelPrinter, build_kernel
+from .emit import build_kernel
 from .guards import compile_guards, feasible_path
+from .piecewise_tree import Path, build_selector, decision_tree, leaves
 from .rewrite import magnitude_expression
 from .stage_forms import (
     affine_inverse_form,
@@ -65,9 +67,6 @@ from .stage_forms import (
 __all__ = ["BranchInfo", "LawBranches", "law_branches", "leaves"]
 
 _Q, _F = sp.Symbol("q"), sp.Symbol("F")
-
-#: ``(condition, required truth value)`` pairs that select a branch.
-_Path = tuple[tuple[sp.Basic, bool], ...]
 
 
 @dataclass(frozen=True)
@@ -118,7 +117,7 @@ class BranchInfo:
     residual: sp.Expr
     dR_dq: sp.Expr
     dR_dF: sp.Expr
-    path: _Path
+    path: Path
     locks: bool
     lock_value: float | None
     steep: bool = False
@@ -136,13 +135,12 @@ class LawBranches:
     """
 
     def __init__(self, residual: sp.Expr) -> None:
-        with distribute(False):
-            leaves = list(_leaves(residual, ()))
-        keep = [feasible_path(path) for _, path in leaves]
+        found = leaves(residual)
+        keep = [feasible_path(path) for _, path in found]
         if not any(keep):
             raise ValueError(f"no branch of {residual} is admissible")
         infos, number = [], []
-        for (expr, path), ok in zip(leaves, keep, strict=True):
+        for (expr, path), ok in zip(found, keep, strict=True):
             number.append(len(infos) if ok else -1)
             if not ok:
                 continue
@@ -159,8 +157,8 @@ class LawBranches:
                                     steep or stage is not None, stage))
         self.info: tuple[BranchInfo, ...] = tuple(infos)
         self.count = len(infos)
-        self.branch: Callable[[float, float], int] = _build_selector(
-            _decision_tree(residual), number)
+        self.branch: Callable[[float, float], int] = build_selector(
+            decision_tree(residual), number)
         self._kernels: dict[tuple, Callable | None] = {}
         self._guards: dict[int, Callable] = {}
         #: branch -> its stage root or None, read once (:meth:`stage_guards_for`)
@@ -338,123 +336,6 @@ def law_branches(bound) -> LawBranches:
     except TypeError:
         pass
     return out
-
-
-# ---------------------------------------------------------------------------------------
-# Enumeration
-
-
-def _ready_piecewise(expr: sp.Basic) -> sp.Piecewise | None:
-    """The first ``Piecewise`` in pre-order whose conditions hold no ``Piecewise``."""
-    for node in sp.preorder_traversal(expr):
-        if isinstance(node, sp.Piecewise) and not any(
-            c.has(sp.Piecewise) for _, c in node.args
-        ):
-            return node
-    return None
-
-
-def _arms(pw: sp.Piecewise, path: _Path) -> Iterator[tuple[sp.Expr, _Path]]:
-    """Each arm of ``pw`` with the path that selects it (first true condition wins)."""
-    before: list[tuple[sp.Basic, bool]] = []
-    for value, cond in pw.args:
-        if cond is sp.false:
-            continue
-        if cond is sp.true:
-            yield value, path + tuple(before)
-            return
-        yield value, path + tuple(before) + ((cond, True),)
-        before.append((cond, False))
-
-
-def leaves(residual: sp.Expr) -> list[tuple[sp.Expr, _Path]]:
-    """Every leaf of a prepared residual (a smooth piece and the path that selects it,
-    feasible or not), in the order of the law's ``Piecewise`` arms."""
-    with distribute(False):
-        return list(_leaves(residual, ()))
-
-
-def _leaves(expr: sp.Expr, path: _Path) -> Iterator[tuple[sp.Expr, _Path]]:
-    pw = _ready_piecewise(expr)
-    if pw is None:
-        yield expr, path
-        return
-    for value, sub in _arms(pw, path):
-        yield from _leaves(expr.xreplace({pw: value}), sub)
-
-
-def _decision_tree(expr: sp.Expr):
-    """``("leaf",)`` or ``("node", [(cond, subtree), ...], fallback_subtree | None)``."""
-    pw = _ready_piecewise(expr)
-    if pw is None:
-        return ("leaf",)
-    arms, fallback = [], None
-    for value, cond in pw.args:
-        if cond is sp.false:
-            continue
-        sub = _decision_tree(expr.xreplace({pw: value}))
-        if cond is sp.true:
-            fallback = sub
-            break
-        arms.append((cond, sub))
-    return ("node", arms, fallback)
-
-
-def _build_selector(tree, number: list[int]) -> Callable[[float, float], int]:
-    """Compile the decision tree into ``branch(q, F) -> int``: the ``k``-th leaf (in the
-    order :func:`_leaves` yields them) returns ``number[k]``; ``-1`` where no condition
-    holds."""
-    printer = KernelPrinter()
-    lines = ["def branch(q, F):"]
-    counter = itertools.count()
-
-    def emit(node, indent: int) -> None:
-        pad = "    " * indent
-        if node[0] == "leaf":
-            lines.append(f"{pad}return {number[next(counter)]}")
-            return
-        _, arms, fallback = node
-        for k, (cond, sub) in enumerate(arms):
-            lines.append(f"{pad}{'if' if k == 0 else 'elif'} {_condition_code(cond, printer)}:")
-            emit(sub, indent + 1)
-        if fallback is not None:
-            if arms:
-                lines.append(f"{pad}else:")
-                emit(fallback, indent + 1)
-            else:
-                emit(fallback, indent)
-        else:
-            lines.append(f"{pad}return -1")
-
-    emit(tree, 1)
-    if next(counter) != len(number):  # pragma: no cover - the two walks agree by construction
-        raise AssertionError("branch selector and leaves disagree")
-    source = "\n".join(lines) + "\n"
-    namespace: dict[str, object] = {"math": __import__("math"), "__builtins__": {}}
-    exec(compile(source, "<lumped branch>", "exec"), namespace)  # noqa: S102 (our own source)
-    fn = namespace["branch"]
-    fn.__source__ = source  # type: ignore[attr-defined]
-    return fn  # type: ignore[return-value]
-
-
-def _condition_code(cond: sp.Basic, printer: KernelPrinter) -> str:
-    if cond is sp.true:
-        return "True"
-    if cond is sp.false:
-        return "False"
-    if isinstance(cond, sp.core.relational.Relational):
-        if cond.rel_op not in ("<", "<=", ">", ">=", "==", "!="):
-            raise ValueError(f"unsupported relation {cond}")
-        return f"({printer.doprint(cond.lhs)}) {cond.rel_op} ({printer.doprint(cond.rhs)})"
-    if isinstance(cond, sp.And | sp.Or):
-        joint = " and " if isinstance(cond, sp.And) else " or "
-        return "(" + joint.join(_condition_code(a, printer) for a in cond.args) + ")"
-    if isinstance(cond, sp.Not):
-        return f"(not {_condition_code(cond.args[0], printer)})"
-    if isinstance(cond, sp.ITE):
-        c, a, b = (_condition_code(x, printer) for x in cond.args)
-        return f"({a} if {c} else {b})"
-    raise ValueError(f"unsupported condition {cond} ({type(cond).__name__})")
 
 
 # ---------------------------------------------------------------------------------------
