@@ -22,7 +22,9 @@ variables), and a first run of a new structure pays it (see ``docs/benchmarks.md
   builds the matrix, factors it with :func:`lumped.solvers.newton.linalg_jit.lu_factor_into`
   (the reference's singleton-first pivots: the row ``v = 0`` of a stuck dashpot is a
   pivot of 1, so its column of the inverse is exact) and keeps ``J^{-1}`` (solved from
-  the factors, column by column) in the array ``Inv``, the key in the array ``key``; a
+  the factors, column by column) in the array ``Inv``, the key in the array ``key``
+  (up to :data:`UNROLLED_SOLVE` unknowns in ``2 E`` locals: read from ``key`` at every
+  iteration it sat on the step's chain, 7 % of the paper scene's BDF2 step); a
   correction ``d = J^{-1} G`` is then ``n^2`` independent products (above
   :data:`UNROLLED_SOLVE` unknowns summed column by column in a loop of constant trip
   count ``n``: ``O(n)`` statements, which LLVM unrolls; below, balanced trees), without
@@ -148,6 +150,9 @@ def fast_source(scene) -> str:
         L += [f"    lc{e}_{m} = lawc[{offsets[e] + m}]" for m in range(slots[e])]
     L += [f"    m{i} = masses[{i}]\n    c{i} = 0.0"
           for i in range(N) if mass[i]]
+    small_key = n <= UNROLLED_SOLVE
+    if small_key:
+        L += [f"    kRF{e} = 0.0\n    kg{e} = 0.0" for e in range(E)]
     for e in checked:
         L += [f"    pq{e} = {elong(e, 'x', 'v')}",
               f"    _, pRq{e}, pRF{e} = law_{law_index[e]}(pq{e}, F{e}{law_args(e)})"]
@@ -178,10 +183,18 @@ def fast_source(scene) -> str:
     # basic block; numba's compile time grows with blocks times variables), ``and`` where
     # the first term usually decides (a moving iterate's residual and convergence tests)
     zero = "(" + " and ".join(f"G{r} == 0.0" for r in range(n)) + ")"
-    # the factor cache's key (dR/dF, h^s dR/dq of each element) is kept in ``key``, not in
-    # 2 E locals carried through both loops (each a copy at every join)
-    same = " & ".join(f"(RF{e} == key[{2 * e}]) & (g{e} == key[{2 * e + 1}])"
-                      for e in range(E)) or "True"
+    # the factor cache's key (dR/dF, h^s dR/dq of each element): up to UNROLLED_SOLVE
+    # unknowns in 2 E locals (a load of ``key`` at every iteration is on the step's chain:
+    # 7 % on the paper scene's bdf2), above in ``key`` (locals carried through both loops
+    # are each a copy at every join: compile time)
+    if small_key:
+        same = " and ".join(f"RF{e} == kRF{e} and g{e} == kg{e}" for e in range(E)) or "True"
+        put_key = [f"{ind}    kRF{e} = RF{e}\n{ind}    kg{e} = g{e}" for e in range(E)]
+    else:
+        same = " & ".join(f"(RF{e} == key[{2 * e}]) & (g{e} == key[{2 * e + 1}])"
+                          for e in range(E)) or "True"
+        put_key = [f"{ind}    key[{2 * e}] = RF{e}\n{ind}    key[{2 * e + 1}] = g{e}"
+                   for e in range(E)]
     L += g_lines
     L += [f"{ind}n_res += 1", f"{ind}same = valid and {same}",
           # a zero residual on the cached branch: the reference's tests hold, and its
@@ -193,7 +206,7 @@ def fast_source(scene) -> str:
     L += _matrix_lines(scene, f"{ind}    ")
     L += [f"{ind}    n_fact += 1", f"{ind}    valid = lu_factor_into(Jm, LU, P)",
           f"{ind}    if not valid:", f"{ind}        break"]
-    L += [f"{ind}    key[{2 * e}] = RF{e}\n{ind}    key[{2 * e + 1}] = g{e}" for e in range(E)]
+    L += put_key
     L += [f"{ind}    inverse_into(LU, P, b, y, Inv)"]
     L += _solve_lines(n, ind)
     dsum = " + ".join(f"d{r}" for r in range(n))
