@@ -45,8 +45,9 @@ def test_the_fast_loop_source_grows_linearly_with_the_unknowns():
 
 def test_a_new_structure_compiles_each_generated_function_once(monkeypatch, tmp_path):
     """A new structure (an empty disk cache) compiles its fast loop and each helper of the
-    generated module once (the forcing helper once, not once a node), and a run with new
-    numbers compiles nothing."""
+    generated module once, no forcing helper of its own (the shared
+    :func:`~lumped.solvers.bdf.fast_force_jit.force_at`), and a run with new numbers
+    compiles nothing."""
     from numba.core import event
 
     from lumped.solvers.bdf import fast_codegen
@@ -78,6 +79,8 @@ def test_a_new_structure_compiles_each_generated_function_once(monkeypatch, tmp_
     generated = Counter(name for module, name in compiled[:n_first]
                         if module.startswith("lumped_jitfast_"))
     assert generated["run_fast"] == 1, generated
+    # the forcing helper is shared, compiled once per machine, not once per structure
+    assert "force_at" not in generated, generated
     assert max(generated.values()) == 1, generated  # no function compiled twice
     assert compiled[n_first:] == []  # new numbers: nothing compiled
 
