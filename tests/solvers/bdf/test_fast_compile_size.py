@@ -45,8 +45,9 @@ def test_the_fast_loop_source_grows_linearly_with_the_unknowns():
 
 def test_a_new_structure_compiles_each_generated_function_once(monkeypatch, tmp_path):
     """A new structure (an empty disk cache) compiles its fast loop and each helper of the
-    generated module once (the forcing helper once, not once a node), and a run with new
-    numbers compiles nothing."""
+    generated module once, no forcing helper of its own (the shared
+    :func:`~lumped.solvers.bdf.fast_force_jit.force_at`), and a run with new numbers
+    compiles nothing."""
     from numba.core import event
 
     from lumped.solvers.bdf import fast_codegen
@@ -78,5 +79,22 @@ def test_a_new_structure_compiles_each_generated_function_once(monkeypatch, tmp_
     generated = Counter(name for module, name in compiled[:n_first]
                         if module.startswith("lumped_jitfast_"))
     assert generated["run_fast"] == 1, generated
+    # the forcing helper is shared, compiled once per machine, not once per structure
+    assert "force_at" not in generated, generated
     assert max(generated.values()) == 1, generated  # no function compiled twice
     assert compiled[n_first:] == []  # new numbers: nothing compiled
+
+
+def test_a_small_structure_keeps_its_factor_cache_key_in_locals():
+    """Up to :data:`~lumped.solvers.bdf.fast_codegen.UNROLLED_SOLVE` unknowns (the paper
+    scene's 3) the key of the factor cache is held in locals: read from the array ``key``
+    at every Newton iteration, it sat on the step's chain of dependent operations and made
+    the paper scene's ``jit-bdf2`` 7 % slower (issue 27). Above, it stays in ``key``
+    (locals carried through both loops cost compile time, not speed)."""
+    from lumped.scenarios import scenario_scene
+    from lumped.solvers.bdf.fast_codegen import UNROLLED_SOLVE, fast_source
+
+    paper = scenario_scene("forcing-F2")
+    assert len(paper.nodes) + len(paper.elements) <= UNROLLED_SOLVE
+    assert "key[" not in fast_source(paper)
+    assert "== key[" in fast_source(chain(3))  # 9 unknowns
