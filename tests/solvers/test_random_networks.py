@@ -358,9 +358,9 @@ _SETTINGS = settings(max_examples=EXAMPLES, deadline=None,
 
 
 #: Methods that compile every new scene (numba, about a second each): a smaller budget.
-#: Each compiled scene also keeps about 6 MB in the process (docs/benchmarks.md, "Memory
-#: per compiled scene"): under ``LUMPED_LARGE`` on a cold disk cache the run needs tens
-#: of GB; a rerun loads the cached modules (0.44 MB each).
+#: Each structure compiled in the process keeps about 8.5 MB there for good (numba never
+#: frees a compiled module; docs/benchmarks.md 4b): under ``LUMPED_LARGE`` on a cold disk
+#: cache the run needs tens of GB; a rerun loads the cached modules (1.5-2 MB each).
 COMPILED = tuple(m for m in GENERIC if m.startswith("jit-"))
 COMPILED_EXAMPLES = LARGE_EXAMPLES if LARGE else 4
 

@@ -3,7 +3,8 @@ r"""``jit-bdf1`` / ``jit-bdf2``: the generic fixed-step BDF of
 
 :func:`run_bdf_jit` runs, by default, the scene's generated fast loop
 (:mod:`lumped.solvers.bdf.fast_codegen`, driven by :mod:`lumped.solvers.bdf.fast_jit`): the step
-system unrolled, the laws inlined, a Newton specialised to the scene's size, agreeing
+system unrolled up to a few unknowns (a loop solve above), the laws' kernels called (LLVM
+inlines them), a Newton specialised to the scene's size, agreeing
 with the reference to the Newton tolerance (round-off on piecewise-linear laws). The
 steps it cannot take go to the faithful port, the scene's generated module
 (:mod:`lumped.codegen.jit`) on the step loop of :mod:`lumped.solvers.bdf.core_jit`: the
