@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lumped import simulate
-from lumped.codegen import jit, parametric, templates
+from lumped.codegen import jit, parametric, rebound, templates
 from lumped.codegen.branches import LawBranches, law_branches
 from lumped.codegen.jit import jit_scene, position_locks
 from lumped.codegen.templates import law_template
@@ -82,8 +82,8 @@ def test_a_new_law_of_a_class_swaps_no_expression_until_one_is_read(monkeypatch)
     for gamma in (2.3000001, 2.3000002):  # the class: its first two laws
         law_branches(law.bind(gamma=gamma, tau=1.7))
     swaps = []
-    swap = parametric.swap
-    monkeypatch.setattr(parametric, "swap", lambda *a: swaps.append(1) or swap(*a))
+    swap = rebound.swap
+    monkeypatch.setattr(rebound, "swap", lambda *a: swaps.append(1) or swap(*a))
     bound = law.bind(gamma=2.3000003, tau=1.7)
     lb = law_branches(bound)
     assert isinstance(lb, parametric.ReboundBranches)
