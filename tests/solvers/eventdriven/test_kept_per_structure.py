@@ -174,3 +174,65 @@ def test_a_sympy_float_made_from_its_content_is_sympys(x):
     got, want = parametric.sympy_float(x), sp.Float(x)
     assert type(got) is type(want) and got == want and float(got) == x
     assert got._hashable_content() == want._hashable_content() and hash(got) == hash(want)
+
+
+def _never_moving(name: str):
+    from lumped.bench.scenes import PAPER_SCENES, generic_scene
+
+    bench = {s.name: s for s in PAPER_SCENES}[name]
+    return generic_scene(bench), bench.t_end
+
+
+def test_new_numbers_make_no_structure_part_again(monkeypatch):
+    """A run with new numbers (every spring's ``k`` new) takes the parts of its plan that
+    depend on the structure alone from the first scene of that structure: the static
+    balance's structure of the mode, the forcing's kinds, the elements on cycles (counted);
+    and it swaps no sympy expression of its law's class."""
+    from lumped.bench.new_numbers import scene_with_new_numbers
+    from lumped.scene import forcing_jit
+    from lumped.solvers.modes import stuck
+    from lumped.solvers.nonsmooth import locks
+
+    base, t_end = _never_moving("forcing-F1")
+    kw = {"t_end": t_end, "method": "radau5", "rtol": 1e-7, "compiled": False}
+    for _ in range(3):  # a class's first two laws are derived; the third is its class's
+        simulate(scene_with_new_numbers(base), **kw)
+    calls = {"structure": 0, "forcing": 0, "cycles": 0, "swap": 0}
+
+    def counted(module, name, what):
+        real = getattr(module, name)
+
+        def fn(*a, **k):
+            calls[what] += 1
+            return real(*a, **k)
+
+        monkeypatch.setattr(module, name, fn)
+
+    counted(stuck, "_structure", "structure")
+    counted(forcing_jit, "forcing_arrays", "forcing")
+    counted(locks, "cyclic_elements", "cycles")
+    counted(rebound, "swap", "swap")
+    sols = [simulate(scene_with_new_numbers(base), **kw) for _ in range(3)]
+    assert all(s.stats["loop"] == "none: at rest throughout (no steps)" for s in sols)
+    assert calls == {"structure": 0, "forcing": 0, "cycles": 0, "swap": 0}
+
+
+def test_runs_with_new_numbers_sharing_a_structure_as_from_scratch():
+    """Runs of scenes that share a structure's parts (new ``k``, any order) give the
+    numbers of a run from scratch: the never-moving bench scenes and a string."""
+    from lumped.bench.new_numbers import scene_with_new_numbers
+
+    cases = []
+    for name in ("release-0.005", "forcing-F1"):
+        base, t_end = _never_moving(name)
+        cases += [(scene_with_new_numbers(base, 1.0 + 1e-6 * j), t_end) for j in (1, 2, 3)]
+    cases += [(_string(0.25 + 0.01 * j, 50.0 + 0.5 * j), 0.6) for j in (1, 2, 3)]
+    kw = {"method": "radau5", "rtol": 1e-6, "compiled": False}
+    forward = [simulate(s, t_end=t, **kw) for s, t in cases]
+    _from_scratch()
+    backward = [simulate(s, t_end=t, **kw) for s, t in reversed(cases)][::-1]
+    for (scene, t_end), a, b in zip(cases, forward, backward, strict=True):
+        _from_scratch()
+        scratch = simulate(scene, t_end=t_end, **kw)
+        _same_run(a, scratch)
+        _same_run(b, scratch)
