@@ -190,6 +190,8 @@ def test_new_numbers_make_no_structure_part_again(monkeypatch):
     and it swaps no sympy expression of its law's class."""
     from lumped.bench.new_numbers import scene_with_new_numbers
     from lumped.scene import forcing_jit
+    from lumped.solvers.eventdriven import fast
+    from lumped.solvers.eventdriven.setup import scene_plan
     from lumped.solvers.modes import stuck
     from lumped.solvers.nonsmooth import locks
 
@@ -212,8 +214,11 @@ def test_new_numbers_make_no_structure_part_again(monkeypatch):
     counted(forcing_jit, "forcing_arrays", "forcing")
     counted(locks, "cyclic_elements", "cycles")
     counted(rebound, "swap", "swap")
-    sols = [simulate(scene_with_new_numbers(base), **kw) for _ in range(3)]
+    scenes = [scene_with_new_numbers(base) for _ in range(3)]
+    sols = [simulate(scene, **kw) for scene in scenes]
     assert all(s.stats["loop"] == "none: at rest throughout (no steps)" for s in sols)
+    # the compiled loop's check for locks in parallel reads the structure's part too
+    assert not any(fast._locks_in_parallel(s, scene_plan(s)) for s in scenes)
     assert calls == {"structure": 0, "forcing": 0, "cycles": 0, "swap": 0}
 
 
