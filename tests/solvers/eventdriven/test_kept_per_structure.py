@@ -241,3 +241,22 @@ def test_runs_with_new_numbers_sharing_a_structure_as_from_scratch():
         scratch = simulate(scene, t_end=t_end, **kw)
         _same_run(a, scratch)
         _same_run(b, scratch)
+
+
+def test_a_scene_run_at_rest_is_not_kept_alive():
+    """What a run at rest keeps on the scene's plan (its start, the static balances)
+    holds no reference to the scene: once the user drops it, it is freed (a sweep of new
+    numbers kept every scene and its plan for good)."""
+    import gc
+    import weakref
+
+    from lumped.bench.new_numbers import scene_with_new_numbers
+
+    base, t_end = _never_moving("forcing-F1")
+    scene = scene_with_new_numbers(base)
+    sol = simulate(scene, t_end=t_end, method="radau5", rtol=1e-7, compiled=False)
+    assert sol.stats["loop"] == "none: at rest throughout (no steps)"
+    ref = weakref.ref(scene)
+    del scene, sol
+    gc.collect()
+    assert ref() is None

@@ -55,13 +55,15 @@ class StaticHold:
     of time, the break-out time and a dense segment.
 
     Built by :func:`static_hold`; ``free`` are the locked elements whose forces follow the
-    balance, ``minv`` is ``-K_free^{-1}`` (rows by ``free``), ``c = K_fixed F_fixed``."""
+    balance, ``minv`` is ``-K_free^{-1}`` (rows by ``free``), ``c = K_fixed F_fixed``.
+    It keeps no reference to ``scene`` (a hold kept on the scene's plan, which the plans
+    kept per scene object hold, would keep the scene alive for good)."""
 
     def __init__(self, scene: Scene, x: list[float], v: list[float], F: list[float],
                  free: list[int], minv: list[list[float]], c: list[float],
                  fkind: np.ndarray, fpar: np.ndarray,
                  arrays: tuple[np.ndarray, np.ndarray] | None = None) -> None:
-        self.scene, self.free, self.minv, self.c = scene, free, minv, c
+        self.free, self.minv, self.c = free, minv, c
         # ``(minv, free)`` as arrays, made once per structure (:func:`static_hold`)
         self._structure_arrays = arrays
         self.fkind, self.fpar = fkind, fpar
