@@ -9,7 +9,7 @@ class's; their sympy expressions are swapped when first read (:class:`LazyBranch
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import fields, replace
+from dataclasses import fields
 from typing import TYPE_CHECKING
 
 import sympy as sp
@@ -49,8 +49,9 @@ class Rebound:
 
     def template(self):
         """The law's :class:`~lumped.codegen.templates.LawTemplate`."""
-        d = self.cls._d
-        return replace(d.template, values=slots(d.template_recipes, self.values))
+        t = self.cls._d.template  # (its class's, with this law's values)
+        return type(t)(t.functions, slots(self.cls._d.template_recipes, self.values),
+                       t.branches)
 
 
 class ReboundBranches(LawBranches):
