@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...codegen.rebound import ReboundBranches
 from ...scene import Mass, Scene
 from ...scene.forcing import jumps
 from ...scene.supports import support_time_events
@@ -293,8 +294,6 @@ def branches_structure(lb) -> object:
     (:class:`~lumped.codegen.parametric.LawClass`) for a law remade from one (every law
     of the class has the same branches, locks and lock values, and the same ``dR/dF``
     but for its floats), else the branches object itself."""
-    from ...codegen.rebound import ReboundBranches
-
     return lb._rebound.cls if type(lb) is ReboundBranches else lb
 
 
@@ -309,9 +308,6 @@ def structure_parts(scene: Scene, branches: list) -> dict:
     kind, each element's kind, ends and law (the unbound law object) and its law's
     branches apart from their numbers (:func:`branches_structure`); everything these
     parts read."""
-    from ..implicit.branch_check import known_monotone
-    from ..nonsmooth.locks import cyclic_elements
-
     laws = tuple(getattr(el.law, "law", el.law) for el in scene.elements)
     key = (tuple(type(nd) for nd in scene.nodes), tuple(el.kind for el in scene.elements),
            scene.elem_a, scene.elem_b, tuple(map(id, laws)),
@@ -321,6 +317,9 @@ def structure_parts(scene: Scene, branches: list) -> dict:
         if got is not None:
             _STRUCTURES.move_to_end(key)
             return got
+    from ..implicit.branch_check import known_monotone
+    from ..nonsmooth.locks import cyclic_elements
+
     cyclic = cyclic_elements(scene)
     got = {"checked": [e for e, el in enumerate(scene.elements)
                        if not known_monotone(el.law)],
