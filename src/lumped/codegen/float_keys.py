@@ -89,10 +89,14 @@ def numbers_key(law, values: tuple[float, ...]) -> tuple | None:
     """:func:`class_key` of ``law`` bound to ``values``, in plain floats (no sympy)."""
     if not admitted(law) or any(_special(v) for v in values):
         return None
-    pm = [s * v for v in values for s in (1.0, -1.0)]
+    pm, contents = [], []
+    for v in values:  # (the content of -v is that of v with the other sign)
+        mpf, prec = float_content(v)
+        pm += (v, -v)
+        contents += ((mpf, prec), ((1 - mpf[0],) + mpf[1:], prec))
     by_value, by_sympy = _constant_keys(law)
     return (law, tuple(math.copysign(1.0, v) for v in values), _dense_ranks(pm + by_value),
-            _dense_ranks([float_content(x) for x in pm] + by_sympy))
+            _dense_ranks(contents + by_sympy))
 
 
 def sympy_float(x: float) -> sp.Float:
@@ -128,5 +132,8 @@ def class_key(bound) -> tuple | None:
 
 def _dense_ranks(keys: list) -> tuple[int, ...]:
     """Each key's place among the distinct keys (equal keys share a place)."""
+    if len(keys) == 2:  # (one parameter, no constant: the common case)
+        a, b = keys
+        return (0, 0) if a == b else (0, 1) if a < b else (1, 0)
     order = {k: r for r, k in enumerate(sorted(set(keys)))}
     return tuple(order[k] for k in keys)

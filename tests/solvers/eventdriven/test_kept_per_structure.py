@@ -260,3 +260,30 @@ def test_a_scene_run_at_rest_is_not_kept_alive():
     del scene, sol
     gc.collect()
     assert ref() is None
+
+
+def _ranks(keys: list) -> tuple[int, ...]:
+    order = {k: r for r, k in enumerate(sorted(set(keys)))}
+    return tuple(order[k] for k in keys)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(allow_nan=False, allow_infinity=False, min_value=-1e300,
+                          max_value=1e300).filter(lambda x: x != 0.0), min_size=2,
+                max_size=2))
+def test_the_class_key_is_sympys_order_of_the_floats(values):
+    """The class key of a law's numbers (made in plain floats, the content of ``-v`` from
+    that of ``v``) is the order sympy gives the floats ``+-v_j`` (from ``sympy.Float``)."""
+    from lumped.codegen.float_keys import numbers_key
+
+    law = get_law("bingham")
+    got = numbers_key(law, tuple(values))
+    if got is None:  # (an integral value or 0.5: derived from scratch)
+        assert any(v.is_integer() or abs(v) == 0.5 for v in values)
+        return
+    pm = [s * v for v in values for s in (1.0, -1.0)]
+    assert got[2] == _ranks(pm) and got[3] == _ranks([sp.Float(x)._hashable_content()
+                                                      for x in pm])
+    one = numbers_key(get_law("linear_spring"), (values[0],))
+    assert one[2] == _ranks(pm[:2]) and one[3] == _ranks([sp.Float(x)._hashable_content()
+                                                          for x in pm[:2]])
