@@ -537,3 +537,22 @@ def test_bingham_residual_keeps_gamma_times_the_excess_force_accurate(d, gamma, 
     q = gamma * excess
     R = get_law("bingham").bind(gamma=gamma, tau=tau).residual(q, F)
     assert abs(R) <= 2 * 2.0**-52 * abs(q)
+
+
+def test_a_laws_hash_is_computed_once(monkeypatch):
+    """A bound law is hashed by every cache a run with new numbers looks it up in (and its
+    law with it): the content key of each is made once (counted), and equal laws still
+    hash alike (a pickled copy included)."""
+    from lumped.laws.element_law import BoundLaw, ElementLaw
+
+    keys = []
+    for cls in (BoundLaw, ElementLaw):
+        real = cls._key
+        monkeypatch.setattr(cls, "_key", lambda self, real=real: keys.append(1) or real(self))
+    law = ElementLaw("hash_once", "spring", "F - k*q", ["k"])
+    bound = law.bind(k=2.5)
+    first = hash(bound)
+    assert len(keys) == 2  # the bound law's key and its law's
+    assert hash(bound) == first and hash(law) == hash(bound.law) and len(keys) == 2
+    again = pickle.loads(pickle.dumps(bound))
+    assert again == bound and hash(again) == first

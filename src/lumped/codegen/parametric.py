@@ -27,29 +27,37 @@ same expressions, branches and bounds with its floats swapped in, and neither a 
 branch (:meth:`LawClass.check`). A class that combines numbers (Herschel-Bulkley's
 ``n - 1``, a string's ``1/k``) fails the check, and after three failures its laws are
 derived law by law. Every decision is read from the law's expression and numbers,
-never its name.
+never its name. The class key is :mod:`lumped.codegen.float_keys`; a law remade from its
+class is :mod:`lumped.codegen.rebound`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import fields, replace
+from dataclasses import replace
 
 import sympy as sp
 
-from .branches import BranchInfo, LawBranches
-from .rebinding import LazyExpressions, Lifted, fill, float_ids, lift_source, lift_text, slots, swap
+from .branches import LawBranches
+from .float_keys import (
+    admitted,
+    class_key,
+    float_content,
+    numbers_key,
+    parameter_floats,
+    sympy_float,
+)
+from .rebinding import Lifted, float_ids, lift_source, lift_text, swap
+from .rebound import LazyBranchInfo, Rebound, ReboundBranches
 from .stage_forms import STEEP_SPAN, affine_steepness, affine_steepness_function
 
 __all__ = ["LawClass", "LazyBranchInfo", "Rebound", "ReboundBranches", "admitted", "class_key",
-           "derivations", "law_class"]
+           "derivations", "float_content", "law_class", "sympy_float"]
 
 _DERIVATIONS = [0]
 _CLASSES: dict[tuple, LawClass | None] = {}
 _FAILURES: dict[tuple, int] = {}
-_ADMITTED: dict[object, bool] = {}
-_LAW_CONSTANTS: dict[object, tuple] = {}
 _REBOUND: dict[object, Rebound | None] = {}
 #: A class's first law, waiting for a second to be checked against.
 _PENDING: dict[tuple, LawClass] = {}
@@ -62,116 +70,6 @@ _REMEMBERED = 4096
 def derivations() -> int:
     """How many classes (:class:`LawClass`) this process has derived."""
     return _DERIVATIONS[0]
-
-
-def admitted(law) -> bool:
-    """Whether every comparison ``law``'s residual makes of numbers alone (an argument of
-    ``Min``, ``Max``, ``Abs``, ``sign``, ``Heaviside`` or of a relation without ``q`` and
-    ``F``) is of a number or ``+-`` a lone parameter, which the class's order of floats
-    decides (see the module notes)."""
-    hit = _ADMITTED.get(law)
-    if hit is None:
-        hit = _ADMITTED[law] = _lone_comparisons(law)
-    return hit
-
-
-def _lone_comparisons(law) -> bool:
-    kinds = (sp.Min, sp.Max, sp.Abs, sp.sign, sp.Heaviside, sp.core.relational.Relational)
-    params = set(law.symbols.values())
-    for node in sp.preorder_traversal(law.residual):
-        if not isinstance(node, kinds):
-            continue
-        for arg in node.args:
-            if arg.has(law.q, law.F) or arg.is_Number:
-                continue
-            if (-arg if arg.could_extract_minus_sign() else arg) not in params:
-                return False
-    return True
-
-
-def _special(value: float) -> bool:
-    """A value sympy or the printer takes apart from the rest of its sign class (or not
-    finite: derived from scratch)."""
-    return not math.isfinite(value) or float(value).is_integer() or abs(value) == 0.5
-
-
-def _constants(law) -> tuple[sp.Float, ...]:
-    hit = _LAW_CONSTANTS.get(law)
-    if hit is None:
-        hit = _LAW_CONSTANTS[law] = tuple(
-            sp.Float(c) for c in law.residual.atoms(sp.Number) if not c.is_Integer)
-    return hit
-
-
-_CONSTANT_KEYS: dict[object, tuple[list, list]] = {}
-
-
-def _constant_keys(law) -> tuple[list, list]:
-    """The law's constants (:func:`_constants`) by value and by sympy's order (once)."""
-    hit = _CONSTANT_KEYS.get(law)
-    if hit is None:
-        consts = _constants(law)
-        hit = _CONSTANT_KEYS[law] = ([float(c) for c in consts],
-                                     [c._hashable_content() for c in consts])
-    return hit
-
-
-def float_content(x: float) -> tuple:
-    """``sympy.Float(x)._hashable_content()`` of a finite nonzero float ``x``, in plain
-    Python: ``((sign, man, exp, bc), 53)``, ``|x| = man 2^exp`` with ``man`` odd of ``bc``
-    bits (mpmath's normal form at the 53 bits of a double), what sympy orders its floats
-    by (:func:`class_key`)."""
-    n, d = abs(x).as_integer_ratio()  # d a power of 2
-    tz = (n & -n).bit_length() - 1
-    man = n >> tz
-    return (int(x < 0.0), man, tz - (d.bit_length() - 1), man.bit_length()), 53
-
-
-def _key(law, values: tuple[float, ...]) -> tuple | None:
-    """:func:`class_key` of ``law`` bound to ``values``, in plain floats (no sympy)."""
-    if not admitted(law) or any(_special(v) for v in values):
-        return None
-    pm = [s * v for v in values for s in (1.0, -1.0)]
-    by_value, by_sympy = _constant_keys(law)
-    return (law, tuple(math.copysign(1.0, v) for v in values), _dense_ranks(pm + by_value),
-            _dense_ranks([float_content(x) for x in pm] + by_sympy))
-
-
-def sympy_float(x: float) -> sp.Float:
-    """``sympy.Float(x)`` of a finite nonzero float ``x``, made from its content
-    (:func:`float_content`) without sympy's parsing of the number (about 10 times
-    faster; the same object content)."""
-    mpf, prec = float_content(x)
-    return _FLOAT._new(mpf, prec, zero=False)
-
-
-_FLOAT = sp.Float
-
-
-def _floats(values: tuple[float, ...]) -> list:
-    """The sympy floats ``+v_j, -v_j`` of the parameters' ``values``, in the key's order
-    (finite and nonzero: :func:`_special` values have no class)."""
-    return [sympy_float(s * v) for v in values for s in (1.0, -1.0)]
-
-
-def class_key(bound) -> tuple | None:
-    """The class of a bound law's numbers, ``None`` when it is derived from scratch.
-
-    ``(law, signs, order by value, order by sympy)`` of the floats ``+-v_j`` and the
-    law's non-integral constants, equal floats in one place; ``None`` for a law not
-    :func:`admitted`, a value :func:`_special`, or a law not given as a sympy residual.
-    """
-    law = getattr(bound, "law", None)
-    if law is None or not isinstance(getattr(law, "residual", None), sp.Expr):
-        return None
-    params = bound.params
-    return _key(law, tuple(params[p] for p in law.parameters))
-
-
-def _dense_ranks(keys: list) -> tuple[int, ...]:
-    """Each key's place among the distinct keys (equal keys share a place)."""
-    order = {k: r for r, k in enumerate(sorted(set(keys)))}
-    return tuple(order[k] for k in keys)
 
 
 class _Derivation:
@@ -261,7 +159,7 @@ class LawClass:
         d = self._d = _Derivation(law, values)
         trees = list(d.expressions) + [e for info in d.lb.info for e in (
             info.residual, info.dR_dq, info.dR_dF, *(c for c, _ in info.path))]
-        self._ids = float_ids(trees, _floats(values))
+        self._ids = float_ids(trees, parameter_floats(values))
         self.steep = any(info.steep or info.stage is not None for info in d.lb.info)
         self.checked, self._steepness = False, []
 
@@ -310,140 +208,6 @@ class LawClass:
                      for info in self._d.lb.info)
 
 
-class Rebound:
-    """A bound law's results made from its :class:`LawClass` (see the module notes)."""
-
-    def __init__(self, cls: LawClass, values: tuple[float, ...]) -> None:
-        self.cls, self.values, self._atoms = cls, values, None
-
-    def atoms(self) -> dict:
-        """The class's float nodes -> this law's sympy floats (made when first asked)."""
-        if self._atoms is None:
-            self._atoms = self.cls.atoms(_floats(self.values))
-        return self._atoms
-
-    def kernel(self) -> Callable:
-        """The law's :func:`~lumped.codegen.compile_kernel` (guarded)."""
-        kernel = _with_magnitude(self.cls._d.kernel, self.values)
-        kernel.expressions = LazyExpressions(self.cls._d.expressions, self.atoms)
-        return kernel
-
-    def branches(self):
-        """The law's :class:`~lumped.codegen.branches.LawBranches` (its kernels and guard
-        functions made when first asked for)."""
-        return ReboundBranches(self)
-
-    def template(self):
-        """The law's :class:`~lumped.codegen.templates.LawTemplate`."""
-        d = self.cls._d
-        return replace(d.template, values=slots(d.template_recipes, self.values))
-
-
-class ReboundBranches(LawBranches):
-    """:class:`~lumped.codegen.branches.LawBranches` of a rebound law: the same methods,
-    its functions made from its class's when first asked for (see the module notes)."""
-
-    def __init__(self, rebound: Rebound) -> None:  # no derivation: made from the class
-        d = rebound.cls._d
-        self._rebound = rebound
-        swapped = _Swapped(rebound.atoms)
-        self.info = tuple(LazyBranchInfo.of(info, swapped) for info in d.lb.info)
-        self.count = d.lb.count
-        self.branch = d.selector.build(rebound.values)
-        self._kernels, self._guards, self._flats = {}, {}, {}
-
-    def _kernel(self, i: int, *, guard: bool, stage: bool = False) -> Callable:
-        key = (i, guard, stage and self.info[i].stage is not None)
-        hit = self._kernels.get(key)
-        if hit is None:
-            d = self._rebound.cls._d
-            hit = self._kernels[key] = _with_magnitude(d.kernels[key], self._rebound.values)
-            hit.lock_value = d.lb._kernels[key].lock_value
-        return hit
-
-    def guards_for(self, i: int) -> Callable:
-        return self._guard(self._check(i))
-
-    def flat_start_for(self, i: int) -> Callable | None:
-        i = self._check(i)
-        if i not in self._flats:
-            lifted = self._rebound.cls._d.flats.get(i)
-            self._flats[i] = None if lifted is None else lifted.build(self._rebound.values)
-        return self._flats[i]
-
-    def stage_guards_for(self, i: int) -> Callable:
-        # the class's law has its own stage guards where LawBranches.stage_guards_for
-        # made them (a steep branch's inverse form, a branch flat at its end)
-        i = self._check(i)
-        return self._guard(-1 - i if -1 - i in self._rebound.cls._d.guards else i)
-
-    def _guard(self, key: int) -> Callable:
-        hit = self._guards.get(key)
-        if hit is None:
-            lifted, codes = self._rebound.cls._d.guards[key]
-            values = self._rebound.values
-            hit = self._guards[key] = lifted.build(values)
-            hit.codes = tuple(fill(text, slots(r, values)) for text, r in codes)
-        return hit
-
-
-class _Swapped:
-    """One rebound law's :func:`~lumped.codegen.rebinding.swap` of its class's
-    expressions, with one memo for all of its branches (as :meth:`LawClass.infos`)."""
-
-    def __init__(self, atoms: Callable[[], dict]) -> None:
-        self.atoms, self.memo = atoms, {}
-
-    def __call__(self, expr: sp.Basic) -> sp.Basic:
-        return swap(expr, self.atoms(), self.memo)
-
-
-_LAZY = ("residual", "dR_dq", "dR_dF", "path")
-_FIELDS = tuple(f.name for f in fields(BranchInfo))
-
-
-class LazyBranchInfo(BranchInfo):
-    """A rebound law's :class:`~lumped.codegen.branches.BranchInfo`: ``index``,
-    ``locks``, ``lock_value``, ``steep`` and ``stage`` are its class's (the class fixes
-    them), and its sympy expressions ``residual``, ``dR_dq``, ``dR_dF`` and ``path`` are
-    the class's with the law's floats swapped in when first read (a run reads the
-    branches' flags and compiled functions, rarely their expressions; no sympy runs for
-    new numbers until then). Equal to the :class:`BranchInfo` of a derivation from
-    scratch where :meth:`LawClass.infos` is."""
-
-    @classmethod
-    def of(cls, info: BranchInfo, swapped: _Swapped) -> LazyBranchInfo:
-        out = object.__new__(cls)
-        for name in ("index", "locks", "lock_value", "steep", "stage"):
-            object.__setattr__(out, name, getattr(info, name))
-        object.__setattr__(out, "_source", info)
-        object.__setattr__(out, "_swapped", swapped)
-        return out
-
-    def __getattr__(self, name: str):  # only for attributes not set: the lazy ones
-        if name not in _LAZY or "_source" not in self.__dict__:
-            raise AttributeError(name)
-        value, swapped = getattr(self._source, name), self._swapped
-        value = tuple((swapped(c), w) for c, w in value) if name == "path" else swapped(value)
-        object.__setattr__(self, name, value)
-        return value
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, BranchInfo):
-            return NotImplemented
-        return all(getattr(self, f) == getattr(other, f) for f in _FIELDS)
-
-    def __hash__(self) -> int:
-        return hash(tuple(getattr(self, f) for f in _FIELDS))
-
-
-def _with_magnitude(pair: tuple[Lifted, Lifted], values: tuple[float, ...]) -> Callable:
-    kernel, magnitude = pair
-    fn = kernel.build(values)
-    fn.magnitude = magnitude.build(values)
-    return fn
-
-
 def law_class(bound) -> Rebound | None:
     """``bound``'s results from its class (:class:`Rebound`), or ``None`` when it is
     derived from scratch (see the module notes); remembered per bound law."""
@@ -467,7 +231,7 @@ def _rebound(bound) -> Rebound | None:
         return None
     params = bound.params
     values = tuple(params[p] for p in law.parameters)
-    key = _key(law, values)
+    key = numbers_key(law, values)
     if key is None:
         return None
     cls = _CLASSES.get(key)
@@ -491,7 +255,7 @@ def _rebound(bound) -> Rebound | None:
             pass
         else:
             try:
-                first.check(own, _floats(values))
+                first.check(own, parameter_floats(values))
             except ValueError:  # the next law is checked against this one, _TRIES times
                 _PENDING[key] = own
                 _fail(key)

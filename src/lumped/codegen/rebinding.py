@@ -33,7 +33,7 @@ _NAMESPACE = {"ArithmeticError": ArithmeticError, "ValueError": ValueError, "max
 
 def slots(recipes: tuple, values: tuple[float, ...]) -> tuple[float, ...]:
     """The literals' values for the parameters' ``values`` (see the module notes)."""
-    return tuple(abs(values[r]) if isinstance(r, int) else r for r in recipes)
+    return tuple([abs(values[r]) if type(r) is int else r for r in recipes])
 
 
 def fill(text: str, literals: tuple[float, ...]) -> str:
@@ -67,22 +67,22 @@ class Lifted:
         """The function for the parameters' ``values``, with its ``__source__``."""
         literals = slots(self.recipes, values)
         fn = self.make(*literals)
-        pieces = _pieces(self.text)
-        fn.__source__ = "".join(
-            p if k % 2 == 0 else repr(literals[p]) for k, p in enumerate(pieces))
+        fn.__source__ = _form(self.text).format(*literals)
         return fn
 
 
-_PIECES: dict[str, list] = {}
+_FORMS: dict[str, str] = {}
 
 
-def _pieces(text: str) -> list:
-    """``text`` split at its ``_c<k>``: text, ``k``, text, ... (cached)."""
-    hit = _PIECES.get(text)
+def _form(text: str) -> str:
+    """``text`` as a format string whose field ``k`` is ``_c<k>``, written by ``repr``
+    (the text's braces doubled; made once per text)."""
+    hit = _FORMS.get(text)
     if hit is None:
-        hit = _SLOT.split(text)
-        hit[1::2] = [int(k) for k in hit[1::2]]
-        _PIECES[text] = hit
+        pieces = _SLOT.split(text)
+        hit = _FORMS[text] = "".join(
+            p.replace("{", "{{").replace("}", "}}") if k % 2 == 0 else f"{{{p}!r}}"
+            for k, p in enumerate(pieces))
     return hit
 
 

@@ -139,6 +139,7 @@ class ElementLaw:
         "q",
         "F",
         "symbols",
+        "_hash",
     )
 
     name: str
@@ -219,6 +220,7 @@ class ElementLaw:
             ("q", q),
             ("F", F),
             ("symbols", MappingProxyType({p: table[p] for p in params})),
+            ("_hash", None),  # (made when first asked: the law is immutable)
         ):
             object.__setattr__(self, attr, value)
 
@@ -250,7 +252,11 @@ class ElementLaw:
         return self._key() == other._key()
 
     def __hash__(self) -> int:
-        return hash(self._key())
+        h = self._hash
+        if h is None:
+            h = hash(self._key())
+            object.__setattr__(self, "_hash", h)
+        return h
 
     def __reduce__(self):  # pickling: rebuild through the checks
         return (
@@ -345,7 +351,7 @@ class BoundLaw:
     (-1.0, -100.0, 1.0)
     """
 
-    __slots__ = ("law", "_params", "_kernel")
+    __slots__ = ("law", "_params", "_kernel", "_hash")
 
     law: ElementLaw
 
@@ -358,6 +364,7 @@ class BoundLaw:
         object.__setattr__(self, "law", law)
         object.__setattr__(self, "_params", values)
         object.__setattr__(self, "_kernel", None)
+        object.__setattr__(self, "_hash", None)  # (made when first asked: immutable)
 
     def __setattr__(self, key: str, value: object) -> None:
         raise AttributeError(f"BoundLaw is immutable (cannot set {key!r})")
@@ -406,7 +413,11 @@ class BoundLaw:
         return self._key() == other._key()
 
     def __hash__(self) -> int:
-        return hash(self._key())
+        h = self._hash
+        if h is None:
+            h = hash(self._key())
+            object.__setattr__(self, "_hash", h)
+        return h
 
     def _args(self) -> str:
         return ", ".join(f"{p}={v!r}" for p, v in self._params.items())

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lumped import simulate
-from lumped.codegen import jit, parametric, templates
+from lumped.codegen import jit, parametric, rebound, templates
 from lumped.codegen.branches import LawBranches, law_branches
 from lumped.codegen.jit import jit_scene, position_locks
 from lumped.codegen.templates import law_template
@@ -82,8 +82,8 @@ def test_a_new_law_of_a_class_swaps_no_expression_until_one_is_read(monkeypatch)
     for gamma in (2.3000001, 2.3000002):  # the class: its first two laws
         law_branches(law.bind(gamma=gamma, tau=1.7))
     swaps = []
-    swap = parametric.swap
-    monkeypatch.setattr(parametric, "swap", lambda *a: swaps.append(1) or swap(*a))
+    swap = rebound.swap
+    monkeypatch.setattr(rebound, "swap", lambda *a: swaps.append(1) or swap(*a))
     bound = law.bind(gamma=2.3000003, tau=1.7)
     lb = law_branches(bound)
     assert isinstance(lb, parametric.ReboundBranches)
@@ -174,3 +174,116 @@ def test_a_sympy_float_made_from_its_content_is_sympys(x):
     got, want = parametric.sympy_float(x), sp.Float(x)
     assert type(got) is type(want) and got == want and float(got) == x
     assert got._hashable_content() == want._hashable_content() and hash(got) == hash(want)
+
+
+def _never_moving(name: str):
+    from lumped.bench.scenes import PAPER_SCENES, generic_scene
+
+    bench = {s.name: s for s in PAPER_SCENES}[name]
+    return generic_scene(bench), bench.t_end
+
+
+def test_new_numbers_make_no_structure_part_again(monkeypatch):
+    """A run with new numbers (every spring's ``k`` new) takes the parts of its plan that
+    depend on the structure alone from the first scene of that structure: the static
+    balance's structure of the mode, the forcing's kinds, the elements on cycles (counted);
+    and it swaps no sympy expression of its law's class."""
+    from lumped.bench.new_numbers import scene_with_new_numbers
+    from lumped.scene import forcing_jit
+    from lumped.solvers.eventdriven import fast
+    from lumped.solvers.eventdriven.setup import scene_plan
+    from lumped.solvers.modes import stuck
+    from lumped.solvers.nonsmooth import locks
+
+    base, t_end = _never_moving("forcing-F1")
+    kw = {"t_end": t_end, "method": "radau5", "rtol": 1e-7, "compiled": False}
+    for _ in range(3):  # a class's first two laws are derived; the third is its class's
+        simulate(scene_with_new_numbers(base), **kw)
+    calls = {"structure": 0, "forcing": 0, "cycles": 0, "swap": 0}
+
+    def counted(module, name, what):
+        real = getattr(module, name)
+
+        def fn(*a, **k):
+            calls[what] += 1
+            return real(*a, **k)
+
+        monkeypatch.setattr(module, name, fn)
+
+    counted(stuck, "_structure", "structure")
+    counted(forcing_jit, "forcing_arrays", "forcing")
+    counted(locks, "cyclic_elements", "cycles")
+    counted(rebound, "swap", "swap")
+    scenes = [scene_with_new_numbers(base) for _ in range(3)]
+    sols = [simulate(scene, **kw) for scene in scenes]
+    assert all(s.stats["loop"] == "none: at rest throughout (no steps)" for s in sols)
+    # the compiled loop's check for locks in parallel reads the structure's part too
+    assert not any(fast._locks_in_parallel(s, scene_plan(s)) for s in scenes)
+    assert calls == {"structure": 0, "forcing": 0, "cycles": 0, "swap": 0}
+
+
+def test_runs_with_new_numbers_sharing_a_structure_as_from_scratch():
+    """Runs of scenes that share a structure's parts (new ``k``, any order) give the
+    numbers of a run from scratch: the never-moving bench scenes and a string."""
+    from lumped.bench.new_numbers import scene_with_new_numbers
+
+    cases = []
+    for name in ("release-0.005", "forcing-F1"):
+        base, t_end = _never_moving(name)
+        cases += [(scene_with_new_numbers(base, 1.0 + 1e-6 * j), t_end) for j in (1, 2, 3)]
+    cases += [(_string(0.25 + 0.01 * j, 50.0 + 0.5 * j), 0.6) for j in (1, 2, 3)]
+    kw = {"method": "radau5", "rtol": 1e-6, "compiled": False}
+    forward = [simulate(s, t_end=t, **kw) for s, t in cases]
+    _from_scratch()
+    backward = [simulate(s, t_end=t, **kw) for s, t in reversed(cases)][::-1]
+    for (scene, t_end), a, b in zip(cases, forward, backward, strict=True):
+        _from_scratch()
+        scratch = simulate(scene, t_end=t_end, **kw)
+        _same_run(a, scratch)
+        _same_run(b, scratch)
+
+
+def test_a_scene_run_at_rest_is_not_kept_alive():
+    """What a run at rest keeps on the scene's plan (its start, the static balances)
+    holds no reference to the scene: once the user drops it, it is freed (a sweep of new
+    numbers kept every scene and its plan for good)."""
+    import gc
+    import weakref
+
+    from lumped.bench.new_numbers import scene_with_new_numbers
+
+    base, t_end = _never_moving("forcing-F1")
+    scene = scene_with_new_numbers(base)
+    sol = simulate(scene, t_end=t_end, method="radau5", rtol=1e-7, compiled=False)
+    assert sol.stats["loop"] == "none: at rest throughout (no steps)"
+    ref = weakref.ref(scene)
+    del scene, sol
+    gc.collect()
+    assert ref() is None
+
+
+def _ranks(keys: list) -> tuple[int, ...]:
+    order = {k: r for r, k in enumerate(sorted(set(keys)))}
+    return tuple(order[k] for k in keys)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(allow_nan=False, allow_infinity=False, min_value=-1e300,
+                          max_value=1e300).filter(lambda x: x != 0.0), min_size=2,
+                max_size=2))
+def test_the_class_key_is_sympys_order_of_the_floats(values):
+    """The class key of a law's numbers (made in plain floats, the content of ``-v`` from
+    that of ``v``) is the order sympy gives the floats ``+-v_j`` (from ``sympy.Float``)."""
+    from lumped.codegen.float_keys import numbers_key
+
+    law = get_law("bingham")
+    got = numbers_key(law, tuple(values))
+    if got is None:  # (an integral value or 0.5: derived from scratch)
+        assert any(v.is_integer() or abs(v) == 0.5 for v in values)
+        return
+    pm = [s * v for v in values for s in (1.0, -1.0)]
+    assert got[2] == _ranks(pm) and got[3] == _ranks([sp.Float(x)._hashable_content()
+                                                      for x in pm])
+    one = numbers_key(get_law("linear_spring"), (values[0],))
+    assert one[2] == _ranks(pm[:2]) and one[3] == _ranks([sp.Float(x)._hashable_content()
+                                                          for x in pm[:2]])

@@ -92,7 +92,7 @@ def _parts(scene: Scene, plan) -> tuple | str:
 
     if not numba_enabled():
         return "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
-    if _locks_in_parallel(scene, plan.branches, plan.cyclic):
+    if _locks_in_parallel(scene, plan):
         return "python: locked elements in parallel (minimum-norm forces)"
     fkind, fpar, _ = forcing_arrays(scene, 1.0, 0, linear=True)
     for i, fn in enumerate(scene.forcing):
@@ -111,15 +111,13 @@ def _parts(scene: Scene, plan) -> tuple | str:
             np.array(plan.checked, dtype=np.int64), js.module.active_branch)
 
 
-def _locks_in_parallel(scene: Scene, lbs: list, cyclic) -> bool:
+def _locks_in_parallel(scene: Scene, plan) -> bool:
     """Some elements that can be force-free (a branch whose ``dR/dF`` is not a nonzero
-    constant) close a cycle: their forces can become indeterminate
-    (:mod:`lumped.solvers.nonsmooth.locks`)."""
+    constant: the plan's ``free_cyclic``, made once per structure) close a cycle: their
+    forces can become indeterminate (:mod:`lumped.solvers.nonsmooth.locks`)."""
     from ..nonsmooth.locks import on_cycles
 
-    free = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in cyclic
-                 if any(not (info.dR_dF.is_number and info.dR_dF != 0)
-                        for info in lbs[e].info))
+    free = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in plan.structure["free_cyclic"])
     return len(free) > 1 and bool(on_cycles(len(scene.nodes), free))
 
 

@@ -172,9 +172,7 @@ def _start(scene: Scene, plan, x: list[float], v: list[float], F: list[float],
     return RestStart(x, v, F, q, newton_iterations, modes, guards, hold, hold.varying,
                      F_end, acc0, np.array([row_of(0.0, x, v, F)], dtype=float),
                      None if F_end is None else np.array(row_of(0.0, x, v, F_end)),
-                     sum(1 for e in plan.cyclic if any(
-                         not (info.dR_dF.is_number and info.dR_dF != 0)
-                         for info in plan.branches[e].info)) > 1,
+                     len(plan.structure["free_cyclic"]) > 1,
                      max([float(p[2]) for k, p in zip(fkind, fpar, strict=True) if k == 2],
                          default=0.0))
 

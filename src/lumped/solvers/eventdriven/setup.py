@@ -12,13 +12,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...codegen.rebound import ReboundBranches
 from ...scene import Mass, Scene
 from ...scene.forcing import jumps
 from ...scene.supports import support_time_events
 
 __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "time_events", "step_floor",
            "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "clear_plans",
-           "SHARED_PLANS", "structure",
+           "SHARED_PLANS", "structure", "structure_parts", "branches_structure",
            "accumulating",
            "too_many"]
 
@@ -204,6 +205,9 @@ class ScenePlan:
     fast: object = None
     module_loaded: bool | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)
+    #: the parts of the structure alone, shared by the plans of one structure
+    #: (:func:`structure_parts`)
+    structure: dict = field(default_factory=dict)
 
 
 #: scene object -> (its nodes, elements, forcing ids, forcing, plan) when the plan was
@@ -255,24 +259,89 @@ def scene_plan(scene: Scene) -> ScenePlan:
 
 
 def _new_plan(scene: Scene, key: tuple | None) -> ScenePlan:
-    """A new :class:`ScenePlan` of ``scene`` (``key``: its content key or ``None``)."""
+    """A new :class:`ScenePlan` of ``scene`` (``key``: its content key or ``None``), its
+    parts of the structure alone taken from :func:`structure_parts`."""
     from ...scene.shifted_laws import branches_of
+    from ..modes.stuck import forcing_kinds
+
+    branches = [branches_of(el.law) for el in scene.elements]
+    parts = structure_parts(scene, branches)
+    plan = ScenePlan(scope_error(scene, branches), branches, parts["checked"],
+                     parts["cyclic"], key, structure=parts)
+    plan.__dict__["hold_structure"] = parts["hold_structure"]  # (modes.stuck.static_hold)
+    kinds = _FORCING_KINDS.get(tuple(map(id, scene.forcing)))
+    if kinds is not None and all(a is b for a, b in zip(kinds[0], scene.forcing,
+                                                        strict=True)):
+        plan.forcing_kinds = kinds[1]
+    else:
+        got = forcing_kinds(scene, plan)
+        if len(_FORCING_KINDS) >= SHARED_PLANS:
+            _FORCING_KINDS.clear()
+        _FORCING_KINDS[tuple(map(id, scene.forcing))] = (scene.forcing, got)
+    return plan
+
+
+#: structure key (:func:`structure_parts`) -> the parts of a plan that depend on it
+#: alone, the last :data:`SHARED_PLANS` structures asked (least recently used first).
+_STRUCTURES: OrderedDict = OrderedDict()
+#: ids of a scene's forcing objects -> (those objects, their
+#: :func:`~lumped.solvers.modes.stuck.forcing_kinds`), whose arrays nothing changes.
+_FORCING_KINDS: dict[tuple, tuple] = {}
+
+
+def branches_structure(lb) -> object:
+    """What fixes a law's branches apart from its numbers: its class
+    (:class:`~lumped.codegen.parametric.LawClass`) for a law remade from one (every law
+    of the class has the same branches, locks and lock values, and the same ``dR/dF``
+    but for its floats), else the branches object itself."""
+    return lb._rebound.cls if type(lb) is ReboundBranches else lb
+
+
+def structure_parts(scene: Scene, branches: list) -> dict:
+    """The parts of a :class:`ScenePlan` that depend only on the scene's structure, made
+    once per structure and shared by the plans of every scene of that structure, whatever
+    its numbers: ``checked`` (the elements whose law is not known monotone), ``cyclic``
+    (the elements on cycles), ``free_cyclic`` (those of them with a branch whose
+    ``dR/dF`` is not a nonzero constant: their forces can be free), ``hold_structure``
+    (the static balance's structure of each mode,
+    :func:`~lumped.solvers.modes.stuck.static_hold`). The structure is each node's
+    kind, each element's kind, ends and law (the unbound law object) and its law's
+    branches apart from their numbers (:func:`branches_structure`); everything these
+    parts read."""
+    laws = tuple(getattr(el.law, "law", el.law) for el in scene.elements)
+    key = (tuple(type(nd) for nd in scene.nodes), tuple(el.kind for el in scene.elements),
+           scene.elem_a, scene.elem_b, tuple(map(id, laws)),
+           tuple(branches_structure(lb) for lb in branches))
+    with _SHARED_LOCK:
+        got = _STRUCTURES.get(key)
+        if got is not None:
+            _STRUCTURES.move_to_end(key)
+            return got
     from ..implicit.branch_check import known_monotone
     from ..nonsmooth.locks import cyclic_elements
 
-    branches = [branches_of(el.law) for el in scene.elements]
-    return ScenePlan(scope_error(scene, branches), branches,
-                     [e for e, el in enumerate(scene.elements)
-                      if not known_monotone(el.law)],
-                     cyclic_elements(scene), key)
+    cyclic = cyclic_elements(scene)
+    got = {"checked": [e for e, el in enumerate(scene.elements)
+                       if not known_monotone(el.law)],
+           "cyclic": cyclic, "hold_structure": {},
+           "free_cyclic": tuple(e for e in cyclic if any(
+               not (info.dR_dF.is_number and info.dR_dF != 0) for info in branches[e].info)),
+           "laws": laws}  # (the laws the key names by id, kept alive with it)
+    with _SHARED_LOCK:
+        got = _STRUCTURES.setdefault(key, got)
+        while len(_STRUCTURES) > SHARED_PLANS:
+            _STRUCTURES.popitem(last=False)
+    return got
 
 
 def clear_plans() -> None:
-    """Forget every kept plan (per object and per content): the next run of any scene
-    makes its plan from scratch (tests compare the two)."""
+    """Forget every kept plan (per object, per content and per structure): the next run
+    of any scene makes its plan from scratch (tests compare the two)."""
     with _SHARED_LOCK:
         _SHARED.clear()
         _PLANS.clear()
+        _STRUCTURES.clear()
+        _FORCING_KINDS.clear()
 
 
 def structure(scene: Scene, plan) -> tuple[list[bool], tuple[float, ...], list[bool],

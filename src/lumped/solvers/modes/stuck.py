@@ -55,15 +55,15 @@ class StaticHold:
     of time, the break-out time and a dense segment.
 
     Built by :func:`static_hold`; ``free`` are the locked elements whose forces follow the
-    balance, ``minv`` is ``-K_free^{-1}`` (rows by ``free``), ``c = K_fixed F_fixed``."""
+    balance, ``minv`` is ``-K_free^{-1}`` (rows by ``free``), ``c = K_fixed F_fixed``.
+    No reference to ``scene`` is kept (a plan keeps holds: it would keep the scene)."""
 
     def __init__(self, scene: Scene, x: list[float], v: list[float], F: list[float],
                  free: list[int], minv: list[list[float]], c: list[float],
                  fkind: np.ndarray, fpar: np.ndarray,
                  arrays: tuple[np.ndarray, np.ndarray] | None = None) -> None:
-        self.scene, self.free, self.minv, self.c = scene, free, minv, c
-        # ``(minv, free)`` as arrays, made once per structure (:func:`static_hold`)
-        self._structure_arrays = arrays
+        self.free, self.minv, self.c = free, minv, c
+        self._structure_arrays = arrays  # (made once per structure: static_hold)
         self.fkind, self.fpar = fkind, fpar
         self.y0 = list(x) + list(v) + list(F)
         self.F0 = list(F)
