@@ -2,7 +2,7 @@
 
 Usage, from the repository root (after ``pip install -e ".[test]"``)::
 
-    python benchmarks/first_run.py [--quick] [--json]
+    python benchmarks/first_run.py [--quick] [--json] [--case CASE ...] [--second]
 
 For each case (method and scene) a fresh Python process starts with **empty caches**:
 ``LUMPED_CACHE_DIR`` and ``XDG_CACHE_HOME`` (the generated modules of ``lumped``) and
@@ -27,7 +27,9 @@ on ``[0, 5]``. ``--quick``: the paper's scene, ``radau5`` (default options) and
 ``lumped.laws`` and ``lumped.scene`` only, so that no import of the benchmark package
 moves a cost out of the first run. Each time is also given over the yardstick
 (:func:`lumped.bench.measure_unit`, measured here before and after the cases; the smaller
-is the unit). ``--json`` prints the records instead of the table.
+is the unit). ``--json`` prints the records instead of the table; ``--case`` runs only
+the cases named; ``--second`` adds, per case, the chain run in a process whose paper
+scene ran first (a second structure: the shared code compiled, its own kernels not).
 """
 
 from __future__ import annotations
@@ -70,7 +72,7 @@ from lumped.scene.forcing import SineBurst
 spec = json.loads(sys.argv[1])
 
 
-def build(k_factor):
+def build(k_factor, spec=spec):
     nodes = [Mass(name, m=m, x0=x0) for name, m, x0 in spec["nodes"]]
     elements = []
     for name, law, a, b, params in spec["elements"]:
@@ -78,6 +80,11 @@ def build(k_factor):
         elements.append(Element(name, get_law(law).bind(**params), a, b))
     node, amplitude, omega, t_off = spec["force"]
     return Scene(nodes, elements, {node: SineBurst(amplitude, omega, t_off)})
+
+
+if spec.get("before"):  # another structure first, untimed: the shared code compiled
+    simulate(build(1.0, spec["before"]), method=spec["method"], t_end=spec["t_end"],
+             throw=False, **spec["options"])
 
 
 def run(scene):
@@ -131,11 +138,13 @@ def chain_spec(n: int = 3) -> dict:
 SCENES = {"paper forcing-F2": paper_spec, "chain-3": chain_spec}
 
 
-def run_case(scene: str, case: str) -> dict:
-    """One fresh process with empty caches; its record (times in CPU seconds)."""
+def run_case(scene: str, case: str, before: str | None = None) -> dict:
+    """One fresh process with empty caches; its record (times in CPU seconds). With
+    ``before``, that scene runs first in the process, untimed (a second structure on a
+    machine whose shared code is compiled)."""
     method, options = CASES[case]
     spec = {**SCENES[scene](), "method": method, "options": options, "t_end": T_END,
-            "new_k": NEW_K}
+            "new_k": NEW_K, "before": SCENES[before]() if before else None}
     with tempfile.TemporaryDirectory(prefix="lumped-first-run-") as tmp:
         env = dict(os.environ)
         for var, sub in (("LUMPED_CACHE_DIR", "lumped"), ("XDG_CACHE_HOME", "xdg"),
@@ -148,8 +157,8 @@ def run_case(scene: str, case: str) -> dict:
     if res.returncode != 0:
         raise RuntimeError(f"{scene}, {case}: the child failed:\n{res.stderr}")
     record = json.loads(res.stdout.strip().splitlines()[-1])
-    return {"scene": scene, "case": case, "method": method, "options": options,
-            "process_wall_s": wall, **record}
+    return {"scene": scene if before is None else f"{scene} after {before}", "case": case,
+            "method": method, "options": options, "process_wall_s": wall, **record}
 
 
 def table(records: list[dict], unit: float) -> str:
@@ -175,11 +184,18 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true",
                         help="the paper's scene, radau5 and jit-bdf2 only")
     parser.add_argument("--json", action="store_true", help="print JSON records")
+    parser.add_argument("--case", action="append", choices=tuple(CASES),
+                        help="only this case (repeatable)")
+    parser.add_argument("--second", action="store_true",
+                        help="also chain-3 after the paper scene in one process (a second "
+                             "structure on a machine whose shared code is compiled)")
     args = parser.parse_args()
     scenes = ("paper forcing-F2",) if args.quick else tuple(SCENES)
-    cases = QUICK_CASES if args.quick else tuple(CASES)
+    cases = tuple(args.case) if args.case else (QUICK_CASES if args.quick else tuple(CASES))
     unit = measure_unit()
     records = [run_case(scene, case) for scene in scenes for case in cases]
+    if args.second:
+        records += [run_case("chain-3", case, before="paper forcing-F2") for case in cases]
     unit = min(unit, measure_unit())
     import numba
 

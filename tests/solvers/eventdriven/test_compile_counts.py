@@ -3,11 +3,11 @@
 The shared loop (:mod:`lumped.solvers.eventdriven.loop_jit`) is compiled once per machine
 and takes a scene's generated kernels as addresses: new numbers compile nothing, a new
 structure compiles its own kernels only; the fold test of a law that is not a known
-monotone one is compiled for such a scene only. The compiled helpers of the events (the mode
-probe, the break-out scan and root of a stuck interval, an attempt's crossing root) are
-compiled only once a process needs them often (:mod:`lumped.solvers.modes.on_demand`),
-so a first run on a fresh machine does not pay for them; with or without them a run gives
-the Python loop's numbers.
+monotone one, and the code of a table forcing, are compiled for such a scene only. The
+compiled helpers of the events (the mode probe, the break-out scan and root of a stuck
+interval, an attempt's crossing root) are compiled only once a process needs them often
+(:mod:`lumped.solvers.modes.on_demand`), so a first run on a fresh machine does not pay
+for them; with or without them a run gives the Python loop's numbers.
 """
 
 from __future__ import annotations
@@ -17,9 +17,10 @@ import contextlib
 import numpy as np
 import pytest
 
-from lumped import Element, Mass, Scene, get_law, simulate
+from lumped import Element, Junction, Mass, Scene, get_law, simulate
 from lumped.bench.impact_scenes import impact_scene
-from lumped.codegen.jit import numba_enabled
+from lumped.codegen.jit import njit, numba_enabled
+from lumped.io import Table
 from lumped.scene.forcing import SineBurst
 from lumped.solvers.eventdriven import fast as fast_mod
 from lumped.solvers.eventdriven import loop_jit
@@ -152,3 +153,95 @@ def test_the_event_helpers_compiled_or_not_give_the_python_loop_run(monkeypatch,
     _same_run(got, ref)
     if helpers == "compiled":
         assert fast_mod._PROBE.fn is not None or fast_mod._SCAN.fn is not None
+
+
+#: The table's code (:func:`lumped.scene.forcing_jit.linear_value` and its helpers).
+_TABLE_CODE = ("linear_value", "_table_value", "_segment")
+
+
+def test_the_shared_loops_forcing_types_no_table_code():
+    # the forcing function the shared loop calls, compiled afresh (no disk cache): none of
+    # numba's passes runs on the table's code (on main the whole table interpolation was
+    # inlined at numba's IR level, typed and lowered for every scene: about 1.2 s)
+    from numba.core import event, types
+
+    arg = {"t": types.float64, "fkind": types.int64[::1], "fpar": types.float64[:, ::1],
+           "table": types.int64, "f": types.float64[::1]}
+    py_func = loop_jit.forces.py_func
+    sig = tuple(arg[name] for name in py_func.__code__.co_varnames[:py_func.__code__.co_argcount])
+    with event.install_recorder("numba:run_pass") as rec:
+        fresh = njit(py_func)
+        fresh.compile(sig)
+    passed_on = {ev.data["qualname"] for _, ev in rec.buffer if ev.is_start}
+    assert "forces" in passed_on
+    assert not passed_on & set(_TABLE_CODE), passed_on
+
+
+def _tabled(k: float = 100.0) -> Scene:
+    ts = np.linspace(0.0, 1.0, 41)
+    table = Table(ts, 10.0 * np.sin(5.0 * np.pi * ts), quantity="force")
+    return Scene([Mass("mass", m=1.0, x0=0.0)],
+                 [Element("spring", get_law("linear_spring").bind(k=k), "ground", "mass"),
+                  Element("dashpot", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground",
+                          "mass")],
+                 {"mass": table})
+
+
+def _compiled_for_such_a_scene_only(monkeypatch, module, store: str, scene: Scene,
+                                    t_end: float) -> None:
+    """``module.<store>`` (a helper compiled on demand) stays empty for the paper scene's
+    compiled run, and is filled by ``scene``'s, which gives the Python loop's run."""
+    monkeypatch.setattr(module, store, [])  # as in a process that never needed it
+    assert simulate(_paper(), compiled=True, **KW).stats["loop"] == "compiled"
+    assert getattr(module, store) == []
+    kw = dict(method="radau5", t_end=t_end, rtol=1e-8, atol=1e-11)
+    ref = simulate(scene, compiled=False, **kw)
+    got = simulate(scene, compiled=True, **kw)
+    assert got.stats["loop"] == "compiled"
+    assert getattr(module, store) != []
+    _same_run(got, ref)
+
+
+def test_the_table_code_is_compiled_for_a_scene_with_a_table_only(monkeypatch):
+    from lumped.solvers.radau import forces_jit
+
+    _compiled_for_such_a_scene_only(monkeypatch, forces_jit, "_TABLE", _tabled(), 1.5)
+
+
+def _maxwell_bingham() -> Scene:
+    """A mass on a spring in series with a Bingham dashpot through a massless junction."""
+    return Scene([Mass("mass", m=1.0, x0=0.0), Junction("j", x0=0.0)],
+                 [Element("dashpot", get_law("bingham").bind(gamma=2.0, tau=1.0), "ground",
+                          "j"),
+                  Element("spring", get_law("linear_spring").bind(k=50.0), "j", "mass"),
+                  Element("wall", get_law("linear_spring").bind(k=20.0), "ground", "mass")],
+                 {"mass": SineBurst(6.0, 4.0, 1.0)})
+
+
+def test_the_shared_loops_stage_newton_calls_no_roundoff_test():
+    # the stage Newton of the shared loop, typed afresh for the loop's arguments: it does not
+    # call the junctions' round-off test (on main it did, which compiled it with the loop
+    # for every scene); it reaches it through an address, given only for junctions
+    from numba.core import types
+
+    from lumped.codegen.function_types import BRANCH_LAW_TYPE
+
+    f8, i8 = types.float64, types.int64
+    v, m, a2, iv = f8[::1], f8[:, ::1], f8[:, :], i8[::1]
+    sig = (BRANCH_LAW_TYPE, v, v, iv, iv, types.boolean[::1], m, iv, m, m, v, f8, v, v, a2, v,
+           f8, i8, v, a2, a2, iv, v, v, iv)
+    fresh = njit(loop_jit._stage.py_func)
+    fresh.compile(sig)
+    typemap = fresh.overloads[sig].type_annotation.typemap
+    called = {ty.dispatcher.py_func.__name__ for ty in typemap.values()
+              if isinstance(ty, types.Dispatcher)}
+    assert "stage_evaluate" in called
+    assert "roundoff_worst_jit" not in called
+
+
+def test_the_junctions_roundoff_test_is_compiled_for_a_scene_with_a_junction_only(
+        monkeypatch):
+    from lumped.solvers.radau import stage_jit
+
+    _compiled_for_such_a_scene_only(monkeypatch, stage_jit, "_ROUNDOFF", _maxwell_bingham(),
+                                    2.0)

@@ -8,10 +8,10 @@ accepted steps into the dense output and the output rows.
 The compiled loop takes a scene when numba is enabled, every forcing is absent, zero,
 constant, a :class:`~lumped.scene.forcing.SineBurst` or a linearly interpolated table (a
 :class:`lumped.io.Table` force, or the inertial force of a ground acceleration record;
-:data:`lumped.scene.forcing_jit.FORCE_LINEAR`; other callables of ``t`` run in Python),
-every law is a sympy residual (the generated kernels of :mod:`lumped.codegen.jit`), and
-no locked elements sit in parallel (their forces are the minimum-norm split, Python's).
-"""
+:data:`lumped.scene.forcing_jit.FORCE_LINEAR`, its code compiled for such a scene only;
+other callables of ``t`` run in Python), every law is a sympy residual (the generated
+kernels of :mod:`lumped.codegen.jit`), and no locked elements sit in parallel (their
+forces are the minimum-norm split, Python's)."""
 
 from __future__ import annotations
 
@@ -19,9 +19,12 @@ import numpy as np
 
 from ...codegen.function_types import branch_type, guards_type, law_type
 from ...scene import Scene
+from ...scene.forcing_jit import FORCE_LINEAR
 from ..modes.mode_guess_jit import compiled_probe_modes, probe_workspace
 from ..modes.on_demand import OnDemand
 from ..modes.stuck_jit import compiled_breakout_root, compiled_breakout_scan
+from ..radau.forces_jit import table_forcing
+from ..radau.stage_jit import roundoff_test
 from ..radau.step_jit import fold_test
 from . import loop_jit as L
 from .step import NOT_SOUGHT, creep_floor
@@ -167,17 +170,14 @@ class CompiledLoop:
         self.fn = L.compiled_advance()
         self.fkind, self.fpar, self.checked = fkind, fpar, checked
         self.fold = fold_test() if len(checked) else 0  # (for laws not known monotone)
+        self.table = table_forcing() if (fkind == FORCE_LINEAR).any() else 0
         self.A, self.W = _butcher()
         self.N, self.E = len(js.masses), len(js.ea)
         self.outputs = self.ws = self.wm = self.iw = None  # on the first call
-        self.fst = np.zeros(16)
-        self.ist = np.zeros(22, dtype=np.int64)
-        self.breaks = np.zeros(0)
-        self.kinks = np.zeros(0, dtype=np.int64)
+        self.fst, self.ist = np.zeros(16), np.zeros(22, dtype=np.int64)
+        self.breaks, self.kinks = np.zeros(0), np.zeros(0, dtype=np.int64)
         self._breaks_of: list | None = None  # the run's list they were made from
-        self.calls = 0
-        self._akey: tuple | None = None
-        self._arrays: tuple = ()
+        self.calls, self._akey, self._arrays = 0, None, ()
 
     def setup(self, t_final: float, rtol: float, atol: float, m_min: float) -> None:
         """The run's constants."""
@@ -221,7 +221,7 @@ class CompiledLoop:
     def _call(self, x, v, F, dF, T0, HS, Y0, D, ROWS) -> None:
         self.fn(self.law.addr, self.guards.addr, self.fold, self.js.consts, self.js.masses,
                 self.js.ea, self.js.eb, self.js.spring, self.js.lock_q, self.modes_a,
-                self.watched_a, self.checked, self.A, self.W, self.fkind, self.fpar,
+                self.watched_a, self.checked, self.A, self.W, self.fkind, self.fpar, self.table,
                 self.breaks, self.kinks, x, v, F, dF, self.fst, self.ist, T0, HS, Y0, D, ROWS,
                 self.ws, self.wm, self.iw)
         self.calls += 1
@@ -231,6 +231,7 @@ class CompiledLoop:
         throughout makes none); the attempts write no output rows: their blocks hold one
         row (a run writes its steps in place, :meth:`run`)."""
         self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(self.N, self.E, self.E, 1)
+        self.iw[1, 3] = roundoff_test() if (self.js.masses == 0.0).any() else 0  # junctions
 
     @property
     def breakout_scan(self):
@@ -394,5 +395,4 @@ def _butcher() -> tuple[np.ndarray, np.ndarray]:
 
 _COUNTERS = (("steps", L.STEPS), ("rejected", L.REJECTED),
              ("newton_iterations", L.NEWTON_ITERATIONS), ("factorizations", L.FACTORIZATIONS),
-             ("nfev", L.NFEV), ("njev", L.NJEV),
-             ("max_newton_iterations", L.MAX_NEWTON_ITERATIONS))
+             ("nfev", L.NFEV), ("njev", L.NJEV), ("max_newton_iterations", L.MAX_NEWTON_ITERATIONS))

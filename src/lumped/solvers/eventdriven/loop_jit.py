@@ -40,8 +40,8 @@ run there). With
 crossing's root is :func:`attempt_root`'s, compiled apart (only when needed).
 
 State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. CREEP_FLOOR``)
-and ``ist`` (ints, indices ``HAVE_ACC .. CREEPING``). The forcing is ``(fkind, fpar)`` of
-:func:`lumped.scene.forcing_jit.forcing_into` (its kinds but a sampled table).
+and ``ist`` (ints, indices ``HAVE_ACC .. CREEPING``). The forcing is ``(fkind, fpar, table)`` of
+:func:`lumped.solvers.radau.forces_jit.forces` (``table``: 0 for a scene without a table).
 """
 
 from __future__ import annotations
@@ -54,9 +54,10 @@ from ...codegen.function_types import function_at, guards_type, law_type
 from ...codegen.jit import njit, numba_enabled
 from ..modes.crossing_root import first_root
 from ..modes.on_demand import compiled_once
+from ..radau.forces_jit import forces
 from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.stage_jit import stage_solve
-from ..radau.step_jit import FOLDED_TYPE, crossed, finite, forces, step_error
+from ..radau.step_jit import FOLDED_TYPE, crossed, finite, start_time, step_error
 from ..radau.tableau import END_SLOPES, C
 from .step import CREEP_STEPS
 
@@ -84,8 +85,8 @@ _stage = njit(cache=True)(stage_solve)
 
 
 def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock_q, modes,
-            watched, checked, A, W, fkind, fpar, breaks, kinks, x, v, F, dF, fst, ist, T0, HS,
-            Y0, D, ROWS, ws, wm, iw) -> None:
+            watched, checked, A, W, fkind, fpar, table, breaks, kinks, x, v, F, dF, fst, ist,
+            T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
     """Steps with the modes held until a reason to return (see the module notes).
 
     ``fold_addr``: the fold test's address (:func:`~lumped.solvers.radau.step_jit.fold_test`,
@@ -114,7 +115,7 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
     M, LUm = wm[3, :ny, :ny], wm[4, :ny, :ny]
     nw = max(watched.shape[0], 1)
     qn, Fn = wm[5, :nw, :4], wm[6, :nw, :4]
-    perm, out, permm = iw[0, :size], iw[1, :3], iw[2, :ny]
+    perm, out, permm = iw[0, :size], iw[1, :4], iw[2, :ny]  # (out[3]: stage_solve's)
     rtol, atol, m_min = fst[RTOL], fst[ATOL], fst[M_MIN]
     t_stop, t_final, prev_break = fst[T_STOP], fst[T_FINAL], fst[PREV_BREAK]
     t, h, F_seen = fst[T], fst[H], fst[F_SEEN]
@@ -145,7 +146,7 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
             ist[STALLED] += 1
         for k in range(3):
             ck = _C0 if k == 0 else (_C1 if k == 1 else _C2)
-            forces(t + ck * h, fkind, fpar, ftmp)
+            forces(t + ck * h, fkind, fpar, table, ftmp)
             for i in range(N):
                 fk[k, i] = ftmp[i]
         for k in range(3):
@@ -168,8 +169,7 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
             for e in range(E):
                 scale[k * n + N + e] = rtol * max(abs(F[e]), F_ref)
         ok = _stage(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x, v, fk,
-                    scale,
-                    1e-3, MAX_NEWTON, G, J, LU, perm, b, du, out)
+                    scale, 1e-3, MAX_NEWTON, G, J, LU, perm, b, du, out)
         its = out[0]
         nfac = out[1]
         if single:  # one attempt for the Python loop: its outcome, nothing accepted
@@ -182,9 +182,9 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
                 ist[A_OK] = -1  # singular: Python's minimum-norm solve
             if ok:
                 fst[A_ERR] = step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched,
-                                         A, U, h, t, prev_break, x, v, F, dF, ist[HAVE_DF],
-                                         fkind, fpar, net, rtol, atol, F_ref, M, LUm, permm,
-                                         rhs, err, fst[TWO])
+                                         A, U, h, start_time(t, prev_break), x, v, F, dF,
+                                         ist[HAVE_DF], fkind, fpar, table, net, rtol, atol,
+                                         F_ref, M, LUm, permm, rhs, err, fst[TWO])
                 if fst[A_ERR] != -1.0:
                     ist[A_OK] = 1
                     ist[A_HIT] = 0  # (the crossing's root: attempt_root, called after)
@@ -212,8 +212,9 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
             ist[HAVE_ACC] = 0
             continue
         err_norm = step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h,
-                               t, prev_break, x, v, F, dF, ist[HAVE_DF], fkind, fpar, net,
-                               rtol, atol, F_ref, M, LUm, permm, rhs, err, fst[TWO])
+                               start_time(t, prev_break), x, v, F, dF, ist[HAVE_DF], fkind,
+                               fpar, table, net, rtol, atol, F_ref, M, LUm, permm, rhs, err,
+                               fst[TWO])
         if err_norm == -1.0:  # singular: undo this pass's counters, Python redoes it
             ist[STALLED] -= 1
             ist[NEWTON_ITERATIONS] -= its
@@ -380,10 +381,9 @@ def compiled_advance():
         f8 = T_.float64
         v, m, m3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
         iv = T_.int64[::1]
-        sig = T_.none(T_.int64, T_.int64, T_.int64, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m,
-                      m,
-                      iv, m, v, iv, v, v, v, v, v, iv, v, v, m, m3, m, m, m3,
-                      T_.int64[:, ::1])
+        i8 = T_.int64
+        sig = T_.none(i8, i8, i8, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m, m, iv, m, i8,
+                      v, iv, v, v, v, v, v, iv, v, v, m, m3, m, m, m3, i8[:, ::1])
         _COMPILED.append(njit(sig, cache=True)(advance))
     return _COMPILED[0]
 

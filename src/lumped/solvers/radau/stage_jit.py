@@ -27,12 +27,13 @@ import math
 
 import numpy as np
 
-from ...codegen.function_types import BRANCH_LAW_TYPE
+from ...codegen.function_types import BRANCH_LAW_TYPE, function_at
 from ...codegen.jit import njit, numba_enabled
 from ..newton.criteria import ROUNDOFF
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 
-__all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_solve"]
+__all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_solve",
+           "roundoff_test"]
 
 
 @njit(cache=True)
@@ -168,7 +169,13 @@ def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U
     """Simplified Newton on the stage system from ``U`` (overwritten); ``out`` receives
     ``(iterations, factorisations, singular)`` (``out[2] = 1`` when a factorisation
     failed: a singular or non-finite Jacobian, left in ``J``). Returns False when Newton
-    failed (singular, non-finite or no convergence): the caller shrinks the step."""
+    failed (singular, non-finite or no convergence): the caller shrinks the step.
+
+    ``out[3]`` (read) is the address of :func:`roundoff_worst_jit` compiled
+    (:func:`roundoff_test`; :func:`workspace` puts it there), or 0 for a scene without
+    junctions (``m_i = 0``), where that test returns ``worst`` as it is: the shared loop
+    of ``radau5`` passes 0 there, and a machine whose scenes have no junction never
+    compiles it."""
     out[2] = 0
     stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n, f,
                    G, J)
@@ -198,8 +205,9 @@ def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U
             return True
         stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n,
                        v_n, f, G, J)
-        worst = roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst)
-        if worst <= tol:  # (a junction's velocity at its round-off)
+        if out[3] != 0:  # a junction's velocity at its round-off (none without junctions)
+            worst = _roundoff_at(out[3])(du, U, J, scale, masses, spring, f, tol, worst)
+        if worst <= tol:
             return True
         if worst > 0.5 * prev:
             ok = lu_factor_into(J, LU, perm)
@@ -231,7 +239,37 @@ def compiled_stage_solve():
 
 def workspace(N: int, E: int) -> tuple[np.ndarray, ...]:
     """``(G, J, LU, perm, b, du, out)`` for :func:`stage_solve` on ``N`` nodes and ``E``
-    elements (``out``: 3 counters)."""
+    elements (``out``: 3 counters and :func:`roundoff_test`)."""
     s = 3 * (N + E)
+    out = np.array([0, 0, 0, roundoff_test()], dtype=np.int64)
     return (np.zeros(s), np.zeros((s, s)), np.zeros((s, s)), np.zeros(s, dtype=np.int64),
-            np.zeros(s), np.zeros(s), np.zeros(3, dtype=np.int64))
+            np.zeros(s), np.zeros(s), out)
+
+
+if numba_enabled():
+    from numba import types as _T
+
+    _v, _m = _T.float64[:], _T.float64[:, :]  # (any layout: the loop passes views)
+    #: The numba function type of :func:`roundoff_worst_jit`.
+    ROUNDOFF_TYPE = _T.FunctionType(_T.float64(_v, _v, _m, _v, _v, _T.boolean[:], _m,
+                                               _T.float64, _T.float64))
+    _roundoff_at = function_at(ROUNDOFF_TYPE)
+else:  # pragma: no cover - without numba: the address 1 stands for the Python function
+    ROUNDOFF_TYPE = None
+
+    def _roundoff_at(addr):
+        return roundoff_worst_jit
+_ROUNDOFF: list = []
+
+
+def roundoff_test() -> int:
+    """The address of :func:`roundoff_worst_jit` compiled (once per process; numba's disk
+    cache after the first time on a machine), 1 without numba (the Python function)."""
+    if not numba_enabled():
+        return 1
+    if not _ROUNDOFF:
+        from numba.experimental.function_type import _get_wrapper_address
+
+        disp = njit(ROUNDOFF_TYPE.signature, cache=True)(roundoff_worst_jit.py_func)
+        _ROUNDOFF.append((_get_wrapper_address(disp, ROUNDOFF_TYPE.signature), disp))
+    return _ROUNDOFF[0][0]

@@ -1,6 +1,6 @@
 r"""The compiled pieces of one Radau IIA step of ``radau5`` (for
 :mod:`lumped.solvers.eventdriven.loop_jit`): the error estimate and its norm, the guard test on
-the collocation polynomial, the fold test, the forcing.
+the collocation polynomial, the fold test (the forcing: :mod:`lumped.solvers.radau.forces_jit`).
 
 Ports, operation for operation, of :meth:`lumped.solvers.radau.error.ErrorEstimate.error`,
 :meth:`~lumped.solvers.radau.error.ErrorEstimate.error_norm`,
@@ -21,14 +21,14 @@ import numpy as np
 
 from ...codegen.function_types import function_at, law_type
 from ...codegen.jit import njit, numba_enabled
-from ...scene.forcing_jit import forcing_into
 from ..implicit.branch_check_jit import dead_band_sign, sign_bit
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 from .error import FORCE_TOL_FACTOR
+from .forces_jit import forces
 from .tableau import E_ERR, MU_REAL, SAMPLES, C
 
 __all__ = ["element_nodes", "folded", "folded_at", "fold_test", "crossed", "error_norm",
-           "step_error", "forces", "finite"]
+           "step_error", "start_time", "finite"]
 
 _C0, _C1, _C2 = C
 _E0, _E1, _E2 = E_ERR
@@ -269,14 +269,6 @@ def error_norm(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h
 
 
 @njit(cache=True)
-def forces(t, fkind, fpar, f) -> None:
-    """``f_i(t)`` per node (``scene.external_forces``): 0 where there is no forcing."""
-    for i in range(f.shape[0]):
-        f[i] = 0.0
-    forcing_into(0, t, fkind, fpar, fpar, f)
-
-
-@njit(cache=True)
 def finite(J) -> bool:
     for r in range(J.shape[0]):
         for c in range(J.shape[1]):
@@ -285,13 +277,21 @@ def finite(J) -> bool:
     return True
 
 
+@njit(cache=True, inline="always")
+def start_time(t, prev_break) -> float:
+    """Where the step from ``t`` reads the forcing: right after a breakpoint, ``t`` else."""
+    return np.nextafter(t, math.inf) if t == prev_break else t
+
+
 @njit(cache=True)
-def step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h, t, prev_break,
-                x, v, F, dF, have_dF, fkind, fpar, net, rtol, atol, F_ref, M, LUm, permm, rhs,
+def step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h, t_n0, x, v,
+                F, dF, have_dF, fkind, fpar, table, net, rtol, atol, F_ref, M, LUm, permm, rhs,
                 err, two) -> float:
-    """The error norm of the step from ``t`` (the forces right after a breakpoint)."""
-    t_n0 = np.nextafter(t, math.inf) if t == prev_break else t
-    forces(t_n0, fkind, fpar, net)
+    """The error norm of the step from ``t``, the forces at ``t_n0`` (:func:`start_time`;
+    ``fkind, fpar, table``: :func:`lumped.solvers.radau.forces_jit.forces`). (At most 30
+    arguments: CPython passes a call with more as one tuple, which numba types and
+    unpacks.)"""
+    forces(t_n0, fkind, fpar, table, net)
     for e in range(ea.shape[0]):
         if ea[e] >= 0:
             net[ea[e]] += F[e]
