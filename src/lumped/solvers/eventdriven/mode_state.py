@@ -19,7 +19,7 @@ from ...scene import Mass, Scene
 from ...scene.supports import support_time
 from ..implicit.initial_slip import start_at_known_rates
 from ..modes.choice import select_modes
-from ..modes.force_bounds import onto_slip_ends
+from ..modes.force_bounds import onto_slip_ends, slip_beyond_joint_bounds
 from ..modes.lock_events import (
     apply_impacts,
     hold_impacted_locks,
@@ -139,7 +139,7 @@ class ModeState:
                 v[:] = v_snapped
             else:
                 sel = again
-        new, v_p, F_p = sel
+        new, v_p, F_p = slip_beyond_joint_bounds(scene, lbs, sel[0], t, F), sel[1], sel[2]
         got = probe_state(scene, lbs, new, t, x, v, F, h0) if self.decided[-1] > h0 and \
             not self.cones and not all(self.is_mass) else None  # (a long probe's junctions)
         if got:  # (... at t + h0; a lock's force stays the long probe's, not m ulp / h0^2)

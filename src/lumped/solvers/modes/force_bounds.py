@@ -24,6 +24,28 @@ r"""Forces the stage Newton leaves off the bounds their laws put them on, put ba
    tau)^2``, flat at its yield force) reversing under a sine took ``-tau - 2.4e-6``, off
    its law at the rate ``2e-15`` left by the landing, and every stage from there failed
    down to the step floor (a backward-Euler bridge of ``3.9e-7`` s).
+3. :func:`slip_beyond_joint_bounds`. The converse of 1: stuck dashpots in parallel
+   between ground and one node (a mass or a junction that no other lock holds, joined to
+   nothing else but springs, whose forces at ``t`` are their laws' at ``x``) carry the
+   load ``T`` on that node only within their joint interval,
+
+   .. math:: \sum_e \min(s_e \mathrm{lo}_e, s_e \mathrm{hi}_e) \le T \le
+             \sum_e \max(s_e \mathrm{lo}_e, s_e \mathrm{hi}_e),
+             \qquad T = -\Bigl(f_n + \sum_{e \notin \text{group}} s_e F_e\Bigr),
+
+   (``s_e = +1`` at an element's first node ``a``, ``-1`` at its second ``b``, as in the
+   balance ``net_n = f_n + sum_{a_e = n} F_e - sum_{b_e = n} F_e``). A load beyond it by
+   more than the balance's round-off ``ROUNDOFF (|f_n| + sum_e |F_e|)`` (the rule of
+   :func:`lumped.solvers.modes.stuck.equilibrium_hold`, which holds a load within it on
+   the bounds) breaks them out together: they share one rate. The mode probe cannot tell
+   (its force tolerance over a probe of ``5e-10`` s is ``rtol m / h ~ 6e-5``, and the
+   lock rule of :func:`lumped.solvers.nonsmooth.locks.lock_parallel_rates` admits forces
+   ``sqrt(eps)`` beyond a yield force): a mass on a Bingham and two Herschel-Bulkley
+   dashpots to ground under a load ``2.4e-15`` (``11 eps``) or ``1e-9`` beyond their
+   joint yield force read stuck, no split within the bounds balanced the load, and the
+   run crept by steps of ``1e-15`` s and stopped after 12 backward-Euler bridges (issue
+   29). Their slip is slow (``1e-30`` and ``1e-18`` m/s, the shear-thickening dashpot
+   taking the excess), and ``radau5`` takes it in 9 steps.
 """
 
 from __future__ import annotations
@@ -33,8 +55,10 @@ from collections.abc import Sequence
 
 from ...scene import Scene
 from ..implicit.initial_slip import known_rate_dashpots, rest_edge, set_valued_at_rest
+from ..newton.criteria import ROUNDOFF
+from .lock_events import lock_cones
 
-__all__ = ["onto_joint_bounds", "onto_slip_ends"]
+__all__ = ["onto_joint_bounds", "onto_slip_ends", "slip_beyond_joint_bounds"]
 
 
 def onto_joint_bounds(scene: Scene, cones: dict[int, tuple[float, float, float, float]],
@@ -81,4 +105,59 @@ def onto_slip_ends(scene: Scene, old: Sequence[int], new: Sequence[int], v: list
                 edge = rest_edge(kernel, F[e])
                 if abs(edge - F[e]) <= math.sqrt(rtol) * (1.0 + abs(edge)):
                     out[e] = edge
+    return out
+
+
+def slip_beyond_joint_bounds(scene: Scene, branches: Sequence, modes: list[int], t: float,
+                             F: Sequence[float]) -> list[int]:
+    """``modes`` with each group of two or more dashpots stuck in parallel between ground
+    and one node ``n`` (held by no other lock, joined to nothing else but springs) whose
+    load at ``t`` (the forcing and the springs' forces ``F``) lies beyond their joint
+    interval by more than the round-off of ``n``'s balance put on the branches their laws
+    read beyond it (see the module notes, 3); the other modes as they are (a new list)."""
+    out = list(modes)
+    groups: dict[int, list[int]] = {}
+    other_locks: set[int] = set()
+    for e, el in enumerate(scene.elements):
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        info = branches[e].info[modes[e]]
+        if not info.locks:
+            continue
+        if el.kind == "dashpot" and info.lock_value == 0.0 and min(a, b) < 0 <= max(a, b):
+            groups.setdefault(max(a, b), []).append(e)
+        else:
+            other_locks.update(i for i in (a, b) if i >= 0)
+    f = scene.external_forces(t) if groups else []
+    for n, members in groups.items():
+        if len(members) < 2 or n in other_locks:
+            continue
+        cones = lock_cones(branches, modes, F, members)
+        if len(cones) < len(members) or not all(
+                math.isfinite(cones[e][2]) and math.isfinite(cones[e][3]) for e in members):
+            continue
+        sign = {e: 1.0 if scene.elem_a[e] == n else -1.0 for e in members}
+        others = [e for e in range(len(F)) if e not in sign
+                  and n in (scene.elem_a[e], scene.elem_b[e])]
+        if any(scene.elements[e].kind != "spring" for e in others):
+            continue  # (a dashpot's force at t may be a held split's, not its law's)
+        rest, scale = f[n], abs(f[n])
+        for e in others:
+            rest += (1.0 if scene.elem_a[e] == n else -1.0) * F[e]
+            scale += abs(F[e])
+        T = -rest
+        top = sum(max(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
+        bottom = sum(min(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
+        scale += sum(max(abs(cones[e][2]), abs(cones[e][3])) for e in members)
+        if T - top > ROUNDOFF * scale:
+            up = True
+        elif bottom - T > ROUNDOFF * scale:
+            up = False
+        else:
+            continue
+        for e in members:  # s_e F_e beyond its end: F_e beyond hi (s_e > 0) or lo
+            _, _, lo, hi = cones[e]
+            beyond = hi + 1.0 + abs(hi) if (sign[e] > 0) == up else lo - 1.0 - abs(lo)
+            b = branches[e].branch(0.0, beyond)
+            if not branches[e].info[b].locks:
+                out[e] = b
     return out
