@@ -54,7 +54,7 @@ from sympy.core.parameters import distribute
 
 from .emit import build_kernel
 from .guards import compile_guards, feasible_path
-from .piecewise_tree import Path, build_selector, decision_tree, leaves
+from .piecewise_tree import build_selector, decision_tree, leaves
 from .rewrite import magnitude_expression
 from .stage_forms import (
     affine_inverse_form,
@@ -65,6 +65,9 @@ from .stage_forms import (
 )
 
 __all__ = ["BranchInfo", "LawBranches", "law_branches", "leaves"]
+
+#: ``(condition, required truth value)`` pairs that select a branch.
+_Path = tuple[tuple[sp.Basic, bool], ...]
 
 _Q, _F = sp.Symbol("q"), sp.Symbol("F")
 
@@ -117,7 +120,7 @@ class BranchInfo:
     residual: sp.Expr
     dR_dq: sp.Expr
     dR_dF: sp.Expr
-    path: Path
+    path: _Path
     locks: bool
     lock_value: float | None
     steep: bool = False

@@ -21,10 +21,10 @@ from sympy.core.parameters import distribute
 
 from .emit import KernelPrinter
 
-__all__ = ["Path", "build_selector", "condition_code", "decision_tree", "leaves"]
+__all__ = ["build_selector", "condition_code", "decision_tree", "leaves"]
 
 #: ``(condition, required truth value)`` pairs that select a branch.
-Path = tuple[tuple[sp.Basic, bool], ...]
+_Path = tuple[tuple[sp.Basic, bool], ...]
 
 
 
@@ -38,7 +38,7 @@ def _ready_piecewise(expr: sp.Basic) -> sp.Piecewise | None:
     return None
 
 
-def _arms(pw: sp.Piecewise, path: Path) -> Iterator[tuple[sp.Expr, Path]]:
+def _arms(pw: sp.Piecewise, path: _Path) -> Iterator[tuple[sp.Expr, _Path]]:
     """Each arm of ``pw`` with the path that selects it (first true condition wins)."""
     before: list[tuple[sp.Basic, bool]] = []
     for value, cond in pw.args:
@@ -51,14 +51,14 @@ def _arms(pw: sp.Piecewise, path: Path) -> Iterator[tuple[sp.Expr, Path]]:
         before.append((cond, False))
 
 
-def leaves(residual: sp.Expr) -> list[tuple[sp.Expr, Path]]:
+def leaves(residual: sp.Expr) -> list[tuple[sp.Expr, _Path]]:
     """Every leaf of a prepared residual (a smooth piece and the path that selects it,
     feasible or not), in the order of the law's ``Piecewise`` arms."""
     with distribute(False):
         return list(_leaves(residual, ()))
 
 
-def _leaves(expr: sp.Expr, path: Path) -> Iterator[tuple[sp.Expr, Path]]:
+def _leaves(expr: sp.Expr, path: _Path) -> Iterator[tuple[sp.Expr, _Path]]:
     pw = _ready_piecewise(expr)
     if pw is None:
         yield expr, path
