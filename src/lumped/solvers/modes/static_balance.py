@@ -29,8 +29,9 @@ class StaticHold:
     :mod:`lumped.solvers.modes.stuck`): forces as functions of time, the break-out time
     and a dense segment.
 
-    Built by :func:`lumped.solvers.modes.stuck.static_hold`; ``free`` are the locked elements whose forces follow the
-    balance, ``minv`` is ``-K_free^{-1}`` (rows by ``free``), ``c = K_fixed F_fixed``."""
+    Built by :func:`lumped.solvers.modes.stuck.static_hold`; ``free`` are the locked
+    elements whose forces follow the balance, ``minv`` is ``-K_free^{-1}`` (rows by
+    ``free``), ``c = K_fixed F_fixed``."""
 
     def __init__(self, scene: Scene, x: list[float], v: list[float], F: list[float],
                  free: list[int], minv: list[list[float]], c: list[float],
