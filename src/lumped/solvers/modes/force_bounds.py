@@ -58,7 +58,13 @@ from ..implicit.initial_slip import known_rate_dashpots, rest_edge, set_valued_a
 from ..newton.criteria import ROUNDOFF
 from .lock_events import lock_cones
 
-__all__ = ["onto_joint_bounds", "onto_slip_ends", "slip_beyond_joint_bounds"]
+__all__ = ["JOINT_MARGIN", "onto_joint_bounds", "onto_slip_ends", "slip_beyond_joint_bounds",
+           "split_near_joint_bounds"]
+
+#: How near an end of their joint interval (a fraction of the half-widths' sum) a load on
+#: stuck dashpots in parallel is held by a static split (see the module notes, 4): the
+#: inset of a force the stage split holds at its bound (:mod:`lumped.solvers.radau.stage`).
+JOINT_MARGIN = 1e-6
 
 
 def onto_joint_bounds(scene: Scene, cones: dict[int, tuple[float, float, float, float]],
@@ -108,14 +114,14 @@ def onto_slip_ends(scene: Scene, old: Sequence[int], new: Sequence[int], v: list
     return out
 
 
-def slip_beyond_joint_bounds(scene: Scene, branches: Sequence, modes: list[int], t: float,
-                             F: Sequence[float]) -> list[int]:
-    """``modes`` with each group of two or more dashpots stuck in parallel between ground
-    and one node ``n`` (held by no other lock, joined to nothing else but springs) whose
-    load at ``t`` (the forcing and the springs' forces ``F``) lies beyond their joint
-    interval by more than the round-off of ``n``'s balance put on the branches their laws
-    read beyond it (see the module notes, 3); the other modes as they are (a new list)."""
-    out = list(modes)
+def _ground_groups(scene: Scene, branches: Sequence, modes: Sequence[int], t: float,
+                   F: Sequence[float]):
+    """Each group of two or more dashpots stuck in parallel between ground and one node
+    ``n`` (held by no other lock, joined to nothing else but springs; see the module
+    notes, 3) as ``(members, sign, cones, T, scale)``: ``sign[e] = s_e``, ``cones`` their
+    lock intervals (:func:`lumped.solvers.modes.lock_events.lock_cones`, every end
+    finite), ``T`` the load on ``n`` they carry and ``scale`` the sum of the magnitudes in
+    ``n``'s balance (the springs' forces and the members' bounds)."""
     groups: dict[int, list[int]] = {}
     other_locks: set[int] = set()
     for e, el in enumerate(scene.elements):
@@ -144,10 +150,21 @@ def slip_beyond_joint_bounds(scene: Scene, branches: Sequence, modes: list[int],
         for e in others:
             rest += (1.0 if scene.elem_a[e] == n else -1.0) * F[e]
             scale += abs(F[e])
-        T = -rest
+        scale += sum(max(abs(cones[e][2]), abs(cones[e][3])) for e in members)
+        yield members, sign, cones, -rest, scale
+
+
+def slip_beyond_joint_bounds(scene: Scene, branches: Sequence, modes: list[int], t: float,
+                             F: Sequence[float]) -> list[int]:
+    """``modes`` with each group of two or more dashpots stuck in parallel between ground
+    and one node ``n`` (held by no other lock, joined to nothing else but springs) whose
+    load at ``t`` (the forcing and the springs' forces ``F``) lies beyond their joint
+    interval by more than the round-off of ``n``'s balance put on the branches their laws
+    read beyond it (see the module notes, 3); the other modes as they are (a new list)."""
+    out = list(modes)
+    for members, sign, cones, T, scale in _ground_groups(scene, branches, modes, t, F):
         top = sum(max(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
         bottom = sum(min(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
-        scale += sum(max(abs(cones[e][2]), abs(cones[e][3])) for e in members)
         if T - top > ROUNDOFF * scale:
             up = True
         elif bottom - T > ROUNDOFF * scale:
@@ -161,3 +178,34 @@ def slip_beyond_joint_bounds(scene: Scene, branches: Sequence, modes: list[int],
             if not branches[e].info[b].locks:
                 out[e] = b
     return out
+
+
+def split_near_joint_bounds(scene: Scene, branches: Sequence, modes: Sequence[int],
+                            t: float, F: Sequence[float]) -> tuple[list[float], set[int]]:
+    r"""``(F, members)``: ``F`` with each group of dashpots stuck in parallel between
+    ground and one node (as :func:`slip_beyond_joint_bounds`) whose load ``T`` lies within
+    their joint interval but within ``JOINT_MARGIN`` of their half-widths' sum ``W`` of an
+    end of it given the split of the stage rule (see the module notes, 4),
+
+    .. math:: s_e F_e = s_e c_e + w_e rac{T - \sum_k s_k c_k}{W},
+
+    the last member's force the balance's remainder; the members so split (a new list and
+    set; both as they were when no group is that near)."""
+    out, split = list(F), set()
+    for members, sign, cones, T, _ in _ground_groups(scene, branches, modes, t, F):
+        top = sum(max(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
+        bottom = sum(min(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
+        W = sum(cones[e][1] for e in members)
+        if not (bottom <= T <= top and min(top - T, T - bottom) <= JOINT_MARGIN * W):
+            continue
+        share = (T - sum(sign[e] * cones[e][0] for e in members)) / W
+        for e in members:  # (within its interval: |share| <= 1 when T is within)
+            c, w, lo, hi = cones[e]
+            out[e] = min(max(c + sign[e] * w * share, lo), hi)
+        last = max(members, key=lambda e: cones[e][1])
+        left = T - sum(sign[e] * out[e] for e in members if e != last)
+        out[last] = sign[last] * left
+        if not cones[last][2] <= out[last] <= cones[last][3]:
+            continue  # (an interval off centre whose split the clamp moved: the steps')
+        split.update(members)
+    return out, split

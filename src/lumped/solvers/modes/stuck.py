@@ -39,7 +39,7 @@ from ...scene import Scene
 from ..newton.criteria import ROUNDOFF
 from ..nonsmooth.rest_balance import rest_inverse
 from ..radau.rows import row_of
-from .force_bounds import onto_joint_bounds
+from .force_bounds import onto_joint_bounds, split_near_joint_bounds
 from .guards import guard_tolerance
 from .static_balance import StaticHold, structure_arrays
 
@@ -116,15 +116,20 @@ def equilibrium_hold(scene: Scene, ms, t: float, x: list[float], v: list[float],
         return None
     snapped = onto_joint_bounds(scene, ms.cones, F, ms.rtol)  # (a load at their joint bound)
     hold = _equilibrium_hold(scene, ms, t, x, v, snapped, fkind, fpar)
-    return hold if hold is not None or snapped == F else \
-        _equilibrium_hold(scene, ms, t, x, v, F, fkind, fpar)
+    if hold is None and snapped != F:
+        hold = _equilibrium_hold(scene, ms, t, x, v, F, fkind, fpar)
+    if hold is None:  # (a load within their joint bound by less than the steps resolve)
+        split, members = split_near_joint_bounds(scene, ms.lbs, ms.modes, t, F)
+        if members:
+            hold = _equilibrium_hold(scene, ms, t, x, v, split, fkind, fpar, members)
+    return hold
 
 
 def _equilibrium_hold(scene: Scene, ms, t: float, x: list[float], v: list[float],
-                      F: list[float], fkind: np.ndarray, fpar: np.ndarray | None
-                      ) -> StaticHold | None:
+                      F: list[float], fkind: np.ndarray, fpar: np.ndarray | None,
+                      split: set[int] = frozenset()) -> StaticHold | None:
     """:func:`equilibrium_hold` at the forces ``F`` (the nodes at rest, the forcing
-    constant)."""
+    constant); the locks in parallel of ``split`` may sit inside their intervals."""
     N = len(v)
     net = scene.net_forces(t, F)
     scale = [abs(fi) for fi in scene.external_forces(t)]
@@ -140,7 +145,7 @@ def _equilibrium_hold(scene: Scene, ms, t: float, x: list[float], v: list[float]
         gs = guard(q[e], F[e])
         if not all(g + tol >= 0.0 for g in gs):
             return None
-        if e in ms.cones and not any(abs(g) <= tol for g in gs):
+        if e in ms.cones and e not in split and not any(abs(g) <= tol for g in gs):
             return None  # inside its cone: the split is the steps' rule's to choose
     return StaticHold(scene, x, v, F, [], [], [0.0] * N, fkind, fpar,
                       (np.zeros((0, N)), np.zeros(0, dtype=np.int64)))
