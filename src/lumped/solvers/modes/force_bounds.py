@@ -46,6 +46,22 @@ r"""Forces the stage Newton leaves off the bounds their laws put them on, put ba
    run crept by steps of ``1e-15`` s and stopped after 12 backward-Euler bridges (issue
    29). Their slip is slow (``1e-30`` and ``1e-18`` m/s, the shear-thickening dashpot
    taking the excess), and ``radau5`` takes it in 9 steps.
+4. :func:`split_near_joint_bounds`. The same group under a load *within* its joint
+   interval by less than ``JOINT_MARGIN W`` (``W = sum_e w_e``, the half-widths' sum) never
+   moves, but its split is not fixed and the steps cannot keep one: the stage reads the
+   forces from the momentum rows only to about ``m atol / h`` (the stage rule,
+   :func:`lumped.solvers.radau.cone_split.cone_solver`, puts them in proportion to the
+   half-widths, ``s_e F_e = s_e c_e + w_e (T - sum_k s_k c_k) / W``, each a fraction
+   ``(top - T) / W`` of its half-width inside its bound), so a force lands past its bound,
+   the active set holds it ``1e-6 w_e`` inside (:meth:`lumped.solvers.radau.stage.
+   StageSystem.solve`), which leaves the others more than they carry. A mass on a Bingham
+   and two Herschel-Bulkley dashpots to ground under loads ``1e-12`` and ``1e-9`` (of
+   the joint yield force) inside it read a force ``3e-9`` past its yield force at steps
+   of ``8e-8`` s, chattered across the guard of the shear-thickening dashpot, crept and
+   stopped after 12 backward-Euler bridges (issue 29). Under a constant forcing
+   :func:`lumped.solvers.modes.stuck.equilibrium_hold` holds the group at the stage
+   rule's split, exact: ``x`` and ``v = 0`` frozen, every force within its interval,
+   ``n``'s balance to round-off (the last member's force is its remainder).
 """
 
 from __future__ import annotations
@@ -184,8 +200,8 @@ def split_near_joint_bounds(scene: Scene, branches: Sequence, modes: Sequence[in
                             t: float, F: Sequence[float]) -> tuple[list[float], set[int]]:
     r"""``(F, members)``: ``F`` with each group of dashpots stuck in parallel between
     ground and one node (as :func:`slip_beyond_joint_bounds`) whose load ``T`` lies within
-    their joint interval but within ``JOINT_MARGIN`` of their half-widths' sum ``W`` of an
-    end of it given the split of the stage rule (see the module notes, 4),
+    their joint interval but within ``JOINT_MARGIN W`` of an end of it (``W`` their
+    half-widths' sum) given the split of the stage rule (see the module notes, 4),
 
     .. math:: s_e F_e = s_e c_e + w_e rac{T - \sum_k s_k c_k}{W},
 

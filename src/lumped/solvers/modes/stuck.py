@@ -111,6 +111,9 @@ def equilibrium_hold(scene: Scene, ms, t: float, x: list[float], v: list[float],
     bounds, where the stage forces scatter around the bounds by the stage Newton's
     tolerance and each step read a crossing (38 loop passes an accepted step). Such
     forces within ``rtol`` of a joint bound are put on it first (:mod:`.force_bounds`).
+    Stuck dashpots in parallel to ground whose load lies within their joint interval by
+    less than the steps resolve are held at the stage rule's split, each force inside its
+    interval (:func:`lumped.solvers.modes.force_bounds.split_near_joint_bounds`).
     """
     if fkind is None or (fkind == 2).any() or any(vi != 0.0 for vi in v):
         return None
