@@ -20,14 +20,19 @@ DT, T_END, RTOL, ATOL = 0.025 / 4, 0.5, 1e-10, 1e-13
 PERMUTATIONS = list(itertools.permutations(range(3)))
 
 
+def joint_yield_laws() -> list:
+    """The three dashpots' laws (yield forces ``TAUS``)."""
+    hb = get_law("herschel_bulkley")
+    return [hb.bind(gamma=1.3282140456696148, tau=TAUS[0], n=1.0),
+            get_law("bingham").bind(gamma=1.0, tau=TAUS[1]),
+            hb.bind(gamma=GAMMA_HB2, tau=TAUS[2], n=2.0)]
+
+
 def joint_yield_scene(load: float, order: tuple[int, ...] = (0, 1, 2),
                       spring: float = 0.0, x0: float = X0) -> Scene:
     """The scene, its dashpots ``e0, e1, e2`` in the law order ``order``; with ``spring >
     0`` a linear spring of that stiffness from ground to the mass as well (``s``)."""
-    hb = get_law("herschel_bulkley")
-    laws = [hb.bind(gamma=1.3282140456696148, tau=TAUS[0], n=1.0),
-            get_law("bingham").bind(gamma=1.0, tau=TAUS[1]),
-            hb.bind(gamma=GAMMA_HB2, tau=TAUS[2], n=2.0)]
+    laws = joint_yield_laws()
     elements = [Element(f"e{k}", laws[i], "ground", "m0") for k, i in enumerate(order)]
     if spring:
         elements.append(Element("s", get_law("linear_spring").bind(k=spring), "ground", "m0"))

@@ -14,9 +14,23 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _joint_yield import ATOL, DT, JOINT, PERMUTATIONS, RTOL, T_END, TAUS, X0, joint_yield_scene
+from _joint_yield import (
+    ATOL,
+    DT,
+    JOINT,
+    PERMUTATIONS,
+    RTOL,
+    T_END,
+    TAUS,
+    X0,
+    M,
+    joint_yield_laws,
+    joint_yield_scene,
+)
 
 from lumped import simulate
+from lumped.laws import get_law
+from lumped.scene import Element, Mass, Scene
 
 
 def _assert_held(sol, order: tuple[int, ...], x0: float) -> None:
@@ -59,3 +73,19 @@ def test_a_load_just_within_beside_a_stretched_spring_holds(sign):
     sol = simulate(scene, method="radau5", dt=DT, t_end=T_END, rtol=RTOL, atol=ATOL,
                    compiled=True)
     _assert_held(sol, (0, 1, 2), x0)
+
+
+@pytest.mark.parametrize("inside", [1e-12, 1e-9])
+def test_the_group_between_two_masses_holds(inside):
+    """The three dashpots between two masses, the first held to ground by a spring
+    stretched to carry the load on the second, ``inside`` within the joint yield force:
+    nothing moves (``1e-12`` crept and stopped after 12 bridges at ``t = 0.006``)."""
+    k, load = 100.0, JOINT * (1.0 - inside)
+    elements = [Element(f"e{i}", law, "mA", "m0") for i, law in enumerate(joint_yield_laws())]
+    elements.append(Element("s", get_law("linear_spring").bind(k=k), "ground", "mA"))
+    scene = Scene([Mass("mA", m=1.0, x0=load / k), Mass("m0", m=M, x0=load / k)],
+                  elements, {"m0": load})
+    sol = simulate(scene, method="radau5", dt=DT, t_end=T_END, rtol=RTOL, atol=ATOL,
+                   compiled=False)
+    _assert_held(sol, (0, 1, 2), load / k)
+    assert np.max(np.abs(np.asarray(sol.x["mA"]) - load / k)) <= ATOL * T_END
