@@ -227,13 +227,15 @@ def split_near_joint_bounds(scene: Scene, branches: Sequence, modes: Sequence[in
         if not (bottom <= T <= top and min(top - T, T - bottom) <= JOINT_MARGIN * W):
             continue
         share = (T - sum(sign[e] * cones[e][0] for e in members)) / W
+        got = {}
         for e in members:  # (within its interval: |share| <= 1 when T is within)
             c, w, lo, hi = cones[e]
-            out[e] = min(max(c + sign[e] * w * share, lo), hi)
+            got[e] = min(max(c + sign[e] * w * share, lo), hi)
         last = max(members, key=lambda e: cones[e][1])
-        left = T - sum(sign[e] * out[e] for e in members if e != last)
-        out[last] = sign[last] * left
-        if not cones[last][2] <= out[last] <= cones[last][3]:
+        got[last] = sign[last] * (T - sum(sign[e] * got[e] for e in members if e != last))
+        if not cones[last][2] <= got[last] <= cones[last][3]:
             continue  # (an interval off centre whose split the clamp moved: the steps')
+        for e, Fe in got.items():
+            out[e] = Fe
         split.update(members)
     return out, split
