@@ -12,33 +12,14 @@ by steps of ``1e-15`` s and stopped after 12 backward-Euler bridges
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numpy as np
 import pytest
+from _joint_yield import ATOL, DT, GAMMA_HB2, JOINT, PERMUTATIONS, RTOL, T_END, TAUS, X0
+from _joint_yield import joint_yield_scene as _scene
 
 from lumped import simulate
-from lumped.laws import get_law
-from lumped.scene import Element, Mass, Scene
-
-TAUS = (0.024652579610771632, 1.0, 0.03594991084219946)
-#: The sum of the yield forces as the balance adds them (in floating point).
-JOINT = TAUS[0] + TAUS[1] + TAUS[2]
-GAMMA_HB2 = 1.0000002302585358
-X0 = -1.3356131035699072e-84
-DT, T_END, RTOL, ATOL = 0.025 / 4, 0.5, 1e-10, 1e-13
-PERMUTATIONS = list(itertools.permutations(range(3)))
-
-
-def _scene(load: float, order: tuple[int, ...] = (0, 1, 2)) -> Scene:
-    hb = get_law("herschel_bulkley")
-    laws = [hb.bind(gamma=1.3282140456696148, tau=TAUS[0], n=1.0),
-            get_law("bingham").bind(gamma=1.0, tau=TAUS[1]),
-            hb.bind(gamma=GAMMA_HB2, tau=TAUS[2], n=2.0)]
-    return Scene([Mass("m0", m=0.31622776601683794, x0=X0, v0=-7.931954298103801e-230)],
-                 [Element(f"e{k}", laws[i], "ground", "m0") for k, i in enumerate(order)],
-                 {"m0": load})
 
 
 def _run(load: float, order: tuple[int, ...]):

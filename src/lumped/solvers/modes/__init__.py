@@ -5,5 +5,6 @@
 :mod:`.mode_guess` (a guessed mode confirmed by the full laws; compiled:
 :mod:`.mode_guess_jit`), :mod:`.lock_events` (impacts, locks and their cones at an
 event), :mod:`.split_kink` (kinks of the split among locks in a step) and :mod:`.stuck`
-(stuck intervals taken in one piece; compiled: :mod:`.stuck_jit`).
+(stuck intervals taken in one piece; their static balance :mod:`.static_balance`;
+compiled: :mod:`.stuck_jit`).
 """

@@ -46,6 +46,25 @@ r"""Forces the stage Newton leaves off the bounds their laws put them on, put ba
    run crept by steps of ``1e-15`` s and stopped after 12 backward-Euler bridges (issue
    29). Their slip is slow (``1e-30`` and ``1e-18`` m/s, the shear-thickening dashpot
    taking the excess), and ``radau5`` takes it in 9 steps.
+4. :func:`split_near_joint_bounds`. The same group (or one between two nodes, read at
+   one of them that is held by no other lock and joined to nothing else but springs)
+   under a load *within* its joint
+   interval by less than ``JOINT_MARGIN W`` (``W = sum_e w_e``, the half-widths' sum) never
+   moves, but its split is not fixed and the steps cannot keep one: the stage reads the
+   forces from the momentum rows only to about ``m atol / h`` (the stage rule,
+   :func:`lumped.solvers.radau.cone_split.cone_solver`, puts them in proportion to the
+   half-widths, ``s_e F_e = s_e c_e + w_e (T - sum_k s_k c_k) / W``, each a fraction
+   ``(top - T) / W`` of its half-width inside its bound), so a force lands past its bound,
+   the active set holds it ``1e-6 w_e`` inside
+   (:meth:`lumped.solvers.radau.stage.StageSystem.solve`), which leaves the others more
+   than they carry. A mass on a Bingham
+   and two Herschel-Bulkley dashpots to ground under loads ``1e-12`` and ``1e-9`` (of
+   the joint yield force) inside it read a force ``3e-9`` past its yield force at steps
+   of ``8e-8`` s, chattered across the guard of the shear-thickening dashpot, crept and
+   stopped after 12 backward-Euler bridges (issue 29). Under a constant forcing
+   :func:`lumped.solvers.modes.stuck.equilibrium_hold` holds the group at the stage
+   rule's split, exact: ``x`` and ``v = 0`` frozen, every force within its interval,
+   ``n``'s balance to round-off (the last member's force is its remainder).
 """
 
 from __future__ import annotations
@@ -58,7 +77,13 @@ from ..implicit.initial_slip import known_rate_dashpots, rest_edge, set_valued_a
 from ..newton.criteria import ROUNDOFF
 from .lock_events import lock_cones
 
-__all__ = ["onto_joint_bounds", "onto_slip_ends", "slip_beyond_joint_bounds"]
+__all__ = ["JOINT_MARGIN", "onto_joint_bounds", "onto_slip_ends", "slip_beyond_joint_bounds",
+           "split_near_joint_bounds"]
+
+#: How near an end of their joint interval (a fraction of the half-widths' sum) a load on
+#: stuck dashpots in parallel is held by a static split (see the module notes, 4): the
+#: inset of a force the stage split holds at its bound (:mod:`lumped.solvers.radau.stage`).
+JOINT_MARGIN = 1e-6
 
 
 def onto_joint_bounds(scene: Scene, cones: dict[int, tuple[float, float, float, float]],
@@ -108,6 +133,53 @@ def onto_slip_ends(scene: Scene, old: Sequence[int], new: Sequence[int], v: list
     return out
 
 
+def _stuck_groups(scene: Scene, branches: Sequence, modes: Sequence[int], t: float,
+                  F: Sequence[float], grounded: bool = True):
+    """Each group of two or more dashpots stuck in parallel between ground and one node
+    ``n`` (or, unless ``grounded``, between two nodes, ``n`` one of them), ``n`` held by no
+    other lock and joined to nothing else but springs (see the module notes, 3), as
+    ``(members, sign, cones, T, scale)``: ``sign[e] = s_e`` at ``n``, ``cones`` their lock
+    intervals (:func:`lumped.solvers.modes.lock_events.lock_cones`, every end finite),
+    ``T`` the load on ``n`` they carry and ``scale`` the sum of the magnitudes in ``n``'s
+    balance (the springs' forces and the members' bounds)."""
+    groups: dict[tuple[int, int], list[int]] = {}
+    other_locks: set[int] = set()
+    for e, el in enumerate(scene.elements):
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        info = branches[e].info[modes[e]]
+        if not info.locks:
+            continue
+        if el.kind == "dashpot" and info.lock_value == 0.0 and (
+                min(a, b) < 0 <= max(a, b) or not grounded and min(a, b) >= 0):
+            groups.setdefault((max(a, b), min(a, b)), []).append(e)
+        else:
+            other_locks.update(i for i in (a, b) if i >= 0)
+    f = scene.external_forces(t) if groups else []
+    for pair, members in groups.items():
+        if len(members) < 2:
+            continue
+        for n in pair:
+            if n < 0 or n in other_locks:
+                continue
+            others = [e for e in range(len(F)) if e not in members
+                      and n in (scene.elem_a[e], scene.elem_b[e])]
+            if all(scene.elements[e].kind == "spring" for e in others):
+                break  # (a dashpot's force at t may be a held split's, not its law's)
+        else:
+            continue
+        cones = lock_cones(branches, modes, F, members)
+        if len(cones) < len(members) or not all(
+                math.isfinite(cones[e][2]) and math.isfinite(cones[e][3]) for e in members):
+            continue
+        sign = {e: 1.0 if scene.elem_a[e] == n else -1.0 for e in members}
+        rest, scale = f[n], abs(f[n])
+        for e in others:
+            rest += (1.0 if scene.elem_a[e] == n else -1.0) * F[e]
+            scale += abs(F[e])
+        scale += sum(max(abs(cones[e][2]), abs(cones[e][3])) for e in members)
+        yield members, sign, cones, -rest, scale
+
+
 def slip_beyond_joint_bounds(scene: Scene, branches: Sequence, modes: list[int], t: float,
                              F: Sequence[float]) -> list[int]:
     """``modes`` with each group of two or more dashpots stuck in parallel between ground
@@ -116,38 +188,9 @@ def slip_beyond_joint_bounds(scene: Scene, branches: Sequence, modes: list[int],
     interval by more than the round-off of ``n``'s balance put on the branches their laws
     read beyond it (see the module notes, 3); the other modes as they are (a new list)."""
     out = list(modes)
-    groups: dict[int, list[int]] = {}
-    other_locks: set[int] = set()
-    for e, el in enumerate(scene.elements):
-        a, b = scene.elem_a[e], scene.elem_b[e]
-        info = branches[e].info[modes[e]]
-        if not info.locks:
-            continue
-        if el.kind == "dashpot" and info.lock_value == 0.0 and min(a, b) < 0 <= max(a, b):
-            groups.setdefault(max(a, b), []).append(e)
-        else:
-            other_locks.update(i for i in (a, b) if i >= 0)
-    f = scene.external_forces(t) if groups else []
-    for n, members in groups.items():
-        if len(members) < 2 or n in other_locks:
-            continue
-        cones = lock_cones(branches, modes, F, members)
-        if len(cones) < len(members) or not all(
-                math.isfinite(cones[e][2]) and math.isfinite(cones[e][3]) for e in members):
-            continue
-        sign = {e: 1.0 if scene.elem_a[e] == n else -1.0 for e in members}
-        others = [e for e in range(len(F)) if e not in sign
-                  and n in (scene.elem_a[e], scene.elem_b[e])]
-        if any(scene.elements[e].kind != "spring" for e in others):
-            continue  # (a dashpot's force at t may be a held split's, not its law's)
-        rest, scale = f[n], abs(f[n])
-        for e in others:
-            rest += (1.0 if scene.elem_a[e] == n else -1.0) * F[e]
-            scale += abs(F[e])
-        T = -rest
+    for members, sign, cones, T, scale in _stuck_groups(scene, branches, modes, t, F):
         top = sum(max(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
         bottom = sum(min(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
-        scale += sum(max(abs(cones[e][2]), abs(cones[e][3])) for e in members)
         if T - top > ROUNDOFF * scale:
             up = True
         elif bottom - T > ROUNDOFF * scale:
@@ -161,3 +204,38 @@ def slip_beyond_joint_bounds(scene: Scene, branches: Sequence, modes: list[int],
             if not branches[e].info[b].locks:
                 out[e] = b
     return out
+
+
+def split_near_joint_bounds(scene: Scene, branches: Sequence, modes: Sequence[int],
+                            t: float, F: Sequence[float]) -> tuple[list[float], set[int]]:
+    r"""``(F, members)``: ``F`` with each group of dashpots stuck in parallel between
+    ground and one node, or between two nodes, one of which is held by no other lock and
+    joined to nothing else but springs (as :func:`slip_beyond_joint_bounds`, which takes
+    only groups to ground), whose load ``T`` on that node lies within
+    their joint interval but within ``JOINT_MARGIN W`` of an end of it (``W`` their
+    half-widths' sum) given the split of the stage rule (see the module notes, 4),
+
+    .. math:: s_e F_e = s_e c_e + w_e rac{T - \sum_k s_k c_k}{W},
+
+    the last member's force the balance's remainder; the members so split (a new list and
+    set; both as they were when no group is that near)."""
+    out, split = list(F), set()
+    for members, sign, cones, T, _ in _stuck_groups(scene, branches, modes, t, F, grounded=False):
+        top = sum(max(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
+        bottom = sum(min(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
+        W = sum(cones[e][1] for e in members)
+        if not (bottom <= T <= top and min(top - T, T - bottom) <= JOINT_MARGIN * W):
+            continue
+        share = (T - sum(sign[e] * cones[e][0] for e in members)) / W
+        got = {}
+        for e in members:  # (within its interval: |share| <= 1 when T is within)
+            c, w, lo, hi = cones[e]
+            got[e] = min(max(c + sign[e] * w * share, lo), hi)
+        last = max(members, key=lambda e: cones[e][1])
+        got[last] = sign[last] * (T - sum(sign[e] * got[e] for e in members if e != last))
+        if not cones[last][2] <= got[last] <= cones[last][3]:
+            continue  # (an interval off centre whose split the clamp moved: the steps')
+        for e, Fe in got.items():
+            out[e] = Fe
+        split.update(members)
+    return out, split
