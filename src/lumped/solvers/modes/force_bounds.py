@@ -215,7 +215,7 @@ def split_near_joint_bounds(scene: Scene, branches: Sequence, modes: Sequence[in
     their joint interval but within ``JOINT_MARGIN W`` of an end of it (``W`` their
     half-widths' sum) given the split of the stage rule (see the module notes, 4),
 
-    .. math:: s_e F_e = s_e c_e + w_e rac{T - \sum_k s_k c_k}{W},
+    .. math:: s_e F_e = s_e c_e + w_e \frac{T - \sum_k s_k c_k}{W},
 
     the last member's force the balance's remainder; the members so split (a new list and
     set; both as they were when no group is that near)."""
