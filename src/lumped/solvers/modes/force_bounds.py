@@ -180,6 +180,14 @@ def _stuck_groups(scene: Scene, branches: Sequence, modes: Sequence[int], t: flo
         yield members, sign, cones, -rest, scale
 
 
+def _joint_interval(members: list[int], sign: dict[int, float],
+                    cones: dict[int, tuple[float, float, float, float]]) -> tuple[float, float]:
+    """``(bottom, top)``: the interval of loads ``sum_e s_e F_e`` a group of
+    :func:`_stuck_groups` carries with each force within its lock interval."""
+    return (sum(min(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members),
+            sum(max(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members))
+
+
 def slip_beyond_joint_bounds(scene: Scene, branches: Sequence, modes: list[int], t: float,
                              F: Sequence[float]) -> list[int]:
     """``modes`` with each group of two or more dashpots stuck in parallel between ground
@@ -189,8 +197,7 @@ def slip_beyond_joint_bounds(scene: Scene, branches: Sequence, modes: list[int],
     read beyond it (see the module notes, 3); the other modes as they are (a new list)."""
     out = list(modes)
     for members, sign, cones, T, scale in _stuck_groups(scene, branches, modes, t, F):
-        top = sum(max(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
-        bottom = sum(min(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
+        bottom, top = _joint_interval(members, sign, cones)
         if T - top > ROUNDOFF * scale:
             up = True
         elif bottom - T > ROUNDOFF * scale:
@@ -221,8 +228,7 @@ def split_near_joint_bounds(scene: Scene, branches: Sequence, modes: Sequence[in
     set; both as they were when no group is that near)."""
     out, split = list(F), set()
     for members, sign, cones, T, _ in _stuck_groups(scene, branches, modes, t, F, grounded=False):
-        top = sum(max(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
-        bottom = sum(min(sign[e] * cones[e][2], sign[e] * cones[e][3]) for e in members)
+        bottom, top = _joint_interval(members, sign, cones)
         W = sum(cones[e][1] for e in members)
         if not (bottom <= T <= top and min(top - T, T - bottom) <= JOINT_MARGIN * W):
             continue
