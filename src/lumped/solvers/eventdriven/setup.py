@@ -268,7 +268,6 @@ def _new_plan(scene: Scene, key: tuple | None) -> ScenePlan:
     parts = structure_parts(scene, branches)
     plan = ScenePlan(scope_error(scene, branches), branches, parts["checked"],
                      parts["cyclic"], key, structure=parts)
-    plan.__dict__["hold_structure"] = parts["hold_structure"]  # (modes.stuck.static_hold)
     kinds = _FORCING_KINDS.get(tuple(map(id, scene.forcing)))
     if kinds is not None and all(a is b for a, b in zip(kinds[0], scene.forcing,
                                                         strict=True)):

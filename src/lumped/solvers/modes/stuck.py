@@ -68,11 +68,12 @@ def static_hold(scene: Scene, plan, modes: Sequence[int], x: list[float],
                 fpar: np.ndarray | None) -> StaticHold | None:
     """The :class:`StaticHold` of the state, or ``None`` when the scene is not at rest in a
     mode that locks every node (see the module notes) or its forcing is not taken. The
-    structure of a mode is kept on ``plan`` (the scene's
-    :class:`~lumped.solvers.eventdriven.setup.ScenePlan`)."""
+    structure of a mode is kept on ``plan.structure`` (the scene's
+    :class:`~lumped.solvers.eventdriven.setup.ScenePlan`'s parts of its structure alone,
+    shared by the plans of that structure)."""
     if fkind is None or any(vi != 0.0 for vi in v):
         return None
-    cache = plan.__dict__.setdefault("hold_structure", {})
+    cache = plan.structure.setdefault("hold_structure", {})
     key = tuple(modes)
     got = cache.get(key, False)
     if got is False:
