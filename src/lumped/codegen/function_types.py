@@ -21,7 +21,8 @@ import functools
 
 from .jit import numba_module
 
-__all__ = ["BRANCH_LAW_TYPE", "function_at", "law_type", "guards_type", "branch_type"]
+__all__ = ["BRANCH_LAW_TYPE", "function_at", "compiled_address", "law_type", "guards_type",
+           "branch_type"]
 
 if numba_module is not None:
     from numba import types as _T
@@ -56,6 +57,21 @@ def function_at(ftype):
         return ftype(_T.int64), codegen
 
     return at
+
+
+def compiled_address(kept: list, py_func, ftype) -> int:
+    """The address of ``py_func`` compiled for ``ftype``'s signature, for a loop that calls
+    it through :func:`function_at`: compiled the first time a process asks (numba's disk
+    cache after the first time on a machine) and kept in ``kept`` (the caller's list,
+    ``[(address, dispatcher)]``, so that the dispatcher lives as long as its address)."""
+    if not kept:
+        from numba.experimental.function_type import _get_wrapper_address
+
+        from .jit import njit
+
+        disp = njit(ftype.signature, cache=True)(py_func)
+        kept.append((_get_wrapper_address(disp, ftype.signature), disp))
+    return kept[0][0]
 
 
 def law_type():

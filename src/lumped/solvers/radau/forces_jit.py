@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 
-from ...codegen.function_types import function_at
+from ...codegen.function_types import compiled_address, function_at
 from ...codegen.jit import njit, numba_enabled
 from ...scene.forcing_jit import FORCE_CONSTANT, FORCE_LINEAR, FORCE_SINE, linear_value
 
@@ -68,9 +68,4 @@ _TABLE: list = []
 def table_forcing() -> int:
     """The address of :func:`table_value` compiled (once per process; numba's disk cache
     after the first time on a machine), for a scene with a table forcing."""
-    if not _TABLE:
-        from numba.experimental.function_type import _get_wrapper_address
-
-        disp = njit(TABLE_TYPE.signature, cache=True)(table_value)
-        _TABLE.append((_get_wrapper_address(disp, TABLE_TYPE.signature), disp))
-    return _TABLE[0][0]
+    return compiled_address(_TABLE, table_value, TABLE_TYPE)

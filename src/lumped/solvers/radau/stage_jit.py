@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from ...codegen.function_types import BRANCH_LAW_TYPE, function_at
+from ...codegen.function_types import BRANCH_LAW_TYPE, compiled_address, function_at
 from ...codegen.jit import njit, numba_enabled
 from ..newton.criteria import ROUNDOFF
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
@@ -267,9 +267,4 @@ def roundoff_test() -> int:
     cache after the first time on a machine), 1 without numba (the Python function)."""
     if not numba_enabled():
         return 1
-    if not _ROUNDOFF:
-        from numba.experimental.function_type import _get_wrapper_address
-
-        disp = njit(ROUNDOFF_TYPE.signature, cache=True)(roundoff_worst_jit.py_func)
-        _ROUNDOFF.append((_get_wrapper_address(disp, ROUNDOFF_TYPE.signature), disp))
-    return _ROUNDOFF[0][0]
+    return compiled_address(_ROUNDOFF, roundoff_worst_jit.py_func, ROUNDOFF_TYPE)

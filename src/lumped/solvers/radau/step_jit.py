@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from ...codegen.function_types import function_at, law_type
+from ...codegen.function_types import compiled_address, function_at, law_type
 from ...codegen.jit import njit, numba_enabled
 from ..implicit.branch_check_jit import dead_band_sign, sign_bit
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
@@ -108,12 +108,7 @@ _FOLD: list = []
 def fold_test() -> int:
     """The address of :func:`folded_at` compiled (once per process; numba's disk cache after
     the first time on a machine), for :func:`lumped.solvers.eventdriven.loop_jit.advance`."""
-    if not _FOLD:
-        from numba.experimental.function_type import _get_wrapper_address
-
-        disp = njit(FOLDED_TYPE.signature, cache=True)(folded_at)
-        _FOLD.append((_get_wrapper_address(disp, FOLDED_TYPE.signature), disp))
-    return _FOLD[0][0]
+    return compiled_address(_FOLD, folded_at, FOLDED_TYPE)
 
 
 @njit(cache=True)
