@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...codegen.function_types import branch_type, guards_type, law_type
+from ...codegen.function_types import branch_type
 from ...scene import Scene
 from ...scene.forcing_jit import FORCE_LINEAR
 from ..modes.mode_guess_jit import compiled_probe_modes, probe_workspace
@@ -27,6 +27,7 @@ from ..radau.forces_jit import table_forcing
 from ..radau.stage_jit import roundoff_test
 from ..radau.step_jit import fold_test
 from . import loop_jit as L
+from .fast_parts import loaded, loop_parts, pointer
 from .step import NOT_SOUGHT, creep_floor
 
 __all__ = ["CompiledLoop", "compiled_loop"]
@@ -63,100 +64,12 @@ def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
         return None, "python: moving supports (no compiled loop)"
     with plan.lock:
         if plan.fast is None:
-            if option is None and steps < COMPILE_AFTER and not _loaded(scene, plan):
+            if option is None and steps < COMPILE_AFTER and not loaded(scene, plan):
                 return None, "python: not compiled yet (a short run)"
-            plan.fast = _parts(scene, plan)
+            plan.fast = loop_parts(scene, plan)
     if isinstance(plan.fast, str):
         return None, plan.fast
     return CompiledLoop(*plan.fast), "compiled" if steps == 0 else f"compiled from step {steps}"
-
-
-def _loaded(scene: Scene, plan) -> bool:
-    """The scene's structure has its generated module already, loaded in this process or
-    in the disk cache (an earlier run of the same laws and topology, with any numbers,
-    compiled it): nothing left to compile. Checked once per plan."""
-    from ...codegen import jit, module_cache
-
-    if getattr(plan, "module_loaded", None) is None:
-        try:
-            source = jit.scene_source(scene).source
-        except ValueError:  # a hand-written kernel: _parts says why
-            plan.module_loaded = True
-        else:
-            plan.module_loaded = module_cache.module_cached(source)
-    return plan.module_loaded
-
-
-def _parts(scene: Scene, plan) -> tuple | str:
-    """The compiled loop's per-scene parts, or why the scene runs in Python."""
-    from ...codegen.jit import jit_scene, numba_enabled
-    from ...scene.forcing import zero_forcing
-    from ...scene.forcing_jit import forcing_arrays
-
-    if not numba_enabled():
-        return "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
-    if _locks_in_parallel(scene, plan):
-        return "python: locked elements in parallel (minimum-norm forces)"
-    fkind, fpar, _ = forcing_arrays(scene, 1.0, 0, linear=True)
-    for i, fn in enumerate(scene.forcing):
-        if fn is zero_forcing:  # f = 0.0, as no forcing
-            fkind[i] = 0
-    if (fkind == 3).any():
-        node = scene.nodes[int(np.argmax(fkind == 3))].name
-        return (f"python: the forcing on node {node!r} is a function of t (compiled: "
-                f"constants, sine bursts and tables)")
-    try:
-        js = jit_scene(scene)
-    except ValueError as err:  # a hand-written kernel: no generated code
-        return f"python: {err}"
-    return (js, _pointer(js.module.branch_law, law_type()),
-            _pointer(js.module.branch_guards, guards_type()), fkind, fpar,
-            np.array(plan.checked, dtype=np.int64), js.module.active_branch)
-
-
-def _locks_in_parallel(scene: Scene, plan) -> bool:
-    """Some elements that can be force-free (a branch whose ``dR/dF`` is not a nonzero
-    constant: the plan's ``free_cyclic``, made once per structure) close a cycle: their
-    forces can become indeterminate (:mod:`lumped.solvers.nonsmooth.locks`)."""
-    from ..nonsmooth.locks import on_cycles
-
-    free = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in plan.structure["free_cyclic"])
-    return len(free) > 1 and bool(on_cycles(len(scene.nodes), free))
-
-
-_POINTERS: dict = {}
-
-
-def _pointer(dispatcher, ftype):
-    """``dispatcher`` as a first-class function of numba type ``ftype`` whose address and
-    type are looked up once (cached per dispatcher).
-
-    numba converts a dispatcher passed for a function-type argument to its address on
-    every call, and types an object of its *wrapper address protocol* anew on every call
-    (each about 0.1 ms); :class:`_Pointer` carries both, ready."""
-    from numba.experimental.function_type import _get_wrapper_address
-
-    key = id(dispatcher)
-    got = _POINTERS.get(key)
-    if got is None or got.keep is not dispatcher:
-        addr = _get_wrapper_address(dispatcher, ftype.signature)
-        got = _POINTERS[key] = _Pointer(addr, ftype, dispatcher)
-    return got
-
-
-class _Pointer:
-    """A compiled function's address and numba type (``_numba_type_``, read by numba's
-    ``typeof``; ``__wrapper_address__``, read when the argument is unboxed); it keeps
-    the dispatcher, hence the code, alive."""
-
-    def __init__(self, addr: int, ftype, keep) -> None:
-        self.addr, self._numba_type_, self.keep = addr, ftype, keep
-
-    def __wrapper_address__(self) -> int:
-        return self.addr
-
-    def signature(self):
-        return self._numba_type_.signature
 
 
 class CompiledLoop:
@@ -269,7 +182,7 @@ class CompiledLoop:
         js = self.js
         cands = np.array(candidates, dtype=np.int64).reshape(len(candidates), self.E)
         cur = _NO_MODE if current is None else np.array(current, dtype=np.int64)
-        branch = _pointer(self._branch, branch_type())
+        branch = pointer(self._branch, branch_type())
         k = fn(self.law.addr, branch.addr, js.consts, js.masses, js.ea, js.eb, js.spring,
                cands, cur, np.array(f, dtype=float), np.array(x, dtype=float),
                np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
@@ -326,6 +239,26 @@ class CompiledLoop:
                     hit = (float(fst[L.A_ROOT]), (int(ist[L.A_W]), int(ist[L.A_J])))
         return (U, int(ist[L.A_ITS]), int(ist[L.A_NFAC]), float(fst[L.A_ERR]),
                 float(fst[L.F_SEEN]), hit)
+
+    def root_from(self, hit, F0: list[float]):
+        """The first crossing on the last :meth:`attempt`'s step with the guards read from
+        the forces ``F0`` at its start ``t`` (the driver's test after an event,
+        :meth:`~lumped.solvers.eventdriven.checks.StepChecks.crossing`: ``F0`` the stage
+        forces' quadratic at ``s = 0``, not the probe's forces): ``hit``, the attempt's
+        crossing from the probe's forces, when it is ``None`` or at ``t`` itself
+        (``s = 0``); else the compiled root finder again on the attempt's stage values
+        (still in the work arrays), ``(s, (w, j))`` or ``None``, as
+        :func:`~lumped.solvers.modes.crossing_root.first_root_py` finds it. One compiled
+        call: no guard is evaluated in Python."""
+        if hit is None or hit[0] == 0.0:
+            return hit
+        js, fst, ist = self.js, self.fst, self.ist
+        x, v = self._arrays[0], self._arrays[1]
+        _ATTEMPT_ROOT.get()(self.guards.addr, js.consts, js.ea, js.eb, js.spring, self.modes_a,
+                            self.watched_a, self.A, x, v, np.array(F0, dtype=float), fst, ist,
+                            self.ws, self.wm)
+        return (float(fst[L.A_ROOT]), (int(ist[L.A_W]), int(ist[L.A_J]))) if ist[L.A_HIT] \
+            else None
 
     def run(self, st: dict, modes: list[int], watched: list[int], stats: dict, dense,
             rows) -> str:

@@ -256,9 +256,10 @@ class StepPass:
         t, tiny = self.t, 16 * _EPS * max(1.0, abs(self.t))
         tangent, kept, target = self.tangent, self.kept, self.target
         # (the compiled attempt has found the crossing by the same algorithm; after an
-        # event it saw the probe's forces: test here from the stage forces)
-        hit = self.crossing(sol, h) if (in_python or self.ms.forces_from_probe or tangent
-                                         or hit_c is NOT_SOUGHT) else hit_c
+        # event it saw the probe's forces: tested again from the stage forces, compiled)
+        hit = self.crossing(sol, h) if (in_python or tangent or hit_c is NOT_SOUGHT) else (
+            self.fast.root_from(hit_c, self.start_forces(sol)) if self.ms.forces_from_probe
+            else hit_c)
         while kept and hit is not None and (hit[0] * h <= tiny or (
                 tangent and hit[0] <= 1.001 * C[0])):
             # the full laws kept the mode at t: a guard read crossed at t is a tangency

@@ -1,0 +1,101 @@
+r"""The compiled loop's parts of a ``radau5`` scene (:mod:`lumped.solvers.eventdriven.fast`):
+whether its structure's module is loaded, its generated kernels' addresses, its forcing's
+arrays and whether it runs in Python instead (and why).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...codegen.function_types import guards_type, law_type
+from ...scene import Scene
+
+__all__ = ["Pointer", "loaded", "locks_in_parallel", "loop_parts", "pointer"]
+
+
+def loaded(scene: Scene, plan) -> bool:
+    """The scene's structure has its generated module already, loaded in this process or
+    in the disk cache (an earlier run of the same laws and topology, with any numbers,
+    compiled it): nothing left to compile. Checked once per plan."""
+    from ...codegen import jit, module_cache
+
+    if getattr(plan, "module_loaded", None) is None:
+        try:
+            source = jit.scene_source(scene).source
+        except ValueError:  # a hand-written kernel: loop_parts says why
+            plan.module_loaded = True
+        else:
+            plan.module_loaded = module_cache.module_cached(source)
+    return plan.module_loaded
+
+
+def loop_parts(scene: Scene, plan) -> tuple | str:
+    """The compiled loop's per-scene parts, or why the scene runs in Python."""
+    from ...codegen.jit import jit_scene, numba_enabled
+    from ...scene.forcing import zero_forcing
+    from ...scene.forcing_jit import forcing_arrays
+
+    if not numba_enabled():
+        return "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
+    if locks_in_parallel(scene, plan):
+        return "python: locked elements in parallel (minimum-norm forces)"
+    fkind, fpar, _ = forcing_arrays(scene, 1.0, 0, linear=True)
+    for i, fn in enumerate(scene.forcing):
+        if fn is zero_forcing:  # f = 0.0, as no forcing
+            fkind[i] = 0
+    if (fkind == 3).any():
+        node = scene.nodes[int(np.argmax(fkind == 3))].name
+        return (f"python: the forcing on node {node!r} is a function of t (compiled: "
+                f"constants, sine bursts and tables)")
+    try:
+        js = jit_scene(scene)
+    except ValueError as err:  # a hand-written kernel: no generated code
+        return f"python: {err}"
+    return (js, pointer(js.module.branch_law, law_type()),
+            pointer(js.module.branch_guards, guards_type()), fkind, fpar,
+            np.array(plan.checked, dtype=np.int64), js.module.active_branch)
+
+
+def locks_in_parallel(scene: Scene, plan) -> bool:
+    """Some elements that can be force-free (a branch whose ``dR/dF`` is not a nonzero
+    constant: the plan's ``free_cyclic``, made once per structure) close a cycle: their
+    forces can become indeterminate (:mod:`lumped.solvers.nonsmooth.locks`)."""
+    from ..nonsmooth.locks import on_cycles
+
+    free = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in plan.structure["free_cyclic"])
+    return len(free) > 1 and bool(on_cycles(len(scene.nodes), free))
+
+
+_POINTERS: dict = {}
+
+
+def pointer(dispatcher, ftype):
+    """``dispatcher`` as a first-class function of numba type ``ftype`` whose address and
+    type are looked up once (cached per dispatcher).
+
+    numba converts a dispatcher passed for a function-type argument to its address on
+    every call, and types an object of its *wrapper address protocol* anew on every call
+    (each about 0.1 ms); :class:`Pointer` carries both, ready."""
+    from numba.experimental.function_type import _get_wrapper_address
+
+    key = id(dispatcher)
+    got = _POINTERS.get(key)
+    if got is None or got.keep is not dispatcher:
+        addr = _get_wrapper_address(dispatcher, ftype.signature)
+        got = _POINTERS[key] = Pointer(addr, ftype, dispatcher)
+    return got
+
+
+class Pointer:
+    """A compiled function's address and numba type (``_numba_type_``, read by numba's
+    ``typeof``; ``__wrapper_address__``, read when the argument is unboxed); it keeps
+    the dispatcher, hence the code, alive."""
+
+    def __init__(self, addr: int, ftype, keep) -> None:
+        self.addr, self._numba_type_, self.keep = addr, ftype, keep
+
+    def __wrapper_address__(self) -> int:
+        return self.addr
+
+    def signature(self):
+        return self._numba_type_.signature
