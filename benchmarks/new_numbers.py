@@ -3,6 +3,7 @@
 Usage, from the repository root::
 
     python benchmarks/new_numbers.py [--repeats 7] [--params k] [--json]
+        [--scenes "paper forcing-F2,chain-3"] [--cases "radau5 compiled=True"]
 
 For each case (method and scene) the scene is first run twice (its structure's compiled
 module is loaded, the process is warm); then, ``--repeats`` times, a scene with **new
@@ -14,7 +15,8 @@ target is at most 1.3) and both over the yardstick (:func:`lumped.bench.measure_
 the smaller of two measurements, before and after). Cases: ``radau5`` at ``rtol`` 1e-7
 (default options, what ``auto`` runs), ``radau5`` with ``compiled=True``, ``jit-bdf2`` at
 ``dt`` 1e-4; on the paper's scene (``forcing-F2``, ``[0, 5]``) and the 3-mass chain
-(:func:`lumped.bench.network_scenes.bingham_chain`, ``[0, 5]``).
+(:func:`lumped.bench.network_scenes.bingham_chain`, ``[0, 5]``); with ``--scenes``, also
+the bench's ``viscous-soft`` (released from ``x0 = 0.3``, one event).
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ import time
 from lumped import simulate
 from lumped.bench.network_scenes import bingham_chain
 from lumped.bench.new_numbers import scene_with_new_numbers
+from lumped.bench.scenes import SCENES as BENCH_SCENES
+from lumped.bench.scenes import generic_scene
 from lumped.bench.timing import measure_unit
 from lumped.scenarios import scenario_scene
 
@@ -37,7 +41,11 @@ CASES = {
     "jit-bdf2": ("jit-bdf2", {"dt": 1e-4}),
 }
 SCENES = {"paper forcing-F2": lambda: scenario_scene("forcing-F2"),
-          "chain-3": lambda: bingham_chain(3)}
+          "chain-3": lambda: bingham_chain(3),
+          "viscous-soft": lambda: generic_scene(
+              next(s for s in BENCH_SCENES if s.name == "viscous-soft"))}
+#: The scenes run without ``--scenes``.
+DEFAULT_SCENES = ("paper forcing-F2", "chain-3")
 
 
 def _cpu(scene, method: str, options: dict) -> float:
@@ -66,10 +74,16 @@ def main() -> None:
     parser.add_argument("--params", default="k",
                         help="comma-separated law parameters to change (default: k)")
     parser.add_argument("--json", action="store_true", help="print JSON records")
+    parser.add_argument("--scenes", default=",".join(DEFAULT_SCENES),
+                        help=f"comma-separated, of: {', '.join(SCENES)}")
+    parser.add_argument("--cases", default=",".join(CASES),
+                        help=f"comma-separated, of: {', '.join(CASES)}")
     args = parser.parse_args()
     params = tuple(p for p in args.params.split(",") if p)
+    scenes = [s for s in args.scenes.split(",") if s]
+    cases = [c for c in args.cases.split(",") if c]
     unit = measure_unit()
-    records = [measure(s, c, args.repeats, params) for s in SCENES for c in CASES]
+    records = [measure(s, c, args.repeats, params) for s in scenes for c in cases]
     unit = min(unit, measure_unit())
     if args.json:
         print(json.dumps({"yardstick_s": unit, "params": params, "records": records},

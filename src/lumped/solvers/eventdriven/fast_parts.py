@@ -10,39 +10,49 @@ import numpy as np
 from ...codegen.function_types import guards_type, law_type
 from ...scene import Scene
 
-__all__ = ["Pointer", "loaded", "locks_in_parallel", "loop_parts", "pointer"]
+__all__ = ["Pointer", "loaded", "locks_in_parallel", "loop_forcing", "loop_parts", "pointer"]
 
 
 def loaded(scene: Scene, plan) -> bool:
     """The scene's structure has its generated module already, loaded in this process or
     in the disk cache (an earlier run of the same laws and topology, with any numbers,
-    compiled it): nothing left to compile. Checked once per plan."""
+    compiled it): nothing left to compile. Checked once per plan, and a yes kept per
+    structure (``plan.structure``, with the cache directory it holds for): a scene with
+    new numbers makes no module text to ask."""
     from ...codegen import jit, module_cache
 
     if getattr(plan, "module_loaded", None) is None:
+        where = str(module_cache.cache_dir())
+        if plan.structure.get("module_loaded_in") == where:
+            plan.module_loaded = True
+            return True
         try:
             source = jit.scene_source(scene).source
         except ValueError:  # a hand-written kernel: loop_parts says why
             plan.module_loaded = True
         else:
             plan.module_loaded = module_cache.module_cached(source)
+            if plan.module_loaded:
+                plan.structure["module_loaded_in"] = where
     return plan.module_loaded
 
 
 def loop_parts(scene: Scene, plan) -> tuple | str:
-    """The compiled loop's per-scene parts, or why the scene runs in Python."""
+    """The compiled loop's per-scene parts, or why the scene runs in Python. What depends
+    on the structure alone is made once per structure (``plan.structure``: the answer of
+    :func:`locks_in_parallel`, the fold-checked elements' array), the forcing's arrays
+    once per forcing objects (:func:`loop_forcing`); the scene's numbers are
+    :func:`~lumped.codegen.jit.jit_scene`'s."""
     from ...codegen.jit import jit_scene, numba_enabled
-    from ...scene.forcing import zero_forcing
-    from ...scene.forcing_jit import forcing_arrays
 
     if not numba_enabled():
         return "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
-    if locks_in_parallel(scene, plan):
+    structure = plan.structure
+    if structure.get("locks_in_parallel") is None:
+        structure["locks_in_parallel"] = locks_in_parallel(scene, plan)
+    if structure["locks_in_parallel"]:
         return "python: locked elements in parallel (minimum-norm forces)"
-    fkind, fpar, _ = forcing_arrays(scene, 1.0, 0, linear=True)
-    for i, fn in enumerate(scene.forcing):
-        if fn is zero_forcing:  # f = 0.0, as no forcing
-            fkind[i] = 0
+    fkind, fpar = loop_forcing(scene)
     if (fkind == 3).any():
         node = scene.nodes[int(np.argmax(fkind == 3))].name
         return (f"python: the forcing on node {node!r} is a function of t (compiled: "
@@ -51,9 +61,40 @@ def loop_parts(scene: Scene, plan) -> tuple | str:
         js = jit_scene(scene)
     except ValueError as err:  # a hand-written kernel: no generated code
         return f"python: {err}"
+    checked = structure.get("checked_array")
+    if checked is None:
+        checked = structure["checked_array"] = np.array(plan.checked, dtype=np.int64)
     return (js, pointer(js.module.branch_law, law_type()),
-            pointer(js.module.branch_guards, guards_type()), fkind, fpar,
-            np.array(plan.checked, dtype=np.int64), js.module.active_branch)
+            pointer(js.module.branch_guards, guards_type()), fkind, fpar, checked,
+            js.module.active_branch)
+
+
+#: ids of a scene's forcing objects -> (those objects, :func:`loop_forcing`'s arrays),
+#: the last few hundred asked (the objects are immutable; the compiled loop only reads
+#: the arrays).
+_FORCING: dict[tuple, tuple] = {}
+
+
+def loop_forcing(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """``(fkind, fpar)`` of the compiled loop's forcing
+    (:func:`~lumped.scene.forcing_jit.forcing_arrays` with ``linear=True``, a
+    :func:`~lumped.scene.forcing.zero_forcing` read as none), made once per forcing
+    objects: a scene with new law numbers and the same forcing objects shares them."""
+    from ...scene.forcing import zero_forcing
+    from ...scene.forcing_jit import forcing_arrays
+
+    key = tuple(map(id, scene.forcing))
+    got = _FORCING.get(key)
+    if got is not None and all(a is b for a, b in zip(got[0], scene.forcing, strict=True)):
+        return got[1], got[2]
+    fkind, fpar, _ = forcing_arrays(scene, 1.0, 0, linear=True)
+    for i, fn in enumerate(scene.forcing):
+        if fn is zero_forcing:  # f = 0.0, as no forcing
+            fkind[i] = 0
+    if len(_FORCING) >= 256:
+        _FORCING.clear()
+    _FORCING[key] = (tuple(scene.forcing), fkind, fpar)
+    return fkind, fpar
 
 
 def locks_in_parallel(scene: Scene, plan) -> bool:

@@ -47,3 +47,41 @@ def test_a_compiled_run_locates_no_crossing_in_python(monkeypatch, case):
     assert len(got.events) >= 3
     assert calls == []
     _same_run(got, ref)
+
+
+@pytest.mark.parametrize("compiled", [True, None])
+def test_new_numbers_make_no_compiled_loop_part_of_the_structure_again(monkeypatch, compiled):
+    """A run with new law numbers on a structure run before makes none of the compiled
+    loop's parts that depend on the structure or the forcing objects alone (before: the
+    forcing's arrays, the locks-in-parallel test and the disk cache's lookup of the
+    structure's module, once per run), and gives the numbers of a run from scratch."""
+    from lumped.bench.new_numbers import scene_with_new_numbers
+    from lumped.codegen import module_cache
+    from lumped.scene import forcing_jit
+    from lumped.solvers.eventdriven.setup import clear_plans
+    from lumped.solvers.nonsmooth import locks
+
+    base = generic_scene(next(s for s in SCENES if s.name == "forcing-F2"))
+    kw = dict(method="radau5", t_end=1.0, rtol=1e-7, compiled=compiled)
+    simulate(base, **kw)  # (the structure's module compiled or loaded)
+    for _ in range(3):  # a class's first two laws are derived; the third is its class's
+        simulate(scene_with_new_numbers(base), **kw)
+    calls = {"forcing": 0, "cycles": 0, "cached": 0}
+
+    def counted(module, name, what):
+        real = getattr(module, name)
+        monkeypatch.setattr(module, name, lambda *a, **k: calls.__setitem__(
+            what, calls[what] + 1) or real(*a, **k))
+
+    counted(forcing_jit, "forcing_arrays", "forcing")
+    counted(locks, "on_cycles", "cycles")
+    counted(module_cache, "module_cached", "cached")
+    scenes = [scene_with_new_numbers(base) for _ in range(2)]
+    got = [simulate(scene, **kw) for scene in scenes]
+    assert all(s.stats["loop"] == "compiled" and len(s.events) >= 2 for s in got)
+    assert calls == {"forcing": 0, "cycles": 0, "cached": 0}
+    monkeypatch.undo()
+    clear_plans()
+    for scene, sol in zip(scenes, got, strict=True):
+        again = simulate(scene, **kw)
+        assert np.array_equal(again.data, sol.data) and again.stats == sol.stats
