@@ -11,6 +11,7 @@ from lumped import simulate
 from lumped.bench.network_scenes import bingham_chain
 from lumped.bench.scenes import SCENES, generic_scene
 from lumped.codegen.jit import numba_enabled
+from lumped.scene.forcing import SineBurst
 from lumped.solvers.eventdriven import checks
 from lumped.solvers.modes import on_demand
 
@@ -85,3 +86,28 @@ def test_new_numbers_make_no_compiled_loop_part_of_the_structure_again(monkeypat
     for scene, sol in zip(scenes, got, strict=True):
         again = simulate(scene, **kw)
         assert np.array_equal(again.data, sol.data) and again.stats == sol.stats
+
+
+def test_a_network_with_no_free_cycle_never_looks_for_indeterminate_forces(monkeypatch):
+    """The chain's springs and dashpots lie on cycles, but no two of its elements that
+    can be force-free (its Bingham dashpots) close one: no force can be indeterminate,
+    and the driver does not look (before: once per event and per step the Python loop
+    accepted). A scene whose stuck dashpots close a cycle still logs its intervals."""
+    from lumped import Element, Mass, Scene, get_law
+    from lumped.solvers.eventdriven import mode_state
+
+    calls = []
+    real = mode_state.indeterminate_elements
+    monkeypatch.setattr(mode_state, "indeterminate_elements",
+                        lambda *a: calls.append(1) or real(*a))
+    got = simulate(bingham_chain(3), method="radau5", t_end=3.5, rtol=1e-6, compiled=False)
+    assert len(got.events) >= 10 and got.indeterminate == {}
+    assert calls == []
+    bing = get_law("bingham")
+    parallel = Scene([Mass("m", m=1.0, x0=0.0)],
+                     [Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m"),
+                      Element("d1", bing.bind(gamma=1.0, tau=1.0), "ground", "m"),
+                      Element("d2", bing.bind(gamma=2.0, tau=0.5), "ground", "m")],
+                     {"m": SineBurst(3.0, 6.0, 1.0)})
+    sol = simulate(parallel, method="radau5", t_end=2.0, rtol=1e-6)
+    assert calls and set(sol.indeterminate) == {"d1", "d2"}

@@ -218,7 +218,7 @@ def test_new_numbers_make_no_structure_part_again(monkeypatch):
     sols = [simulate(scene, **kw) for scene in scenes]
     assert all(s.stats["loop"] == "none: at rest throughout (no steps)" for s in sols)
     # the compiled loop's check for locks in parallel reads the structure's part too
-    assert not any(fast_parts.locks_in_parallel(s, scene_plan(s)) for s in scenes)
+    assert not any(fast_parts.locks_in_parallel(scene_plan(s)) for s in scenes)
     assert calls == {"structure": 0, "forcing": 0, "cycles": 0, "swap": 0}
 
 

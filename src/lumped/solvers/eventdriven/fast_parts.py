@@ -39,8 +39,8 @@ def loaded(scene: Scene, plan) -> bool:
 
 def loop_parts(scene: Scene, plan) -> tuple | str:
     """The compiled loop's per-scene parts, or why the scene runs in Python. What depends
-    on the structure alone is made once per structure (``plan.structure``: the answer of
-    :func:`locks_in_parallel`, the fold-checked elements' array), the forcing's arrays
+    on the structure alone is made once per structure (``plan.structure``: the elements
+    whose forces can be free on cycles, the fold-checked elements' array), the forcing's arrays
     once per forcing objects (:func:`loop_forcing`); the scene's numbers are
     :func:`~lumped.codegen.jit.jit_scene`'s."""
     from ...codegen.jit import jit_scene, numba_enabled
@@ -48,9 +48,7 @@ def loop_parts(scene: Scene, plan) -> tuple | str:
     if not numba_enabled():
         return "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
     structure = plan.structure
-    if structure.get("locks_in_parallel") is None:
-        structure["locks_in_parallel"] = locks_in_parallel(scene, plan)
-    if structure["locks_in_parallel"]:
+    if locks_in_parallel(plan):
         return "python: locked elements in parallel (minimum-norm forces)"
     fkind, fpar = loop_forcing(scene)
     if (fkind == 3).any():
@@ -97,14 +95,12 @@ def loop_forcing(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     return fkind, fpar
 
 
-def locks_in_parallel(scene: Scene, plan) -> bool:
+def locks_in_parallel(plan) -> bool:
     """Some elements that can be force-free (a branch whose ``dR/dF`` is not a nonzero
-    constant: the plan's ``free_cyclic``, made once per structure) close a cycle: their
-    forces can become indeterminate (:mod:`lumped.solvers.nonsmooth.locks`)."""
-    from ..nonsmooth.locks import on_cycles
-
-    free = tuple((e, scene.elem_a[e], scene.elem_b[e]) for e in plan.structure["free_cyclic"])
-    return len(free) > 1 and bool(on_cycles(len(scene.nodes), free))
+    constant) close a cycle: their forces can become indeterminate
+    (:mod:`lumped.solvers.nonsmooth.locks`); the plan's structure's ``free_cycles``, made
+    once per structure."""
+    return bool(plan.structure["free_cycles"])
 
 
 _POINTERS: dict = {}

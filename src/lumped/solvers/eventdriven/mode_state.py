@@ -67,7 +67,7 @@ class ModeState:
         self.N, self.E = len(scene.nodes), len(scene.elements)
         self.is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
         self.m_min = min((nd.m for nd in scene.nodes if isinstance(nd, Mass)), default=1.0)
-        self.cyclic = plan.cyclic
+        self.cyclic = plan.cyclic if plan.structure["free_cycles"] else ()  # (none free)
         self.zeno_window = zeno_window
         self.modes = [0] * self.E
         self.kernels: list = [None] * self.E

@@ -301,8 +301,11 @@ def structure_parts(scene: Scene, branches: list) -> dict:
     once per structure and shared by the plans of every scene of that structure, whatever
     its numbers: ``checked`` (the elements whose law is not known monotone), ``cyclic``
     (the elements on cycles), ``free_cyclic`` (those of them with a branch whose
-    ``dR/dF`` is not a nonzero constant: their forces can be free), ``hold_structure``
-    (the static balance's structure of each mode,
+    ``dR/dF`` is not a nonzero constant: their forces can be free), ``free_cycles``
+    (those of them on a cycle of such elements alone: the only elements whose forces can
+    be indeterminate, :func:`~lumped.solvers.nonsmooth.locks.indeterminate_elements`;
+    none, and no element's force ever is), ``hold_structure`` (the static balance's
+    structure of each mode,
     :func:`~lumped.solvers.modes.stuck.static_hold`). The structure is each node's
     kind, each element's kind, ends and law (the unbound law object) and its law's
     branches apart from their numbers (:func:`branches_structure`); everything these
@@ -317,14 +320,16 @@ def structure_parts(scene: Scene, branches: list) -> dict:
             _STRUCTURES.move_to_end(key)
             return got
     from ..implicit.branch_check import known_monotone
-    from ..nonsmooth.locks import cyclic_elements
+    from ..nonsmooth.locks import cyclic_elements, on_cycles
 
     cyclic = cyclic_elements(scene)
+    free = tuple(e for e in cyclic if any(
+        not (info.dR_dF.is_number and info.dR_dF != 0) for info in branches[e].info))
     got = {"checked": [e for e, el in enumerate(scene.elements)
                        if not known_monotone(el.law)],
-           "cyclic": cyclic, "hold_structure": {},
-           "free_cyclic": tuple(e for e in cyclic if any(
-               not (info.dR_dF.is_number and info.dR_dF != 0) for info in branches[e].info)),
+           "cyclic": cyclic, "hold_structure": {}, "free_cyclic": free,
+           "free_cycles": on_cycles(len(scene.nodes), tuple(
+               (e, scene.elem_a[e], scene.elem_b[e]) for e in free)) if len(free) > 1 else (),
            "laws": laws}  # (the laws the key names by id, kept alive with it)
     with _SHARED_LOCK:
         got = _STRUCTURES.setdefault(key, got)
