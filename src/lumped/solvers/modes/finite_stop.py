@@ -1,7 +1,8 @@
 r"""A junction's dashpot that stops in finite time, within the tolerance of its stop.
 
-A yield dashpot whose rate vanishes at its yield force faster than linearly in the force
-stops in finite time when the springs at a massless junction drive it. A
+A yield dashpot whose rate vanishes at its yield force more slowly than linearly in the
+force's distance to it (a power ``n < 1``) stops in finite time when the springs at a
+massless junction drive it. A
 Herschel-Bulkley dashpot ``q = -gamma (-F - tau)^n`` with ``n < 1`` at a junction held
 by springs of joint stiffness ``K`` relaxes as
 
@@ -19,7 +20,11 @@ force tolerance), every step of ``2e-11`` to ``1e-2`` s put the rate through zer
 the slip (``delta > 0``: the exact motion still slips, ``3.6e-5`` s more), and the run
 crept on by ``2e-11`` s a landing until its work budget stopped it (issue 29).
 
-:func:`stop_within_tolerance` takes the stop at such a landing: when the dashpot's force
+:func:`take_stop` (called by
+:meth:`~lumped.solvers.eventdriven.mode_state.ModeState.change_mode` at a guard event where
+:func:`~lumped.solvers.modes.lock_events.snap_to_locks` held the landed dashpot on its
+lock and the full laws still keep it slipping) takes the stop at such a landing
+(:func:`stop_within_tolerance`): when the dashpot's force
 is within the run's force tolerance of the edge ``F*`` of its law's set at rest
 (:func:`lumped.solvers.implicit.initial_slip.rest_edge`), its rate within the velocity
 tolerance of 0, and the junction at one of its ends is joined to nothing but springs off
@@ -28,11 +33,12 @@ on ``F*``,
 
 .. math::
 
-    f_j + \sum_{a_k = j} F_k(x_j) - \sum_{b_k = j} F_k(x_j) = 0
-    \quad\text{with } F_e = F^*,
+    f_j + \sum_{a_k = j} F_k(x_j) - \sum_{b_k = j} F_k(x_j) = 0,
+    \qquad F_e = F^*,
 
-(Newton in ``x_j``, each spring's force from its law at its new elongation; ``dF_k/dq_k
-= -R_q / R_F``), when that moves it by at most the position tolerance; the dashpot is
+(the sums over every element at ``j``, the dashpot's force held at ``F*``; Newton in
+``x_j``, each spring's force from its law at its new elongation, ``dF_k/dq_k = -R_q /
+R_F``), when that moves it by at most the position tolerance; the dashpot is
 then held on its stuck branch. The state is then the stop itself, where the full laws
 read the dashpot stuck.
 """
