@@ -435,10 +435,29 @@ _UNDAMPED_BESIDE_STUCK = Scene(
      Element("e2", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground", "m2")])
 
 
+#: A draw of the ``LUMPED_LARGE`` radau5 Python-loop run (issue 29, after 7280 passing): a
+#: junction on a Herschel-Bulkley ``n = 0.8`` dashpot to a mass stuck on a Coulomb
+#: element, which stops in finite time at ``t = 0.285`` (``delta ~ (t* - t)^5``); the
+#: landings on its guard crept on by ``2e-11`` s until the work budget stopped the run
+#: (:mod:`lumped.solvers.modes.finite_stop`).
+_FINITE_STOP_AT_A_JUNCTION = Scene(
+    [Mass("m0", m=1.0, x0=-0.8861753551274929, v0=1.4290706745375878),
+     Junction("j1", x0=-0.7137041729608238)],
+    [Element("e0", get_law("string_spring").bind(k=27.37029951734457,
+                                                 L=0.010083519707317613), "ground", "m0"),
+     Element("e1", get_law("herschel_bulkley").bind(gamma=10.0, tau=0.08588194489965506,
+                                                    n=0.8), "m0", "j1"),
+     Element("e2", get_law("coulomb").bind(tau=1.0, r=1.0), "ground", "m0"),
+     Element("e3", get_law("linear_spring").bind(k=10.0), "j1", "ground"),
+     Element("e4", get_law("implicit_spring").bind(k=39.605669270229065, L0=1.0,
+                                                   F0=1.000002302587744), "m0", "j1")])
+
+
 @pytest.mark.parametrize("method", LOOPED)
 @_SETTINGS
 @given(scene=networks())
 @example(scene=_UNDAMPED_BESIDE_STUCK)
+@example(scene=_FINITE_STOP_AT_A_JUNCTION)
 def test_random_passive_network_python_loop(method: str, scene: Scene) -> None:
     check_network(scene, method, compiled=False)
 

@@ -19,6 +19,7 @@ from ...scene import Mass, Scene
 from ...scene.supports import support_time
 from ..implicit.initial_slip import start_at_known_rates
 from ..modes.choice import select_modes
+from ..modes.finite_stop import take_stop
 from ..modes.force_bounds import onto_slip_ends, slip_beyond_joint_bounds
 from ..modes.lock_events import (
     apply_impacts,
@@ -111,8 +112,7 @@ class ModeState:
         scene, lbs, modes, names, events = self.scene, self.lbs, self.modes, self.names, \
             self.events
         rtol, atol, options = self.rtol, self.atol, self.settings.options
-        support_time(scene, t)  # (moving supports: the laws at t; a probe at t + h_p
-        # sets its own time and sets t back)
+        support_time(scene, t)  # (moving supports: the laws at t; a probe at t + h_p sets t back)
         if self.fast is not None:
             self.fast.forget()  # x, v, F may change in place here
         h0 = h_probe
@@ -146,6 +146,8 @@ class ModeState:
             v_p, F_p = got[0], [F_p[e] if lbs[e].info[new[e]].locks else f
                                 for e, f in enumerate(got[1])]
         scale_v = atol + rtol * max(abs(vi) for vi in v)
+        if hint in held and new == modes:  # a finite-time stop within tolerance: take it
+            new, v_p, F_p = take_stop(scene, lbs, new, hint, t, x, v, F, v_p, F_p, rtol, atol)
         hit = apply_impacts(scene, lbs, modes, new, x, v, scale_v, self.opts["restitution"],
                             F)
         if isinstance(hit, str):
@@ -372,10 +374,8 @@ class ModeState:
         msg = self.change_mode(t, max(1e-7 * h, 1e3 * _EPS * max(1.0, abs(t))), cause,
                                x, v, F)
         self.forces_from_probe = True
-        if self.cyclic and not msg:  # forces not unique from the event on
-            free = indeterminate_elements(self.scene, self.scene.elongations(x, v), F,
-                                          self.cyclic)
-            self.log.mark(t, t, [self.names[e] for e in free])
+        if not msg:  # forces not unique from the event on (locks on cycles)
+            self.mark_free(t, t, x, v, F)
         self.stats["events"] = len(self.events)
         if msg:
             return Status.INCONSISTENT, msg
