@@ -14,9 +14,14 @@ s to fail): strict expected failures, so that a fix shows as an unexpected pass.
    0.2687`` (``rtol = 1e-10``; ``bdf2`` runs through).
 2. The same dashpots between two free masses, the second loaded so that their force
    (``f m_A / (m_A + m)``) is ``1e-9`` within the joint yield force: the masses move
-   together, the stage reads the group's force from the momentum rows to about ``m atol
-   / h`` (far more than ``1e-9``), the run creeps and stops after 12 bridges at ``t =
-   3.6e-5`` (``rtol = 1e-6``; at ``1e-10`` it runs through).
+   together; as the steps shrink (``5e-7`` to ``5e-9`` s) the stage's split scatters
+   by up to ``1e-6`` of the yield force about its rule's (the stage Newton's tolerance
+   of the forces grows like ``m / h``), the active set holds all three ``1e-6`` of their
+   half-widths inside (``1e-6`` short of the load), the mode alternates between all
+   stuck and the shear-thickening dashpot at its flat yield end, after each
+   backward-Euler bridge the forces restart on the opposite bounds (their sum ``-J``),
+   and the run creeps and stops after 12 bridges at ``t = 3.6e-5`` (``rtol = 1e-6``; at
+   ``1e-10`` it runs through, 61 steps).
 """
 
 from __future__ import annotations
