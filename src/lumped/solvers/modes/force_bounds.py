@@ -192,11 +192,18 @@ def slip_beyond_joint_bounds(scene: Scene, branches: Sequence, modes: list[int],
                              F: Sequence[float]) -> list[int]:
     """``modes`` with each group of two or more dashpots stuck in parallel between ground
     and one node ``n`` (held by no other lock, joined to nothing else but springs) whose
-    load at ``t`` (the forcing and the springs' forces ``F``) lies beyond their joint
-    interval by more than the round-off of ``n``'s balance put on the branches their laws
-    read beyond it (see the module notes, 3); the other modes as they are (a new list)."""
+    load just after ``t`` (the forcing and the springs' forces ``F``) lies beyond their
+    joint interval by more than the round-off of ``n``'s balance put on the branches their
+    laws read beyond it (see the module notes, 3); the other modes as they are (a new list).
+
+    The forcing is read one ulp after ``t``, beyond a jump at ``t`` (the mode is the one
+    after it): a sine burst switched off at its peak, ``1e-12`` to ``1e-7`` beyond the
+    joint yield force, takes that peak at ``t_off`` itself, and the group, which the probe
+    read stuck under the load ``0`` after it, was sent to slip on; every step failed and
+    the run stopped on its work budget (issue 29)."""
     out = list(modes)
-    for members, sign, cones, T, scale in _stuck_groups(scene, branches, modes, t, F):
+    after = math.nextafter(t, math.inf)
+    for members, sign, cones, T, scale in _stuck_groups(scene, branches, modes, after, F):
         bottom, top = _joint_interval(members, sign, cones)
         if T - top > ROUNDOFF * scale:
             up = True
