@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from ...codegen.function_types import compiled_address, function_at, law_type
+from ...codegen.function_types import compiled_address, function_at, guards_type, law_type
 from ...codegen.jit import njit, numba_enabled
 from ..implicit.branch_check_jit import dead_band_sign, sign_bit
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
@@ -28,7 +28,8 @@ from .forces_jit import forces
 from .tableau import E_ERR, MU_REAL, SAMPLES, C
 
 __all__ = ["element_nodes", "folded", "folded_at", "fold_test", "crossed", "error_norm",
-           "step_error", "start_time", "finite"]
+           "step_error", "start_time", "finite", "step_error_at", "crossed_at", "error_address",
+           "crossed_address"]
 
 _C0, _C1, _C2 = C
 _E0, _E1, _E2 = E_ERR
@@ -93,15 +94,23 @@ def folded_at(law_addr, lawc, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_
 
 if numba_enabled():
     _law_at = function_at(law_type())
+    _guards_at = function_at(guards_type())
     from numba import types as _T
 
     _f8, _i8, _v = _T.float64, _T.int64, _T.float64[::1]
+    _iv, _b, _mc, _ma = _i8[::1], _T.boolean[::1], _f8[:, ::1], _f8[:, :]
     #: The numba function type of :func:`folded_at`.
     FOLDED_TYPE = _T.FunctionType(_T.boolean(
-        _i8, _v, _i8[::1], _i8[::1], _T.boolean[::1], _i8[::1], _i8[::1], _f8[:, ::1], _f8, _v,
-        _v, _v, _v, _i8, _i8, _f8[:], _f8[:]))
+        _i8, _v, _iv, _iv, _b, _iv, _iv, _mc, _f8, _v, _v, _v, _v, _i8, _i8, _f8[:], _f8[:]))
+    #: The numba function type of :func:`step_error_at`.
+    ERROR_TYPE = _T.FunctionType(_f8(
+        _i8, _v, _v, _iv, _iv, _b, _iv, _iv, _mc, _v, _f8, _f8, _v, _v, _v, _v, _i8, _iv, _mc,
+        _i8, _v, _f8, _f8, _f8, _ma, _ma, _iv, _v, _v, _f8))
+    #: The numba function type of :func:`crossed_at`.
+    CROSSED_TYPE = _T.FunctionType(_T.boolean(
+        _i8, _v, _iv, _iv, _b, _iv, _iv, _mc, _f8, _v, _v, _v, _v, _i8, _i8, _ma, _ma, _v))
 else:  # pragma: no cover - without numba
-    FOLDED_TYPE = None
+    FOLDED_TYPE = ERROR_TYPE = CROSSED_TYPE = None
 _FOLD: list = []
 
 
@@ -150,7 +159,7 @@ def _bit(x, scale) -> int:
     return sign_bit(dead_band_sign(x, scale))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def crossed(branch_guards, lawc, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, U, N, n,
              qn, Fn, gbuf) -> bool:
     """True when a watched guard (shifted by its round-off tolerance) is negative at a
@@ -278,7 +287,7 @@ def start_time(t, prev_break) -> float:
     return np.nextafter(t, math.inf) if t == prev_break else t
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h, t_n0, x, v,
                 F, dF, have_dF, fkind, fpar, table, net, rtol, atol, F_ref, M, LUm, permm, rhs,
                 err, two) -> float:
@@ -294,3 +303,38 @@ def step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h
             net[eb[e]] -= F[e]
     return error_norm(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h, x, v, F,
                        net, dF, have_dF == 1, rtol, atol, F_ref, M, LUm, permm, rhs, err, two)
+
+
+def step_error_at(law_addr, lawc, masses, ea, eb, spring, modes, watched, A, U, h, t_n0, x, v,
+                  F, dF, have_dF, fkind, fpar, table, net, rtol, atol, F_ref, M, LUm, permm,
+                  rhs, err, two) -> float:
+    """:func:`step_error` on the scene's ``branch_law`` at ``law_addr``, compiled apart
+    (:func:`error_address`): the shared loop calls it through its address, so the loop's
+    own module holds none of its code (LLVM optimises and emits it once, not again inside
+    the loop)."""
+    return step_error(_law_at(law_addr), lawc, masses, ea, eb, spring, modes, watched, A, U,
+                      h, t_n0, x, v, F, dF, have_dF, fkind, fpar, table, net, rtol, atol, F_ref,
+                      M, LUm, permm, rhs, err, two)
+
+
+def crossed_at(guards_addr, lawc, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, U, N, n,
+               qn, Fn, gbuf) -> bool:
+    """:func:`crossed` on the scene's ``branch_guards`` at ``guards_addr``, compiled apart
+    (:func:`crossed_address`), as :func:`step_error_at`."""
+    return crossed(_guards_at(guards_addr), lawc, ea, eb, spring, modes, watched, A, h, x_n,
+                   v_n, F_n, U, N, n, qn, Fn, gbuf)
+
+
+_ERROR: list = []
+_CROSSED: list = []
+
+
+def error_address() -> int:
+    """The address of :func:`step_error_at` compiled (once per process; numba's disk cache
+    after the first time on a machine)."""
+    return compiled_address(_ERROR, step_error_at, ERROR_TYPE)
+
+
+def crossed_address() -> int:
+    """The address of :func:`crossed_at` compiled, as :func:`error_address`."""
+    return compiled_address(_CROSSED, crossed_at, CROSSED_TYPE)
