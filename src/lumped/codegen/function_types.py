@@ -122,8 +122,8 @@ def compiled_address(kept: list, py_func, ftype) -> int:
 
         from .jit import njit
 
-        with scalar_loops():
-            disp = njit(ftype.signature, cache=True)(py_func)
+        with scalar_loops():  # (called through its address only: no Python wrapper)
+            disp = njit(ftype.signature, cache=True, no_cpython_wrapper=True)(py_func)
         kept.append((_get_wrapper_address(disp, ftype.signature), disp))
     return kept[0][0]
 

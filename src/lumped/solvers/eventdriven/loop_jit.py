@@ -382,7 +382,7 @@ def compiled_advance():
         sig = T_.none(i8, i8, i8, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m, m, iv, m, i8,
                       v, iv, v, v, v, v, v, iv, v, v, m, m3, m, m, m3, i8[:, ::1])
         with scalar_loops():
-            _COMPILED.append(njit(sig, cache=True)(advance))
+            _COMPILED.append(njit(sig, cache=True, no_cfunc_wrapper=True)(advance))
     return _COMPILED[0]
 
 
