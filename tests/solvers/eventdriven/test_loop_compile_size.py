@@ -136,3 +136,38 @@ def test_scalar_loops_compiles_without_the_loop_vectorizer_and_sets_it_back():
     plain(a)
     scalar(b)
     assert np.array_equal(a, b)
+
+
+def test_a_new_structure_compiles_no_branch_kernel_apart(monkeypatch, tmp_path):
+    # a structure's branch kernels and guards are inlined (numba's IR) into its
+    # branch_law and branch_guards: compiled there once, not each on its own as well
+    # (before: each a compilation of its own, wrappers and LLVM, about 0.05 s apiece,
+    # 14 of them for the 3-mass chain)
+    import re
+
+    from numba.core import config, event
+
+    from lumped import Element, Mass, Scene, get_law, simulate
+    from lumped.scene.forcing import SineBurst
+
+    simulate(Scene([Mass("m", m=1.0, x0=0.0)],
+                   [Element("k", get_law("linear_spring").bind(k=10.0), "ground", "m")]),
+             method="radau5", t_end=0.1, compiled=True)  # the shared loop, compiled or loaded
+    # a structure no other test builds: a Bingham chain of two masses, each on a spring
+    # and a Coulomb slider, loaded on the second
+    lin, bing, coul = get_law("linear_spring"), get_law("bingham"), get_law("coulomb")
+    scene = Scene([Mass("p", m=1.3, x0=0.0), Mass("r", m=0.7, x0=0.0)],
+                  [Element("k1", lin.bind(k=31.0), "ground", "p"),
+                   Element("b1", bing.bind(gamma=0.9, tau=0.45), "ground", "p"),
+                   Element("k2", lin.bind(k=23.0), "p", "r"),
+                   Element("c2", coul.bind(tau=0.3, r=1.0), "p", "r")],
+                  {"r": SineBurst(4.0, 6.0, 0.7)})
+    monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path))  # (numba's disk cache: empty)
+    with event.install_recorder("numba:compile") as rec:
+        got = simulate(scene, method="radau5", t_end=0.4, rtol=1e-6, compiled=True)
+    assert got.stats["loop"] == "compiled" and got.ok
+    names = [ev.data["dispatcher"].py_func.__qualname__ for _, ev in rec.buffer
+             if ev.is_start and ev.data["dispatcher"].py_func.__module__.startswith(
+                 "lumped_jit_")]
+    assert "branch_law" in names and "branch_guards" in names
+    assert not [n for n in names if re.fullmatch(r"(branch|guards)_\d+_\d+", n)], names
