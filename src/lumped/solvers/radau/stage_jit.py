@@ -291,6 +291,6 @@ _STAGE: list = []
 
 def stage_address() -> int:
     """The address of :func:`stage_solve_at` compiled (once per process; numba's disk cache
-    after the first time on a machine), for :func:`lumped.solvers.eventdriven.loop_jit.
-    advance`."""
+    after the first time on a machine), for the shared loop of ``radau5``
+    (:func:`lumped.solvers.eventdriven.loop_jit.advance`)."""
     return compiled_address(_STAGE, stage_solve_at, STAGE_TYPE)
