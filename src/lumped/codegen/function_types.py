@@ -17,12 +17,13 @@ every value of them.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 
 from .jit import numba_module
 
 __all__ = ["BRANCH_LAW_TYPE", "function_at", "compiled_address", "law_type", "guards_type",
-           "branch_type"]
+           "branch_type", "scalar_loops"]
 
 if numba_module is not None:
     from numba import types as _T
@@ -36,27 +37,79 @@ else:  # pragma: no cover - without numba
 
 
 def function_at(ftype):
-    """An intrinsic ``addr -> ftype``: the first-class function whose C wrapper is at
-    ``addr`` (:func:`numba.experimental.function_type._get_wrapper_address`), as numba
-    unboxes a function argument, without its Python object (``py_addr``) and jit
-    address (``jit_addr``, 0 for a wrapper-address object): calls go through the C
-    wrapper, as they do for such an argument."""
-    from numba.core import cgutils
+    """An intrinsic ``addr -> function``: the function whose C wrapper is at ``addr``
+    (:func:`numba.experimental.function_type._get_wrapper_address`), of the signature of
+    the numba function type ``ftype``, called as a plain C function pointer.
+
+    Its value is not a numba first-class function (a ``ftype``) but a pointer of the
+    type of a ctypes function (:class:`_AddressCall`): a call is one indirect call. A
+    first-class function's call also checks its jit address and, at a null C address,
+    takes the GIL and asks its Python object for one; that code is emitted, and
+    compiled, at every call site. The callee (the C wrapper) and the numbers are the
+    same."""
     from numba.extending import intrinsic
+
+    ptype = _address_call_type(ftype.signature)
 
     @intrinsic
     def at(typingctx, addr):
         def codegen(context, builder, signature, args):
-            fn = cgutils.create_struct_proxy(ftype)(context, builder)
-            voidptr = context.get_value_type(_T.voidptr)
-            fn.c_addr = builder.inttoptr(args[0], voidptr)
-            fn.py_addr = cgutils.get_null_value(voidptr)
-            fn.jit_addr = cgutils.get_null_value(voidptr)
-            return fn._getvalue()
+            return builder.inttoptr(args[0], context.get_value_type(ptype))
 
-        return ftype(_T.int64), codegen
+        return ptype(_T.int64), codegen
 
     return at
+
+
+def _no_pointer(obj):  # pragma: no cover - a value of _AddressCall never comes from Python
+    raise TypeError("a compiled function's address comes from compiled_address")
+
+
+@functools.cache
+def _address_call_type(sig):
+    """The numba type of a C function pointer of signature ``sig`` (one per signature)."""
+    return _AddressCall(sig)
+
+
+if numba_module is not None:
+    from numba.core.datamodel.models import ExternalFuncPointerModel
+    from numba.extending import register_model
+
+    class _AddressCall(_T.ExternalFunctionPointer):
+        """A C function pointer of signature ``sig`` (numba lowers a call to it as a
+        ctypes function's: one indirect call); pickled by its signature (numba's disk
+        cache keeps the signatures of the functions that take one)."""
+
+        def __init__(self, sig) -> None:
+            super().__init__(sig, get_pointer=_no_pointer)
+
+        def __reduce__(self):
+            return _address_call_type, (self.sig,)
+
+    register_model(_AddressCall)(ExternalFuncPointerModel)
+
+
+@contextlib.contextmanager
+def scalar_loops():
+    """Compile without LLVM's loop vectorizer (``numba.core.config.LOOP_VECTORIZE``, which
+    numba reads at each compile; set back after, under numba's compiler lock so no other
+    thread's compile sees it).
+
+    The shared loops run over a scene's few nodes and elements (3 to a few dozen): a
+    vectorized loop body, its remainder loop and its run-time checks of overlap never
+    pay there, and they were about a third of the LLVM time of ``radau5``'s loop (1.5 s
+    of a first run). Vectorizing reorders no floating-point sum (LLVM does so only
+    under fast-math), so the numbers are the same."""
+    from numba.core import config
+    from numba.core.compiler_lock import global_compiler_lock
+
+    with global_compiler_lock:
+        before = config.LOOP_VECTORIZE
+        config.LOOP_VECTORIZE = 0
+        try:
+            yield
+        finally:
+            config.LOOP_VECTORIZE = before
 
 
 def compiled_address(kept: list, py_func, ftype) -> int:
@@ -69,7 +122,8 @@ def compiled_address(kept: list, py_func, ftype) -> int:
 
         from .jit import njit
 
-        disp = njit(ftype.signature, cache=True)(py_func)
+        with scalar_loops():  # (called through its address only: no Python wrapper)
+            disp = njit(ftype.signature, cache=True, no_cpython_wrapper=True)(py_func)
         kept.append((_get_wrapper_address(disp, ftype.signature), disp))
     return kept[0][0]
 

@@ -103,7 +103,8 @@ def lift_function(source: str, name: str) -> tuple[str, list[float]]:
     args = head[head.index("(") + 1:head.rindex(")")]
     body, values = lift_constants(rest)
     extra = "".join(f", _c{k}" for k in range(len(values)))
-    return f"@njit(cache=True)\ndef {name}({args}{extra}):\n{body}", values
+    inline = ', inline="always"' if name.startswith(("branch_", "guards_")) else ""
+    return f"@njit(cache=True{inline})\ndef {name}({args}{extra}):\n{body}", values
 
 
 def slot_arguments(array: str, start: int, count: int) -> str:

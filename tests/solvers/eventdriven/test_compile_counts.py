@@ -230,7 +230,9 @@ def test_the_shared_loops_stage_newton_calls_no_roundoff_test():
     v, m, a2, iv = f8[::1], f8[:, ::1], f8[:, :], i8[::1]
     sig = (BRANCH_LAW_TYPE, v, v, iv, iv, types.boolean[::1], m, iv, m, m, v, f8, v, v, a2, v,
            f8, i8, v, a2, a2, iv, v, v, iv)
-    fresh = njit(loop_jit._stage.py_func)
+    from lumped.solvers.radau.stage_jit import stage_solve
+
+    fresh = njit(stage_solve)
     fresh.compile(sig)
     typemap = fresh.overloads[sig].type_annotation.typemap
     called = {ty.dispatcher.py_func.__name__ for ty in typemap.values()

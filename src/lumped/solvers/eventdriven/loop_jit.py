@@ -1,47 +1,48 @@
 r"""The inner loop of ``radau5`` compiled with numba: consecutive steps with the modes held.
 
-:func:`advance` takes Radau IIA steps from ``t`` towards the next stop (a forcing
-breakpoint or ``t_end``) with every element held on its mode's branch, exactly as the
-reference loop of :class:`lumped.solvers.eventdriven.run.Radau5Run` takes them, operation for
-operation (the numbers agree bit for bit):
+:func:`advance` takes Radau IIA steps from ``t`` towards the next stop (a forcing breakpoint
+or ``t_end``) with every element held on its mode's branch, operation for operation as the
+reference loop of :class:`lumped.solvers.eventdriven.run.Radau5Run` (bit for bit):
 
-1. the stage Newton (:func:`lumped.solvers.radau.stage_jit.stage_solve`) with the scales
-   ``atol + rtol |v_i|`` and ``rtol max(|F_e|, F_ref)``, ``F_ref = max(F_seen, m_min
-   (max |v| + atol / rtol) / h)``;
-2. the filtered error estimate of RADAU5 and its norm
+1. the stage Newton (:func:`lumped.solvers.radau.stage_jit.stage_solve`), scales ``atol +
+   rtol |v_i|`` and ``rtol max(|F_e|, F_ref)``, ``F_ref = max(F_seen, m_min (max |v| +
+   atol / rtol) / h)``;
+2. RADAU5's filtered error estimate and its norm
    (:func:`lumped.solvers.radau.step_jit.step_error`): ``(mu / h M - J) e = f(y_n) + M
    sum_k E_k Z_k / h``, RMS of ``e / (atol + rtol max(|y_n|, |y_n+1|))`` over ``x``, the
-   masses' ``v`` and the guarded elements' forces;
+   masses' ``v`` and the guarded forces;
 3. Gustafsson's predictive step control, ``h_new = h / max(quot, facgus)``;
-4. the guards of the watched elements on the step's collocation polynomial at the
-   samples ``s = k / 8`` of :data:`lumped.solvers.radau.tableau.SAMPLES` (only *detected*: the
-   root and the landing are the reference's);
+4. the watched guards on the step's collocation polynomial at ``s = k / 8``
+   (:data:`lumped.solvers.radau.tableau.SAMPLES`; only *detected*: the root and the
+   landing are the reference's);
 5. the accepted step's dense-output record ``(t_n, h, y_n, Y_k - y_n)`` and its output row.
 
 It returns to Python, with the state as at the top of the reference loop's pass that
-must run next, when any of these holds (the code in ``ist[REASON]``): the next step
-would reach the stop and the room left is below the step floor (:data:`STOP`; else the
-loop takes the step to the stop, with ``h`` the room left, and returns after it:
-:data:`STOPPED`), a guard turns negative in a candidate step
-(:data:`CROSSING`: Python redoes that step and lands on the event), a law that is not a
-known monotone one crosses a fold of its graph (:data:`FOLD`: Python redoes the step and
-stops with its message), a Jacobian is singular but finite (:data:`SINGULAR`: Python's
-minimum-norm solve), the step size is below its floor (:data:`FLOOR`), the output arrays
-are full (:data:`FULL`), ``max_steps`` or the stall limit (:data:`LIMIT`), the eighth
-Newton failure in a row (:data:`DAMPED`: Python redoes that pass with its line-search
-fallback), or the creep test of the Python loop's accepted steps
-(:meth:`~lumped.solvers.eventdriven.step.StepPass._accept`: ``ist[CREEPING]`` steps in a
-row shorter than ``max(step floor, fst[CREEP_FLOOR])`` reach ``CREEP_STEPS``): after such
-a step, accepted, before the controller sizes the next (:data:`CREEP`: Python stops the
-run there). With
-``ist[SINGLE] = 1`` it makes one attempt of size ``h`` for the Python loop and returns
-(:data:`ATTEMPT`) its outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular),
-``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]`` and the stage values in ``ws[0]``; the
-crossing's root is :func:`attempt_root`'s, compiled apart (only when needed).
+must run next, when (the code in ``ist[REASON]``): the next step would reach the stop
+with a room below the step floor (:data:`STOP`; else it takes the step to the stop, ``h``
+the room left, and returns after it: :data:`STOPPED`), a guard turns negative in a
+candidate step (:data:`CROSSING`: Python redoes it and lands on the event), a law not
+known monotone crosses a fold (:data:`FOLD`: Python redoes the step and stops), a
+Jacobian is singular but finite (:data:`SINGULAR`: Python's minimum-norm solve), the step
+is below its floor (:data:`FLOOR`), the output arrays are full (:data:`FULL`),
+``max_steps`` or the stall limit (:data:`LIMIT`), the eighth Newton failure in a row
+(:data:`DAMPED`: Python redoes the pass with its line search), or ``ist[CREEPING]``
+accepted steps in a row shorter than ``max(step floor, fst[CREEP_FLOOR])`` reach
+``CREEP_STEPS`` (:data:`CREEP`, after that step, before the controller sizes the next:
+the creep test of the Python loop, ``StepPass._accept`` of
+:mod:`lumped.solvers.eventdriven.step`, which stops the run). With ``ist[SINGLE] = 1`` it
+makes one attempt of size ``h`` for the Python loop and returns (:data:`ATTEMPT`) its
+outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular), ``ist[A_ITS]``,
+``ist[A_NFAC]``, ``fst[A_ERR]`` and the stage values in ``ws[0]``; the crossing's root is
+:func:`attempt_root`'s, compiled apart (only when needed).
 
-State in and out: ``x, v, F, dF`` (arrays), ``fst`` (floats, indices ``T .. CREEP_FLOOR``)
-and ``ist`` (ints, indices ``HAVE_ACC .. CREEPING``). The forcing is ``(fkind, fpar, table)`` of
-:func:`lumped.solvers.radau.forces_jit.forces` (``table``: 0 for a scene without a table).
+State in and out: ``x, v, F, dF``, ``fst`` (floats, ``T .. CREEP_FLOOR``) and ``ist``
+(ints, ``HAVE_ACC .. CREEPING``). The forcing is ``(fkind, fpar, table)`` of
+:func:`lumped.solvers.radau.forces_jit.forces` (``table``: 0 without a table).
+
+The stage solve, error estimate and guard test are called through their addresses
+(``iw[1, STAGE_AT .. CROSSED_AT]``, :func:`loop_workspace`): numba would link a called
+function's code into this loop's module, and LLVM optimise and emit it there again.
 """
 
 from __future__ import annotations
@@ -50,14 +51,14 @@ import math
 
 import numpy as np
 
-from ...codegen.function_types import function_at, guards_type, law_type
+from ...codegen.function_types import function_at, guards_type, scalar_loops
 from ...codegen.jit import njit, numba_enabled
 from ..modes.crossing_root import first_root
 from ..modes.on_demand import compiled_once
+from ..radau import stage_jit, step_jit
 from ..radau.forces_jit import forces
 from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
-from ..radau.stage_jit import stage_solve
-from ..radau.step_jit import FOLDED_TYPE, crossed, finite, start_time, step_error
+from ..radau.step_jit import FOLDED_TYPE, finite, start_time
 from ..radau.tableau import END_SLOPES, C
 from .step import CREEP_STEPS
 
@@ -77,11 +78,10 @@ REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "flo
            FULL: "full", LIMIT: "limit", ATTEMPT: "attempt", STOPPED: "stopped",
            FOLD: "fold", DAMPED: "damped", CREEP: "creep"}
 
+STAGE_AT, ERROR_AT, CROSSED_AT = 4, 5, 6  # iw[1, ...]: the addresses (see the module notes)
 _EPS = 2.220446049250313e-16
 _C0, _C1, _C2 = C
 _S1, _S2, _S3 = END_SLOPES
-
-_stage = njit(cache=True)(stage_solve)
 
 
 def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock_q, modes,
@@ -90,19 +90,18 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
     """Steps with the modes held until a reason to return (see the module notes).
 
     ``fold_addr``: the fold test's address (:func:`~lumped.solvers.radau.step_jit.fold_test`,
-    compiled for a law not known monotone only; 0 if ``checked`` is empty). ``law_addr``
-    and ``guards_addr`` are the addresses of the scene's compiled ``branch_law`` and
-    ``branch_guards`` (:func:`law_type`, :func:`guards_type`; the caller keeps them alive),
-    ``lawc`` the scene's law constants they take: an integer is passed in a few
-    nanoseconds, where numba passes a first-class function argument through two Python
-    calls that unpickle its signature (about 3.5 us each, per call).
+    compiled for a law not known monotone only; 0 if ``checked`` is empty). ``law_addr``,
+    ``guards_addr``: the addresses of the scene's compiled ``branch_law`` and
+    ``branch_guards`` (the caller keeps them alive; an integer passes in nanoseconds, a
+    first-class function argument in about 3.5 us a call), ``lawc`` their law constants.
     ``breaks`` are the forcing's breakpoints and ``kinks`` (1 or 0) whether each is a
     kink (:func:`~lumped.solvers.eventdriven.setup.time_events`): a step that ends on a
     kink goes on to the next breakpoint, as the Python loop does, instead of returning;
     ``ist[BI]`` is the next breakpoint's index.
     ``ws`` (vectors), ``wm`` (matrices) and ``iw`` (ints) are :func:`loop_workspace`."""
-    branch_law = _law_at(law_addr)
-    branch_guards = _guards_at(guards_addr)
+    stage_solve = _stage_at(iw[1, STAGE_AT])
+    step_error = _error_at(iw[1, ERROR_AT])
+    crossed = _crossed_at(iw[1, CROSSED_AT])
     N = masses.shape[0]
     E = ea.shape[0]
     n = N + E
@@ -168,8 +167,8 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
                 scale[k * n + i] = atol + rtol * abs(v[i])
             for e in range(E):
                 scale[k * n + N + e] = rtol * max(abs(F[e]), F_ref)
-        ok = _stage(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x, v, fk,
-                    scale, 1e-3, MAX_NEWTON, G, J, LU, perm, b, du, out)
+        ok = stage_solve(law_addr, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x, v,
+                         fk, scale, 1e-3, MAX_NEWTON, G, J, LU, perm, b, du, out)
         its = out[0]
         nfac = out[1]
         if single:  # one attempt for the Python loop: its outcome, nothing accepted
@@ -181,7 +180,7 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
             if ok or (out[2] == 1 and finite(J)):
                 ist[A_OK] = -1  # singular: Python's minimum-norm solve
             if ok:
-                fst[A_ERR] = step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched,
+                fst[A_ERR] = step_error(law_addr, lawc, masses, ea, eb, spring, modes, watched,
                                          A, U, h, start_time(t, prev_break), x, v, F, dF,
                                          ist[HAVE_DF], fkind, fpar, table, net, rtol, atol,
                                          F_ref, M, LUm, permm, rhs, err, fst[TWO])
@@ -211,7 +210,7 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
             h *= 0.5
             ist[HAVE_ACC] = 0
             continue
-        err_norm = step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h,
+        err_norm = step_error(law_addr, lawc, masses, ea, eb, spring, modes, watched, A, U, h,
                                start_time(t, prev_break), x, v, F, dF, ist[HAVE_DF], fkind,
                                fpar, table, net, rtol, atol, F_ref, M, LUm, permm, rhs, err,
                                fst[TWO])
@@ -235,7 +234,7 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
             h = h / quot
             ist[HAVE_ACC] = 0
             continue
-        hit = watched.shape[0] > 0 and crossed(branch_guards, lawc, ea, eb, spring, modes, watched,
+        hit = watched.shape[0] > 0 and crossed(guards_addr, lawc, ea, eb, spring, modes, watched,
                                                A, h, x, v, F, U, N, n, qn, Fn, gbuf)
         if hit or (checked.shape[0] > 0 and _folded_at(fold_addr)(
                 law_addr, lawc, ea, eb, spring, modes, checked, A, h, x, v, F, U, N, n, qn[0],
@@ -347,9 +346,9 @@ def attempt_root(guards_addr, lawc, ea, eb, spring, modes, watched, A, x, v, F, 
 
 
 if numba_enabled():
-    _law_at = function_at(law_type())
-    _guards_at = function_at(guards_type())
-    _folded_at = function_at(FOLDED_TYPE)
+    _guards_at, _folded_at = function_at(guards_type()), function_at(FOLDED_TYPE)
+    _stage_at = function_at(stage_jit.STAGE_TYPE)
+    _error_at, _crossed_at = function_at(step_jit.ERROR_TYPE), function_at(step_jit.CROSSED_TYPE)
 
 _COMPILED: list = []
 _ROOT: list = []
@@ -378,13 +377,12 @@ def compiled_advance():
     if not _COMPILED:
         from numba import types as T_
 
-        f8 = T_.float64
-        v, m, m3 = f8[::1], f8[:, ::1], f8[:, :, ::1]
-        iv = T_.int64[::1]
-        i8 = T_.int64
+        f8, i8 = T_.float64, T_.int64
+        v, m, m3, iv = f8[::1], f8[:, ::1], f8[:, :, ::1], i8[::1]
         sig = T_.none(i8, i8, i8, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m, m, iv, m, i8,
                       v, iv, v, v, v, v, v, iv, v, v, m, m3, m, m, m3, i8[:, ::1])
-        _COMPILED.append(njit(sig, cache=True)(advance))
+        with scalar_loops():
+            _COMPILED.append(njit(sig, cache=True, no_cfunc_wrapper=True)(advance))
     return _COMPILED[0]
 
 
@@ -396,5 +394,7 @@ def loop_workspace(N: int, E: int, watched: int, cap: int):
     outputs = (np.zeros(cap), np.zeros(cap), np.zeros((cap, ny)), np.zeros((cap, 3, ny)),
                np.zeros((cap, 1 + ny)))
     big = max(s, ny, 4, watched)
-    return (outputs, np.zeros((10, max(big, 64))), np.zeros((7, big, big)),
-            np.zeros((3, big), dtype=np.int64))
+    iw = np.zeros((3, max(big, CROSSED_AT + 1)), dtype=np.int64)
+    iw[1, STAGE_AT] = stage_jit.stage_address()
+    iw[1, ERROR_AT], iw[1, CROSSED_AT] = step_jit.error_address(), step_jit.crossed_address()
+    return outputs, np.zeros((10, max(big, 64))), np.zeros((7, big, big)), iw

@@ -33,7 +33,7 @@ from ..newton.criteria import ROUNDOFF
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 
 __all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_solve",
-           "roundoff_test"]
+           "roundoff_test", "stage_solve_at", "stage_address", "STAGE_TYPE"]
 
 
 @njit(cache=True)
@@ -219,6 +219,17 @@ def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U
 
 
 _COMPILED: list = []
+_solve = njit(cache=True, inline="always")(stage_solve)
+
+
+def stage_solve_at(law_addr, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n,
+                   f, scale, tol, max_iters, G, J, LU, perm, b, du, out) -> bool:
+    """:func:`stage_solve` on the scene's ``branch_law`` at ``law_addr``
+    (:func:`lumped.codegen.function_types.function_at`), compiled apart
+    (:func:`stage_address`): the shared loop calls it through its address, so the loop's
+    own module holds none of its code."""
+    return _solve(_law_at(law_addr), lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h,
+                  x_n, v_n, f, scale, tol, max_iters, G, J, LU, perm, b, du, out)
 
 
 def compiled_stage_solve():
@@ -254,8 +265,15 @@ if numba_enabled():
     ROUNDOFF_TYPE = _T.FunctionType(_T.float64(_v, _v, _m, _v, _v, _T.boolean[:], _m,
                                                _T.float64, _T.float64))
     _roundoff_at = function_at(ROUNDOFF_TYPE)
+    _law_at = function_at(BRANCH_LAW_TYPE)
+    _vc, _ma, _iv = _T.float64[::1], _T.float64[:, ::1], _T.int64[::1]
+    #: The numba function type of :func:`stage_solve_at` (the loop's views: 1-D slices
+    #: contiguous, 2-D ones of any layout).
+    STAGE_TYPE = _T.FunctionType(_T.boolean(
+        _T.int64, _vc, _vc, _iv, _iv, _T.boolean[::1], _ma, _iv, _ma, _ma, _vc, _T.float64, _vc,
+        _vc, _m, _vc, _T.float64, _T.int64, _vc, _m, _m, _iv, _vc, _vc, _iv))
 else:  # pragma: no cover - without numba: the address 1 stands for the Python function
-    ROUNDOFF_TYPE = None
+    ROUNDOFF_TYPE = STAGE_TYPE = None
 
     def _roundoff_at(addr):
         return roundoff_worst_jit
@@ -268,3 +286,11 @@ def roundoff_test() -> int:
     if not numba_enabled():
         return 1
     return compiled_address(_ROUNDOFF, roundoff_worst_jit.py_func, ROUNDOFF_TYPE)
+_STAGE: list = []
+
+
+def stage_address() -> int:
+    """The address of :func:`stage_solve_at` compiled (once per process; numba's disk cache
+    after the first time on a machine), for the shared loop of ``radau5``
+    (:func:`lumped.solvers.eventdriven.loop_jit.advance`)."""
+    return compiled_address(_STAGE, stage_solve_at, STAGE_TYPE)

@@ -8,9 +8,13 @@ Ports, operation for operation, of :meth:`lumped.solvers.radau.error.ErrorEstima
 :func:`lumped.solvers.modes.crossing_root.first_root_py` (only the test that some sample
 is negative) and :func:`lumped.solvers.modes.guards.fold_crossed`; the unknowns are laid out as in
 :mod:`lumped.solvers.radau.stage` (``U[k*n + i]`` a node's stage velocity, ``U[k*n + N + e]`` an
-element's stage force). The scene's kernels come in as numba first-class functions,
-``branch_law(e, i, q, F, lawc)`` and ``branch_guards(e, i, q, F, out, lawc)`` of
-:mod:`lumped.codegen.jit`.
+element's stage force). The scene's kernels, ``branch_law(e, i, q, F, lawc)`` and
+``branch_guards(e, i, q, F, out, lawc)`` of :mod:`lumped.codegen.jit`, come in as
+functions, or as their addresses (:func:`lumped.codegen.function_types.function_at`) in
+:func:`step_error` and :func:`crossed`: those two are compiled apart, once per machine
+(:func:`error_address`, :func:`crossed_address`), and the loop calls them through their
+addresses, so that LLVM optimises and emits their code once, not again inside the loop's
+module.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ import math
 
 import numpy as np
 
-from ...codegen.function_types import compiled_address, function_at, law_type
+from ...codegen.function_types import compiled_address, function_at, guards_type, law_type
 from ...codegen.jit import njit, numba_enabled
 from ..implicit.branch_check_jit import dead_band_sign, sign_bit
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
@@ -27,8 +31,8 @@ from .error import FORCE_TOL_FACTOR
 from .forces_jit import forces
 from .tableau import E_ERR, MU_REAL, SAMPLES, C
 
-__all__ = ["element_nodes", "folded", "folded_at", "fold_test", "crossed", "error_norm",
-           "step_error", "start_time", "finite"]
+__all__ = ["element_nodes", "folded", "folded_at", "fold_test", "crossed", "step_error",
+           "start_time", "finite", "error_address", "crossed_address"]
 
 _C0, _C1, _C2 = C
 _E0, _E1, _E2 = E_ERR
@@ -93,15 +97,23 @@ def folded_at(law_addr, lawc, ea, eb, spring, modes, checked, A, h, x_n, v_n, F_
 
 if numba_enabled():
     _law_at = function_at(law_type())
+    _guards_at = function_at(guards_type())
     from numba import types as _T
 
     _f8, _i8, _v = _T.float64, _T.int64, _T.float64[::1]
+    _iv, _b, _mc, _ma = _i8[::1], _T.boolean[::1], _f8[:, ::1], _f8[:, :]
     #: The numba function type of :func:`folded_at`.
     FOLDED_TYPE = _T.FunctionType(_T.boolean(
-        _i8, _v, _i8[::1], _i8[::1], _T.boolean[::1], _i8[::1], _i8[::1], _f8[:, ::1], _f8, _v,
-        _v, _v, _v, _i8, _i8, _f8[:], _f8[:]))
+        _i8, _v, _iv, _iv, _b, _iv, _iv, _mc, _f8, _v, _v, _v, _v, _i8, _i8, _f8[:], _f8[:]))
+    #: The numba function type of :func:`step_error`.
+    ERROR_TYPE = _T.FunctionType(_f8(
+        _i8, _v, _v, _iv, _iv, _b, _iv, _iv, _mc, _v, _f8, _f8, _v, _v, _v, _v, _i8, _iv, _mc,
+        _i8, _v, _f8, _f8, _f8, _ma, _ma, _iv, _v, _v, _f8))
+    #: The numba function type of :func:`crossed`.
+    CROSSED_TYPE = _T.FunctionType(_T.boolean(
+        _i8, _v, _iv, _iv, _b, _iv, _iv, _mc, _f8, _v, _v, _v, _v, _i8, _i8, _ma, _ma, _v))
 else:  # pragma: no cover - without numba
-    FOLDED_TYPE = None
+    FOLDED_TYPE = ERROR_TYPE = CROSSED_TYPE = None
 _FOLD: list = []
 
 
@@ -150,11 +162,13 @@ def _bit(x, scale) -> int:
     return sign_bit(dead_band_sign(x, scale))
 
 
-@njit(cache=True)
-def crossed(branch_guards, lawc, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, U, N, n,
-             qn, Fn, gbuf) -> bool:
+def crossed(guards_addr, lawc, ea, eb, spring, modes, watched, A, h, x_n, v_n, F_n, U, N, n,
+            qn, Fn, gbuf) -> bool:
     """True when a watched guard (shifted by its round-off tolerance) is negative at a
-    sample of the step: :func:`lumped.solvers.modes.crossing_root.first_root_py`'s test."""
+    sample of the step: :func:`lumped.solvers.modes.crossing_root.first_root_py`'s test, on
+    the scene's ``branch_guards`` at ``guards_addr``. Compiled apart
+    (:func:`crossed_address`): the shared loop calls it through its address."""
+    branch_guards = _guards_at(guards_addr)
     for w in range(watched.shape[0]):
         element_nodes(ea, eb, spring, A, h, x_n, v_n, F_n, U, N, n, watched[w], qn[w], Fn[w])
     for s in _SAMPLES:
@@ -176,14 +190,40 @@ def crossed(branch_guards, lawc, ea, eb, spring, modes, watched, A, h, x_n, v_n,
 
 
 @njit(cache=True)
-def error_norm(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h, x_n, v_n, F_n,
-                net_n, dF, have_dF, rtol, atol, F_ref, M, LU, perm, rhs, err, two) -> float:
-    """The scaled RMS error of the step (``StageSystem.error`` then ``error_norm``);
-    NaN for a non-finite system, -1.0 for a singular finite one (Python's minimum norm).
+def finite(J) -> bool:
+    for r in range(J.shape[0]):
+        for c in range(J.shape[1]):
+            if not math.isfinite(J[r, c]):
+                return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def start_time(t, prev_break) -> float:
+    """Where the step from ``t`` reads the forcing: right after a breakpoint, ``t`` else."""
+    return np.nextafter(t, math.inf) if t == prev_break else t
+
+
+def step_error(law_addr, lawc, masses, ea, eb, spring, modes, watched, A, U, h, t_n0, x_n, v_n,
+               F_n, dF, have_dF, fkind, fpar, table, net_n, rtol, atol, F_ref, M, LU, perm, rhs,
+               err, two) -> float:
+    """The scaled RMS error of the step from ``t`` (``StageSystem.error`` then
+    ``error_norm``), the external forces read at ``t_n0`` (:func:`start_time`; ``fkind,
+    fpar, table``: :func:`lumped.solvers.radau.forces_jit.forces`), on the scene's
+    ``branch_law`` at ``law_addr``; NaN for a non-finite system, -1.0 for a singular
+    finite one (Python's minimum norm). Compiled apart (:func:`error_address`): the shared
+    loop calls it through its address.
 
     ``two`` is 2.0, a run-time value: CPython's ``y ** 2`` is the C library's ``pow``, which
     differs from ``y * y`` in the last bit now and then, and numba (LLVM) turns a constant
     exponent 2 into ``y * y``."""
+    branch_law = _law_at(law_addr)
+    forces(t_n0, fkind, fpar, table, net_n)
+    for e in range(ea.shape[0]):
+        if ea[e] >= 0:
+            net_n[ea[e]] += F_n[e]
+        if eb[e] >= 0:
+            net_n[eb[e]] -= F_n[e]
     N = masses.shape[0]
     E = ea.shape[0]
     n = N + E
@@ -246,7 +286,7 @@ def error_norm(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h
             sc = atol + rtol * max(abs(v_n[i]), abs(U[2 * n + i]))
             acc += (err[N + i] / sc) ** two
             cnt += 1
-    if have_dF:
+    if have_dF == 1:
         g0 = 1.0 / MU_REAL
         rtol_F = min(1e-3, FORCE_TOL_FACTOR * rtol)
         for w in range(watched.shape[0]):
@@ -263,34 +303,17 @@ def error_norm(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h
     return math.sqrt(acc / cnt)
 
 
-@njit(cache=True)
-def finite(J) -> bool:
-    for r in range(J.shape[0]):
-        for c in range(J.shape[1]):
-            if not math.isfinite(J[r, c]):
-                return False
-    return True
+
+_ERROR: list = []
+_CROSSED: list = []
 
 
-@njit(cache=True, inline="always")
-def start_time(t, prev_break) -> float:
-    """Where the step from ``t`` reads the forcing: right after a breakpoint, ``t`` else."""
-    return np.nextafter(t, math.inf) if t == prev_break else t
+def error_address() -> int:
+    """The address of :func:`step_error` compiled (once per process; numba's disk cache
+    after the first time on a machine)."""
+    return compiled_address(_ERROR, step_error, ERROR_TYPE)
 
 
-@njit(cache=True)
-def step_error(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h, t_n0, x, v,
-                F, dF, have_dF, fkind, fpar, table, net, rtol, atol, F_ref, M, LUm, permm, rhs,
-                err, two) -> float:
-    """The error norm of the step from ``t``, the forces at ``t_n0`` (:func:`start_time`;
-    ``fkind, fpar, table``: :func:`lumped.solvers.radau.forces_jit.forces`). (At most 30
-    arguments: CPython passes a call with more as one tuple, which numba types and
-    unpacks.)"""
-    forces(t_n0, fkind, fpar, table, net)
-    for e in range(ea.shape[0]):
-        if ea[e] >= 0:
-            net[ea[e]] += F[e]
-        if eb[e] >= 0:
-            net[eb[e]] -= F[e]
-    return error_norm(branch_law, lawc, masses, ea, eb, spring, modes, watched, A, U, h, x, v, F,
-                       net, dF, have_dF == 1, rtol, atol, F_ref, M, LUm, permm, rhs, err, two)
+def crossed_address() -> int:
+    """The address of :func:`crossed` compiled, as :func:`error_address`."""
+    return compiled_address(_CROSSED, crossed, CROSSED_TYPE)
