@@ -1,10 +1,13 @@
-"""A scene drawn by the random-network suite that more than one test file runs (issue 29):
-the loaded chain of strings of radau5's tight-tolerance check."""
+"""Scenes drawn by the random-network suite that more than one test file runs (issue 29):
+the loaded chain of strings of radau5's tight-tolerance check, and a junction on springs
+whose Coulomb link slips."""
 
 from __future__ import annotations
 
+import math
+
 from lumped.laws import get_law
-from lumped.scene import Element, Mass, Scene, SineBurst
+from lumped.scene import Element, Junction, Mass, Scene, SineBurst
 
 
 def loaded_string_chain() -> Scene:
@@ -29,3 +32,16 @@ def loaded_string_chain() -> Scene:
                                                         n=0.8), "m2", "m1")],
         {"m1": SineBurst(amplitude=1.936983360451386, omega=1.6104068096704158,
                          t_off=0.313764147268767)})
+
+
+def junction_on_springs_slipping_on_coulomb() -> Scene:
+    # the 3399th draw of the LUMPED_LARGE tight run (issue 29): a junction between two
+    # springs (one to a loaded mass) held by a Coulomb element that slips from t = 0.148
+    return Scene(
+        [Junction("j0", x0=0.3617685522811145),
+         Mass("m1", m=0.9092648455812927, x0=0.0, v0=-1.9246237940315574)],
+        [Element("e0", get_law("coulomb").bind(tau=1.0, r=1.0), "ground", "j0"),
+         Element("e1", get_law("linear_spring").bind(k=1.0), "ground", "m1"),
+         Element("e2", get_law("linear_spring").bind(k=0.9999999999976974), "j0", "m1"),
+         Element("e3", get_law("linear_spring").bind(k=1.0), "j0", "ground")],
+        {"m1": SineBurst(amplitude=2.499999999998849, omega=1.0, t_off=math.inf)})

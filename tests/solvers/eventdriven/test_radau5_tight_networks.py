@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 from _convergence import assert_within_bdf2s_own_error
+from _lock_scenes import junction_on_springs_slipping_on_coulomb
 
 from lumped import simulate
 from lumped.laws import get_law
@@ -415,3 +416,27 @@ def test_radau5_starts_with_a_step_the_loop_takes():
     loose = simulate(_mass_breaking_out_a_hair_from_the_origin(), method="radau5",
                      dt=0.025 / 4, t_end=0.5, rtol=1e-7, atol=1e-10)
     np.testing.assert_allclose(sol.x["m1"], loose.x["m1"], rtol=0.0, atol=1e-6)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_junction_held_by_springs_alone_while_its_coulomb_link_slips(compiled):
+    """While e0 slips its law's row is ``F + tau`` (``dR/dq = 0``): only the springs'
+    rows ``F_k = F_n + h sum_l a_kl k (V_m - V_j)_l`` hold the junction's velocity, to
+    one ulp of their forces over ``h a k`` (``1e-13`` at ``h = 6e-3``), above the stage
+    Newton's test ``1e-3 (atol + rtol |v|) = 7e-14`` at ``rtol = 1e-10``. Every stage solve
+    from ``t = 0.35387`` failed, more so as the step shrank: the run crept, backward Euler
+    bridged it twice and it stopped on its work budget after 15 000 rejected steps (the
+    junction velocity's test now floored at the springs' round-off,
+    :mod:`lumped.solvers.radau.roundoff`)."""
+    scene = junction_on_springs_slipping_on_coulomb()
+    dt = 0.025
+    sol = simulate(scene, method="radau5", dt=dt, t_end=0.5, rtol=1e-10, atol=1e-13,
+                   compiled=compiled, max_steps=5_000)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message
+    assert sol.stats["rejected"] <= 10, sol.stats
+    # e0 slips from t = 0.148 on at its yield force, the junction's springs carry it
+    assert [ev.element for ev in sol.events] == ["e0"]
+    after = np.asarray(sol.t) > sol.events[0].t
+    np.testing.assert_allclose(np.asarray(sol.F["e0"])[after], -1.0, rtol=1e-9)
+    assert_within_bdf2s_own_error(scene, sol, ("j0", "m1"), dt, 0.5, 4)

@@ -109,3 +109,44 @@ def test_a_steady_pace_within_the_budget_runs_to_the_end(compiled, monkeypatch):
 def test_the_pace_window_scales_with_the_budget():
     assert budget.window(1_000) == budget.window(1_000_000) == budget.PACE_WINDOW == 10_000
     assert budget.window(10**8) == 10**6
+
+
+def _window(b: budget.WorkBudget, t: float, steps: int, rejected: int):
+    # the budget's test after a window of STUCK_WINDOW tries from the last one
+    stats = {"steps": steps, "rejected": rejected}
+    return b.check(t, stats)
+
+
+@pytest.mark.parametrize(("rejected", "moved", "stuck"), [
+    (600, 1e-9, True),   # mostly rejected, a hopeless pace: stuck
+    (100, 1e-9, False),  # mostly accepted (an accumulation of events): the pace test's
+    (600, 1e-2, False),  # mostly rejected at a pace within the budget
+])
+def test_a_stuck_run_stops_after_a_short_window_of_tries(rejected, moved, stuck):
+    w = budget.STUCK_WINDOW
+    b = budget.WorkBudget(1_000_000, 1.0)
+    assert w < b.window
+    assert _window(b, 0.5, w, 0) is None  # the first window: 0.5 s in w steps
+    got = _window(b, 0.5 + moved, 2 * w - rejected, rejected)
+    assert (got is not None) is stuck
+    if stuck:
+        assert got[0] is Status.MAX_ITERS and "it is stuck" in got[1]
+        assert f"last {w} tries, {rejected} of them rejected" in got[1]
+
+
+def test_a_run_whose_stage_solves_fail_stops_within_two_short_windows(monkeypatch):
+    # issue 29: a junction on springs, its Coulomb link slipping; with the stage Newton's
+    # test of the junction's velocity not floored at the springs' round-off (as before
+    # that fix) every stage solve fails from t = 0.35387: the run crept, was bridged
+    # twice and spent 20 000 tries (15 000 rejected) before the pace test stopped it
+    from _lock_scenes import junction_on_springs_slipping_on_coulomb
+
+    from lumped.solvers.radau import stage
+
+    monkeypatch.setattr(stage, "roundoff_worst", lambda du, U, J, scale, junction, rate,
+                        f, tol, worst: worst)
+    sol = simulate(junction_on_springs_slipping_on_coulomb(), method="radau5", dt=0.025,
+                   t_end=0.5, rtol=1e-10, atol=1e-13, compiled=False, throw=False)
+    assert sol.status is Status.MAX_ITERS and "it is stuck" in sol.message
+    tried = sol.stats["steps"] + sol.stats["rejected"]
+    assert tried <= 2 * budget.STUCK_WINDOW + 100, sol.stats

@@ -65,14 +65,46 @@ def test_a_junction_velocity_correction_at_its_laws_round_off_is_converged():
     assert _both(du, J, U, scale) > TOL
 
 
-def test_a_springs_row_sets_no_floor():
-    # a spring's row holds the velocity through h A V: its rounding is the positions'
-    # over h, not a law's; the same correction fails the test
+def test_a_springs_row_sets_the_floor_where_no_dashpots_row_holds_the_velocity():
+    # a junction on springs alone (its Coulomb element slipping, a row flat in q): the
+    # spring's row, F - F_n - h a k V, holds the velocity to its forces' rounding over
+    # h a k; the same correction as a dashpot's row lets through is converged (issue 29)
     J, U, scale = _system()
     du = np.zeros(9)
     du[1 + N_UNK] = 0.5 * ROUNDOFF * (0.03 + 1e-3 * 0.04) / 1e-3
+    assert abs(du[1 + N_UNK]) / scale[1 + N_UNK] > TOL
+    assert _both(du, J, U, scale, spring=[True]) == pytest.approx(0.5 * TOL, rel=1e-12)
+    # ... but not on a step so short that the springs' rounding (ulp / (h a k)) exceeds
+    # the velocity's own tolerance (a junction following an impact within the step)
+    for k in range(3):
+        J[k * N_UNK + 2, k * N_UNK + 1] = -1e-9
+    du[1 + N_UNK] = 0.5 * ROUNDOFF * (0.03 + 1e-9 * 0.04) / 1e-9
+    assert ROUNDOFF * 0.03 / 1e-9 > scale[1 + N_UNK]
     worst = abs(du[1 + N_UNK]) / scale[1 + N_UNK]
     assert _both(du, J, U, scale, spring=[True]) == worst > TOL
+
+
+def test_a_springs_row_sets_no_floor_beside_a_dashpots_row():
+    # a spring's row holds the velocity through h A V: its rounding is the positions'
+    # over h, which on a short step after an impact passes a junction velocity still
+    # jumping: where a dashpot's row (dG/dq = 1e-3) holds the velocity too, it alone sets
+    # the floor, not the spring's (dG/dq = 1, a floor 600 times lower)
+    masses, spring, n = [1.0, 0.0], [False, True], 4
+    J = np.eye(3 * n)
+    U = np.zeros(3 * n)
+    for k in range(3):
+        b, r = k * n + 1, k * n + 2  # j's balance row (its velocity's column), e0's row
+        J[b, b] = 0.0
+        J[b, r], J[b, r + 1] = 1.0, 1.0
+        J[r, b], J[r + 1, b] = -1e-3, -1.0
+        U[k * n:(k + 1) * n] = [0.5, 0.04, 0.03, -0.03]
+    scale = 1e-13 + 1e-10 * np.abs(U)
+    rho = ROUNDOFF * (0.06 + 1e-3 * 0.04) / 1e-3  # (the balance's terms: 0.03 + 0.03)
+    du = np.zeros(3 * n)
+    du[n + 1] = 0.5 * rho
+    assert _both(du, J, U, scale, spring, masses) == pytest.approx(0.5 * TOL, rel=1e-12)
+    du[n + 1] = 2.0 * rho
+    assert _both(du, J, U, scale, spring, masses) > TOL
 
 
 def test_the_floor_is_the_junctions_alone():

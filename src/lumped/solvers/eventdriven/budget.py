@@ -16,7 +16,16 @@ Radau5Run`), which is where the compiled loop returns to:
   failed at every step longer than 1e-9 s moved 3.2e-6 s in 10 000 tries with 0.7 s to
   go, 2.2e9 tries; a budget of 1e6 tries would take 2 hours of its Python loop).
 
-Both stop the run with :attr:`~lumped.solvers.status.Status.MAX_ITERS` (SciML's return
+* stuck: over the last :data:`STUCK_WINDOW` tries of ``radau5`` itself, at least half
+  of them rejected, the time left at that pace needs more than :data:`STUCK_MARGIN`
+  times the tries left: a run whose stage solves fail at every step size (a junction's
+  velocity that the stage Newton could not converge below its round-off crept from
+  ``t = 0.35387`` with 15 000 rejected tries of its 20 000, at up to tens of ms each,
+  before the pace test's window of 10 000 ended twice, issue 29) stops within two such
+  windows (the compiled loop's: when it returns). A slow phase of accepted steps (an
+  accumulation of events) is left to the pace test.
+
+All three stop the run with :attr:`~lumped.solvers.status.Status.MAX_ITERS` (SciML's return
 code for a step budget; a ``SolverError`` with ``throw=True``), never bridged, with the
 time reached, the tries of each kind and how to raise the budget.
 
@@ -37,6 +46,12 @@ __all__ = ["PACE_WINDOW", "WorkBudget", "window"]
 #: Tries in the shortest window of the pace test.
 PACE_WINDOW = 10_000
 
+#: Tries in a window of the stuck test (mostly rejected tries at a hopeless pace).
+STUCK_WINDOW = 1_000
+
+#: How far beyond the tries left the stuck test's pace must need to stop the run.
+STUCK_MARGIN = 100
+
 
 def window(max_steps: int) -> int:
     """Tries per window of the pace test: :data:`PACE_WINDOW`, or ``max_steps / 100`` if
@@ -55,6 +70,7 @@ class WorkBudget:
         #: redone shorter to land on an event, a mode chosen again at ``t``)
         self.redone = 0
         self.mark = (0, 0.0)  # (tries but bridges', t) at the start of the current window
+        self.stuck = (0, 0, 0.0)  # (tries but bridges', rejected, t): the stuck window's
 
     def tries(self, stats: dict) -> int:
         """The steps tried so far (see the module notes)."""
@@ -79,10 +95,12 @@ class WorkBudget:
         # the pace of radau5's own tries (a bridge's steps are sized by the bridge,
         # :mod:`lumped.solvers.eventdriven.bridge`, and its count bounded there)
         own = tries - stats.get("bridged_steps", 0)
+        left = self.max_steps - tries
+        got = self._stuck(t, own, stats["rejected"], left, stats)
         own0, t0 = self.mark
-        if own - own0 < self.window:
-            return None
-        left, moved, n = self.max_steps - tries, t - t0, own - own0
+        if got is not None or own - own0 < self.window:
+            return got
+        moved, n = t - t0, own - own0
         if moved * left < n * (self.t_final - t):
             need = (f"about {n * (self.t_final - t) / moved:.2g} tries" if moved > 0
                     else "tries without end")
@@ -94,6 +112,25 @@ class WorkBudget:
                 "give a larger max_steps to go on")
         self.mark = (own, t)
         return None
+
+    def _stuck(self, t: float, own: int, rejected: int, left: int, stats: dict
+               ) -> tuple[Status, str] | None:
+        """The stuck test (see the module notes) at the end of a window of
+        :data:`STUCK_WINDOW` tries: at least half of ``n`` tries rejected and ``t`` moved
+        by ``dt_w`` with ``(t_final - t) / dt_w * n > STUCK_MARGIN * left``."""
+        own0, rej0, t0 = self.stuck
+        n = own - own0
+        if n < STUCK_WINDOW:
+            return None
+        self.stuck = (own, rejected, t)
+        moved, r = t - t0, rejected - rej0
+        if 2 * r < n or moved * STUCK_MARGIN * left >= n * (self.t_final - t):
+            return None
+        return Status.MAX_ITERS, (
+            f"radau5 stopped at t = {t!r} of t_end = {self.t_final!r}: it is stuck: its "
+            f"last {n} tries, {r} of them rejected, moved t by {moved!r} s, at which pace "
+            f"the {self.t_final - t!r} s left need more than {STUCK_MARGIN} times the "
+            f"{left} tries left of max_steps = {self.max_steps} ({self._count(stats)})")
 
     def _count(self, stats: dict) -> str:
         bridged = stats.get("bridged_steps", 0)

@@ -148,16 +148,21 @@ def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst) -> float:
         for u in range(size):
             bal += abs(J[j, u]) * abs(U[u])
         rho = 0.0
-        for row in range(size):
-            e = row % n - N
-            c = abs(J[row, j]) if e >= 0 and not spring[e] else 0.0
-            if c > 0.0:
-                s = 0.0
-                for u in range(size):
-                    s += abs(J[row, u]) * (bal if u == row else abs(U[u]))
-                s = s / c
-                if rho == 0.0 or s < rho:
-                    rho = s
+        for any_row in (False, True):  # the laws in the rate; else any row (springs')
+            for row in range(size):
+                e = row % n - N
+                c = abs(J[row, j]) if (e >= 0 and not spring[e]) or any_row else 0.0
+                if c > 0.0:
+                    s = 0.0
+                    for u in range(size):
+                        s += abs(J[row, u]) * (bal if u == row else abs(U[u]))
+                    s = s / c
+                    if rho == 0.0 or s < rho:
+                        rho = s
+            if rho > 0.0:
+                break
+        if rho > 0.0 and any_row and ROUNDOFF * rho > scale[j]:
+            rho = 0.0  # (the springs' rounding beyond the velocity's own tolerance)
         r = abs(du[j]) / max(scale[j], ROUNDOFF * rho / tol)
         if not r <= worst:
             worst = r
