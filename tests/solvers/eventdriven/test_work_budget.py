@@ -150,3 +150,32 @@ def test_a_run_whose_stage_solves_fail_stops_within_two_short_windows(monkeypatc
     assert sol.status is Status.MAX_ITERS and "it is stuck" in sol.message
     tried = sol.stats["steps"] + sol.stats["rejected"]
     assert tried <= 2 * budget.STUCK_WINDOW + 100, sol.stats
+
+
+@pytest.mark.parametrize("max_steps", [1_000_000, 1_500])
+def test_the_compiled_loop_counts_every_try_against_the_budget(max_steps, monkeypatch):
+    # the scene above with its stage solves failing inside the compiled loop (no
+    # round-off test of the junction's velocity there, as before that fix): the loop
+    # used to cap accepted steps only, so with max_steps = 5000 it spent 14 773 tries,
+    # and the stuck test waited 19 160 tries for it to return; now it returns at a
+    # window of tries and at the budget's last try
+    from _lock_scenes import junction_on_springs_slipping_on_coulomb
+
+    from lumped.solvers.eventdriven import fast
+    from lumped.solvers.radau import stage
+
+    monkeypatch.setattr(stage, "roundoff_worst", lambda du, U, J, scale, junction, rate,
+                        f, tol, worst: worst)
+    monkeypatch.setattr(fast, "roundoff_test", lambda: 0)
+    sol = simulate(junction_on_springs_slipping_on_coulomb(), method="radau5", dt=0.025,
+                   t_end=0.5, rtol=1e-10, atol=1e-13, compiled=True, max_steps=max_steps,
+                   throw=False)
+    assert sol.stats["loop"] == "compiled" and sol.status is Status.MAX_ITERS
+    stats = sol.stats
+    own = stats["steps"] + stats["rejected"]
+    assert stats["rejected"] > 2 * stats["steps"]  # (the failing stage solves)
+    if max_steps > 5_000:
+        assert "it is stuck" in sol.message and own <= 3 * budget.STUCK_WINDOW
+    else:
+        assert "max_steps = 1500 is spent" in sol.message
+        assert own + stats.get("bridged_steps", 0) <= max_steps

@@ -29,12 +29,13 @@ All three stop the run with :attr:`~lumped.solvers.status.Status.MAX_ITERS` (Sci
 code for a step budget; a ``SolverError`` with ``throw=True``), never bridged, with the
 time reached, the tries of each kind and how to raise the budget.
 
-The compiled loop (:mod:`lumped.solvers.eventdriven.loop_jit`) counts accepted steps only
-and returns at ``max_steps`` of them: :meth:`WorkBudget.compiled_cap` hands it the
-accepted steps it may take before it returns, at most a window's worth, so that the tests
-above run at least once a window. Its rejected steps between two returns are counted
-when it returns (at most the stall limit,
-:data:`~lumped.solvers.radau.stage.STALL_PASSES`, in a row).
+The compiled loop (:mod:`lumped.solvers.eventdriven.loop_jit`) counts its tries, accepted
+and rejected, and returns at a cap: :meth:`WorkBudget.compiled_cap` hands it the tries it
+may take before it returns, the budget left, at most a window of the stuck test
+(:data:`STUCK_WINDOW`) or of the pace test, so that the tests above see every try and
+run at least once a window (a run whose stage solves kept failing inside the compiled
+loop, which capped accepted steps only, spent 14 773 tries of ``max_steps = 5000``, and
+the stuck test waited for it to return, issue 29).
 """
 
 from __future__ import annotations
@@ -78,10 +79,12 @@ class WorkBudget:
                 + self.redone)
 
     def compiled_cap(self, stats: dict) -> int:
-        """The ``max_steps`` of the compiled loop: the accepted steps it may reach before
-        it returns (the budget left, at most a window of it, at least one step)."""
+        """The ``max_steps`` of the compiled loop: the count of accepted plus rejected
+        steps it may reach before it returns (the budget left, at most a window of the
+        stuck test or the pace test, at least one try)."""
         left = self.max_steps - self.tries(stats)
-        return stats["steps"] + max(1, min(left, self.window))
+        return (stats["steps"] + stats["rejected"]
+                + max(1, min(left, self.window, STUCK_WINDOW)))
 
     def check(self, t: float, stats: dict) -> tuple[Status, str] | None:
         """``(Status.MAX_ITERS, message)`` when the budget is spent, or when the run's pace

@@ -17,24 +17,24 @@ reference loop of :class:`lumped.solvers.eventdriven.run.Radau5Run` (bit for bit
    landing are the reference's);
 5. the accepted step's dense-output record ``(t_n, h, y_n, Y_k - y_n)`` and its output row.
 
-It returns to Python, with the state as at the top of the reference loop's pass that
-must run next, when (the code in ``ist[REASON]``): the next step would reach the stop
-with a room below the step floor (:data:`STOP`; else it takes the step to the stop, ``h``
-the room left, and returns after it: :data:`STOPPED`), a guard turns negative in a
-candidate step (:data:`CROSSING`: Python redoes it and lands on the event), a law not
-known monotone crosses a fold (:data:`FOLD`: Python redoes the step and stops), a
-Jacobian is singular but finite (:data:`SINGULAR`: Python's minimum-norm solve), the step
-is below its floor (:data:`FLOOR`), the output arrays are full (:data:`FULL`),
-``max_steps`` or the stall limit (:data:`LIMIT`), the eighth Newton failure in a row
-(:data:`DAMPED`: Python redoes the pass with its line search), or ``ist[CREEPING]``
-accepted steps in a row shorter than ``max(step floor, fst[CREEP_FLOOR])`` reach
-``CREEP_STEPS`` (:data:`CREEP`, after that step, before the controller sizes the next:
-the creep test of the Python loop, ``StepPass._accept`` of
-:mod:`lumped.solvers.eventdriven.step`, which stops the run). With ``ist[SINGLE] = 1`` it
-makes one attempt of size ``h`` for the Python loop and returns (:data:`ATTEMPT`) its
-outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular), ``ist[A_ITS]``,
-``ist[A_NFAC]``, ``fst[A_ERR]`` and the stage values in ``ws[0]``; the crossing's root is
-:func:`attempt_root`'s, compiled apart (only when needed).
+It returns to Python, with the state as at the top of the reference loop's pass that must
+run next, when (the code in ``ist[REASON]``): the next step would reach the stop with a room
+below the step floor (:data:`STOP`; else it takes the step to the stop, ``h`` the room left,
+and returns after it: :data:`STOPPED`), a guard turns negative in a candidate step
+(:data:`CROSSING`: Python redoes it and lands on the event), a law not known monotone
+crosses a fold (:data:`FOLD`: Python redoes the step and stops), a Jacobian is singular but
+finite (:data:`SINGULAR`: Python's minimum-norm solve), the step is below its floor
+(:data:`FLOOR`), the output arrays are full (:data:`FULL`), ``ist[MAX_STEPS]`` tries
+(accepted and rejected: :meth:`~lumped.solvers.eventdriven.budget.WorkBudget.compiled_cap`)
+or the stall limit (:data:`LIMIT`), the eighth Newton failure in a row (:data:`DAMPED`:
+Python redoes the pass with its line search), or ``ist[CREEPING]`` accepted steps in a row
+shorter than ``max(step floor, fst[CREEP_FLOOR])`` reach ``CREEP_STEPS`` (:data:`CREEP`,
+after that step, before the controller sizes the next: the creep test of the Python loop,
+``StepPass._accept`` of :mod:`lumped.solvers.eventdriven.step`, which stops the run). With
+``ist[SINGLE] = 1`` it makes one attempt of size ``h`` for the Python loop and returns
+(:data:`ATTEMPT`) its outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular),
+``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]`` and the stage values in ``ws[0]``; the
+crossing's root is :func:`attempt_root`'s, compiled apart (only when needed).
 
 State in and out: ``x, v, F, dF``, ``fst`` (floats, ``T .. CREEP_FLOOR``) and ``ist``
 (ints, ``HAVE_ACC .. CREEPING``). The forcing is ``(fkind, fpar, table)`` of
@@ -125,7 +125,7 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
         to_stop = False
         if single:
             pass
-        elif ist[STALLED] + 1 > STALL_PASSES or ist[STEPS] >= ist[MAX_STEPS]:
+        elif ist[STALLED] + 1 > STALL_PASSES or ist[STEPS] + ist[REJECTED] >= ist[MAX_STEPS]:
             reason = LIMIT
         elif ist[N_OUT] >= cap:
             reason = FULL
