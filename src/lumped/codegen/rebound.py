@@ -28,7 +28,7 @@ class Rebound:
     """A bound law's results made from its :class:`LawClass` (see the module notes)."""
 
     def __init__(self, cls: LawClass, values: tuple[float, ...]) -> None:
-        self.cls, self.values, self._atoms = cls, values, None
+        self.cls, self.values, self._atoms, self._kernel = cls, values, None, None
 
     def atoms(self) -> dict:
         """The class's float nodes -> this law's sympy floats (made when first asked)."""
@@ -37,9 +37,15 @@ class Rebound:
         return self._atoms
 
     def kernel(self) -> Callable:
-        """The law's :func:`~lumped.codegen.compile_kernel` (guarded)."""
-        kernel = with_magnitude(self.cls._d.kernel, self.values)
-        kernel.expressions = LazyExpressions(self.cls._d.expressions, self.atoms)
+        """The law's :func:`~lumped.codegen.compile_kernel` (guarded), made once: a law
+        bound anew to the same numbers (a scene rebuilt with one number changed) is
+        given this object by :func:`~lumped.codegen.parametric.law_class`, and so the
+        same kernel (a pure function of the numbers)."""
+        kernel = self._kernel
+        if kernel is None:
+            kernel = with_magnitude(self.cls._d.kernel, self.values)
+            kernel.expressions = LazyExpressions(self.cls._d.expressions, self.atoms)
+            self._kernel = kernel
         return kernel
 
     def branches(self):

@@ -287,3 +287,27 @@ def test_the_class_key_is_sympys_order_of_the_floats(values):
     one = numbers_key(get_law("linear_spring"), (values[0],))
     assert one[2] == _ranks(pm[:2]) and one[3] == _ranks([sp.Float(x)._hashable_content()
                                                           for x in pm[:2]])
+
+
+def test_a_law_bound_again_to_its_numbers_builds_no_kernel(monkeypatch):
+    """A scene with new numbers binds every law anew: those whose numbers did not change
+    (the dashpot of a new ``k``) take the kernel of the law already bound to them, no
+    function is built (counted), and their runs are those from scratch."""
+    from lumped.codegen import rebinding
+
+    dashpot = get_law("bingham")
+    first = dashpot.bind(gamma=0.2, tau=0.5000123)
+    first.kernel(0.1, 1.0)
+    built = []
+    real = rebinding.Lifted.build
+    monkeypatch.setattr(rebinding.Lifted, "build",
+                        lambda self, values: built.append(values) or real(self, values))
+    again = dashpot.bind(gamma=0.2, tau=0.5000123)
+    assert again is not first and again.kernel(0.1, 1.0) == first.kernel(0.1, 1.0)
+    assert not built
+    scene = _released(10.000654)
+    kept = simulate(scene, t_end=1.0, method="radau5", rtol=1e-6, compiled=False)
+    _from_scratch()
+    parametric._REBOUND.clear()
+    _same_run(kept, simulate(_released(10.000654), t_end=1.0, method="radau5", rtol=1e-6,
+                             compiled=False))

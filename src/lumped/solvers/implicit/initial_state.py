@@ -26,6 +26,7 @@ from functools import lru_cache
 from ...scene import Mass, Scene
 from ...scene.supports import support_rates
 from ..newton.criteria import residual_ok
+from ..newton.linalg import kept_factor_solver
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..newton.scalar_root import scalar_root
 from ..newton.semismooth import newton_solve
@@ -255,7 +256,7 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
     # one solve per run: allow a generous budget (degenerate yields converge linearly)
     ic_options = _ic_options(options)
     res = newton_solve(evaluate, u0, ic_options, min_norm=True, check_scaled=True,
-                       equilibrate=True)
+                       equilibrate=True, factor=kept_factor_solver)
     if res.code is not NewtonCode.SUCCESS:
         # restarts: the junctions' velocities from their balances solved one by one
         # (lumped.solvers.implicit.balance_sweeps.balance_sweeps), then every junction
@@ -364,7 +365,8 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
                 if start is u0 and proj is None:
                     continue  # done above
                 retry = newton_solve(evaluate, start, ic_options, min_norm=True, project=proj,
-                                     check_scaled=True, equilibrate=True)
+                                     check_scaled=True, equilibrate=True,
+                                     factor=kept_factor_solver)
                 if retry.code is NewtonCode.SUCCESS:
                     res = retry
                     break

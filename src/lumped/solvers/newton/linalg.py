@@ -3,15 +3,18 @@ r"""Small dense linear algebra for the Newton solver, on Python floats.
 :func:`lu_factor` / :func:`lu_solve` (partial pivoting) for systems of at most
 :data:`DENSE_PYTHON_MAX` unknowns, numpy on the whole matrix above; :func:`unrolled_lu_solve`
 generates a branch-free solve for fixed factors, and :class:`FactorCache` keeps the last
-factorisation so that a step whose Jacobian is unchanged reuses it.
+factorisation so that a step whose Jacobian is unchanged reuses it; :func:`kept_factor_solver`
+keeps the factorisations of the last few Jacobians of any solve, by their bits.
 """
 
 from __future__ import annotations
 
 import math
+import struct
 from collections.abc import Sequence
 
-__all__ = ["DENSE_PYTHON_MAX", "FactorCache", "lu_factor", "lu_solve", "unrolled_lu_solve"]
+__all__ = ["DENSE_PYTHON_MAX", "FactorCache", "factor_solver", "kept_factor_solver",
+           "lu_factor", "lu_solve", "unrolled_lu_solve"]
 
 
 #: Largest system factorised in plain Python; larger ones use numpy on the whole matrix.
@@ -126,6 +129,35 @@ def factor_solver(J: list[list[float]]):
         return _NumpyLU(J).solve
     except (ZeroDivisionError, ValueError):
         return None
+
+
+#: :func:`kept_factor_solver`'s solvers by the bits of their Jacobians, the last
+#: :data:`KEPT_FACTORS` made.
+_KEPT: dict[bytes, object] = {}
+KEPT_FACTORS = 64
+
+
+def kept_factor_solver(J: list[list[float]]):
+    """:func:`factor_solver` ``(J)``, kept per ``J``'s bits (a signed zero is not the other
+    zero) for the last :data:`KEPT_FACTORS` Jacobians of at most :data:`DENSE_PYTHON_MAX`
+    unknowns: the same factors, so the same solves, bit for bit. For the few solves whose
+    Jacobians recur across scenes: the consistent initial state's read the masses, the
+    laws' slopes and the vanishing step, not a spring's force, so a new spring constant
+    meets the Jacobians of the last one (:mod:`lumped.solvers.implicit.initial_state`)."""
+    n = len(J)
+    if n > DENSE_PYTHON_MAX:
+        return factor_solver(J)
+    try:
+        key = struct.pack(f"{n * n}d", *[x for row in J for x in row])
+    except struct.error:  # (not floats: not kept)
+        return factor_solver(J)
+    got = _KEPT.get(key, False)
+    if got is False:
+        got = factor_solver(J)
+        if len(_KEPT) >= KEPT_FACTORS:
+            _KEPT.clear()
+        _KEPT[key] = got
+    return got
 
 
 class FactorCache:

@@ -87,6 +87,7 @@ def newton_solve(
     project: Callable[[list[float]], list[float]] | None = None,
     check_scaled: bool = False,
     equilibrate: bool = False,
+    factor: Callable = factor_solver,
 ) -> NewtonResult:
     """Solve ``G(u) = 0`` from ``u0`` by damped semismooth Newton (see the module notes).
 
@@ -125,6 +126,11 @@ def newton_solve(
         With ``min_norm``, scale the rows of a singular Jacobian to unit largest entries
         before its minimum-norm solve (``min_norm_solver(J, rows=True)``): the consistent
         initial state's vanishing-step rows (entries ``1e-20``) stay in its range.
+    factor : callable
+        ``J -> solve`` or ``None`` when ``J`` is singular: :func:`~lumped.solvers.newton.
+        linalg.factor_solver` (default), or :func:`~lumped.solvers.newton.linalg.
+        kept_factor_solver` for solves whose Jacobians recur (its hits count as
+        factorisations: the counters do not depend on what was kept).
 
     Returns
     -------
@@ -196,7 +202,7 @@ def newton_solve(
         if cache is not None and cache.J == J:
             solve = cache.hit()
         else:
-            solve = factor_solver(J)
+            solve = factor(J)
             n_fact += 1
             if solve is None:
                 met_singular = True
@@ -226,7 +232,7 @@ def newton_solve(
             n_res += 1
             if J_dir != J and all(finite(row) for row in J_dir):
                 n_jac += 1
-                solve_dir = factor_solver(J_dir)
+                solve_dir = factor(J_dir)
                 n_fact += 1
                 if solve_dir is not None:
                     d2 = solve_dir(G)
