@@ -23,7 +23,7 @@ from ...codegen.jit import njit
 from ..radau.step_jit import element_nodes
 from ..radau.tableau import SAMPLES, C
 
-__all__ = ["first_root", "first_root_py", "illinois"]
+__all__ = ["collocation_at", "collocation_at_py", "first_root", "first_root_py", "illinois"]
 
 _C0, _C1, _C2 = C
 _D1 = _C0 * (_C0 - _C1) * (_C0 - _C2)
@@ -41,6 +41,12 @@ def collocation_at(s, y0, y1, y2, y3):
     l2 = s * (s - _C0) * (s - _C2) / _D2
     l3 = s * (s - _C0) * (s - _C1) / _D3
     return y0 + (l1 * (y1 - y0) + l2 * (y2 - y0) + l3 * (y3 - y0))
+
+
+#: :func:`collocation_at` uncompiled, for the Python loop: the same numbers bit for bit
+#: (no fused multiply-add in the compiled one), and a first run of a structure in the
+#: Python loop compiles nothing for its events (issue 27)
+collocation_at_py = getattr(collocation_at, "py_func", collocation_at)
 
 
 def illinois(g: Callable[[float], float], a: float, b: float, ga: float, gb: float
@@ -79,8 +85,8 @@ def first_root_py(nodes: Sequence[tuple[Sequence[float], Sequence[float]]],
     for s in SAMPLES:
         best, which = np.inf, (0, 0)
         for w, ((q0, q1, q2, q3), (f0, f1, f2, f3)) in enumerate(nodes):
-            qs = collocation_at(s, q0, q1, q2, q3)
-            Fs = collocation_at(s, f0, f1, f2, f3)
+            qs = collocation_at_py(s, q0, q1, q2, q3)
+            Fs = collocation_at_py(s, f0, f1, f2, f3)
             tol = _TOL * (1.0 + abs(qs) + abs(Fs))
             for j, g in enumerate(guard_fns[w](qs, Fs)):
                 if g + tol < best:
@@ -90,7 +96,7 @@ def first_root_py(nodes: Sequence[tuple[Sequence[float], Sequence[float]]],
             (q0, q1, q2, q3), (f0, f1, f2, f3) = nodes[w]
 
             def g(z: float, w=w, j=j, q=(q0, q1, q2, q3), f=(f0, f1, f2, f3)) -> float:
-                return guard_fns[w](collocation_at(z, *q), collocation_at(z, *f))[j]
+                return guard_fns[w](collocation_at_py(z, *q), collocation_at_py(z, *f))[j]
 
             g0 = g(prev)
             if not g0 > 0.0:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from .crossing_root import collocation_at, illinois
+from .crossing_root import collocation_at_py, illinois
 
 __all__ = ["split_kink"]
 
@@ -69,8 +69,8 @@ def split_kink(held: Mapping[int, tuple[tuple[float, ...], tuple[float, ...]]],
             return None  # a stage beyond its interval: the locks break (a guard's event)
     for e, (F_held, F_free) in held.items():
         _, w, lo, hi = cones[e]
-        if not any(collocation_at(s, *F_held) > hi + tol or collocation_at(s, *F_held) < lo - tol
-                   for s in _READ):
+        if not any(collocation_at_py(s, *F_held) > hi + tol
+                   or collocation_at_py(s, *F_held) < lo - tol for s in _READ):
             continue
         s = _kink_of(F_free, lo, hi, _AT_END * w)
         s = 0.5 if s is None or not 0.0 < s < 1.0 else s
@@ -84,12 +84,12 @@ def _kink_of(F_free: tuple[float, ...], lo: float, hi: float, margin: float
     a start this close to a bound is held there."""
     start = F_free[0]
     if start >= hi - margin:  # held at hi: the kink where it comes back below
-        return _first_sign_change(lambda s: collocation_at(s, *F_free) - (hi - margin))
+        return _first_sign_change(lambda s: collocation_at_py(s, *F_free) - (hi - margin))
     if start <= lo + margin:
-        return _first_sign_change(lambda s: (lo + margin) - collocation_at(s, *F_free))
+        return _first_sign_change(lambda s: (lo + margin) - collocation_at_py(s, *F_free))
     # inside: the kink where the free split reaches either end
-    return _first_sign_change(lambda s: min(hi - collocation_at(s, *F_free),
-                                            collocation_at(s, *F_free) - lo))
+    return _first_sign_change(lambda s: min(hi - collocation_at_py(s, *F_free),
+                                            collocation_at_py(s, *F_free) - lo))
 
 
 def _first_sign_change(g) -> float | None:
