@@ -71,6 +71,11 @@ class StepChecks:
         if frame is not None:
             frame.bare()
 
+    def lock_group(self) -> int:
+        """The group of the held mode's locks that the dense output records with a step
+        (:meth:`~lumped.solvers.radau.dense.DenseOutput.group`)."""
+        return self.dense.group(self.lbs, self.modes, self.cones)
+
     def start_forces(self, U: list[float]) -> list[float]:
         """The forces at ``t`` the step's polynomial starts from: after an event the
         stage forces' quadratic at ``s = 0`` rather than the probe's forces, whose

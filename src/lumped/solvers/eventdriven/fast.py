@@ -264,7 +264,8 @@ class CompiledLoop:
             rows) -> str:
         """Advance the driver's state ``st`` (keys ``t, h, x, v, F, dF_n, F_seen, h_acc,
         err_acc, h_good, h_big, stalled, creeping, t_stop, t_final, prev_break, rtol, atol,
-        m_min, max_steps``) in place; returns the reason the loop stopped (``REASONS``).
+        m_min, max_steps, group``; ``group`` the dense output's group of the mode's locks)
+        in place; returns the reason the loop stopped (``REASONS``).
 
         ``h_big`` is the longest step the run accepted (the scale of a bridge's steps,
         :mod:`lumped.solvers.eventdriven.bridge`): the longest of the steps taken here
@@ -286,7 +287,7 @@ class CompiledLoop:
                 h_big = max(h_big, float(HS[:kept].max()))
             if ist[L.REASON] == L.CREEP:
                 st["t_prev"] = float(T0[k - 1])
-            dense.commit(k)
+            dense.commit(k, st["group"])
             rows.commit(k)
             if ist[L.REASON] != L.FULL:
                 break

@@ -18,7 +18,7 @@ from ...grid import steps_for
 from ...scene import Scene
 from ..implicit.initial_state import consistent_initial_state
 from ..modes.stuck import hold_interval
-from ..radau.dense import DenseOutput
+from ..radau.dense import DenseOutput, LockedForces
 from ..radau.error import initial_step
 from ..radau.rows import Rows, output_data, row_of
 from ..radau.stage import StageSystem
@@ -96,7 +96,7 @@ class Radau5Run(StepPass, StepChecks):
         # the forcing's breakpoints, and whether each is a kink (no mode choice there)
         self.breaks, self.kinks = time_events(scene, t_final)
         zeno_window = opts["zeno_window"] or 1e-6 * t_final
-        self.dense = DenseOutput(N, E)
+        self.dense = DenseOutput(N, E, LockedForces(scene))
         self.rows = Rows()
         self.rows.append(row_of(0.0, x, v, F))
         self.stats = stats = {
@@ -261,7 +261,7 @@ class Radau5Run(StepPass, StepChecks):
                 "prev_break": breaks[bi - 1] if bi > 0 else math.nan, "bi": bi,
                 "breaks": breaks, "kinks": self.kinks, "rtol": self.rtol,
                 "atol": self.atol, "m_min": self.m_min,
-                "max_steps": self.budget.compiled_cap(self.stats)}
+                "max_steps": self.budget.compiled_cap(self.stats), "group": self.lock_group()}
 
     def bridge_over(self) -> bool:
         """Backward Euler over the stop (``status``, ``message``) from the last accepted

@@ -328,7 +328,7 @@ class StepPass:
         F0 = self.dense_start_forces(sol, h)
         ms = self.ms
         ms.forces_from_probe = False
-        self.dense.add(self.t, h, x + self.v + F0, Y)
+        self.dense.add(self.t, h, x + self.v + F0, Y, self.lock_group())
         self.dF_n = self.system.end_slope(sol, h, self.F)
         target = self.target
         event_here = target is not None

@@ -1,6 +1,8 @@
 r"""The dense output of the adaptive method's accepted steps: the collocation polynomial of
 each step (:class:`DenseOutput`, :func:`position_weights`), evaluated by numpy or in one
-compiled pass, and the static balance of the stuck intervals held without steps.
+compiled pass, the static balance of the stuck intervals held without steps, and on the
+steps of a mode that holds nodes at rest the forces of their locks put onto their balance
+(:mod:`lumped.solvers.radau.locked_forces`).
 
 The row layout of ``data`` and the rows of a run are in :mod:`lumped.solvers.radau.rows`.
 """
@@ -12,9 +14,10 @@ import math
 import numpy as np
 
 from ...codegen.jit import njit, numba_enabled
+from .locked_forces import LockedForces
 from .tableau import C, dense_weights
 
-__all__ = ["DenseOutput", "position_weights"]
+__all__ = ["DenseOutput", "LockedForces", "position_weights"]
 
 
 def position_weights(s):
@@ -40,12 +43,19 @@ class DenseOutput:
     Steps come one at a time (:meth:`add`, the Python loop) or as blocks of arrays
     (:meth:`extend`; the compiled loop writes its steps in place, :meth:`block` and
     :meth:`commit`); all keep the order of the steps. They are held in arrays that grow
-    by doubling, so a run's steps are never concatenated."""
+    by doubling, so a run's steps are never concatenated.
 
-    def __init__(self, N: int, E: int) -> None:
+    With ``locked`` (:class:`~lumped.solvers.radau.locked_forces.LockedForces`), each step
+    carries the group of its held mode's locks (:meth:`group`; ``-1``: none), and the
+    forces of the locks between nodes at rest are put onto their balance at the output
+    times."""
+
+    def __init__(self, N: int, E: int, locked: LockedForces | None = None) -> None:
         self.N, self.E = N, E
         ny = 2 * N + E
+        self.locked = locked
         self._T0 = self._H = np.empty(0)
+        self._G = np.empty(0, dtype=np.int64)
         self._Y0 = self._D = None  # made with the first step (a stuck run takes none)
         self._shapes = ((), (), (ny,), (3, ny))
         self._count = 0
@@ -68,17 +78,25 @@ class DenseOutput:
         if need > cap:
             new = max(need, 2 * cap, 64)
             n = self._count
-            for name, shape in zip(("_T0", "_H", "_Y0", "_D"), self._shapes, strict=True):
-                grown = np.empty((new, *shape))
+            for name, shape in zip(("_T0", "_H", "_Y0", "_D", "_G"), self._shapes + ((),),
+                                   strict=True):
+                grown = np.empty((new, *shape), dtype=np.int64 if name == "_G" else float)
                 if n:
                     grown[:n] = getattr(self, name)[:n]
                 setattr(self, name, grown)
 
-    def add(self, t: float, h: float, y0: list[float], Y: list[list[float]]) -> None:
-        """One step: its start ``t``, size ``h``, ``y_n`` and the stage values ``Y_k``."""
+    def group(self, branches, modes: list[int], cones: dict) -> int:
+        """The group of a held mode's locks for :meth:`add` and :meth:`commit`
+        (:meth:`LockedForces.group`; ``-1`` without ``locked``)."""
+        return -1 if self.locked is None else self.locked.group(branches, modes, cones)
+
+    def add(self, t: float, h: float, y0: list[float], Y: list[list[float]],
+            group: int = -1) -> None:
+        """One step: its start ``t``, size ``h``, ``y_n``, the stage values ``Y_k`` and the
+        group of its mode's locks (:meth:`group`)."""
         self._reserve(1)
         i = self._count
-        self._T0[i], self._H[i] = t, h
+        self._T0[i], self._H[i], self._G[i] = t, h, group
         self._Y0[i] = y0
         np.subtract(Y, self._Y0[i], out=self._D[i])
         self._count += 1
@@ -98,8 +116,10 @@ class DenseOutput:
         a, b = self._count, self._count + k
         return self._T0[a:b], self._H[a:b], self._Y0[a:b], self._D[a:b]
 
-    def commit(self, k: int) -> None:
-        """Keep the first ``k`` steps written into the last :meth:`block`."""
+    def commit(self, k: int, group: int = -1) -> None:
+        """Keep the first ``k`` steps written into the last :meth:`block`, all of one mode
+        (the group of its locks: :meth:`group`)."""
+        self._G[self._count:self._count + k] = group
         self._count += k
 
     def _arrays(self) -> tuple[np.ndarray, ...]:
@@ -130,6 +150,7 @@ class DenseOutput:
         out = np.empty((len(ts), 1 + 2 * N + self.E))
         if numba_enabled():  # the same numbers, in one compiled pass per part
             self._compiled(ts, t_lo, t_hi, out)
+            self._locked(ts, t_hi, out)
             return out
         bad = ~((ts >= t_lo) & (ts <= t_hi))
         if bad.any():
@@ -151,7 +172,20 @@ class DenseOutput:
                 rows[:, 2:2 + 2 * N:2] = y0[N:2 * N]
                 rows[:, 1 + 2 * N:] = hold.forces_many(sel)
                 out[inside] = rows
+        self._locked(ts, t_hi, out)
         return out
+
+    def _locked(self, ts: np.ndarray, t_hi: float, out: np.ndarray) -> None:
+        """The forces of the locks between nodes at rest onto their balance, on the rows
+        of steps (:meth:`LockedForces.correct`; not those of the stuck intervals)."""
+        if self.locked is None or not self._count or not (self._G[:self._count] >= 0).any():
+            return
+        skip = np.zeros(len(ts), dtype=bool)
+        if self._static:
+            for s0, s1, closed in zip(*self._static_table(t_hi), strict=True):
+                skip |= (ts >= s0) & ((ts < s1) | ((ts == s1) & closed))
+        T0, H, Y0, D = self._arrays()
+        self.locked.correct(ts, out, T0, H, Y0, D, self._G[:self._count], skip)
 
     def _compiled(self, ts: np.ndarray, t_lo: float, t_hi: float, out: np.ndarray) -> None:
         """:meth:`__call__` compiled: the numpy path's rows, each evaluated once (a row in a

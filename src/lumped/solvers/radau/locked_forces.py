@@ -1,0 +1,153 @@
+r"""The forces of the locks between nodes at rest on ``radau5``'s dense output (issue 29).
+
+On a step whose held mode keeps a node at rest (``v_n = 0`` and ``V_k = 0`` at every stage,
+bit-exact: a stuck dashpot's row is ``V_k = 0``), the node's balance (eq. 4a with
+``v' = 0``)
+
+.. math::
+
+    r_i(t) = f_i(t) + \sum_{a_e = i} F_e(t) - \sum_{b_e = i} F_e(t) = 0
+
+holds at every ``t``, and the forces of the locks that join such nodes to each other or to
+ground (a stuck dashpot, a taut string: :attr:`lumped.codegen.branches.BranchInfo.locks`)
+are algebraic: they follow the load. The stage values hold the balance at the nodes
+``s = c_k``; between them the collocation cubic interpolates the forces, and with them the
+load, whose interpolation error (a sine at ``omega h = 1.3``: ``5e-3`` of its amplitude)
+the error estimate does not see: ``x`` and ``v`` are exact, and the forces whose guards
+decide events are held only to ``min(1e-3, 100 rtol)``, enough to show a guard's sign
+change. Nor is the start of a step after an event on the balance where its forces come
+from a probe. So at each output time the dense output puts those forces onto the balance
+by the correction of least weighted norm,
+
+.. math::
+
+    F_L(t) \leftarrow F_L(t) - W K^T \left(K W K^T\right)^{+} r(t),
+
+``r`` the residual of the interpolated forces at the nodes at rest that a lock joins,
+``K`` the incidence of those locks (``+1`` at the end ``a``, ``-1`` at ``b``) and ``W``
+the weights of the split among locks in parallel, the half-widths ``w_e`` of their force
+intervals (:func:`lumped.solvers.radau.cone_split.cone_solver`), ``1`` for a lock alone.
+The stage rule's split of a load ``S`` among locks in parallel is ``F_e = c_e + w_e
+lambda(S)``, so the corrected forces are that rule's split of the exact load: each inside
+its interval while the load is inside their joint one. A lock alone at a node takes
+exactly ``-r``. Moving nodes, and the forces of other elements, are left as interpolated
+(their accuracy is the step's); a step at the forcing's breakpoint reads the load's right
+limit at its start (the forces after a time event).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from ...scene.forcing import SineBurst, zero_forcing
+from ...scene.forcing_spec import ConstantForce
+
+__all__ = ["LockedForces"]
+
+
+class LockedForces:
+    """The correction of the module notes for the steps of one scene: the groups of locks
+    (:meth:`group`, one per held mode) and :meth:`correct`."""
+
+    def __init__(self, scene) -> None:
+        self.N, self.E = len(scene.nodes), len(scene.elements)
+        self.ea, self.eb = tuple(scene.elem_a), tuple(scene.elem_b)
+        self.forcing = tuple(scene.forcing)
+        self._groups: list[tuple[tuple[int, ...], tuple[float, ...]]] = []
+        self._index: dict[tuple, int] = {}
+        self._modes: dict[tuple, int] = {}
+        self._maps: dict[tuple, tuple | None] = {}
+
+    def group(self, branches: Sequence, modes: Sequence[int], cones: dict) -> int:
+        """The index of the held mode's locks and their weights, ``-1`` for a mode without
+        locks (its steps are left as interpolated)."""
+        key = (tuple(modes), tuple((e, c[1]) for e, c in cones.items()))
+        got = self._modes.get(key)
+        if got is None:
+            locks = tuple(e for e in range(self.E) if branches[e].info[modes[e]].locks)
+            weights = tuple(float(cones[e][1]) if e in cones else 1.0 for e in locks)
+            got = -1
+            if locks:
+                got = self._index.setdefault((locks, weights), len(self._groups))
+                if got == len(self._groups):
+                    self._groups.append((locks, weights))
+            self._modes[key] = got
+        return got
+
+    def loads(self, ts: np.ndarray) -> np.ndarray:
+        """``f_i(t)`` per node at the times ``ts``, ``(len(ts), N)``."""
+        out = np.zeros((len(ts), self.N))
+        for i, fn in enumerate(self.forcing):
+            if fn is None or fn is zero_forcing:
+                continue
+            if isinstance(fn, SineBurst):
+                out[:, i] = np.where(ts > fn.t_off, 0.0, fn.amplitude * np.sin(fn.omega * ts))
+            elif isinstance(fn, ConstantForce):
+                out[:, i] = fn.value
+            else:
+                out[:, i] = [float(fn(float(t))) for t in ts]
+        return out
+
+    def _map(self, g: int, rest: np.ndarray) -> tuple | None:
+        """``(lock columns, node rows, incidence of every element at those rows, P)`` with
+        ``P = W K^T (K W K^T)^+`` for the locks of group ``g`` whose ends are at rest
+        (``rest``) or ground, or ``None`` when there are none."""
+        key = (g, rest.tobytes())
+        if key in self._maps:
+            return self._maps[key]
+        locks, weights = self._groups[g]
+        still = [bool(r) for r in rest] + [True]  # (index -1: ground)
+        free = [(e, w) for e, w in zip(locks, weights, strict=True)
+                if still[self.ea[e]] and still[self.eb[e]]]
+        nodes = sorted({i for e, _ in free for i in (self.ea[e], self.eb[e]) if i >= 0})
+        got = None
+        if nodes:
+            row = {i: r for r, i in enumerate(nodes)}
+            Kall = np.zeros((len(nodes), self.E))
+            for e in range(self.E):
+                if self.ea[e] in row:
+                    Kall[row[self.ea[e]], e] += 1.0
+                if self.eb[e] in row:
+                    Kall[row[self.eb[e]], e] -= 1.0
+            cols = [e for e, _ in free]
+            K, W = Kall[:, cols], np.array([w for _, w in free])
+            P = (W[:, None] * K.T) @ np.linalg.pinv((K * W) @ K.T)
+            got = (np.array(cols), np.array(nodes), Kall, P)
+        self._maps[key] = got
+        return got
+
+    def correct(self, ts: np.ndarray, out: np.ndarray, T0: np.ndarray, H: np.ndarray,
+                Y0: np.ndarray, D: np.ndarray, G: np.ndarray, skip: np.ndarray) -> None:
+        """Correct the rows ``out`` (the dense output's, at the times ``ts``, of the steps
+        ``(T0, H, Y0, D)`` with the groups ``G``) in place, but those of ``skip``."""
+        N = self.N
+        i = np.clip(np.searchsorted(T0, ts, side="right") - 1, 0, len(T0) - 1)
+        sel = (G[i] >= 0) & ~skip
+        if not sel.any():
+            return
+        steps = np.unique(i[sel])
+        V = slice(N, 2 * N)
+        rest = (Y0[steps, V] == 0.0) & np.all(D[steps][:, :, V] == 0.0, axis=1)
+        maps: dict[tuple, int] = {}
+        code = np.full(len(T0), -1)
+        found: list[tuple] = []
+        for s, still in zip(steps, rest, strict=True):
+            key = (int(G[s]), still.tobytes())
+            if key not in maps:
+                maps[key] = len(found)
+                found.append(self._map(int(G[s]), still))
+            code[s] = maps[key]
+        Fcols = slice(1 + 2 * N, 1 + 2 * N + self.E)
+        for k, got in enumerate(found):
+            rows = np.flatnonzero(sel & (code[i] == k))
+            if got is None or not len(rows):
+                continue
+            cols, nodes, Kall, P = got
+            t = ts[rows]
+            # the load's right limit at a step's start (the forces after a time event)
+            t = np.where(t == T0[i[rows]], np.nextafter(t, math.inf), t)
+            r = self.loads(t)[:, nodes] + out[rows, Fcols] @ Kall.T
+            out[rows[:, None], 1 + 2 * N + cols[None, :]] -= r @ P.T
