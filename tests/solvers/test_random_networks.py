@@ -453,11 +453,28 @@ _FINITE_STOP_AT_A_JUNCTION = Scene(
                                                    F0=1.000002302587744), "m0", "j1")])
 
 
+def _stuck_at_the_joint_yield_force(first: str) -> Scene:
+    """Two draws of the ``LUMPED_LARGE=1`` radau5 Python-loop run (issue 29, session 22):
+    a mass at rest on a ``first`` (Coulomb or Bingham) and a Bingham dashpot, yield force
+    1 each, and a newtonian one, under a sine burst of amplitude exactly their joint yield
+    force 2; the forces the dense output interpolated between its long steps (``omega h =
+    1.3``) were off the mass's balance by 9e-3 and above their yield forces."""
+    params = {"tau": 1.0, "r": 1.0} if first == "coulomb" else {"gamma": 1.0, "tau": 1.0}
+    return Scene(
+        [Mass("m0", m=1.0)],
+        [Element("e0", get_law(first).bind(**params), "ground", "m0"),
+         Element("e1", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground", "m0"),
+         Element("e2", get_law("newtonian").bind(c=1.0), "ground", "m0")],
+        {"m0": SineBurst(2.0, 10.0, math.inf)})
+
+
 @pytest.mark.parametrize("method", LOOPED)
 @_SETTINGS
 @given(scene=networks())
 @example(scene=_UNDAMPED_BESIDE_STUCK)
 @example(scene=_FINITE_STOP_AT_A_JUNCTION)
+@example(scene=_stuck_at_the_joint_yield_force("coulomb"))
+@example(scene=_stuck_at_the_joint_yield_force("bingham"))
 def test_random_passive_network_python_loop(method: str, scene: Scene) -> None:
     check_network(scene, method, compiled=False)
 
