@@ -19,12 +19,12 @@ warm repeat.
 
 from __future__ import annotations
 
-import argparse
 import os
 import statistics
 import time
 
 from new_numbers import CASES, SCENES, T_END, _cpu
+from new_numbers_parts import arguments
 
 import lumped.solvers.eventdriven.run as run_module
 from lumped.bench.new_numbers import scene_with_new_numbers
@@ -64,11 +64,7 @@ def _laws(scene) -> None:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=300)
-    parser.add_argument("--scene", default="viscous-soft", choices=list(SCENES))
-    parser.add_argument("--case", default="radau5 compiled=True", choices=list(CASES))
-    args = parser.parse_args()
+    args = arguments(__doc__.splitlines()[0], 300)
     method, options = CASES[args.case]
     base = SCENES[args.scene]()
     for _ in range(3):  # warm: the structure's module, the code paths of new numbers

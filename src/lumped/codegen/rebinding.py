@@ -85,8 +85,8 @@ class Lifted:
 def codes_of(guards: Callable) -> tuple[str, ...]:
     """``guards.codes``: the code of each guard of a generated guard function
     (:func:`~lumped.codegen.guards.compile_guards`), written now (and kept on it) for
-    one made from its class without them (:class:`~lumped.codegen.rebound.
-    ReboundBranches`: each ``_c<k>`` of the class's codes written as its literal)."""
+    one made from its class without them, each ``_c<k>`` of the class's codes written
+    as its literal (:class:`~lumped.codegen.rebound.ReboundBranches`)."""
     try:
         return guards.codes  # type: ignore[attr-defined]
     except AttributeError:
