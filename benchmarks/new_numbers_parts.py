@@ -58,12 +58,18 @@ def timed(spec: str, totals: dict) -> None:
             setattr(module, name, wrapper)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=400)
+def arguments(description: str, repeats: int) -> argparse.Namespace:
+    """``--repeats`` (default ``repeats``), ``--scene`` and ``--case`` of the command line
+    (this script's, and :mod:`new_numbers_ahead`'s)."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--repeats", type=int, default=repeats)
     parser.add_argument("--scene", default="viscous-soft", choices=list(SCENES))
     parser.add_argument("--case", default="radau5 compiled=True", choices=list(CASES))
-    args = parser.parse_args()
+    return parser.parse_args()
+
+
+def main() -> None:
+    args = arguments(__doc__.splitlines()[0], 400)
     method, options = CASES[args.case]
     import lumped.solvers.eventdriven.runner  # noqa: F401 - (the modules that hold them)
 

@@ -12,6 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from lumped.codegen.branches import law_branches
+from lumped.codegen.rebinding import codes_of
 from lumped.laws import ElementLaw, get_law
 
 #: (label, bound law, expected count, expected lock values by branch (None: no lock))
@@ -181,9 +182,9 @@ def test_the_coulomb_limit_is_solved_for_its_force():
     fwd, back = lb.branch(3.0, 1.0 + 3e-12), lb.branch(-3.0, -1.0 - 3e-12)
     R, Rq, RF = lb.stage_kernel_for(fwd)(3.0, 1.5)
     assert (R, Rq, RF) == (pytest.approx(0.5 - 3e-12, rel=1e-15), -1e-12, 1.0)
-    assert lb.stage_guards_for(fwd).codes[1] == "q"
+    assert codes_of(lb.stage_guards_for(fwd))[1] == "q"
     assert lb.stage_guards_for(fwd)(2.0, 1.0)[0] == 2.0  # F + tau
-    assert lb.stage_guards_for(back).codes == ("-q",)
+    assert codes_of(lb.stage_guards_for(back)) == ("-q",)
     # the whole law in the form of the mode choice: the same zeros as the law
     law = lb.stage_law_for(get_law("bingham").bind(gamma=1e12, tau=1.0).kernel)
     assert law(0.0, 0.5) == (0.0, 1.0, 0.0) and law(2.0, 1.0 + 2e-12)[0] == 0.0

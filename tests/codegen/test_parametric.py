@@ -14,6 +14,7 @@ import lumped.codegen.emit as emit
 from lumped.codegen import compile_kernel
 from lumped.codegen.branches import LawBranches, law_branches
 from lumped.codegen.parametric import admitted, class_key, derivations, law_class
+from lumped.codegen.rebinding import codes_of, source_of
 from lumped.codegen.templates import law_template, template_from_scratch
 from lumped.laws import ElementLaw, get_law
 
@@ -51,8 +52,8 @@ def _same(a: float, b: float) -> bool:
 
 
 def _same_kernel(got, ref) -> None:
-    assert got.__source__ == ref.__source__
-    assert got.magnitude.__source__ == ref.magnitude.__source__
+    assert source_of(got) == ref.__source__
+    assert source_of(got.magnitude) == ref.magnitude.__source__
     for q, F in POINTS:
         assert all(map(_same, got(q, F), ref(q, F))), (q, F)
         assert _same(got.magnitude(q, F), ref.magnitude(q, F)), (q, F)
@@ -69,7 +70,7 @@ def test_bound_through_the_class_as_from_scratch(label, law, sets) -> None:
         assert bound.kernel.expressions == ref.expressions
         got, want = law_branches(bound), LawBranches(ref.expressions[0])
         assert got.info == want.info
-        assert got.branch.__source__ == want.branch.__source__
+        assert source_of(got.branch) == want.branch.__source__
         for i in range(want.count):
             for guard in (True, False):
                 assert got.source_for(i, guard=guard) == want.source_for(i, guard=guard)
@@ -80,7 +81,7 @@ def test_bound_through_the_class_as_from_scratch(label, law, sets) -> None:
             assert got.kernel_for(i).lock_value == want.kernel_for(i).lock_value
             for fn in ("guards_for", "stage_guards_for"):
                 g, w = getattr(got, fn)(i), getattr(want, fn)(i)
-                assert g.__source__ == w.__source__ and g.codes == w.codes
+                assert source_of(g) == w.__source__ and codes_of(g) == w.codes
                 for q, F in POINTS:
                     assert all(map(_same, g(q, F), w(q, F)))
         assert law_template(bound) == template_from_scratch(bound, want)
@@ -93,11 +94,11 @@ def _check_as_from_scratch(law, values: dict) -> None:
     _same_kernel(bound.kernel, ref)
     got, want = law_branches(bound), LawBranches(ref.expressions[0])
     assert got.info == want.info
-    assert got.branch.__source__ == want.branch.__source__
+    assert source_of(got.branch) == want.branch.__source__
     for i in range(want.count):
         _same_kernel(got.stage_kernel_for(i), want.stage_kernel_for(i))
         g, w = got.stage_guards_for(i), want.stage_guards_for(i)
-        assert g.codes == w.codes
+        assert codes_of(g) == w.codes
         for q, F in POINTS:
             assert all(map(_same, g(q, F), w(q, F))), (i, q, F)
     assert law_template(bound) == template_from_scratch(bound, want)
@@ -151,6 +152,42 @@ def test_new_numbers_derive_nothing_again(monkeypatch) -> None:
         law_template(bound)
     assert calls == {"prepare": 0, "branches": 0}
     assert derivations() == before
+
+
+def test_a_run_with_new_numbers_writes_no_branch_source(monkeypatch) -> None:
+    """A ``radau5`` run of a scene whose spring constant is new (its classes made)
+    writes the source text of the spring's kernel and its magnitude (``bound.kernel.
+    __source__``, public) and of no branch function: its stage kernels, guards and branch
+    selector are called, their texts written only when read (counted, not timed; each
+    text was written with ``repr`` of every literal at every new number)."""
+    from lumped import Element, Mass, Scene, simulate
+    from lumped.codegen import rebinding
+    from lumped.codegen.rebinding import source_of
+
+    def scene(k: float) -> Scene:
+        return Scene([Mass("m", 1.0, x0=0.3)],
+                     [Element("s", get_law("linear_spring").bind(k=k), "ground", "m"),
+                      Element("d", get_law("bingham").bind(gamma=0.2, tau=0.5), "ground",
+                              "m")])
+
+    for k in (10.123456789, 10.123456791, 10.123456793):  # the classes, a run of each
+        simulate(scene(k), method="radau5", t_end=2.0, compiled=False)
+    written = []
+    form = rebinding._form
+
+    def counted(text: str) -> str:
+        written.append(text)
+        return form(text)
+
+    monkeypatch.setattr(rebinding, "_form", counted)
+    new = scene(10.123456797)
+    sol = simulate(new, method="radau5", t_end=2.0, compiled=False)
+    assert sol.stats["events"] == 1  # (it slips, then sticks: its branches were used)
+    d = law_class(new.elements[0].law).cls._d
+    assert sorted(written) == sorted([d.kernel[0].text, d.kernel[1].text])
+    lb = law_branches(new.elements[0].law)  # the texts, when asked, as from scratch
+    want = LawBranches(new.elements[0].law.kernel.expressions[0])
+    assert source_of(lb.branch) == want.branch.__source__
 
 
 @pytest.mark.parametrize(("residual", "params", "expected"), [

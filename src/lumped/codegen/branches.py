@@ -55,6 +55,7 @@ from sympy.core.parameters import distribute
 from .emit import build_kernel
 from .guards import compile_guards, feasible_path
 from .piecewise_tree import build_selector, decision_tree, leaves
+from .rebinding import source_of
 from .rewrite import magnitude_expression
 from .stage_forms import (
     affine_inverse_form,
@@ -174,14 +175,16 @@ class LawBranches:
 
         Plain ``math`` code like :func:`~lumped.codegen.compile_kernel` (``nan`` where
         undefined), with ``.magnitude(q, F)`` (the terms' scale, for Newton's residual
-        test) and ``.__source__``.
+        test); its text is :meth:`source_for` (or
+        :func:`~lumped.codegen.rebinding.source_of` of it: a law made from its class
+        writes the text when first asked).
         """
         return self._kernel(self._check(i), guard=True)
 
     def source_for(self, i: int, *, guard: bool = False) -> str:
         """The Python source of :meth:`kernel_for` ``(i)``; ``guard=False`` (default) gives
         the bare body without ``try``, the form to hand to numba."""
-        return self._kernel(self._check(i), guard=guard).__source__
+        return source_of(self._kernel(self._check(i), guard=guard))
 
     def stage_kernel_for(self, i: int) -> Callable[[float, float], tuple[float, float, float]]:
         """:meth:`kernel_for` ``(i)`` in the form a stage solve takes it: for a steep
@@ -192,7 +195,7 @@ class LawBranches:
     def stage_source_for(self, i: int, *, guard: bool = False) -> str:
         """The Python source of :meth:`stage_kernel_for` ``(i)`` (bare body by default,
         the form to hand to numba)."""
-        return self._kernel(self._check(i), guard=guard, stage=True).__source__
+        return source_of(self._kernel(self._check(i), guard=guard, stage=True))
 
     def stage_guards_for(self, i: int) -> Callable[[float, float], tuple[float, ...]]:
         """:meth:`guards_for` ``(i)`` for the stage solve: on a steep branch with an
@@ -234,7 +237,8 @@ class LawBranches:
 
     def guards_for(self, i: int) -> Callable[[float, float], tuple[float, ...]]:
         """``guards(q, F) -> (g_1, ...)``: all ``> 0`` strictly inside branch ``i``, some
-        ``< 0`` outside it (see the module notes); ``()`` for a smooth law."""
+        ``< 0`` outside it (see the module notes); ``()`` for a smooth law. The code of
+        each guard is :func:`~lumped.codegen.rebinding.codes_of` of the function."""
         i = self._check(i)
         hit = self._guards.get(i)
         if hit is None:

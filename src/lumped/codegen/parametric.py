@@ -48,7 +48,7 @@ from .float_keys import (
     parameter_floats,
     sympy_float,
 )
-from .rebinding import Lifted, float_ids, lift_source, lift_text, swap
+from .rebinding import Lifted, codes_of, float_ids, lift_source, lift_text, source_of, swap
 from .rebound import LazyBranchInfo, Rebound, ReboundBranches
 from .stage_forms import STEEP_SPAN, affine_steepness, affine_steepness_function
 
@@ -93,21 +93,21 @@ class _Derivation:
             lb.stage_guards_for(i)
             lb.flat_start_for(i)
         self.kernel = self._pair(kernel)
-        self.selector = lift_source(lb.branch.__source__, values)
+        self.selector = lift_source(source_of(lb.branch), values)
         self.kernels = {key: self._pair(fn) for key, fn in lb._kernels.items()
                         if key[0] != "law"}
-        self.flats = {i: lift_source(fn.__source__, values)
+        self.flats = {i: lift_source(source_of(fn), values)
                       for i, fn in lb._flats.items() if fn is not None}
-        self.guards = {key: (lift_source(fn.__source__, values),
-                             tuple(lift_text(code, values) for code in fn.codes))
+        self.guards = {key: (lift_source(source_of(fn), values),
+                             tuple(lift_text(code, values) for code in codes_of(fn)))
                        for key, fn in lb._guards.items()}
         self.template = template_from_scratch(law.bind(**named), lb)
         self.template_recipes = lift_text(
             " ".join(repr(v) for v in self.template.values), values)[1]
 
     def _pair(self, fn: Callable) -> tuple[Lifted, Lifted]:
-        return lift_source(fn.__source__, self.values), lift_source(
-            fn.magnitude.__source__, self.values)
+        return lift_source(source_of(fn), self.values), lift_source(
+            source_of(fn.magnitude), self.values)
 
     def signature(self) -> tuple:
         """What must not change with the numbers: every text and recipe."""

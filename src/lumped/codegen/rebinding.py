@@ -7,7 +7,8 @@ numbers as float literals (``repr`` of a float). :func:`lift_source` names each 
 a factory compiled once then makes the function for other numbers
 (:meth:`Lifted.build`), whose literals are read from the recipes. The factory's closure
 reads the same floats the literals stood for, so it computes the same numbers, bit for
-bit, and its ``__source__`` is the text a derivation with those numbers prints.
+bit, and its ``__source__`` is the text a derivation with those numbers prints (written
+when first asked, :func:`source_of`, for the functions a run only calls).
 :func:`swap` does the same for a sympy expression: its floats replaced, the tree rebuilt
 as it is, unevaluated. :mod:`lumped.codegen.parametric` says when this is exact.
 """
@@ -22,7 +23,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 __all__ = ["Lifted", "LazyExpressions", "fill", "float_ids", "lift_source", "lift_text", "slots",
-           "swap"]
+           "codes_of", "source_of", "swap"]
 
 #: A float literal of the generated code (as :mod:`lumped.codegen.templates` reads them).
 FLOAT_LITERAL = re.compile(r"(?<![\w.])(?:\d+\.\d*(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])")
@@ -63,12 +64,47 @@ class Lifted:
     recipes: tuple
     make: Callable
 
-    def build(self, values: tuple[float, ...]) -> Callable:
-        """The function for the parameters' ``values``, with its ``__source__``."""
+    def build(self, values: tuple[float, ...], *, source: bool = True) -> Callable:
+        """The function for the parameters' ``values``, with its ``__source__``; with
+        ``source=False`` its text is written only when :func:`source_of` first asks (a
+        run calls the function and rarely reads its text: writing it, the literals
+        formatted by ``repr``, cost more than making the function)."""
         literals = slots(self.recipes, values)
         fn = self.make(*literals)
-        fn.__source__ = _form(self.text).format(*literals)
+        if source:
+            fn.__source__ = self.source(literals)
+        else:
+            fn.__lifted__ = (self, literals)
         return fn
+
+    def source(self, literals: tuple[float, ...]) -> str:
+        """The text of the function made from ``literals`` (each written by ``repr``)."""
+        return _form(self.text).format(*literals)
+
+
+def codes_of(guards: Callable) -> tuple[str, ...]:
+    """``guards.codes``: the code of each guard of a generated guard function
+    (:func:`~lumped.codegen.guards.compile_guards`), written now (and kept on it) for
+    one made from its class without them, each ``_c<k>`` of the class's codes written
+    as its literal (:class:`~lumped.codegen.rebound.ReboundBranches`)."""
+    try:
+        return guards.codes  # type: ignore[attr-defined]
+    except AttributeError:
+        codes, values = guards.__lifted_codes__  # type: ignore[attr-defined]
+        out = guards.codes = tuple(  # type: ignore[attr-defined]
+            fill(text, slots(r, values)) for text, r in codes)
+        return out
+
+
+def source_of(fn: Callable) -> str:
+    """``fn.__source__``: the text of a generated function, written now (and kept on
+    ``fn``) for one built without it (:meth:`Lifted.build` ``(source=False)``)."""
+    try:
+        return fn.__source__  # type: ignore[attr-defined]
+    except AttributeError:
+        lifted, literals = fn.__lifted__  # type: ignore[attr-defined]
+        text = fn.__source__ = lifted.source(literals)  # type: ignore[attr-defined]
+        return text
 
 
 _FORMS: dict[str, str] = {}

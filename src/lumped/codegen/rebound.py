@@ -3,7 +3,8 @@ r"""A bound law's results remade from its class, no sympy until an expression is
 :class:`Rebound` is what :func:`lumped.codegen.parametric.law_class` gives for a law of
 a checked class: its kernel, branches and template built from the class's lifted code
 with the law's numbers (:mod:`lumped.codegen.rebinding`). The branches' flags are the
-class's; their sympy expressions are swapped when first read (:class:`LazyBranchInfo`).
+class's; their sympy expressions are swapped when first read (:class:`LazyBranchInfo`),
+and their functions' texts written when first read (:class:`ReboundBranches`).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import sympy as sp
 
 from .branches import BranchInfo, LawBranches
 from .float_keys import parameter_floats
-from .rebinding import LazyExpressions, Lifted, fill, slots, swap
+from .rebinding import LazyExpressions, Lifted, slots, swap
 
 if TYPE_CHECKING:
     from .parametric import LawClass
@@ -62,7 +63,11 @@ class Rebound:
 
 class ReboundBranches(LawBranches):
     """:class:`~lumped.codegen.branches.LawBranches` of a rebound law: the same methods,
-    its functions made from its class's when first asked for (see the module notes)."""
+    its functions made from its class's when first asked for (see the module notes). Their
+    texts (``__source__``, a guard function's ``codes``) are written only when read
+    through :func:`~lumped.codegen.rebinding.source_of` and
+    :func:`~lumped.codegen.rebinding.codes_of` (:meth:`source_for` reads them so): a run
+    with new numbers calls its branch functions and writes no source text."""
 
     def __init__(self, rebound: Rebound) -> None:  # no derivation: made from the class
         d = rebound.cls._d
@@ -70,7 +75,7 @@ class ReboundBranches(LawBranches):
         swapped = _Swapped(rebound.atoms)
         self.info = tuple(LazyBranchInfo.of(info, swapped) for info in d.lb.info)
         self.count = d.lb.count
-        self.branch = d.selector.build(rebound.values)
+        self.branch = d.selector.build(rebound.values, source=False)
         self._kernels, self._guards, self._flats = {}, {}, {}
 
     def _kernel(self, i: int, *, guard: bool, stage: bool = False) -> Callable:
@@ -78,7 +83,8 @@ class ReboundBranches(LawBranches):
         hit = self._kernels.get(key)
         if hit is None:
             d = self._rebound.cls._d
-            hit = self._kernels[key] = with_magnitude(d.kernels[key], self._rebound.values)
+            hit = self._kernels[key] = with_magnitude(d.kernels[key], self._rebound.values,
+                                                      source=False)
             hit.lock_value = d.lb._kernels[key].lock_value
         return hit
 
@@ -89,7 +95,8 @@ class ReboundBranches(LawBranches):
         i = self._check(i)
         if i not in self._flats:
             lifted = self._rebound.cls._d.flats.get(i)
-            self._flats[i] = None if lifted is None else lifted.build(self._rebound.values)
+            self._flats[i] = None if lifted is None else lifted.build(self._rebound.values,
+                                                                       source=False)
         return self._flats[i]
 
     def stage_guards_for(self, i: int) -> Callable:
@@ -103,8 +110,8 @@ class ReboundBranches(LawBranches):
         if hit is None:
             lifted, codes = self._rebound.cls._d.guards[key]
             values = self._rebound.values
-            hit = self._guards[key] = lifted.build(values)
-            hit.codes = tuple(fill(text, slots(r, values)) for text, r in codes)
+            hit = self._guards[key] = lifted.build(values, source=False)
+            hit.__lifted_codes__ = (codes, values)  # (written when asked: codes_of)
         return hit
 
 
@@ -158,8 +165,11 @@ class LazyBranchInfo(BranchInfo):
         return hash(tuple(getattr(self, f) for f in _FIELDS))
 
 
-def with_magnitude(pair: tuple[Lifted, Lifted], values: tuple[float, ...]) -> Callable:
+def with_magnitude(pair: tuple[Lifted, Lifted], values: tuple[float, ...], *,
+                   source: bool = True) -> Callable:
+    """A kernel and its ``.magnitude`` built for ``values`` (their texts written when
+    first asked with ``source=False``, :func:`~lumped.codegen.rebinding.source_of`)."""
     kernel, magnitude = pair
-    fn = kernel.build(values)
-    fn.magnitude = magnitude.build(values)
+    fn = kernel.build(values, source=source)
+    fn.magnitude = magnitude.build(values, source=source)
     return fn

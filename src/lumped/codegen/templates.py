@@ -214,7 +214,8 @@ def _branches(bound, lb=None):
     branches (:func:`lumped.codegen.branches.law_branches`; the kernels in the form the
     stage solve of ``radau5`` takes, ``stage_source_for``)."""
     from lumped.codegen.branches import law_branches
+    from lumped.codegen.rebinding import codes_of, source_of
 
     lb = law_branches(bound) if lb is None else lb
-    return lb.branch.__source__, [(lb.stage_source_for(i), tuple(lb.stage_guards_for(i).codes))
+    return source_of(lb.branch), [(lb.stage_source_for(i), codes_of(lb.stage_guards_for(i)))
                                   for i in range(lb.count)]

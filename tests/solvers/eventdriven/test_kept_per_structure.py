@@ -301,7 +301,8 @@ def test_a_law_bound_again_to_its_numbers_builds_no_kernel(monkeypatch):
     built = []
     real = rebinding.Lifted.build
     monkeypatch.setattr(rebinding.Lifted, "build",
-                        lambda self, values: built.append(values) or real(self, values))
+                        lambda self, values, **kw: built.append(values) or real(self, values,
+                                                                               **kw))
     again = dashpot.bind(gamma=0.2, tau=0.5000123)
     assert again is not first and again.kernel(0.1, 1.0) == first.kernel(0.1, 1.0)
     assert not built

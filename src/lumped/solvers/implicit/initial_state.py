@@ -37,7 +37,8 @@ from .initial_kept import kept_per_scene
 from .initial_rest import cluster_guesses, initial_rest_forces
 from .initial_slip import rates_below_resolution, settle_on_rest_set
 from .initial_user_forces import apply_user_forces
-from .step_system import EPS, law_scale, newton_failure
+from .limit_rows import limit_rows
+from .step_system import EPS, newton_failure
 
 __all__ = ["consistent_initial_state"]
 
@@ -173,16 +174,12 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
     step, by Newton's method; ``(v, F, stats)``."""
     nodes, elements = scene.nodes, scene.elements
     N, E = len(nodes), len(elements)
-    n = N + E
     is_mass = [isinstance(nd, Mass) for nd in nodes]
     mass = [nd.m if isinstance(nd, Mass) else 0.0 for nd in nodes]
     v0 = [nd.v0 if isinstance(nd, Mass) else 0.0 for nd in nodes]
     ea, eb = scene.elem_a, scene.elem_b
 
-    def at(vals: list[float], i: int) -> float:
-        return vals[i] if i >= 0 else 0.0
-
-    # 2. the limit system
+    # 2. the limit system (its rows: lumped.solvers.implicit.limit_rows)
     kernels = [el.law.kernel for el in elements]
     spring = [el.kind == "spring" for el in elements]
     q_rate = [0.0] * E
@@ -198,49 +195,7 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
         q_rate = [0.0 if spring[e] else eps * r
                   for e, r in enumerate(support_rates(scene, 0.0))]
 
-    def evaluate(u: list[float]):
-        G = [0.0] * n
-        S = [0.0] * n
-        J = [[0.0] * n for _ in range(n)]
-        # d_i: the node's velocity increment (eps a for masses, v for junctions)
-        d = [eps * u[i] if is_mass[i] else u[i] for i in range(N)]
-        dd = [eps if is_mass[i] else 1.0 for i in range(N)]
-        for i in range(N):
-            if is_mass[i]:
-                p = mass[i] * u[i]
-                G[i] = p - f[i]
-                S[i] = abs(p) + abs(f[i])
-                J[i][i] = mass[i]
-            else:
-                G[i] = -f[i]
-                S[i] = abs(f[i])
-        for e in range(E):
-            k = N + e
-            Fe = u[k]
-            a, b = ea[e], eb[e]
-            for i, sgn in ((a, -1.0), (b, 1.0)):
-                if i >= 0:
-                    G[i] += sgn * Fe
-                    S[i] += abs(Fe)
-                    J[i][k] = sgn
-            row = J[k]
-            Fp = pinned[e]
-            if Fp is not None:
-                G[k] = Fe - Fp
-                S[k] = abs(Fe) + abs(Fp)
-                row[k] = 1.0
-                continue
-            scale = eps if spring[e] else 1.0  # springs see x0 + eps * v
-            q = q0[e] + q_rate[e] + scale * (at(d, b) - at(d, a))
-            R, Rq, RF = kernels[e](q, Fe)
-            G[k] = R
-            S[k] = law_scale(kernels[e], q, Fe, R, Rq, RF)
-            row[k] = RF
-            if a >= 0:
-                row[a] = -Rq * scale * dd[a]
-            if b >= 0:
-                row[b] = Rq * scale * dd[b]
-        return G, J, S
+    evaluate = limit_rows(is_mass, mass, f, ea, eb, pinned, q0, q_rate, kernels, spring, eps)
 
     # a mass starts at the acceleration of a support it has a dashpot to (stuck there,
     # its rate stays 0): the law row's residual is O(eps) and would pass at a = 0
