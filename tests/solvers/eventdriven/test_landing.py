@@ -47,3 +47,23 @@ def test_a_failed_landing_step_closes_the_bracket():
     assert landing.h_hi == 0.5 and landing.count == 1
     assert landing.failed_stage(0.25 + 1e-16, 1.0) == 0.25  # closed: land on h_lo
     assert landing.h_hi == landing.h_lo
+
+
+@pytest.mark.parametrize("depth", [0.0, -1e-9, 1e-9, 1e-6])
+def test_a_dip_of_the_end_values_is_searched_in_a_few_tries(depth):
+    # the guard at the end of a step of size h dips to -depth at h = 0.3 (issue 29: a
+    # load at exactly, below or above a stuck lock's bound at its peak); the step of 0.4
+    # crossed inside (its polynomial overshoots), its end held, and the polynomial put
+    # the crossing at h = 0.25, before the dip
+    def g(h):
+        return 50.0 * (h - 0.3) ** 2 - depth
+
+    landing = Landing((0, 0), 0.4, g(0.4), 0.4)
+    h = 0.25
+    while not landing.landed(g(h), 1e-14, 1.0, h, None):
+        h = landing.next_size(h, g(h), None)
+    assert landing.count <= 10  # (40 passes, the most, and a landing off the dip before)
+    if depth > 0.0:  # the first root
+        assert h == pytest.approx(0.3 - math.sqrt(depth / 50.0), abs=1e-11)
+    else:  # the touch, or the guard's minimum, which holds
+        assert h == pytest.approx(0.3, abs=1e-6) and g(h) >= -1e-14

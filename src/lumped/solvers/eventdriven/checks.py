@@ -140,8 +140,11 @@ class StepChecks:
         if hit is None or not self.ms.forces_from_probe or hit[0] == 0.0:
             return hit  # (a guard already off at t: an event at t itself, as before)
         F_0 = self.start_forces(U)  # a crossing inside the step: tested without the offset
-        return first_root_py([system.element_nodes(U, h, x, v, F_0, e) for e in watched],
-                             fns)
+        again = first_root_py([system.element_nodes(U, h, x, v, F_0, e) for e in watched],
+                              fns)
+        # ... but not moved to t itself by the quadratic's own error at s = 0 (a guard at
+        # exactly 0 at the event, a tangential break-out, read off at t: issue 29)
+        return hit if again is not None and again[0] == 0.0 else again
 
     def defect(self, U: list[float], h: float) -> float:
         """The largest scaled defect of the step's dense output against the held laws

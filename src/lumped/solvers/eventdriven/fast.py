@@ -257,8 +257,9 @@ class CompiledLoop:
         _ATTEMPT_ROOT.get()(self.guards.addr, js.consts, js.ea, js.eb, js.spring, self.modes_a,
                             self.watched_a, self.A, x, v, np.array(F0, dtype=float), fst, ist,
                             self.ws, self.wm)
-        return (float(fst[L.A_ROOT]), (int(ist[L.A_W]), int(ist[L.A_J]))) if ist[L.A_HIT] \
+        again = (float(fst[L.A_ROOT]), (int(ist[L.A_W]), int(ist[L.A_J]))) if ist[L.A_HIT] \
             else None
+        return hit if again is not None and again[0] == 0.0 else again  # (as crossing)
 
     def run(self, st: dict, modes: list[int], watched: list[int], stats: dict, dense,
             rows) -> str:

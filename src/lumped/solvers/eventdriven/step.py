@@ -273,25 +273,25 @@ class StepPass:
             tangent.add(hit[1])
             hit = self.crossing(sol, h)
         if tangent and self.beyond_tangent(sol, h):
-            # a guard read as a tangency is off at a stage by more than the tolerance:
-            # the stage found another root of the held branch (the mirror root of a
-            # Herschel-Bulkley n = 2 slip branch below its yield force), a failed step
+            # a guard read as a tangency is off at a stage beyond the tolerance: another root
+            # of the held branch (Herschel-Bulkley n = 2's mirror root below tau), failed
             self._failed(h, h_min)
             return True
         if target is not None:  # a landing step: bracket the event by end-of-step values
-            if hit is not None and hit[1] != target.which and hit[0] < 1.0:
-                # another guard crosses first; at t itself: no landing, the event is at t
-                at_t = hit[0] * h <= tiny
-                self.target = None if at_t else Landing(
-                    hit[1], h, self.end_guard(sol, h, hit[1])[0], target.h_found)
-                self.h = h if at_t else hit[0] * h
-                return True
             g_end, tol = self.end_guard(sol, h, target.which)
-            if not target.landed(g_end, tol, t):
-                self.h = target.next_size(h, g_end, hit[0] if hit is not None and hit[1]
-                                          == target.which and hit[0] < 1.0 else None)
+            s_in = hit[0] if hit is not None and hit[0] < 1.0 else None
+            g_other = None if s_in is None or hit[1] == target.which else self.end_guard(
+                sol, h, hit[1])[0]
+            if g_other is not None and target.switches(g_end, g_other):
+                # another guard crosses first; at t itself: no landing, the event is at t
+                at_t = s_in * h <= tiny
+                self.target = None if at_t else Landing(hit[1], h, g_other, target.h_found)
+                self.h = h if at_t else s_in * h
                 return True
-            return False
+            s_in = s_in if g_other is None else None  # (this guard's crossing inside)
+            landed = target.landed(g_end, tol, t, h, s_in)  # (a step that lands is accepted)
+            self.h = h if landed else target.next_size(h, g_end, s_in)
+            return not landed
         if hit is None or not hit[0] < 1.0 or (kept and hit[0] * h <= tiny):
             return False
         s_hit = hit[0]
