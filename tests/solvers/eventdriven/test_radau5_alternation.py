@@ -74,8 +74,10 @@ def test_a_long_probe_looking_past_the_break_out_does_not_start_a_cycle():
     # tight run's time. (m0's v0 = 1.2e-210 stops at once under no load: both start
     # stuck with no force, not e0 at its yield force as before the fix of the slip from
     # rest; the split of the load between e0 and e1, locks in parallel, is then the
-    # solver's, and at rtol 1e-10 e0 reaches its yield force at t = 0.04374 while e1
-    # still holds the mass: a switch without motion, before the joint break-out.)
+    # solver's: at rtol 1e-10 e0 reached its yield force at t = 0.04374 while e1 still
+    # held the mass, a switch without motion, until the split was solved to round-off;
+    # both now reach their bounds at the joint break-out, where the choice cycles once
+    # and its record replays to the mode held, the last test.)
     scene = Scene(
         [Mass("m0", m=0.7515144379113692, x0=-7.91271658498692e-124,
               v0=1.1799647503738502e-210),
