@@ -74,8 +74,10 @@ def test_a_long_probe_looking_past_the_break_out_does_not_start_a_cycle():
     # tight run's time. (m0's v0 = 1.2e-210 stops at once under no load: both start
     # stuck with no force, not e0 at its yield force as before the fix of the slip from
     # rest; the split of the load between e0 and e1, locks in parallel, is then the
-    # solver's, and at rtol 1e-10 e0 reaches its yield force at t = 0.04374 while e1
-    # still holds the mass: a switch without motion, before the joint break-out.)
+    # solver's: at rtol 1e-10 e0 reached its yield force at t = 0.04374 while e1 still
+    # held the mass, a switch without motion, until the split was solved to round-off;
+    # both now reach their bounds at the joint break-out, where the choice cycles once
+    # and its record replays to the mode held, the last test.)
     scene = Scene(
         [Mass("m0", m=0.7515144379113692, x0=-7.91271658498692e-124,
               v0=1.1799647503738502e-210),
@@ -104,3 +106,39 @@ def test_a_long_probe_looking_past_the_break_out_does_not_start_a_cycle():
         (t0, t1), = sol.stick_intervals(name)
         assert t0 == 0.0 and abs(t1 - t_out) < 1e-6
     assert np.abs(_positions(sol, scene) - _positions(tight, scene)).max() < 1e-6
+
+
+def test_a_mode_returned_to_after_its_switches_were_cut_records_them_anew():
+    """The record of switches at one ``t`` replays to the mode held (issue 29). At one
+    ``t`` the choice went A -> B -> A -> B -> C (no accepted step between): the return to
+    A cut B's switch from the record (the switches since A took no time), and the return
+    to B, whose own switch lay beyond the cut record, recorded none, so that e1's
+    break-out was lost (the joint break-out of the second scene above at ``rtol =
+    1e-10``, once its stage split keeps both dashpots in their intervals up to it)."""
+    from types import MappingProxyType
+
+    from lumped.solvers.eventdriven.mode_state import ModeState
+    from lumped.solvers.eventdriven.setup import read_options, scene_plan
+    from lumped.solvers.registry import RunSettings
+
+    bingham = get_law("bingham").bind(gamma=1.0, tau=1.0)
+    scene = Scene([Mass("m0", m=1.0)], [Element("e0", bingham, "ground", "m0"),
+                                         Element("e1", bingham, "ground", "m0")])
+    settings = RunSettings(t_end=1.0, dt=None, rtol=1e-6, atol=1e-9, throw=True,
+                           options=None, extra=MappingProxyType({}))
+    stats = {"steps": 0, "events": 0}
+    ms = ModeState(scene, scene_plan(scene), settings, read_options(settings), 1e-6, 1e-9,
+                   stats, 1e-6)
+    x, v, F = [0.0], [0.0], [0.5, 0.5]
+    ms.set_modes([2, 2], F)  # (both stuck)
+    script = iter([[0, 2], [2, 2], [2, 1], [2, 2], [2, 1], [0, 1]])
+    ms._choose = lambda t, h, cause, x, v, F: (next(script), list(v), list(F))
+    assert ms.change_mode(0.1, 1e-9, "guard", x, v, F) == ""
+    stats["steps"] += 1  # (a step accepted in [2, 0]; then the choices at t = 0.2)
+    for _ in range(5):
+        assert ms.change_mode(0.2, 1e-9, "guard", x, v, F) == ""
+    assert ms.modes == [0, 1]
+    replayed = {"e0": 2, "e1": 2}
+    for ev in ms.events:
+        replayed[ev.element] = ev.to_branch
+    assert [replayed["e0"], replayed["e1"]] == ms.modes, ms.events

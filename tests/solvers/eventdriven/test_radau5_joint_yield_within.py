@@ -4,9 +4,10 @@ a constant load just *within* the sum of their yield forces (issue 29, the conve
 
 The exact motion for every load within the joint yield force: the mass never moves and
 every force stays within its yield band (the split among them is not unique). The steps
-cannot keep a split there: the stage reads the forces only to about ``m atol / h``, so a
-force lands past its yield force, the stage's active set holds it ``1e-6`` of its
-half-width inside, and the others cannot carry the rest; loads ``1e-12`` and ``1e-9``
+did not keep a split there before it was solved to round-off (``eps m / h`` before,
+:func:`lumped.solvers.radau.cone_split.cone_solver`): a force landed past its yield
+force, the stage's active set held it ``1e-6`` of its half-width inside, and the others
+could not carry the rest; loads ``1e-12`` and ``1e-9``
 (of the joint yield force) inside crept and stopped after 12 backward-Euler bridges
 (:func:`lumped.solvers.modes.force_bounds.split_near_joint_bounds`)."""
 

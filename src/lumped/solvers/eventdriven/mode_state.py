@@ -190,14 +190,14 @@ class ModeState:
             elif cause == "guard":  # (a yield dashpot at rate ~0 switching: at its edge)
                 F[:] = onto_slip_ends(scene, modes, new, v, F, scale_v, rtol)
         back = self.left.get(tuple(new))
-        if back is not None:
+        if back is not None and back[0] <= len(events):
             # back to a mode held at t (no accepted step since): the switches since then
-            # took no time, none stays
+            # took no time, none stays (a mode whose own switches a return to an earlier
+            # mode cut is recorded anew: a break-out of e1 beside e0 was lost)
             del events[back[0]:]
-        for e in range(self.E if back is None else 0):
-            if new[e] != modes[e] and not any(ev.t == t and ev.element == names[e]
-                                              and ev.kind == "impact"
-                                              for ev in events[-self.E:]):
+        for e in range(self.E if back is None or back[0] > len(events) else 0):
+            if new[e] != modes[e] and not any(ev.t == t and ev.element == names[e] and
+                                              ev.kind == "impact" for ev in events[-self.E:]):
                 events.append(Event(t, names[e], "switch", modes[e], new[e]))
                 self.recent.append(t)
         self.set_modes(new, F)

@@ -50,13 +50,13 @@ r"""Forces the stage Newton leaves off the bounds their laws put them on, put ba
    one of them that is held by no other lock and joined to nothing else but springs)
    under a load *within* its joint
    interval by less than ``JOINT_MARGIN W`` (``W = sum_e w_e``, the half-widths' sum) never
-   moves, but its split is not fixed and the steps cannot keep one: the stage reads the
-   forces from the momentum rows only to about ``m atol / h`` (the stage rule,
-   :func:`lumped.solvers.radau.cone_split.cone_solver`, puts them in proportion to the
-   half-widths, ``s_e F_e = s_e c_e + w_e (T - sum_k s_k c_k) / W``, each a fraction
-   ``(top - T) / W`` of its half-width inside its bound), so a force lands past its bound,
-   the active set holds it ``1e-6 w_e`` inside
-   (:meth:`lumped.solvers.radau.stage.StageSystem.solve`), which leaves the others more
+   moves, but its split is not fixed. The stage rule,
+   :func:`lumped.solvers.radau.cone_split.cone_solver`, puts the forces in proportion to
+   the half-widths, ``s_e F_e = s_e c_e + w_e (T - sum_k s_k c_k) / W``, each a fraction
+   ``(top - T) / W`` of its half-width inside its bound; until that split was solved to
+   round-off (issue 29) the stage read it to ``eps m / h``, so a force landed past its
+   bound, the active set held it ``1e-6 w_e`` inside
+   (:meth:`lumped.solvers.radau.stage.StageSystem.solve`), which left the others more
    than they carry. A mass on a Bingham
    and two Herschel-Bulkley dashpots to ground under loads ``1e-12`` and ``1e-9`` (of
    the joint yield force) inside it read a force ``3e-9`` past its yield force at steps

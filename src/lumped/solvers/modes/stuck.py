@@ -109,8 +109,8 @@ def equilibrium_hold(scene: Scene, ms, t: float, x: list[float], v: list[float],
     the locks in parallel too (a split among them that the steps' cone rule would keep),
     which :func:`static_hold` leaves to the steps: e.g. a mass on two stuck Bingham
     dashpots loaded by exactly the sum of their yield forces, both forces on their
-    bounds, where the stage forces scatter around the bounds by the stage Newton's
-    tolerance and each step read a crossing (38 loop passes an accepted step). Such
+    bounds, where the stage forces scattered around the bounds and each step read a
+    crossing (38 loop passes an accepted step). Such
     forces within ``rtol`` of a joint bound are put on it first (:mod:`.force_bounds`).
     Stuck dashpots in parallel to ground whose load lies within their joint interval by
     less than the steps resolve are held at the stage rule's split, each force inside its

@@ -58,39 +58,56 @@ def cone_solver(J: list[list[float]], U: list[float], cones: dict[int, tuple[flo
     ``S`` in proportion to their capacities (each within its cone whenever ``|S|`` is within
     the sum), a rigid lock (``w_e`` huge) takes what the others do not.
 
-    With ``du = D z + o`` (``D = sqrt(w_e)``, ``o = c_e - U_j`` on those forces; ``D = 1``,
-    ``o = 0`` elsewhere; ``U`` the iterate, read at every call): ``z`` is the minimum-norm
-    solution of ``J D z = b - J o``.
+    With ``du = D z + o`` (``D = sqrt(w_e)``, ``o = c_e - U_j`` on those forces; ``o = 0``
+    elsewhere; ``U`` the iterate, read at every call): ``z`` is the minimum-norm solution
+    of ``J D z = b - J o``, rows equilibrated. The scales are set so that the split is
+    solved to round-off at every step size (issue 29): a row with one entry (a stuck
+    dashpot to ground: ``V = 0``) fixes its unknown by one division, exactly, as the LU's
+    singleton pivots do, and that column is taken out of the other rows before the SVD;
+    a mass's velocity, ``m / h`` in its momentum rows beside the forces' ``1``, is scaled
+    by ``D = 1 / max_i |J_ij|`` (its correction is unique: its weight in the norm changes
+    nothing but the rounding); every other unknown has ``D = 1``. In one SVD of the raw
+    rows the split came out to its round-off, ``eps m / h``: ``5e-5`` of a yield force
+    on a step of ``1e-12`` s, where the load lay ``1e-9`` within the joint yield force.
     ``held`` (stage column -> force): forces held at a bound of their interval (centre
     moved there, weight ``1e-12 w_e``), see :meth:`lumped.solvers.radau.stage.StageSystem.solve`."""
     import numpy as np
 
     size = len(U)
     held = held or {}
-    cols = {k * n + N + e: (c, w) for k in range(3) for e, (c, w, *_) in cones.items()}
     A = np.array(J, dtype=float)
+    single = [(i, int(nz[0]), float(A[i, nz[0]])) for i in range(size)
+              for nz in [np.flatnonzero(A[i])] if len(nz) == 1]
+    pinned = sorted({j for _, j, _ in single})
+    cols = {k * n + N + e: (c, w) for k in range(3) for e, (c, w, *_) in cones.items()
+            if k * n + N + e not in pinned}  # (a force its own law fixes is no share)
     D = np.ones(size)
     for j, (_, w) in cols.items():
         D[j] = math.sqrt(w * 1e-12 if j in held else w)
-    # rows equilibrated (the same solutions; a junction's row through a flat law, dq/dF
-    # ~ 1e-7, is not cut off as round-off beside the momentum rows' m / h)
+    for k in range(3):
+        for i in range(N):
+            j = k * n + i
+            if any(A[kk * n + i, j] != 0.0 for kk in range(3)):  # (a mass's momentum rows)
+                D[j] = 1.0 / np.abs(A[:, j]).max()
+    A_pin = A[:, pinned]
     AD = A * D
+    AD[:, pinned] = 0.0
+    # rows equilibrated (the same solutions; a junction's row through a flat law, dq/dF
+    # ~ 1e-7, is not cut off as round-off beside the momentum rows)
     r = np.abs(AD).max(axis=1)
     r[r == 0.0] = 1.0
     pinv = np.linalg.pinv(AD / r[:, None], rcond=size * 2.220446049250313e-16) / r
-    # a row with one nonzero (a stuck dashpot to ground: ``V = 0``) fixes its unknown by
-    # one division, exactly, as the LU's singleton pivots do
-    single = [(i, int(nz[0]), float(A[i, nz[0]])) for i in range(size)
-              for nz in [np.flatnonzero(A[i])] if len(nz) == 1]
 
     def solve(b: list[float]) -> list[float]:
         o = np.zeros(size)
         for j, (c, _) in cols.items():  # ``U`` is the caller's iterate, updated in place
             o[j] = held.get(j, c) - U[j]
-        z = pinv @ (np.asarray(b, dtype=float) - A @ o)
-        du = (D * z + o).tolist()
+        fixed = np.zeros(size)
         for i, j, a in single:
-            du[j] = b[i] / a
-        return du
+            fixed[j] = b[i] / a
+        z = pinv @ (np.asarray(b, dtype=float) - A @ o - A_pin @ fixed[pinned])
+        du = D * z + o
+        du[pinned] = fixed[pinned]
+        return du.tolist()
 
     return solve
