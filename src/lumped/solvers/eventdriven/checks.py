@@ -88,7 +88,9 @@ class StepChecks:
                 for e in range(self.E)]
 
     def dense_start_forces(self, U: list[float], h: float) -> list[float]:
-        """The forces at ``t`` the dense output's polynomials start from, after an event.
+        """The forces at ``t`` the dense output's polynomials start from, after an event
+        (and at the start when locks act in parallel: the initial state's split of their
+        load is not the stage solve's, ``F_0 = -0.077`` against ``-0.1`` held in issue 29).
 
         The probe's force, the right limit at ``t`` to ``O(h_probe)``, for an element
         that is not locked, or locked between junctions and ground only (its force is

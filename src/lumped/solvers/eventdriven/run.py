@@ -117,10 +117,11 @@ class Radau5Run(StepPass, StepChecks):
         # the compiled stage Newton (compiled=True), built on first need: with the compiled
         # loop the attempts need it only after a singular Jacobian (building it costs ~0.7 ms)
         self.stage_solve = None
-
         msg = ms.change_mode(0.0, 1e-9 * t_final, "start", x, v, F)
         ms.events.clear()
         ms.recent.clear()
+        # locks in parallel: the first step starts their split from its stages' as after an
+        ms.forces_from_probe = bool(ms.cones)  # event (StepChecks.dense_start_forces)
         if msg:
             raise SolverError(f"radau5: no consistent initial mode: {msg}",
                               status=Status.INCONSISTENT, t=0.0, where="", residual=math.nan)
