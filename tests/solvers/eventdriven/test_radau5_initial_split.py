@@ -23,7 +23,7 @@ from __future__ import annotations
 import pytest
 from _convergence import assert_within_bdf2s_own_error
 
-from lumped import simulate
+from lumped import SolverError, simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
 
@@ -88,3 +88,21 @@ def test_the_draw_agrees_with_bdf2():
     sol = simulate(scene, method="radau5", dt=dt, t_end=0.5, rtol=1e-10, atol=1e-13,
                    compiled=False)
     assert_within_bdf2s_own_error(scene, sol, ("m1", "m2", "j0"), dt, 0.5, 32)
+
+
+@pytest.mark.xfail(raises=SolverError, strict=True)
+def test_backward_euler_follows_a_break_away_on_a_thinning_dashpot_at_tiny_steps():
+    """Not fixed: the bridge's own failure on the draw. m1 (``m = 0.137``) breaks away
+    from rest on e1 alone (``n = 0.5``, ``gamma = 0.369``, ``tau = 1``) under ``-3.887``,
+    ``v' = -21.1``. Backward Euler at ``dt = 6.7e-12`` (the bridge's ``sqrt(rtol) h``)
+    fails at step 22, ``v = -3.1e-9``, its largest residual ``-3.1e-9``, all of ``q``: a
+    rate below ``gamma sqrt(ulp(tau)) = 5.5e-9`` has no force in floating point (``F -
+    tau = (q / gamma)^2 = 7e-17 < ulp(1)``), Newton sits at ``F = -tau``, the stuck branch
+    (``q - 0``), and never converges. From ``dt = 1e-11`` on the steps pass the band
+    (51 Newton iterations on a step)."""
+    scene = Scene([Mass("m1", m=0.1367559683814865, x0=0.0)],
+                  [Element("e1", get_law("herschel_bulkley").bind(
+                      gamma=0.3694690741303337, tau=1.0, n=0.5), "ground", "m1")],
+                  {"m1": -3.886707193086813})
+    sol = simulate(scene, method="bdf1", dt=6.7e-12, t_end=64 * 6.7e-12)
+    assert sol.ok
