@@ -35,7 +35,6 @@ from .mode_parts import laws_hold, mode_cones, mode_parts
 from .setup import accumulating, too_many
 
 __all__ = ["ModeState"]
-
 _EPS = 2.220446049250313e-16
 #: A kept choice at a guard at most this many accepted steps after the last one keeps the
 #: state at ``t`` (:meth:`ModeState.state_stays`).
@@ -181,12 +180,13 @@ class ModeState:
             # at t = 0 the consistent initial forces stay, unless they miss a law at the
             # probe's junction velocities (the initial state can leave a junction between
             # two slipping dashpots unresolved); dashpots at known rates then take their
-            # laws' forces at t = 0, not the probe's (implicit.initial_slip)
+            # laws' forces at t = 0, not the probe's, a lock's its rest set's (initial_slip)
             if cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
                                                  scene.elongations(x, v), F):
                 F[:] = F_p
             if cause == "start":
-                v[:], F[:] = start_at_known_rates(scene, v, F, v_p, F_p)
+                v[:], F[:] = start_at_known_rates(scene, v, F, v_p, F_p, [
+                    lbs[e].info[k].locks for e, k in enumerate(new)])
             elif cause == "guard":  # (a yield dashpot at rate ~0 switching: at its edge)
                 F[:] = onto_slip_ends(scene, modes, new, v, F, scale_v, rtol)
         back = self.left.get(tuple(new))

@@ -39,7 +39,7 @@ balance reads them (the masses' accelerations do, which the initial state does n
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from ...scene import Mass, Scene
 from ..newton.scalar_root import scalar_root
@@ -195,8 +195,8 @@ def rest_edge(kernel, F: float) -> float:
 
 
 def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
-                         v_probe: list[float], F_probe: list[float]
-                         ) -> tuple[list[float], list[float]]:
+                         v_probe: list[float], F_probe: list[float],
+                         locked: Sequence[bool] = ()) -> tuple[list[float], list[float]]:
     r"""Row 0 of the adaptive method: the dashpots at known rates on their laws at
     ``t = 0``, after its mode choice by a probe step of length ``h_p`` (``1e-9`` of the
     run, far longer than the initial state's ``eps``).
@@ -212,7 +212,11 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
        at rest: each mass at its end whose ``v_0`` the probe reverses or stops gets
        ``v(0) = 0`` (a change below ``h_p |a|``), and the dashpot the edge of its set at
        rest nearest the probe's force (its yield force with the sign of the slip that
-       follows, the paper's (16));
+       follows, the paper's (16)); so does one the chosen mode locks (``locked``): the
+       full laws found its stop inside the probe, whose rate may end a few ulps short of
+       zero (a Herschel-Bulkley ``n = 1.5`` dashpot from ``v_0 = 1e-10``: ``5.7e-42``),
+       and row 0 would otherwise pair ``v(0) = 0``, set by the lock, with the slipping
+       force of the initial state, above the yield force;
     2. every other dashpot at a known rate ``q = v_b(0) - v_a(0)`` whose law fixes its
        force there gets the root of ``R(q, F) = 0``
        (:func:`lumped.solvers.newton.scalar_root.scalar_root`, a sign change between
@@ -228,6 +232,8 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
         ones, or the probe's where its state was taken).
     v_probe, F_probe : list of float
         The velocities and forces of the probe step that chose the mode.
+    locked : sequence of bool, optional
+        Per element, whether the chosen mode locks it (a stuck dashpot).
 
     Returns
     -------
@@ -240,14 +246,18 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
     q0 = [0.0] * len(F)
     for e in known:
         q0[e] = (v[eb[e]] if eb[e] >= 0 else 0.0) - (v[ea[e]] if ea[e] >= 0 else 0.0)
+    def held(e: int) -> bool:
+        return e < len(locked) and bool(locked[e])
+
     turned, stopped = _reversed(
-        scene, q0, lambda e: (v_probe[eb[e]] if eb[e] >= 0 else 0.0)
+        scene, q0, lambda e: 0.0 if held(e) else (v_probe[eb[e]] if eb[e] >= 0 else 0.0)
         - (v_probe[ea[e]] if ea[e] >= 0 else 0.0), v, lambda i: v_probe[i])
     for i in stopped:
         v[i] = 0.0
     for e in known:
         kernel = scene.elements[e].law.kernel
-        q = (v[eb[e]] if eb[e] >= 0 else 0.0) - (v[ea[e]] if ea[e] >= 0 else 0.0)
+        q = 0.0 if held(e) else (v[eb[e]] if eb[e] >= 0 else 0.0) - (
+            v[ea[e]] if ea[e] >= 0 else 0.0)  # (a lock's rate: 0; its masses: the lock's)
         start = F_probe[e] if e in turned else F[e]
         try:
             root, fixed = scalar_root(kernel, q, start)
