@@ -212,9 +212,11 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
        at rest: each mass at its end whose ``v_0`` the probe reverses or stops gets
        ``v(0) = 0`` (a change below ``h_p |a|``), and the dashpot the edge of its set at
        rest nearest the probe's force (its yield force with the sign of the slip that
-       follows, the paper's (16)); so does one the chosen mode locks (``locked``): the
-       full laws found its stop inside the probe, whose rate may end a few ulps short of
-       zero (a Herschel-Bulkley ``n = 1.5`` dashpot from ``v_0 = 1e-10``: ``5.7e-42``),
+       follows, the paper's (16)); so does one the chosen mode locks (``locked``) whose
+       probe rate is round-off of ``q_0`` (``|q| <= eps |q_0|``): the full laws found its
+       stop inside the probe, whose rate may end short of zero (a Herschel-Bulkley ``n =
+       1.5`` dashpot from ``v_0 = 1e-10``: ``5.7e-42``; a lock to a moving support keeps
+       its rate ``q_0``, the support's),
        and row 0 would otherwise pair ``v(0) = 0``, set by the lock, with the slipping
        force of the initial state, above the yield force;
     2. every other dashpot at a known rate ``q = v_b(0) - v_a(0)`` whose law fixes its
@@ -246,17 +248,19 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
     q0 = [0.0] * len(F)
     for e in known:
         q0[e] = (v[eb[e]] if eb[e] >= 0 else 0.0) - (v[ea[e]] if ea[e] >= 0 else 0.0)
-    def held(e: int) -> bool:
-        return e < len(locked) and bool(locked[e])
+    def q_probe(e: int) -> float:
+        return (v_probe[eb[e]] if eb[e] >= 0 else 0.0) - (v_probe[ea[e]] if ea[e] >= 0 else 0.0)
 
-    turned, stopped = _reversed(
-        scene, q0, lambda e: 0.0 if held(e) else (v_probe[eb[e]] if eb[e] >= 0 else 0.0)
-        - (v_probe[ea[e]] if ea[e] >= 0 else 0.0), v, lambda i: v_probe[i])
+    # locked by the chosen mode, the probe's rate round-off of the initial one: stopped
+    held = {e for e in known if e < len(locked) and locked[e]
+            and abs(q_probe(e)) <= 2.220446049250313e-16 * abs(q0[e])}
+    turned, stopped = _reversed(scene, q0, lambda e: 0.0 if e in held else q_probe(e), v,
+                                lambda i: v_probe[i])
     for i in stopped:
         v[i] = 0.0
     for e in known:
         kernel = scene.elements[e].law.kernel
-        q = 0.0 if held(e) else (v[eb[e]] if eb[e] >= 0 else 0.0) - (
+        q = 0.0 if e in held else (v[eb[e]] if eb[e] >= 0 else 0.0) - (
             v[ea[e]] if ea[e] >= 0 else 0.0)  # (a lock's rate: 0; its masses: the lock's)
         start = F_probe[e] if e in turned else F[e]
         try:
