@@ -54,3 +54,24 @@ def test_no_solution_is_none():
                   forces={"j": 1.0})
     assert forces_from_accelerations(scene, 0.0, [0.5, 0.0], [0.0, 0.0], [0.5, 0.0],
                                    [0]) is None
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_a_dashpot_stopped_by_a_lock_keeps_its_yield_force(sign):
+    # a Herschel-Bulkley n = 3 dashpot slipping at F = +-0.67 (> tau = 0.34) beside a
+    # string that has just stopped the mass: at rate 0 its law leaves any |F| <= tau, and
+    # the nearest to its force, its yield force +-tau, is kept (its root alone lay at
+    # -0.33 from +0.67, issue 29); the string carries the rest of the load
+    from lumped.solvers.nonsmooth.lock_forces import forces_with_held
+
+    # (the string is strung the way the load pulls: from ground to the mass, or back)
+    tau = 0.34
+    ends = ("ground", "mass") if sign > 0 else ("mass", "ground")
+    scene = Scene([Mass("mass", m=1.0, x0=sign * 0.5)],
+                  [Element("string", get_law("string_spring").bind(k=1.0, L=0.5), *ends),
+                   Element("hb", get_law("herschel_bulkley").bind(gamma=1.0, tau=tau, n=3.0),
+                           "ground", "mass")],
+                  forces={"mass": sign * 0.9})
+    F = forces_with_held(scene, 0.0, [sign * 0.5], [0.0], [0.5, sign * 0.67], [0])
+    assert F[1] == pytest.approx(sign * tau, abs=1e-12)
+    assert F == pytest.approx([0.9 - tau, sign * tau], abs=1e-12)

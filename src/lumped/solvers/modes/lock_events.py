@@ -19,6 +19,7 @@ import sys
 from collections.abc import Sequence
 
 from ...scene import Mass, Scene
+from .guards import guard_tolerance
 
 __all__ = ["after_impact_forces", "apply_impacts", "hold_impacted_locks", "hold_rate_locks",
            "lock_cones", "release_resting_locks", "snap_to_locks"]
@@ -305,7 +306,13 @@ def hold_impacted_locks(scene: Scene, branches: Sequence, t: float, hits: Sequen
     with ``q`` still on the lock's value to round-off, the balance of accelerations
     decides: an element whose balance force lies strictly inside its lock's set stays
     locked, with that force (``threshold``: the rate below which an element is at rest
-    relative to its ends)."""
+    relative to its ends). When all of them stay, every dashpot takes the balance's force
+    too, the probe's being one of the free branch's: a Herschel-Bulkley ``n = 1.5``
+    dashpot stopped by a string kept ``tau + (a h_p)^(1/n)``, ``2.3e-7`` above its yield
+    force ``tau`` (its rate over the probe, ``1e-10``, beside the slack string), for as
+    long as the string held its mass (issue 29). Its branch stays the choice's where that
+    branch's guards admit the force (a slip branch at ``F = tau``), else the law reads it
+    there."""
     q = scene.elongations(x, v)
     doubt = [e for e in hits if not branches[e].info[new[e]].locks
              and any(info.locks and info.lock_value is not None
@@ -317,6 +324,17 @@ def hold_impacted_locks(scene: Scene, branches: Sequence, t: float, hits: Sequen
     for e in holding:
         new[e] = branches[e].branch(q[e], forces[e])
         F_p[e] = forces[e]
+    if len(holding) < len(doubt):
+        return
+    for e, el in enumerate(scene.elements):
+        f = forces[e]
+        if el.kind != "dashpot" or e in holding or f == F_p[e]:
+            continue
+        read = branches[e].branch(q[e], f)
+        if read >= 0 and any(g < -guard_tolerance(q[e], f)
+                             for g in branches[e].guards_for(new[e])(q[e], f)):
+            new[e] = read
+        F_p[e] = f
 
 
 def release_resting_locks(scene: Scene, branches: Sequence, t: float, old: Sequence[int],

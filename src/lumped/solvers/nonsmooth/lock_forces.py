@@ -188,9 +188,15 @@ def forces_with_held(scene: Scene, t: float, x: Sequence[float], v: Sequence[flo
     Each dashpot not in ``held`` whose law fixes its force (``dR/dF != 0`` at ``(q,
     F_e)``) takes the force its law gives at its rate ``q`` (a scalar root from ``F_e``;
     with ``q_before``, only where its rate differs from ``q_before[e]``: elsewhere ``F_e``
-    is already the law's); then ``held`` and every element whose law leaves its force
-    free (``dR/dF = 0``: a stuck dashpot, another taut lock) take the forces of the
-    balance of accelerations (:func:`forces_from_accelerations`).
+    is already the law's). Where its law leaves the force free at the new rate (a
+    dashpot stopped by the lock: Bingham, Herschel-Bulkley at ``q = 0``, any ``|F| <=
+    tau``) it takes the force of that rest set nearest ``F_e``, its boundary: a slipping
+    dashpot stops at its yield force, ``tau sgn(F_e)`` (the root alone lies anywhere in
+    the set: ``-0.33`` for a Herschel-Bulkley ``n = 3`` dashpot stopped from ``F_e =
+    0.67 > tau = 0.34``, issue 29). Then ``held`` and every element whose law leaves its
+    force free (``dR/dF = 0``: a stuck dashpot, another taut lock) take the forces of the
+    balance of accelerations (:func:`forces_from_accelerations`), which keeps a dashpot's
+    force where it can.
 
     Returns
     -------
@@ -210,9 +216,12 @@ def forces_with_held(scene: Scene, t: float, x: Sequence[float], v: Sequence[flo
         if (el.kind == "dashpot" and (q_before is None or q[e] != q_before[e])
                 and kernel(q[e], out[e])[2] != 0.0):
             try:
-                out[e] = scalar_root(kernel, q[e], out[e])[0]
+                root, pinned = scalar_root(kernel, q[e], out[e])
             except ValueError:
                 return None
+            tol = 1e-12 * (abs(q[e]) + abs(root)) + 1e-300
+            out[e] = root if pinned or not _admissible(kernel, q[e], root, tol) else \
+                _boundary(kernel, q[e], root, out[e], tol)
         if kernel(q[e], out[e])[2] == 0.0:
             free.append(e)
     got = forces_from_accelerations(scene, t, x, v, out, free)
