@@ -145,7 +145,7 @@ def consistent_initial_state(
         for r, el in zip(support_rates(scene, 0.0), elements, strict=True))
     stopped: list[int] = []  # masses whose v0 the limit step reverses: at rest
     for _ in range(2):  # again once, with the rates the limit step reverses at rest
-        F_rest = initial_rest_forces(scene, pinned, q0, f) \
+        F_rest = initial_rest_forces(scene, pinned, q0, f, eps) \
             if all(is_mass) and not accelerating else None
         if F_rest is not None:  # at rest, the load held by locks: no Newton
             v, F = list(v0), F_rest
