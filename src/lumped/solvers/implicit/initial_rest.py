@@ -17,7 +17,7 @@ from ...scene import Junction, Scene
 from ..nonsmooth.groups import connected_groups
 from ..nonsmooth.rest_balance import rest_forces, rest_inverse
 from .branch_check import known_monotone
-from .initial_slip import known_rate_dashpots, rest_edge
+from .initial_slip import rest_edge
 
 __all__ = ["cluster_guesses", "initial_rest_forces"]
 
@@ -66,12 +66,16 @@ _MONOTONE: dict[int, tuple[object, bool]] = {}
 
 
 def _monotone(bound) -> bool:
-    """:func:`lumped.solvers.implicit.branch_check.known_monotone`, kept per bound law object."""
-    got = _MONOTONE.get(id(bound))
-    if got is None or got[0] is not bound:
+    """:func:`lumped.solvers.implicit.branch_check.known_monotone`, kept per law object
+    (``bound.law``, which it reads alone: the same for every value of the numbers)."""
+    law = getattr(bound, "law", None)
+    if law is None:
+        return known_monotone(bound)
+    got = _MONOTONE.get(id(law))
+    if got is None or got[0] is not law:
         if len(_MONOTONE) > 256:
             _MONOTONE.clear()
-        got = _MONOTONE[id(bound)] = (bound, known_monotone(bound))
+        got = _MONOTONE[id(law)] = (law, known_monotone(bound))
     return got[1]
 
 
@@ -140,7 +144,7 @@ def _slip_edges(scene: Scene, K: list[list[float]], free: tuple[int, ...],
     0 to ``F_r``, the same float for every point beyond it). So the result is the one
     Newton's root leads to, bit for bit, without the Newton iterations."""
     ea, eb, nodes = scene.elem_a, scene.elem_b, scene.nodes
-    if known_rate_dashpots(scene, slipping) != slipping:
+    if any(end.element in slipping for end in scene.support_ends):
         return False  # (a dashpot on a support: its rate has an offset)
     count = [0] * len(nodes)
     for e in free:
