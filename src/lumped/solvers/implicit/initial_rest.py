@@ -3,7 +3,10 @@ r"""The consistent initial state's pieces read from the network at rest, without
 This module owns :func:`initial_rest_forces`, the shortcut of
 :func:`lumped.solvers.implicit.initial_state.consistent_initial_state` when every node is a
 mass: every force fixed by its law, or the others held by the balance with every mass at
-rest (dashpots at rest whose laws have no folds, on a regular incidence matrix); and
+rest (dashpots at rest whose laws have no folds, on a regular incidence matrix), or, for
+such a dashpot alone on its mass whose held force its law does not admit (it slips from
+rest), the edge of its set at rest nearest that force, the limit system's root as the
+settling of :mod:`lumped.solvers.implicit.initial_slip` leaves it; and
 :func:`cluster_guesses`, the velocity guesses of its last restarts, with every cluster of
 junctions moving as one with a dashpot neighbour outside it.
 """
