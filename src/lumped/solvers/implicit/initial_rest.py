@@ -145,7 +145,9 @@ def _slip_edges(scene: Scene, K: list[list[float]], free: tuple[int, ...],
     :func:`lumped.solvers.implicit.initial_slip.settle_on_rest_set` moves to ``F_e``
     (:func:`lumped.solvers.implicit.initial_slip.rest_edge`: the edge on the segment from
     0 to ``F_r``, the same float for every point beyond it). So the result is the one
-    Newton's root leads to, bit for bit, without the Newton iterations."""
+    the limit system's root leads to, bit for bit, without Newton. (Newton itself may
+    stop short of that root, inside the set, where its residual test passes: a few ulps
+    inside, or anywhere in it when ``eps d`` is below its ``atol``.)"""
     ea, eb, nodes = scene.elem_a, scene.elem_b, scene.nodes
     if any(end.element in slipping for end in scene.support_ends):
         return False  # (a dashpot on a support: its rate has an offset)
