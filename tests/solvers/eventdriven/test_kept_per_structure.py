@@ -26,14 +26,18 @@ except ImportError:  # (the code before: nothing kept)
 from lumped.solvers.implicit.initial_state import consistent_initial_state
 
 
-def _released(k: float, x0: float = 0.3) -> Scene:
-    """``viscous-soft`` of the bench (k = 10, gamma = 0.2, tau = 0.5, x0 = 0.3): its
-    initial state takes Newton (the dashpot slips from rest), it does not stay at rest."""
-    return Scene(
-        [Mass("mass", m=1.0, x0=x0)],
-        [Element("spring", get_law("linear_spring").bind(k=k), "ground", "mass"),
-         Element("dashpot", get_law("bingham").bind(gamma=0.2, tau=0.5), "ground", "mass")],
-    )
+def _released(k: float, x0: float = 0.3, friction: bool = False) -> Scene:
+    """``viscous-soft`` of the bench (k = 10, gamma = 0.2, tau = 0.5, x0 = 0.3): the
+    dashpot slips from rest, it does not stay at rest (its initial force, its yield
+    force, is read without Newton). With ``friction``, a Coulomb dashpot beside it: two
+    forces left to one mass's balance, the initial state takes Newton."""
+    elements = [Element("spring", get_law("linear_spring").bind(k=k), "ground", "mass"),
+                Element("dashpot", get_law("bingham").bind(gamma=0.2, tau=0.5), "ground",
+                        "mass")]
+    if friction:
+        elements.append(Element("friction", get_law("coulomb").bind(tau=0.25, r=10.0),
+                                "ground", "mass"))
+    return Scene([Mass("mass", m=1.0, x0=x0)], elements)
 
 
 def _same_run(a, b) -> None:
@@ -58,7 +62,7 @@ def test_a_run_solves_its_initial_state_once(monkeypatch):
     monkeypatch.setattr(initial_state, "_limit_system",
                         lambda *a: calls.append(1) or limit(*a))
     for k in (10.000123, 10.000456):  # new numbers each
-        sol = simulate(_released(k), t_end=1.0, method="radau5", rtol=1e-6,
+        sol = simulate(_released(k, friction=True), t_end=1.0, method="radau5", rtol=1e-6,
                        compiled=False)
         assert sol.stats["initial_newton_iterations"] > 0
     assert len(calls) == 2

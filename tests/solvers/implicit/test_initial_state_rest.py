@@ -129,3 +129,78 @@ def test_shortcut_is_taken_at_rest():
         assert v == v1
         assert _same(F, F1), (F, F1)
     assert consistent_initial_state(one)[1] == [0.5, -0.5]
+
+
+def _oscillator(m: float, k: float, dashpot, x0: float, F0: float) -> Scene:
+    return Scene([Mass("mass", m=m, x0=x0)],
+                 [Element("spring", get_law("linear_spring").bind(k=k), "ground", "mass"),
+                  Element("dashpot", dashpot, "ground", "mass")], {"mass": F0})
+
+
+def test_a_dashpot_slipping_from_rest_takes_its_yield_force_without_newton():
+    """The bench's viscous-soft (``k x0 = 3 > tau = 0.5``) and an oscillator under a load
+    (issue 27): the dashpot slips from rest, its initial force is the yield force with the
+    load's sign, exactly, as the closed form's
+    :func:`~lumped.solvers.closed.closed_form.initial_dashpot_force`, with no Newton. The
+    limit system's Newton stops within its tolerance, at or inside the yield force
+    (``-0.09999999999999964`` for ``tau = 0.1``, ``k x0 = 5``)."""
+    from lumped.solvers.closed.closed_form import BinghamOscillator, initial_dashpot_force
+
+    cases = [(1.0, 10.0, 0.2, 0.5, 0.3, 0.0, 5.0), (1.0, 100.0, 1.0, 0.1, 0.05, 0.0, 1.0),
+             (0.5, 100.0, 0.2, 1.0, -0.3, 0.0, 5.0), (2.0, 3.0, 50.0, 0.7, 0.1, -4.0, 1e3)]
+    for m, k, gamma, tau, x0, F0, time_scale in cases:
+        scene = _oscillator(m, k, get_law("bingham").bind(gamma=gamma, tau=tau), x0, F0)
+        v, F, stats = consistent_initial_state(scene, time_scale=time_scale)
+        osc = BinghamOscillator(m=m, k=k, gamma=gamma, tau=tau)
+        assert stats["newton_iterations"] == 0, (m, k, x0)
+        assert v == [0.0]
+        assert F[1] == initial_dashpot_force(osc, x0, 0.0, F0) == math.copysign(tau, F0 - k * x0)
+        assert F[0] == _with_newton(scene, time_scale)[1][0]  # (the spring's, by its law)
+
+
+@st.composite
+def _slipping_oscillators(draw):
+    """One to three masses, each on a spring to ground and on one yield dashpot (Bingham,
+    Coulomb or Herschel-Bulkley) to ground, under a load, springs between them; at rest."""
+    n = draw(st.integers(1, 3))
+    nodes = [Mass(f"m{i}", m=draw(_decade(0.01, 100.0)), x0=draw(_value(-1.0, 1.0)))
+             for i in range(n)]
+    elements = []
+    for i, nd in enumerate(nodes):
+        name = draw(st.sampled_from(("bingham", "coulomb", "herschel_bulkley")))
+        ends = ("ground", nd.name) if draw(st.booleans()) else (nd.name, "ground")
+        elements += [Element(f"d{i}", _law(draw, name, 0.0), *ends),
+                     Element(f"s{i}", _law(draw, "linear_spring", nd.x0), "ground", nd.name)]
+        if i and draw(st.booleans()):
+            elements.append(Element(f"k{i}", _law(draw, "linear_spring", 0.0),
+                                    nodes[i - 1].name, nd.name))
+    forces = {nd.name: draw(_value(-5.0, 5.0)) for nd in nodes if draw(st.booleans())}
+    return Scene(nodes, elements, forces)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_slipping_oscillators(), _decade(1e-3, 1e3))
+def test_dashpots_slipping_from_rest_take_the_limit_systems_edge(scene, time_scale):
+    """Each yield dashpot alone on its mass: held by it (its law admits the balance's force
+    at rest) or slipping, with the edge of its set at rest nearest that force (the float
+    in the set next to one outside), on which the rate of the limit step
+    ``eps (a_b - a_a)`` slips the way the force resists (``F q > 0``, energy
+    dissipated); all without Newton."""
+    v, F, stats = consistent_initial_state(scene, time_scale=time_scale)
+    assert stats["newton_iterations"] == 0 and v == [0.0] * len(scene.nodes)
+    eps = 1e-20 * time_scale
+    net = scene.net_forces(0.0, F)
+    acc = [net[i] / nd.m for i, nd in enumerate(scene.nodes)]
+    for e, el in enumerate(scene.elements):
+        if el.kind != "dashpot":
+            continue
+        kernel = el.law.kernel
+        assert kernel(0.0, F[e])[0] == 0.0  # on its set at rest
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        q = eps * ((acc[b] if b >= 0 else 0.0) - (acc[a] if a >= 0 else 0.0))
+        slips = kernel(0.0, math.nextafter(F[e], math.copysign(math.inf, F[e])))[0] != 0.0
+        if abs(net[b if b >= 0 else a]) > 1e-9 * (abs(F[e]) + 1.0):  # it moves its mass
+            event("slips")
+            assert slips and F[e] != 0.0 and F[e] * q > 0.0, (F[e], q)
+        else:
+            event("held")

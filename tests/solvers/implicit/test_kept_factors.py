@@ -19,12 +19,16 @@ solve_anew = consistent_initial_state.__wrapped__  # (not the state kept per sce
 
 
 def _released(k: float, x0: float = 0.3) -> Scene:
-    """``viscous-soft`` of the bench (m = 1, k = 10, gamma = 0.2, tau = 0.5, x0 = 0.3):
-    the dashpot slips from rest, the initial state takes Newton."""
+    """``viscous-soft`` of the bench (m = 1, k = 10, gamma = 0.2, tau = 0.5, x0 = 0.3)
+    with a second, Coulomb, dashpot beside the Bingham one: both slip from rest, and with
+    two forces left to one mass's balance the initial state takes Newton (one dashpot
+    alone takes its yield force without Newton:
+    :func:`lumped.solvers.implicit.initial_rest.initial_rest_forces`)."""
     return Scene(
         [Mass("mass", m=1.0, x0=x0)],
         [Element("spring", get_law("linear_spring").bind(k=k), "ground", "mass"),
-         Element("dashpot", get_law("bingham").bind(gamma=0.2, tau=0.5), "ground", "mass")],
+         Element("dashpot", get_law("bingham").bind(gamma=0.2, tau=0.5), "ground", "mass"),
+         Element("friction", get_law("coulomb").bind(tau=0.25, r=10.0), "ground", "mass")],
     )
 
 

@@ -5,6 +5,7 @@ initial state, reads the mode off it (:func:`~lumped.solvers.eventdriven.mode_pa
 rest_mode`) and builds the static balance of that mode
 (:func:`~lumped.solvers.modes.stuck.static_hold`). When every node is a mass at rest and
 the initial forces need no Newton (the forces fixed by the laws and the static balance,
+or a yield dashpot's edge,
 :func:`lumped.solvers.implicit.initial_rest.initial_rest_forces`: the initial state's
 counters are all zero), none of these reads the run's arguments: not ``t_end`` (the
 initial state's time scale only sizes the vanishing step of its Newton system), not the

@@ -72,7 +72,12 @@ def consistent_initial_state(
        A stuck dashpot thus takes the force that keeps its mass at rest if its law
        admits it, else the nearest admissible one (for the paper's scene
        ``clip(F(0) - k x0, -tau, tau)``, as
-       :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`);
+       :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`). When every node
+       is a mass and the system needs no Newton -- every such force held by the balance
+       at rest, or a dashpot alone on its mass at the edge of its set at rest nearest
+       that force -- it is read off directly
+       (:func:`lumped.solvers.implicit.initial_rest.initial_rest_forces`; the counters
+       are then zero);
     3. the force of ``t = 0``, not the step's, for a dashpot between masses (or a mass
        and ground) that slips from rest (:mod:`lumped.solvers.implicit.initial_slip`): a
        rate ``q0 != 0`` that the step reverses or stops (``v0 = 1e-113`` under a load past
@@ -145,7 +150,7 @@ def consistent_initial_state(
         for r, el in zip(support_rates(scene, 0.0), elements, strict=True))
     stopped: list[int] = []  # masses whose v0 the limit step reverses: at rest
     for _ in range(2):  # again once, with the rates the limit step reverses at rest
-        F_rest = initial_rest_forces(scene, pinned, q0, f) \
+        F_rest = initial_rest_forces(scene, pinned, q0, f, eps) \
             if all(is_mass) and not accelerating else None
         if F_rest is not None:  # at rest, the load held by locks: no Newton
             v, F = list(v0), F_rest
