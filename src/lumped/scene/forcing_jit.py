@@ -245,24 +245,24 @@ def loads_at(fkind: np.ndarray, fpar: np.ndarray, ts: np.ndarray,
     ``forcing[i](t)`` (:func:`lumped.scene.zero_forcing`, sampled by
     :func:`forcing_arrays`, is ``0`` here without a call).
     """
-    from .forcing import zero_forcing
-
     out = np.zeros((len(ts), len(fkind)))
-    for i, kind in enumerate(fkind):
+    for i, kind in enumerate(fkind.tolist()):
         if kind == FORCE_LINEAR:
             out[:, i] = _linear_at(fpar[i], ts)
         elif kind == FORCE_TABLE:
+            from .forcing import zero_forcing
+
             fn = forcing[i]
             if fn is not None and fn is not zero_forcing:
                 out[:, i] = [float(fn(float(t))) for t in ts]
         elif kind != FORCE_NONE:
-            out[:, i] = _simple_at(kind, fpar[i, :3], ts)
+            out[:, i] = _simple_at(kind, fpar[i], ts)
     return out
 
 
 def _simple_at(kind: int, p: np.ndarray, ts: np.ndarray) -> np.ndarray | float:
-    """A :data:`FORCE_CONSTANT` or :data:`FORCE_SINE` forcing ``p = (p0, p1, p2)`` at the
-    times ``ts`` (``p0`` for a constant)."""
+    """A :data:`FORCE_CONSTANT` or :data:`FORCE_SINE` forcing ``p = (p0, p1, p2, ...)`` at
+    the times ``ts`` (``p0`` for a constant)."""
     if kind == FORCE_SINE:
         return np.where(ts > p[2], 0.0, p[0] * np.sin(p[1] * ts))
     return p[0]
@@ -271,21 +271,24 @@ def _simple_at(kind: int, p: np.ndarray, ts: np.ndarray) -> np.ndarray | float:
 def _linear_at(row: np.ndarray, ts: np.ndarray) -> np.ndarray:
     """:func:`linear_value` of the :data:`FORCE_LINEAR` ``row`` at the times ``ts``."""
     n, h = int(row[0]), LINEAR_HEAD
-    scale, before, after = row[2], row[3], row[4]
     tt = row[h:h + n]
-    k = np.clip(np.searchsorted(tt, ts, side="right") - 1, 0, n - 2)
+    t0, tl = tt[0], tt[-1]
+    k = np.searchsorted(tt[1:n - 1], ts, side="right")  # (_segment's, 0 before t_0)
     tk = tt[k]
     if row[1] == LINEAR_TABLE:
         y = row[h + n:h + 2 * n]
         yk = y[k]
-        inner = np.where(ts == tk, yk, yk + (ts - tk) / (tt[k + 1] - tk) * (y[k + 1] - yk))
-        value = scale * np.where((tt[0] <= ts) & (ts < tt[-1]), inner, np.where(
-            ts == tt[-1], y[-1], np.where(ts < tt[0], before, after)))
+        value = np.where(ts == tk, yk, yk + (ts - tk) / (tt[k + 1] - tk) * (y[k + 1] - yk))
+        inside = (t0 <= ts) & (ts < tl)
+        if not inside.all():
+            value = np.where(inside, value, np.where(
+                ts == tl, y[-1], np.where(ts < t0, row[3], row[4])))
     else:  # LINEAR_MOTION: the segments' start values and slopes
-        a, s = row[h + n:h + 2 * n - 1], row[h + 2 * n - 1:h + 3 * n - 2]
-        value = scale * np.where(ts < tt[0], before, np.where(
-            ts > tt[-1], after, a[k] + s[k] * (ts - tk)))
+        value = row[h + n + k] + row[h + 2 * n - 1 + k] * (ts - tk)
+        if not ((t0 <= ts) & (ts <= tl)).all():
+            value = np.where(ts < t0, row[3], np.where(ts > tl, row[4], value))
+    value = row[2] * value  # (the scale)
     added = int(row[LINEAR_ADD])
     if added == FORCE_NONE:
         return value
-    return _simple_at(added, row[LINEAR_ADD + 1:LINEAR_ADD + 4], ts) + value
+    return _simple_at(added, row[LINEAR_ADD + 1:], ts) + value
