@@ -1,6 +1,7 @@
 """Tables in compiled code (:data:`lumped.scene.forcing_jit.FORCE_LINEAR`): a force read
 from a table and the inertial force of a ground motion read from a record evaluate in
-compiled code to the Python callable's numbers bit for bit, and ``radau5`` runs such
+compiled code, and with numpy (:func:`~lumped.scene.forcing_jit.loads_at`), to the Python
+callable's numbers bit for bit, and ``radau5`` runs such
 scenes in its compiled loop with the Python loop's numbers."""
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from lumped.scene.forcing_jit import (
     forcing_arrays,
     forcing_into,
     linear_row,
+    loads_at,
 )
 from lumped.scene.inertial import combine_forcing, inertial_forcing
 
@@ -47,11 +49,15 @@ def _check_compiled_values(scene: Scene, times: list[float]) -> None:
     fkind, fpar, _ = forcing_arrays(scene, 1.0, 0, linear=True)
     assert (fkind == FORCE_LINEAR).any()
     f = np.zeros(len(scene.nodes))
+    rows = []
     for t in times:
         assert forcing_into(0, t, fkind, fpar, fpar, f) == -1
         for i, fn in enumerate(scene.forcing):
             if fkind[i] == FORCE_LINEAR:
                 assert f[i] == fn(t), (i, t)
+        rows.append(f.copy())
+    # and with numpy at all the times at once (the dense output's), the same doubles
+    assert np.array_equal(loads_at(fkind, fpar, np.array(times), scene.forcing), rows)
 
 
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 40),

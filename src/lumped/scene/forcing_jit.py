@@ -21,14 +21,15 @@ A node's forcing is a kind and three parameters:
   :func:`linear_row`), so ``fpar`` is as wide as the longest table needs.
 
 :func:`forcing_code` encodes one forcing, :func:`forcing_arrays` a scene's (``fkind,
-fpar, ftab``), and :func:`forcing_into` evaluates them in compiled code. Positive ``F``
-pushes its node towards positive ``x``.
+fpar, ftab``), :func:`forcing_into` evaluates them in compiled code and :func:`loads_at`
+at many times with numpy (nothing compiled: the Python loop's dense output). Positive
+``F`` pushes its node towards positive ``x``.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -39,7 +40,8 @@ if TYPE_CHECKING:
     from .network import Scene
 
 __all__ = ["FORCE_NONE", "FORCE_CONSTANT", "FORCE_SINE", "FORCE_TABLE", "FORCE_LINEAR",
-           "forcing_code", "forcing_arrays", "forcing_into", "linear_row", "linear_value"]
+           "forcing_code", "forcing_arrays", "forcing_into", "linear_row", "linear_value",
+           "loads_at"]
 
 FORCE_NONE, FORCE_CONSTANT, FORCE_SINE, FORCE_TABLE, FORCE_LINEAR = 0, 1, 2, 3, 4
 #: The two interpolants of :data:`FORCE_LINEAR`: :class:`lumped.io.Table`'s (``y_k +
@@ -229,3 +231,64 @@ def forcing_into(step, t, fkind, fpar, ftab, f) -> int:
             return i
         f[i] = val
     return -1
+
+
+def loads_at(fkind: np.ndarray, fpar: np.ndarray, ts: np.ndarray,
+             forcing: Sequence[Callable[[float], float] | None] = ()) -> np.ndarray:
+    r"""``f_i(t)`` per node at the times ``ts``, ``(len(ts), N)``, by the kind codes
+    (:func:`forcing_arrays`) with numpy, nothing compiled.
+
+    :data:`FORCE_CONSTANT` is ``p0``; :data:`FORCE_SINE` is ``p0 sin(p1 t)`` for ``t <=
+    p2``, ``0`` after (numpy's ``sin``); :data:`FORCE_LINEAR` is :func:`linear_value`'s
+    arithmetic, operation by operation, on arrays (the same doubles); only
+    :data:`FORCE_TABLE`, a callable without a kind code, is called once per time,
+    ``forcing[i](t)`` (:func:`lumped.scene.zero_forcing`, sampled by
+    :func:`forcing_arrays`, is ``0`` here without a call).
+    """
+    out = np.zeros((len(ts), len(fkind)))
+    for i, kind in enumerate(fkind.tolist()):
+        if kind == FORCE_LINEAR:
+            out[:, i] = _linear_at(fpar[i], ts)
+        elif kind == FORCE_TABLE:
+            from .forcing import zero_forcing
+
+            fn = forcing[i]
+            if fn is not None and fn is not zero_forcing:
+                out[:, i] = [float(fn(float(t))) for t in ts]
+        elif kind != FORCE_NONE:
+            out[:, i] = _simple_at(kind, fpar[i], ts)
+    return out
+
+
+def _simple_at(kind: int, p: np.ndarray, ts: np.ndarray) -> np.ndarray | float:
+    """A :data:`FORCE_CONSTANT` or :data:`FORCE_SINE` forcing ``p = (p0, p1, p2, ...)`` at
+    the times ``ts`` (``p0`` for a constant)."""
+    if kind == FORCE_SINE:
+        return np.where(ts > p[2], 0.0, p[0] * np.sin(p[1] * ts))
+    return p[0]
+
+
+def _linear_at(row: np.ndarray, ts: np.ndarray) -> np.ndarray:
+    """:func:`linear_value` of the :data:`FORCE_LINEAR` ``row`` at the times ``ts``."""
+    n, h = int(row[0]), LINEAR_HEAD
+    tt = row[h:h + n]
+    t0, tl = tt[0], tt[-1]
+    k = np.searchsorted(tt[1:n - 1], ts, side="right")  # (_segment's, 0 before t_0)
+    tk = tt[k]
+    if row[1] == LINEAR_TABLE:
+        y = row[h + n:h + 2 * n]
+        yk = y[k]
+        value = np.where(ts == tk, yk, yk + (ts - tk) / (tt[k + 1] - tk) * (y[k + 1] - yk))
+        inside = (t0 <= ts) & (ts < tl)
+        if not inside.all():
+            value = np.where(inside, value, np.where(
+                ts == tl, y[-1], np.where(ts < t0, row[3], row[4])))
+    else:  # LINEAR_MOTION: the segments' start values and slopes
+        value = row[h + n + k] + row[h + 2 * n - 1 + k] * (ts - tk)
+        if not ((t0 <= ts) & (ts <= tl)).all():
+            value = np.where(ts < t0, row[3], np.where(ts > tl, row[4], value))
+    value = row[2] * value  # (the scale)
+    added = int(row[LINEAR_ADD])
+    if added == FORCE_NONE:
+        return value
+    return _simple_at(added, row[LINEAR_ADD + 1:], ts) + value

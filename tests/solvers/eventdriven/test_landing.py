@@ -67,3 +67,67 @@ def test_a_dip_of_the_end_values_is_searched_in_a_few_tries(depth):
         assert h == pytest.approx(0.3 - math.sqrt(depth / 50.0), abs=1e-11)
     else:  # the touch, or the guard's minimum, which holds
         assert h == pytest.approx(0.3, abs=1e-6) and g(h) >= -1e-14
+
+
+def _dip(g, tol: float = 1e-14) -> tuple[float, Landing, list[tuple[float, bool]]]:
+    """A landing driven as in the test above (a step of 0.4 crossed inside and its end
+    held, the polynomial put the crossing at 0.25): the size it lands on, the landing, and
+    per try its size and whether the dip was being searched after it."""
+    landing = Landing((0, 0), 0.4, g(0.4), 0.4)
+    h, tries = 0.25, []
+    while True:
+        done = landing.landed(g(h), tol, 1.0, h, None)
+        tries.append((h, landing.dip))
+        if done:
+            return h, landing, tries
+        h = landing.next_size(h, g(h), None)
+
+
+def _skewed(depth: float):
+    """End values that dip to ``-depth`` at ``h = 0.3``, not a parabola (the searches'
+    parabolas miss its minimum: they take a few tries)."""
+    return lambda h: 50.0 * (h - 0.3) ** 2 * (1.0 + (h - 0.3)) - depth
+
+
+def test_a_dip_below_minus_tol_brackets_the_first_root():
+    g = _skewed(1e-6)
+    h, landing, tries = _dip(g)
+    # held twice towards the high end (0.25, 0.325): the search starts; its third value
+    # is below -tol: a root bracket (the search ends), refined on end values to the root
+    assert [dip for _, dip in tries] == [False, True, True, True, False, False, False, False]
+    assert g(tries[4][0]) < -1e-14 and not landing.poly
+    assert landing.count == 7
+    first = 0.3 - (1e-6 / 50.0) ** 0.5  # (to 1e-8: the cubic term)
+    assert abs(g(h)) <= 1e-14 and h == pytest.approx(first, abs=2e-8)  # (not the second)
+
+
+def test_a_dip_that_touches_zero_lands_within_tol():
+    g = _skewed(0.0)
+    h, landing, tries = _dip(g)
+    # no value below -tol: the search goes on to a value within tol, the touch
+    assert [dip for _, dip in tries] == [False] + [True] * 8
+    assert landing.count == 8 and not landing.final
+    assert 0.0 <= g(h) <= 1e-14 and h == pytest.approx(0.3, abs=1e-7)
+
+
+def test_a_clear_minimum_above_zero_ends_the_search_on_the_lowest_value():
+    g = _skewed(-1e-3)  # the minimum holds by 1e-3
+    h, landing, tries = _dip(g)
+    # the first parabola's vertex value exceeds tol by more than twice what it promises
+    # below the lowest value: the search lands on that lowest value (the full laws choose)
+    assert [dip for _, dip in tries] == [False, True, True]
+    assert landing.count == 2 and landing.final
+    assert h == min(landing.seen, key=lambda p: p[1])[0] and g(h) > 1e-3
+
+
+@pytest.mark.parametrize("g", [lambda h: 1.0 - h, lambda h: 1.0 + 1e-3 * h],
+                         ids=["falling to the high end", "flat"])
+def test_end_values_that_do_not_dip_start_no_search(g):
+    h, landing, tries = _dip(g)
+    # the lowest value is at the high end, or not below half of its neighbours: no dip
+    # search; the bracket is bisected towards the high end until the passes are spent
+    assert not any(dip for _, dip in tries) and landing.poly
+    assert landing.count == MAX_PASSES
+    assert all(hk == pytest.approx(0.5 * (prev + 0.4), rel=1e-12)
+               for (prev, _), (hk, _) in zip(tries, tries[1:], strict=False))
+    assert 0.4 - h < 1e-12 and landing.h_hi == pytest.approx(0.4, rel=1e-15)

@@ -15,6 +15,7 @@ from lumped.codegen.branches import law_branches
 from lumped.codegen.stage_forms import flat_inverse
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene, SineBurst
+from lumped.solvers.eventdriven.step import StepPass
 from lumped.solvers.radau.flat_start import at_flat_end
 
 q, F = sp.symbols("q F")
@@ -53,6 +54,33 @@ def test_at_flat_end_reads_the_force_at_the_end_only():
     start = lb.flat_start_for(fwd)
     assert at_flat_end([start, None], [0.0, 0.0], [tau, 1.0]) == [0]
     assert at_flat_end([start], [1e-6], [tau + 1e-6]) == []
+
+
+def test_the_flat_ends_are_read_once_per_state():
+    # a pass asks up to three times at one state (the run loop, the step, the stage
+    # guess): the ends are a function of the modes and x, v, F, read once (before: 3)
+    tau = 0.25
+    law = get_law("herschel_bulkley").bind(gamma=0.5, tau=tau, n=1.5)
+    lb = law_branches(law)
+    fwd = next(i for i in range(lb.count) if lb.flat_start_for(i) is not None
+               and lb.flat_start_for(i)(1e-3, tau)[0] == 0.0)
+    reads = []
+
+    class Branches:
+        def flat_start_for(self, i):
+            start = lb.flat_start_for(i)
+            return lambda q, F: reads.append((q, F)) or start(q, F)
+
+    scene = Scene([Mass("m", 1.0)], [Element("d", law, "ground", "m")])
+    run = StepPass()
+    run.frame, run.lbs, run.scene, run.modes = None, [Branches()], scene, [fwd]
+    run.x, run.v, run.F = [0.0], [0.0], [tau]
+    assert [run.flat_ends() for _ in range(3)] == [[0]] * 3
+    assert len(reads) == 2  # (the base at F and at 0: one reading)
+    run.F = [tau + 1e-3]  # a new state: read again
+    assert run.flat_ends() == [] and len(reads) == 4
+    run.modes = [fwd]  # (the same modes, made anew)
+    assert run.flat_ends() == [] and len(reads) == 4
 
 
 def _flat_dashpot_on_a_mass_among_locks() -> Scene:

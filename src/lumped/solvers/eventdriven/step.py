@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 
 from ..modes.guards import fold_crossed
-from ..radau.flat_start import at_flat_end, flat_start
+from ..radau.flat_start import FlatEnds, flat_start
 from ..radau.rows import row_of
 from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.tableau import A as _A
@@ -186,14 +186,13 @@ class StepPass:
 
     def flat_ends(self) -> list[int]:
         """The elements held on a branch flat at its end and starting at that end
-        (:func:`~lumped.solvers.radau.flat_start.at_flat_end`), none with moving supports."""
-        key = tuple(self.modes)
-        if getattr(self, "_flat_key", None) != key and self.frame is None:
-            self._flat_key, self._flat_starts = key, [
-                getattr(lb, "flat_start_for", lambda i: None)(i)
-                for lb, i in zip(self.lbs, key, strict=True)]
-        return [] if self.frame is not None or not any(self._flat_starts) else at_flat_end(
-            self._flat_starts, self.scene.elongations(self.x, self.v), self.F)
+        (:class:`~lumped.solvers.radau.flat_start.FlatEnds`: once per state), none with
+        moving supports."""
+        if self.frame is not None:
+            return []
+        if getattr(self, "_flat", None) is None:
+            self._flat = FlatEnds(self.lbs)
+        return self._flat(self.scene, self.modes, self.x, self.v, self.F)
 
     def stage_guess(self, h: float, damped: bool = False) -> list[float]:
         """The stage guess of a step of size ``h``: ``(v_n, F_n)`` at every stage, or,
@@ -205,7 +204,7 @@ class StepPass:
             t, bi = self.t, self.bi
             net_n = self.scene.net_forces(math.nextafter(t, math.inf) if (
                 bi > 0 and t == self.breaks[bi - 1]) else t, self.F)
-            flat_start(self.system, U, h, self.x, self.v, self.F, net_n, self._flat_starts,
+            flat_start(self.system, U, h, self.x, self.v, self.F, net_n, self._flat.starts,
                        self.guards, ends)
         return U
 

@@ -16,6 +16,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ...scene import Scene
+from ...scene.forcing_jit import loads_at
 from .guards import guard_tolerance
 
 __all__ = ["StaticHold", "structure_arrays"]
@@ -100,15 +101,9 @@ class StaticHold:
         return self._arrays
 
     def forces_many(self, ts: np.ndarray) -> np.ndarray:
-        """:meth:`forces` at many times, ``(len(ts), E)`` (numpy's ``sin``)."""
-        N = len(self.c)
-        f = np.zeros((len(ts), N))
-        for i in range(N):
-            kind, (a, w, t_off) = self.fkind[i], self.fpar[i]
-            if kind == 1:
-                f[:, i] = a
-            elif kind == 2:
-                f[:, i] = np.where(ts > t_off, 0.0, a * np.sin(w * ts))
+        """:meth:`forces` at many times, ``(len(ts), E)`` (the forcing by
+        :func:`lumped.scene.forcing_jit.loads_at`: numpy's ``sin``)."""
+        f = loads_at(self.fkind, self.fpar, ts)
         out = np.empty((len(ts), len(self.F0)))
         out[:] = self.F0
         if self.free:

@@ -29,7 +29,7 @@ from collections.abc import Callable, Sequence
 
 from .tableau import C
 
-__all__ = ["AT_END", "at_flat_end", "flat_start"]
+__all__ = ["AT_END", "FlatEnds", "at_flat_end", "flat_start"]
 
 #: A force is at its branch's flat end when its base ``|s F + d|`` is within this
 #: fraction of ``max(|s F|, |d|)`` (a few thousand ulps: the end located to round-off by
@@ -51,6 +51,38 @@ def at_flat_end(starts: Sequence[Callable | None], q_n: Sequence[float],
         if abs(base) <= AT_END * max(abs(base - b0), abs(b0)):
             out.append(e)
     return out
+
+
+class FlatEnds:
+    """:func:`at_flat_end` of a run's held modes and state, once per state: the held
+    branches' flat starts (:attr:`starts`, ``flat_start_for``) are read once per modes,
+    the elements at their ends once per ``(x, v, F)``, of which they are a function (no
+    moving supports: ``q`` is ``x`` and ``v``'s), however often the loop asks at one
+    state (the run loop, the step, the stage guess)."""
+
+    def __init__(self, lbs: Sequence) -> None:
+        self.lbs = lbs
+        self.modes: tuple[int, ...] | None = None
+        self.starts: list[Callable | None] = []
+        self._any = False
+        self._state: list[list[float]] | None = None
+        self._ends: list[int] = []
+
+    def __call__(self, scene, modes: Sequence[int], x: list[float], v: list[float],
+                 F: list[float]) -> list[int]:
+        """The elements at their flat ends in the state ``(x, v, F)`` of ``scene``."""
+        key = tuple(modes)
+        if key != self.modes:
+            self.modes, self._state = key, None
+            self.starts = [getattr(lb, "flat_start_for", lambda i: None)(i)
+                           for lb, i in zip(self.lbs, key, strict=True)]
+            self._any = any(self.starts)
+        if not self._any:
+            return []
+        if self._state != [x, v, F]:
+            self._state = [list(x), list(v), list(F)]
+            self._ends = at_flat_end(self.starts, scene.elongations(x, v), F)
+        return list(self._ends)
 
 
 def flat_start(system, U: list[float], h: float, x_n: list[float], v_n: list[float],

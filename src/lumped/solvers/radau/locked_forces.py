@@ -42,8 +42,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ...scene.forcing import SineBurst, zero_forcing
-from ...scene.forcing_spec import ConstantForce
+from ...scene.forcing_jit import forcing_arrays, loads_at
 
 __all__ = ["LockedForces"]
 
@@ -56,6 +55,9 @@ class LockedForces:
         self.N, self.E = len(scene.nodes), len(scene.elements)
         self.ea, self.eb = tuple(scene.elem_a), tuple(scene.elem_b)
         self.forcing = tuple(scene.forcing)
+        # the forcing's kind codes ``(fkind, fpar)``, made at the first :meth:`loads`
+        self._scene = scene
+        self._kinds: tuple[np.ndarray, np.ndarray] | None = None
         self._groups: list[tuple[tuple[int, ...], tuple[float, ...]]] = []
         self._index: dict[tuple, int] = {}
         self._modes: dict[tuple, int] = {}
@@ -78,18 +80,13 @@ class LockedForces:
         return got
 
     def loads(self, ts: np.ndarray) -> np.ndarray:
-        """``f_i(t)`` per node at the times ``ts``, ``(len(ts), N)``."""
-        out = np.zeros((len(ts), self.N))
-        for i, fn in enumerate(self.forcing):
-            if fn is None or fn is zero_forcing:
-                continue
-            if isinstance(fn, SineBurst):
-                out[:, i] = np.where(ts > fn.t_off, 0.0, fn.amplitude * np.sin(fn.omega * ts))
-            elif isinstance(fn, ConstantForce):
-                out[:, i] = fn.value
-            else:
-                out[:, i] = [float(fn(float(t))) for t in ts]
-        return out
+        """``f_i(t)`` per node at the times ``ts``, ``(len(ts), N)``
+        (:func:`lumped.scene.forcing_jit.loads_at`: by the forcing's kind codes, a
+        table's too; a callable without one is called per time)."""
+        if self._kinds is None:
+            self._kinds = forcing_arrays(self._scene, 1.0, 0, linear=True)[:2]
+            self._scene = None  # (read once; the forcing callables are kept)
+        return loads_at(*self._kinds, ts, self.forcing)
 
     def _map(self, g: int, rest: np.ndarray) -> tuple | None:
         """``(lock columns, node rows, incidence of every element at those rows, P)`` with
