@@ -113,11 +113,11 @@ def pointer(dispatcher, ftype):
     numba converts a dispatcher passed for a function-type argument to its address on
     every call, and types an object of its *wrapper address protocol* anew on every call
     (each about 0.1 ms); :class:`Pointer` carries both, ready."""
-    from numba.experimental.function_type import _get_wrapper_address
-
     key = id(dispatcher)
     got = _POINTERS.get(key)
     if got is None or got.keep is not dispatcher:
+        from numba.experimental.function_type import _get_wrapper_address
+
         addr = _get_wrapper_address(dispatcher, ftype.signature)
         got = _POINTERS[key] = Pointer(addr, ftype, dispatcher)
     return got
