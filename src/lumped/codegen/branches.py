@@ -343,7 +343,7 @@ def law_branches(bound) -> LawBranches:
         out = LawBranches(residual)
     try:
         if len(_CACHE) >= _REMEMBERED:
-            for old in list(_CACHE)[:_REMEMBERED // 2]:
+            for old in list(_CACHE)[:len(_CACHE) - _REMEMBERED // 2]:
                 _CACHE.pop(old, None)
         _CACHE[bound] = out
     except TypeError:
