@@ -170,6 +170,12 @@ def test_cache_dir_from_environment(monkeypatch, tmp_path):
     monkeypatch.delenv("LUMPED_CACHE_DIR")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "x"))
     assert cache_dir() == tmp_path / "x" / "lumped"
+    monkeypatch.delenv("XDG_CACHE_HOME")  # (only then is HOME read)
+    for home in ("h1", "h2"):
+        monkeypatch.setenv("HOME", str(tmp_path / home))
+        assert cache_dir() == tmp_path / home / ".cache" / "lumped"
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path / "b"))
+    assert cache_dir() == tmp_path / "b"
 
 
 def test_a_generated_module_exists_when_loaded_or_on_disk(js, monkeypatch, tmp_path):

@@ -273,3 +273,20 @@ def test_two_laws_with_the_same_numbers_make_no_class() -> None:
              method="bdf1", dt=1e-3, t_end=0.5)  # (taut at t = 0.2: an impact)
     _check_as_from_scratch(law, {"k": 0.19164306754609922, "L": 0.22357337016105375})
     _check_as_from_scratch(law, {"k": 0.3316, "L": 0.517})
+
+
+def test_a_rebound_laws_powers_print_as_a_derivations():
+    """The sympy expressions of a law made from its class (a power of ``F - tau``, its
+    float swapped in) are whole sympy objects: they print, as the derivation from scratch
+    does (a power rebuilt without its constructor had no ``is_commutative``: printing
+    raised AttributeError, and ``radau5`` refusing a second such law with it)."""
+    law = ElementLaw("two_powers_print", "dashpot",
+                     "q - Piecewise((sqrt(F - tau) + (F - tau)**2, F > tau),"
+                     " (-sqrt(-F - tau) - (-F - tau)**2, F < -tau), (0, True))", ["tau"])
+    bounds = [law.bind(tau=tau) for tau in (1.0, 1.5, 2.5)]
+    lbs = [law_branches(b) for b in bounds]
+    assert law_class(bounds[2]) is not None  # (made from the class)
+    scratch = LawBranches(bounds[2].kernel.expressions[0])
+    for info, want in zip(lbs[2].info, scratch.info, strict=True):
+        assert str(info.dR_dF) == str(want.dR_dF)
+        assert str(info.residual) == str(want.residual)

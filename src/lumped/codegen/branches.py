@@ -312,6 +312,9 @@ class LawBranches:
 
 
 _CACHE: dict[object, LawBranches] = {}
+#: How many bound laws :data:`_CACHE` keeps (the oldest half is dropped beyond: a sweep
+#: of new numbers binds a law per point, whose branches were kept for good).
+_REMEMBERED = 4096
 
 
 def law_branches(bound) -> LawBranches:
@@ -339,6 +342,9 @@ def law_branches(bound) -> LawBranches:
                 f"{type(bound).__name__}") from None
         out = LawBranches(residual)
     try:
+        if len(_CACHE) >= _REMEMBERED:
+            for old in list(_CACHE)[:len(_CACHE) - _REMEMBERED // 2]:
+                _CACHE.pop(old, None)
         _CACHE[bound] = out
     except TypeError:
         pass

@@ -173,6 +173,8 @@ def swap(expr: sp.Basic, atoms: dict[int, sp.Basic], memo: dict | None = None) -
             out = expr._from_args(new, expr.is_commutative)
         else:
             out = sp.Basic.__new__(type(expr), *new)
+            if isinstance(expr, sp.Pow):  # (the slot Pow's constructor sets: printing,
+                out.is_commutative = expr.is_commutative  # as_terms read it)
     memo[key] = out
     return out
 

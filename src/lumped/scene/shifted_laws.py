@@ -144,6 +144,13 @@ def branches_of(law: Any) -> Any:
     :class:`ShiftedBranches` of a law shifted by a :class:`SupportFrame`."""
     if isinstance(law, ShiftedLaw):
         return law.branches()
-    from ..codegen.branches import law_branches
+    if not _LAW_BRANCHES:  # (imported once: an import in a function costs ~1 us a call)
+        from ..codegen.branches import law_branches
 
-    return law_branches(law)
+        _LAW_BRANCHES.append(law_branches)
+    return _LAW_BRANCHES[0](law)
+
+
+#: :func:`lumped.codegen.branches.law_branches`, once imported (codegen comes after
+#: scene in the layers: imported on first use).
+_LAW_BRANCHES: list[Callable[[Any], Any]] = []

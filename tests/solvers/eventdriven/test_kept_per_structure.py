@@ -316,3 +316,62 @@ def test_a_law_bound_again_to_its_numbers_builds_no_kernel(monkeypatch):
     parametric._REBOUND.clear()
     _same_run(kept, simulate(_released(10.000654), t_end=1.0, method="radau5", rtol=1e-6,
                              compiled=False))
+
+
+def _steep(name: str, tau: float, k: float = 10.0) -> Scene:
+    """A dashpot with a steep branch and no inverse form (``radau5`` refuses it, issue
+    11), named ``name``, beside a spring ``k``."""
+    from lumped.laws import ElementLaw
+
+    law = _STEEP.setdefault("law", ElementLaw(
+        "two_powers", "dashpot", "q - Piecewise((sqrt(F - tau) + (F - tau)**2, F > tau),"
+        " (-sqrt(-F - tau) - (-F - tau)**2, F < -tau), (0, True))", ["tau"]))
+    return Scene([Mass("m", m=1.0, x0=0.5)],
+                 [Element("s", get_law("linear_spring").bind(k=k), "ground", "m"),
+                  Element(name, law.bind(tau=tau), "ground", "m")])
+
+
+_STEEP: dict = {}
+
+
+def test_the_refusal_is_read_per_structure_and_names_each_scene(monkeypatch):
+    """Whether ``radau5`` refuses a scene is kept with its structure (the branches' flags
+    of its laws' classes); the message of each refused scene is its own (its element's
+    name and numbers), and a scene it takes with new numbers walks no branch for it
+    (counted)."""
+    from lumped.bench.new_numbers import scene_with_new_numbers
+    from lumped.solvers.eventdriven import setup
+
+    for name, tau in (("d", 1.0), ("brake", 1.5), ("d", 2.5)):
+        scene = _steep(name, tau)
+        plan = setup.scene_plan(scene)
+        assert plan.refused == setup.scope_error(scene)  # (the message from scratch)
+        assert f"element {name!r}" in plan.refused and "two_powers" in plan.refused
+    calls = []
+    real = setup.scope_error
+    monkeypatch.setattr(setup, "scope_error", lambda *a: calls.append(1) or real(*a))
+    base = _released(10.0)
+    setup.scene_plan(scene_with_new_numbers(base))  # the structure's first plan
+    calls.clear()
+    plans = [setup.scene_plan(scene_with_new_numbers(base)) for _ in range(3)]
+    assert [p.refused for p in plans] == [None] * 3
+    assert calls == []
+    refused = setup.scene_plan(_steep("e", 3.5, k=11.0)).refused
+    assert "element 'e'" in refused and calls == [1]
+
+
+def test_the_branches_kept_per_bound_law_are_bounded(monkeypatch):
+    """A sweep of new numbers binds a law per point: at most ``_REMEMBERED`` of their
+    branches are kept (they were all kept for good: 45 objects a run with new numbers),
+    and a law whose branches were dropped gets them anew, the same."""
+    from lumped.codegen import branches
+
+    monkeypatch.setattr(branches, "_REMEMBERED", 8, raising=False)
+    law = get_law("linear_spring")
+    laws = [law.bind(k=10.0 + 0.001 * j) for j in range(20)]
+    first = [law_branches(b) for b in laws]
+    assert len(branches._CACHE) <= 8
+    again = law_branches(laws[0])  # dropped: made anew
+    assert again.info == first[0].info and again.count == first[0].count
+    assert [again.branch(0.1, 2.0), again.guards_for(0)(0.1, 2.0)] == [
+        first[0].branch(0.1, 2.0), first[0].guards_for(0)(0.1, 2.0)]

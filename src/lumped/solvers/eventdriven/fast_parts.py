@@ -78,13 +78,13 @@ def loop_forcing(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     (:func:`~lumped.scene.forcing_jit.forcing_arrays` with ``linear=True``, a
     :func:`~lumped.scene.forcing.zero_forcing` read as none), made once per forcing
     objects: a scene with new law numbers and the same forcing objects shares them."""
-    from ...scene.forcing import zero_forcing
-    from ...scene.forcing_jit import forcing_arrays
-
     key = tuple(map(id, scene.forcing))
     got = _FORCING.get(key)
     if got is not None and all(a is b for a, b in zip(got[0], scene.forcing, strict=True)):
         return got[1], got[2]
+    from ...scene.forcing import zero_forcing
+    from ...scene.forcing_jit import forcing_arrays
+
     fkind, fpar, _ = forcing_arrays(scene, 1.0, 0, linear=True)
     for i, fn in enumerate(scene.forcing):
         if fn is zero_forcing:  # f = 0.0, as no forcing
@@ -113,11 +113,11 @@ def pointer(dispatcher, ftype):
     numba converts a dispatcher passed for a function-type argument to its address on
     every call, and types an object of its *wrapper address protocol* anew on every call
     (each about 0.1 ms); :class:`Pointer` carries both, ready."""
-    from numba.experimental.function_type import _get_wrapper_address
-
     key = id(dispatcher)
     got = _POINTERS.get(key)
     if got is None or got.keep is not dispatcher:
+        from numba.experimental.function_type import _get_wrapper_address
+
         addr = _get_wrapper_address(dispatcher, ftype.signature)
         got = _POINTERS[key] = Pointer(addr, ftype, dispatcher)
     return got

@@ -13,9 +13,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...codegen.rebound import ReboundBranches
+from ...codegen.scene_key import scene_key
 from ...scene import Mass, Scene
 from ...scene.forcing import jumps
+from ...scene.shifted_laws import branches_of
 from ...scene.supports import support_time_events
+from ..modes.stuck import forcing_kinds
 
 __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "time_events", "step_floor",
            "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "clear_plans",
@@ -87,8 +90,6 @@ def scope_error(scene: Scene, branches: list | None = None) -> str | None:
     stop mid-run, and ``auto`` runs ``bdf2`` there (its globalised Newton takes such
     points).
     """
-    from ...scene.shifted_laws import branches_of
-
     if branches is None:
         branches = [branches_of(el.law) for el in scene.elements]
     for el, lb in zip(scene.elements, branches, strict=True):
@@ -235,8 +236,6 @@ def scene_plan(scene: Scene) -> ScenePlan:
     if got is not None and got[0] is scene.nodes and got[1] is scene.elements \
             and (got[3] is scene.forcing or got[2] == tuple(id(f) for f in scene.forcing)):
         return got[4]
-    from ...codegen.scene_key import scene_key
-
     keyed = scene_key(scene)
     key = None if keyed is None else keyed[0]
     plan = None
@@ -261,13 +260,10 @@ def scene_plan(scene: Scene) -> ScenePlan:
 def _new_plan(scene: Scene, key: tuple | None) -> ScenePlan:
     """A new :class:`ScenePlan` of ``scene`` (``key``: its content key or ``None``), its
     parts of the structure alone taken from :func:`structure_parts`."""
-    from ...scene.shifted_laws import branches_of
-    from ..modes.stuck import forcing_kinds
-
     branches = [branches_of(el.law) for el in scene.elements]
     parts = structure_parts(scene, branches)
-    plan = ScenePlan(scope_error(scene, branches), branches, parts["checked"],
-                     parts["cyclic"], key, structure=parts)
+    plan = ScenePlan(scope_error(scene, branches) if parts["steep"] else None, branches,
+                     parts["checked"], parts["cyclic"], key, structure=parts)
     kinds = _FORCING_KINDS.get(tuple(map(id, scene.forcing)))
     if kinds is not None and all(a is b for a, b in zip(kinds[0], scene.forcing,
                                                         strict=True)):
@@ -305,11 +301,11 @@ def structure_parts(scene: Scene, branches: list) -> dict:
     (those of them on a cycle of such elements alone: the only elements whose forces can
     be indeterminate, :func:`~lumped.solvers.nonsmooth.locks.indeterminate_elements`;
     none, and no element's force ever is), ``hold_structure`` (the static balance's
-    structure of each mode,
-    :func:`~lumped.solvers.modes.stuck.static_hold`). The structure is each node's
-    kind, each element's kind, ends and law (the unbound law object) and its law's
-    branches apart from their numbers (:func:`branches_structure`); everything these
-    parts read."""
+    structure of each mode, :func:`~lumped.solvers.modes.stuck.static_hold`),
+    ``steep`` (some branch is steep with no inverse form: :func:`scope_error` refuses
+    the scene; only then is its message written). The structure is each node's kind,
+    each element's kind, ends and law (the unbound law object) and its law's branches
+    apart from their numbers (:func:`branches_structure`); everything these parts read."""
     laws = tuple(getattr(el.law, "law", el.law) for el in scene.elements)
     key = (tuple(type(nd) for nd in scene.nodes), tuple(el.kind for el in scene.elements),
            scene.elem_a, scene.elem_b, tuple(map(id, laws)),
@@ -330,6 +326,7 @@ def structure_parts(scene: Scene, branches: list) -> dict:
            "cyclic": cyclic, "hold_structure": {}, "free_cyclic": free,
            "free_cycles": on_cycles(len(scene.nodes), tuple(
                (e, scene.elem_a[e], scene.elem_b[e]) for e in free)) if len(free) > 1 else (),
+           "steep": any(i.steep and i.stage is None for lb in branches for i in lb.info),
            "laws": laws}  # (the laws the key names by id, kept alive with it)
     with _SHARED_LOCK:
         got = _STRUCTURES.setdefault(key, got)

@@ -19,6 +19,9 @@ import sys
 from collections.abc import Sequence
 
 from ...scene import Mass, Scene
+from ..newton.scalar_root import scalar_root
+from ..nonsmooth.impacts import impact_solve
+from ..nonsmooth.lock_forces import forces_with_held
 from .guards import guard_tolerance
 
 __all__ = ["after_impact_forces", "apply_impacts", "hold_impacted_locks", "hold_rate_locks",
@@ -81,8 +84,6 @@ def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[floa
     list of int
         The elements held (empty: ``v`` is unchanged).
     """
-    from ..nonsmooth.impacts import impact_solve
-
     slack = math.sqrt(_EPS)
     held, target = [], []
     q_x = scene.elongations(x, [0.0] * len(x))
@@ -231,8 +232,6 @@ def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Seq
             inner.append(e)
             gaps.append(float(L) - (x[b] - x[a]))
     if inner:  # between two nodes: the least move (kinetic-energy norm) onto q = L
-        from ..nonsmooth.impacts import impact_solve
-
         dx, _, _ = impact_solve(scene, [0.0] * len(x), inner, 0.0, target=gaps)
         x[:] = [xi + di for xi, di in zip(x, dx, strict=True)]
     return [(e, impulses[locked.index(e)]) for e in hits], lost
@@ -268,8 +267,6 @@ def after_impact_forces(scene: Scene, t: float, x: Sequence[float], v: Sequence[
         boundary, the kink: it goes slack). ``(F, [])`` when no impacted element is at
         rest relative to its ends or the balances have no solution.
     """
-    from ..nonsmooth.lock_forces import forces_with_held
-
     ea, eb = scene.elem_a, scene.elem_b
     held = []
     for e in hits:
@@ -361,8 +358,6 @@ def release_resting_locks(scene: Scene, branches: Sequence, t: float, old: Seque
         The elements put on a slack branch (empty: ``new``, ``F_p`` unchanged; also when
         the balances have no solution).
     """
-    from ..newton.scalar_root import scalar_root
-
     q = scene.elongations(x, v)
     cand = []
     for e, el in enumerate(scene.elements):

@@ -41,6 +41,8 @@ import numpy as np
 
 from ...scene import Mass, Scene
 from ...scene.supports import support_accelerations
+from ..newton.scalar_root import scalar_root
+from .impacts import lock_state
 
 __all__ = ["forces_from_accelerations", "forces_with_held", "taut_on_supports"]
 
@@ -154,8 +156,6 @@ def taut_on_supports(scene: Scene, t: float, x: Sequence[float], v: Sequence[flo
     the load keeps taut then carries the load and the support's ``m a_s``. An element
     whose balance would push it off the lock keeps the boundary of its set. Any other
     scene, or none locked: ``F`` unchanged."""
-    from .impacts import lock_state
-
     frame = getattr(scene, "support_frame", None)
     if frame is None:
         return list(F)
@@ -204,8 +204,6 @@ def forces_with_held(scene: Scene, t: float, x: Sequence[float], v: Sequence[flo
         The forces, or ``None`` when a dashpot's root fails or the balance has no finite
         solution.
     """
-    from ..newton.scalar_root import scalar_root
-
     q = scene.elongations(x, v)
     out = list(F)
     free = list(held)
