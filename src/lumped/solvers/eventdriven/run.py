@@ -194,10 +194,10 @@ class Radau5Run(StepPass, StepChecks):
         count = self.budget.kept(t, self.stats)
         if count < _KEPT_AT_T:
             return None
+        since = "" if self.budget.kept_at == t else f", from t = {self.budget.kept_at!r} on"
         return Status.STEP_TOO_SMALL, (
-            f"radau5 stopped at t = {t!r}: the full laws kept the mode {count} times since "
-            f"t = {self.budget.kept_at!r} (each step in it crosses a guard at once, and no "
-            "landing step gets away)")
+            f"radau5 stopped at t = {t!r}: the full laws kept the mode there {count} times"
+            f"{since} (each step in it crosses a guard at once, and no step gets away)")
 
     def time_event(self, h: float) -> bool:
         """A time event at the breakpoint ``t``; whether the run stops there. At a kink of
