@@ -16,6 +16,7 @@ from _yield_check import check_yield
 from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
+from lumped.solvers.eventdriven import run as run_module
 from lumped.solvers.eventdriven.bridge import BRIDGE_STEPS, MAX_STEPS, bridge_steps, linear_stages
 from lumped.solvers.eventdriven.mode_state import ModeState
 from lumped.solvers.radau.dense_defect import dense_defect
@@ -234,10 +235,19 @@ def test_a_creep_above_the_step_floor_is_bridged(monkeypatch):
     is bridged."""
     monkeypatch.setattr(ModeState, "state_stays", lambda self, *args: False)
     scene, h = _junction_on_a_stuck_coulomb_element()
+    kept = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=h**2, atol=h**3,
+                    compiled=False, max_steps=5000)
+    # the mode kept at each landing: 4 kept choices at nearly one t end it first
+    # (WorkBudget.kept, issue 29), bridged the same
+    assert kept.ok and kept.stats["bridges"] == 1
+    assert "kept the mode there 4 times, from t = " in kept.message
+    assert [ev.element for ev in kept.events if ev.kind == "impact"] == ["e3", "e3"]
+    # the creep test behind them
+    monkeypatch.setattr(run_module, "_KEPT_AT_T", 10**9)
     sol = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=h**2, atol=h**3,
                    compiled=False, max_steps=5000)
     # (20 creeping steps, not 200 as before: 41 steps in all)
-    assert sol.ok and sol.stats["steps"] < 100
+    assert sol.ok and kept.stats["steps"] < sol.stats["steps"] < 100
     assert sol.stats["bridges"] == 1 and "creep floor" in sol.message and "'e2'" in sol.message
     # the string's impacts, before and after the bridge
     assert [ev.element for ev in sol.events if ev.kind == "impact"] == ["e3", "e3"]

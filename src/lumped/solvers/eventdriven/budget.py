@@ -29,6 +29,12 @@ All three stop the run with :attr:`~lumped.solvers.status.Status.MAX_ITERS` (Sci
 code for a step budget; a ``SolverError`` with ``throw=True``), never bridged, with the
 time reached, the tries of each kind and how to raise the budget.
 
+A pass that chooses the mode again at a guard and keeps it may cost far more than a try
+(a full mode choice, thousands of residual evaluations): :meth:`WorkBudget.kept` counts
+such choices at (nearly) one time, at the stuck test's pace, and the driver stops the run
+after a few (``STEP_TOO_SMALL``, bridged; ``_KEPT_AT_T`` in
+:mod:`lumped.solvers.eventdriven.run`).
+
 The compiled loop (:mod:`lumped.solvers.eventdriven.loop_jit`) counts its tries, accepted
 and rejected, and returns at a cap: :meth:`WorkBudget.compiled_cap` hands it the tries it
 may take before it returns, the budget left, at most a window of the stuck test
@@ -39,6 +45,8 @@ the stuck test waited for it to return, issue 29).
 """
 
 from __future__ import annotations
+
+import math
 
 from ..status import Status
 
@@ -72,6 +80,25 @@ class WorkBudget:
         self.redone = 0
         self.mark = (0, 0.0)  # (tries but bridges', t) at the start of the current window
         self.stuck = (0, 0, 0.0)  # (tries but bridges', rejected, t): the stuck window's
+        self.kept_at, self.kept_count = math.nan, 0  # a series of kept choices (kept())
+
+    def kept(self, t: float, stats: dict) -> int:
+        """Count a choice of the mode at ``t`` that kept it; the choices in its series.
+
+        A series of kept choices starts at ``t_k`` and goes on while the ``c`` choices
+        after its first moved ``t`` so little that the time left at their pace needs more
+        than :data:`STUCK_MARGIN` times the tries left, ``(t - t_k) * STUCK_MARGIN * left
+        < c * (t_final - t)`` (every kept choice costs a pass of the loop): at one ``t``,
+        or crept on by an accepted step as short as ``5e-12 s`` after each (a junction's
+        Herschel-Bulkley n = 0.3 dashpot whose guard read crossed at ``t = 0.13772``
+        after every step, a full mode choice of 18 000 residual evaluations each, 2 s,
+        that the stuck test saw once per 250 of them, issue 29)."""
+        left = max(1, self.max_steps - self.tries(stats))
+        if (t - self.kept_at) * STUCK_MARGIN * left < self.kept_count * (self.t_final - t):
+            self.kept_count += 1
+        else:
+            self.kept_at, self.kept_count = t, 1
+        return self.kept_count
 
     def tries(self, stats: dict) -> int:
         """The steps tried so far (see the module notes)."""

@@ -39,10 +39,11 @@ __all__ = ["Radau5Run", "DEFAULT_RTOL", "DEFAULT_ATOL"]
 DEFAULT_RTOL = 1e-6
 DEFAULT_ATOL = 1e-9
 _EPS = 2.220446049250313e-16
-#: Choices of the mode at one time that keep it, with no step accepted in between, after
-#: which the run stops there (and is bridged): a stall. At most 1 in 6300 runs of random
-#: networks that did not stall (2100 draws, 3 levels); a stall repeats it every 20-40
-#: loop passes, up to :data:`~lumped.solvers.radau.stage.STALL_PASSES` (4 s a stall).
+#: Choices of the mode at (nearly) one time that keep it (a series of
+#: :meth:`~lumped.solvers.eventdriven.budget.WorkBudget.kept`) after which the run stops
+#: there (and is bridged): a stall. At most 1 in 6300 runs of random networks that did not
+#: stall (2100 draws, 3 levels); a stall repeats it every 20-40 loop passes, up to
+#: :data:`~lumped.solvers.radau.stage.STALL_PASSES` (4 s a stall).
 _KEPT_AT_T = 4
 #: The stops that backward Euler bridges (:mod:`lumped.solvers.eventdriven.bridge`, the keyword
 #: ``bridge``); a fold of a law (``BRANCH_LOST``), the work budget ``max_steps``
@@ -155,7 +156,6 @@ class Radau5Run(StepPass, StepChecks):
         self.creeping = 0  # accepted steps in a row below the step floor (landings)
         self.kink_cuts = 0  # steps cut at a kink of the split since the last accepted one
         self.hold_check = True  # a held interval may start at t
-        self.kept_at, self.kept_count = math.nan, 0  # choices at one t that kept the mode
 
     # -----------------------------------------------------------------------------------
     # small pieces
@@ -191,13 +191,13 @@ class Radau5Run(StepPass, StepChecks):
         if stop or self.modes != old:
             self.tangent.clear()  # (the old mode's (watched, guard) pairs)
             return stop
-        self.kept_at, self.kept_count = t, (self.kept_count + 1 if t == self.kept_at else 1)
-        if self.kept_count < _KEPT_AT_T:
+        count = self.budget.kept(t, self.stats)
+        if count < _KEPT_AT_T:
             return None
+        since = "" if self.budget.kept_at == t else f", from t = {self.budget.kept_at!r} on"
         return Status.STEP_TOO_SMALL, (
-            f"radau5 stopped at t = {t!r}: the full laws kept the mode there "
-            f"{self.kept_count} times without an accepted step (each step in it crosses a "
-            "guard at once, and no landing step holds)")
+            f"radau5 stopped at t = {t!r}: the full laws kept the mode there {count} times"
+            f"{since} (each step in it crosses a guard at once, and no step gets away)")
 
     def time_event(self, h: float) -> bool:
         """A time event at the breakpoint ``t``; whether the run stops there. At a kink of
