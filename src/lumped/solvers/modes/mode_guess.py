@@ -103,23 +103,29 @@ def probe_state(scene: Scene, branches: Sequence, modes: Sequence[int], t: float
                 x: list[float], v: list[float], F: list[float], h_p: float
                 ) -> tuple[list[float], list[float]] | None:
     """The probe step of size ``h_p`` from ``t`` on the mode ``modes`` (no branch read):
-    ``(v_p, F_p)``, the junction velocities and forces at ``t + h_p``, or ``None``."""
+    ``(v_p, F_p)``, the junction velocities and forces at ``t + h_p``, or ``None``. A held
+    position lock (a taut string) is held on the velocity level, as in the stage solve
+    (:func:`_elongation`)."""
     with support_time_restored(scene, t):
         support_time(scene, t + h_p)
-        got = _probe(scene, branches, modes, scene.external_forces(t + h_p), x, v, F, h_p)
+        got = _probe(scene, branches, modes, scene.external_forces(t + h_p), x, v, F, h_p,
+                     velocity_locks=True)
     return None if got is None else (got[0], got[1])
 
 
 def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float],
            x: list[float], v: list[float], F: list[float], h_p: float,
-           min_norm: bool = False):
+           min_norm: bool = False, velocity_locks: bool = False):
     """The held-mode probe step by Newton's method: ``(v_p, F_p, q)`` or ``None``
-    (``min_norm``: a singular matrix by the minimum-norm correction)."""
+    (``min_norm``: a singular matrix by the minimum-norm correction; ``velocity_locks``:
+    a held position lock on the velocity level, :func:`_elongation`; the mode guesses
+    keep the positions' form, that of their compiled twin)."""
     N, E = len(scene.nodes), len(scene.elements)
     n = N + E
     ea, eb = scene.elem_a, scene.elem_b
     kernels = [branches[e].stage_kernel_for(modes[e]) for e in range(E)]
     spring = [el.kind == "spring" for el in scene.elements]
+    locks = [getattr(k, "lock_value", None) if velocity_locks else None for k in kernels]
     cm = [nd.m / h_p if isinstance(nd, Mass) else 0.0 for nd in scene.nodes]
     u = list(v) + list(F)
     for _ in range(_MAX_ITERS):
@@ -140,8 +146,7 @@ def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float
                 G[b] += Fe
                 J[b][N + e] += 1.0
             if spring[e]:
-                qe = ((x[b] + h_p * vel[b]) if b >= 0 else 0.0) - (
-                    (x[a] + h_p * vel[a]) if a >= 0 else 0.0)
+                qe = _elongation(x, vel, a, b, h_p, locks[e])
                 dq = h_p
             else:
                 qe = (vel[b] if b >= 0 else 0.0) - (vel[a] if a >= 0 else 0.0)
@@ -168,12 +173,30 @@ def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float
                 done = False
         if done:
             vel = u[:N]
-            q = [((x[eb[e]] + h_p * vel[eb[e]]) if eb[e] >= 0 else 0.0)
-                 - ((x[ea[e]] + h_p * vel[ea[e]]) if ea[e] >= 0 else 0.0) if spring[e]
+            q = [_elongation(x, vel, ea[e], eb[e], h_p, locks[e]) if spring[e]
                  else (vel[eb[e]] if eb[e] >= 0 else 0.0) - (vel[ea[e]] if ea[e] >= 0 else 0.0)
                  for e in range(E)]
             return vel, u[N:], q
     return None
+
+
+def _elongation(x: list[float], vel: list[float], a: int, b: int, h_p: float,
+                lock: float | None) -> float:
+    """The elongation of a spring from ``a`` to ``b`` at ``t + h_p``: of ``x + h_p v``,
+    or, held on a position lock at ``lock`` (a taut string), ``lock + h_p (v_b - v_a)``.
+
+    The lock on the velocity level, as the stage solve holds it
+    (:meth:`lumped.solvers.radau.stage.StageSystem.evaluate`): the positions carry their
+    rounding, ``ulp(x)``, which the lock turns into rates of ``ulp(x) / h_p`` and forces
+    of ``m ulp(x) / h_p^2``. A string slack by ``4.6e-17`` (below ``ulp(x)``) on a probe
+    of ``4.3e-11`` s left a junction's rate ``1e-6`` off its mass's, and Newton's update
+    test, cycling at round-off, refused the probe: the junction then kept the rate of a
+    longer probe (``h_p a``, ``5.7e-4``) off the stage solution's, whose dense output
+    overshot through a guard at once (issue 29)."""
+    if lock is not None:
+        return lock + h_p * ((vel[b] if b >= 0 else 0.0) - (vel[a] if a >= 0 else 0.0))
+    return ((x[b] + h_p * vel[b]) if b >= 0 else 0.0) - ((x[a] + h_p * vel[a]) if a >= 0
+                                                          else 0.0)
 
 
 def _solve(J: list[list[float]], G: list[float]) -> list[float] | None:
