@@ -1,5 +1,7 @@
 """Choices of the mode that keep it at (nearly) one time end the run in a few choices
-(issue 29, "never a hang"; :meth:`lumped.solvers.eventdriven.budget.WorkBudget.kept`)."""
+(issue 29, "never a hang"; :meth:`lumped.solvers.eventdriven.budget.WorkBudget.kept`); the
+scene that kept them, a junction's dashpot reversing beside a taut string, now runs on
+(:func:`lumped.solvers.modes.mode_guess.probe_state`)."""
 
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ from lumped import Element, Junction, Mass, Scene, get_law, simulate
 from lumped.scene import SineBurst
 from lumped.solvers.eventdriven import budget, mode_state
 
-T_STAR = 0.13772186781395804  # e0's guard read crossed, kept after every step from here
+T_STAR = 0.13772186781395804  # e0's reversal (its guard was read crossed at every step)
 
 
 def _loaded_network() -> Scene:
