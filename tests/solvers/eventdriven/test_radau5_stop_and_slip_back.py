@@ -10,8 +10,8 @@ Forwards ``v' = P - 3 - 4 v`` until the stop at ``t_s``; then at once backwards,
 the property failed because the fixed-step references were not: the stop lies inside the
 first step of every level of their ladders, and ``bdf1`` (off by 5e-6) and ``bdf2`` (off by
 8.5e-4: it breaks out backwards with the velocity of the step before the stop) read a
-ladder difference far below their error (noticed, not yet changed in the property's
-oracle).
+ladder difference far below their error (the property's ladders now take the halvings an
+early first event needs: ``test_random_networks.check_tight``).
 """
 
 from __future__ import annotations
