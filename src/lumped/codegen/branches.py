@@ -52,6 +52,7 @@ from dataclasses import dataclass
 import sympy as sp
 from sympy.core.parameters import distribute
 
+from .bounded_cache import remember
 from .emit import build_kernel
 from .guards import compile_guards, feasible_path
 from .piecewise_tree import build_selector, decision_tree, leaves
@@ -342,10 +343,7 @@ def law_branches(bound) -> LawBranches:
                 f"{type(bound).__name__}") from None
         out = LawBranches(residual)
     try:
-        if len(_CACHE) >= _REMEMBERED:
-            for old in list(_CACHE)[:len(_CACHE) - _REMEMBERED // 2]:
-                _CACHE.pop(old, None)
-        _CACHE[bound] = out
+        remember(_CACHE, bound, out, _REMEMBERED)
     except TypeError:
         pass
     return out

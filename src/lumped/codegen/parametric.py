@@ -39,6 +39,7 @@ from dataclasses import replace
 
 import sympy as sp
 
+from .bounded_cache import remember
 from .branches import LawBranches
 from .float_keys import (
     admitted,
@@ -216,10 +217,7 @@ def law_class(bound) -> Rebound | None:
     except (KeyError, TypeError):
         hit = _rebound(bound)
         try:
-            if len(_REBOUND) >= _REMEMBERED:
-                for old in list(_REBOUND)[:_REMEMBERED // 2]:
-                    del _REBOUND[old]
-            _REBOUND[bound] = hit
+            remember(_REBOUND, bound, hit, _REMEMBERED)
         except TypeError:  # unhashable
             pass
     return hit

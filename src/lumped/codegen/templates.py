@@ -18,6 +18,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from .bounded_cache import remember
+
 __all__ = ["kernel_sources", "lift_constants", "lift_function", "slot_arguments",
            "LawTemplate", "law_template", "template_from_scratch"]
 
@@ -176,10 +178,7 @@ def law_template(bound) -> LawTemplate:
     rebound = law_class(bound)
     hit = rebound.template() if rebound is not None else template_from_scratch(bound)
     if key is not None:
-        if len(_BY_LAW) >= _REMEMBERED:
-            for old in list(_BY_LAW)[:_REMEMBERED // 2]:
-                _BY_LAW.pop(old, None)
-        _BY_LAW[key] = hit
+        remember(_BY_LAW, key, hit, _REMEMBERED)
     return hit
 
 
