@@ -35,6 +35,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..codegen.jit import njit
+from .forcing import SineBurst, zero_forcing
+from .forcing_spec import ConstantForce
 
 if TYPE_CHECKING:
     from .network import Scene
@@ -155,8 +157,6 @@ def forcing_code(forcing: Callable[[float], float] | None) -> tuple[int, float, 
     is neither a constant nor a sine burst gives :data:`FORCE_TABLE`: the caller samples
     it on its grid.
     """
-    from .forcing import SineBurst, zero_forcing
-    from .forcing_spec import ConstantForce
 
     if forcing is None or forcing is zero_forcing:
         return FORCE_NONE, 0.0, 0.0, 0.0
@@ -172,8 +172,6 @@ def forcing_arrays(scene: Scene, dt: float, n_steps: int, *, linear: bool = Fals
     ``t_n = n dt``, ``n <= n_steps`` (``ftab`` holds the sampled forcings' values by step,
     one row when nothing is sampled). With ``linear``, a linearly interpolated table
     (:func:`linear_row`) is :data:`FORCE_LINEAR` instead of sampled."""
-    from .forcing import SineBurst
-
     N = len(scene.nodes)
     fkind = np.zeros(N, dtype=np.int64)
     rows = {i: linear_row(fn) for i, fn in enumerate(scene.forcing)} if linear else {}
@@ -206,8 +204,6 @@ def forcing_arrays(scene: Scene, dt: float, n_steps: int, *, linear: bool = Fals
 
 def _constant(fn) -> bool:
     """A constant force of :func:`lumped.scene.as_forcing` (``fn.value`` for every ``t``)."""
-    from .forcing_spec import ConstantForce
-
     return type(fn) is ConstantForce
 
 
@@ -250,8 +246,6 @@ def loads_at(fkind: np.ndarray, fpar: np.ndarray, ts: np.ndarray,
         if kind == FORCE_LINEAR:
             out[:, i] = _linear_at(fpar[i], ts)
         elif kind == FORCE_TABLE:
-            from .forcing import zero_forcing
-
             fn = forcing[i]
             if fn is not None and fn is not zero_forcing:
                 out[:, i] = [float(fn(float(t))) for t in ts]
