@@ -245,23 +245,23 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
     v, F = list(v), list(F)
     ea, eb = scene.elem_a, scene.elem_b
     known = known_rate_dashpots(scene, list(range(len(F))))
+
+    def rate(vel: list[float], e: int) -> float:  # (ground at rest)
+        return (vel[eb[e]] if eb[e] >= 0 else 0.0) - (vel[ea[e]] if ea[e] >= 0 else 0.0)
+
     q0 = [0.0] * len(F)
     for e in known:
-        q0[e] = (v[eb[e]] if eb[e] >= 0 else 0.0) - (v[ea[e]] if ea[e] >= 0 else 0.0)
-    def q_probe(e: int) -> float:
-        return (v_probe[eb[e]] if eb[e] >= 0 else 0.0) - (v_probe[ea[e]] if ea[e] >= 0 else 0.0)
-
+        q0[e] = rate(v, e)
     # locked by the chosen mode, the probe's rate round-off of the initial one: stopped
     held = {e for e in known if e < len(locked) and locked[e]
-            and abs(q_probe(e)) <= 2.220446049250313e-16 * abs(q0[e])}
-    turned, stopped = _reversed(scene, q0, lambda e: 0.0 if e in held else q_probe(e), v,
-                                lambda i: v_probe[i])
+            and abs(rate(v_probe, e)) <= 2.220446049250313e-16 * abs(q0[e])}
+    turned, stopped = _reversed(scene, q0, lambda e: 0.0 if e in held else rate(v_probe, e),
+                                v, lambda i: v_probe[i])
     for i in stopped:
         v[i] = 0.0
     for e in known:
         kernel = scene.elements[e].law.kernel
-        q = 0.0 if e in held else (v[eb[e]] if eb[e] >= 0 else 0.0) - (
-            v[ea[e]] if ea[e] >= 0 else 0.0)  # (a lock's rate: 0; its masses: the lock's)
+        q = 0.0 if e in held else rate(v, e)  # (a lock's rate: 0; its masses: the lock's)
         start = F_probe[e] if e in turned else F[e]
         try:
             root, fixed = scalar_root(kernel, q, start)
