@@ -42,7 +42,7 @@ from typing import Any, Protocol
 from .._validate import as_finite, as_positive
 from .forcing_spec import Forcing, as_forcing
 
-__all__ = ["GROUND", "Mass", "Junction", "Element", "Scene", "as_forcing"]
+__all__ = ["GROUND", "Mass", "Junction", "Element", "Scene", "across", "as_forcing"]
 
 #: The name of the fixed node every scene has.
 GROUND = "ground"
@@ -353,8 +353,7 @@ class Scene:
         (:func:`.supports.support_offsets`), for which ``t`` is required."""
         out = []
         for el, a, b in zip(self.elements, self.elem_a, self.elem_b, strict=True):
-            y = x if el.kind == "spring" else v
-            out.append((y[b] if b >= 0 else 0.0) - (y[a] if a >= 0 else 0.0))
+            out.append(across(x if el.kind == "spring" else v, a, b))
         if self.support_ends:
             from .supports import support_offsets
 
@@ -401,6 +400,13 @@ class Scene:
         if self.supports:
             ground += f", supports={self.supports!r}"
         return f"Scene(nodes=[{', '.join(parts)}], elements=[{'; '.join(els)}]{ground})"
+
+
+def across(y: Sequence[float], a: int, b: int) -> float:
+    """The across variable ``y_b - y_a`` of an element from node ``a`` to node ``b``
+    (indices into ``y``; ground, ``-1``, at ``0``): the elongation for positions, the
+    elongation rate for velocities (the module's sign convention)."""
+    return (y[b] if b >= 0 else 0.0) - (y[a] if a >= 0 else 0.0)
 
 
 def check_name(what: str, name: object) -> None:

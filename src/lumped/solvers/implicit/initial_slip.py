@@ -42,6 +42,7 @@ import math
 from collections.abc import Callable, Sequence
 
 from ...scene import Mass, Scene
+from ...scene.network import across
 from ..newton.scalar_root import scalar_root
 
 __all__ = ["known_rate_dashpots", "rates_below_resolution", "rest_edge",
@@ -246,8 +247,8 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
     ea, eb = scene.elem_a, scene.elem_b
     known = known_rate_dashpots(scene, list(range(len(F))))
 
-    def rate(vel: list[float], e: int) -> float:  # (ground at rest)
-        return (vel[eb[e]] if eb[e] >= 0 else 0.0) - (vel[ea[e]] if ea[e] >= 0 else 0.0)
+    def rate(vel: list[float], e: int) -> float:
+        return across(vel, ea[e], eb[e])
 
     q0 = [0.0] * len(F)
     for e in known:

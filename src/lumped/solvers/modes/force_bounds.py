@@ -73,6 +73,7 @@ import math
 from collections.abc import Sequence
 
 from ...scene import Scene
+from ...scene.network import across
 from ..implicit.initial_slip import known_rate_dashpots, rest_edge, set_valued_at_rest
 from ..newton.criteria import ROUNDOFF
 from .lock_events import lock_cones
@@ -124,7 +125,7 @@ def onto_slip_ends(scene: Scene, old: Sequence[int], new: Sequence[int], v: list
     out = list(F)
     for e in known_rate_dashpots(scene, [e for e in range(len(F)) if new[e] != old[e]]):
         a, b = scene.elem_a[e], scene.elem_b[e]
-        if abs((v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)) <= tol:
+        if abs(across(v, a, b)) <= tol:
             kernel = scene.elements[e].law.kernel
             if set_valued_at_rest(kernel):  # (a yield law)
                 edge = rest_edge(kernel, F[e])

@@ -19,6 +19,7 @@ import sys
 from collections.abc import Sequence
 
 from ...scene import Mass, Scene
+from ...scene.network import across
 from ..newton.scalar_root import scalar_root
 from ..nonsmooth.impacts import impact_solve
 from ..nonsmooth.lock_forces import forces_with_held
@@ -90,7 +91,7 @@ def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[floa
     for e, el in enumerate(scene.elements):
         lb = branches[e]
         a, b = scene.elem_a[e], scene.elem_b[e]
-        rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        rate = across(v, a, b)
         for info in lb.info:
             L = info.lock_value
             if not info.locks or L is None:
@@ -200,7 +201,7 @@ def apply_impacts(scene: Scene, branches: Sequence, old: Sequence[int], new: Seq
         if new[e] == old[e]:
             continue
         a, b = ea[e], eb[e]
-        rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        rate = across(v, a, b)
         if abs(rate) > threshold:
             hits.append(e)
     if not hits:
@@ -271,7 +272,7 @@ def after_impact_forces(scene: Scene, t: float, x: Sequence[float], v: Sequence[
     held = []
     for e in hits:
         a, b = ea[e], eb[e]
-        rate = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        rate = across(v, a, b)
         if abs(rate) <= threshold:
             held.append(e)
     if not held:
@@ -367,7 +368,7 @@ def release_resting_locks(scene: Scene, branches: Sequence, t: float, old: Seque
                 abs(q[e] - L) > 4.0 * _EPS * max(abs(L), abs(q[e])):
             continue
         a, b = scene.elem_a[e], scene.elem_b[e]
-        if abs((v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)) <= threshold:
+        if abs(across(v, a, b)) <= threshold:
             cand.append(e)
     if not cand:
         return []

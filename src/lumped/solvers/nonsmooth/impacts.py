@@ -47,6 +47,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from ...scene.network import across
 from ...scene.supports import clock_rates
 
 __all__ = ["lockable_elements", "locking_elements", "lock_state", "impact_velocities",
@@ -133,7 +134,7 @@ def _rates(scene, v: Sequence[float], elems: Sequence[int],
     out = []
     for e in elems:
         a, b = scene.elem_a[e], scene.elem_b[e]
-        r = (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
+        r = across(v, a, b)
         out.append(r if offsets is None else r + offsets[e])
     return out
 

@@ -30,6 +30,7 @@ from collections.abc import Sequence
 from functools import lru_cache
 
 from ...scene import Scene
+from ...scene.network import across
 
 __all__ = ["cyclic_elements", "cycles_among", "indeterminate_elements", "IntervalLog",
            "prefer_locks", "lock_parallel_rates", "split_free_forces"]
@@ -159,15 +160,10 @@ def prefer_locks(scene, branches: Sequence, modes: Sequence[int], v: Sequence[fl
         lb = branches[e]
         if el.kind != "dashpot" or lb.info[out[e]].locks:
             continue
-        got = _admitting_lock(lb, _rate(v, ea[e], eb[e]), F[e])
+        got = _admitting_lock(lb, across(v, ea[e], eb[e]), F[e])
         if got is not None:
             out[e] = got
     return out
-
-
-def _rate(v: Sequence[float], a: int, b: int) -> float:
-    """``v_b - v_a``, ground (``-1``) at rest."""
-    return (v[b] if b >= 0 else 0.0) - (v[a] if a >= 0 else 0.0)
 
 
 def _admitting_lock(lb, value: float, F_e: float) -> int | None:
@@ -224,7 +220,7 @@ def lock_parallel_rates(scene, branches: Sequence, modes: Sequence[int], v: Sequ
         a, b = ea[e], eb[e]
         if el.kind != "dashpot" or lb.info[out[e]].locks or \
                 _find(parent, a % m) != _find(parent, b % m) or \
-                abs(_rate(v, a, b)) > rate_tol:
+                abs(across(v, a, b)) > rate_tol:
             continue
         got = _admitting_lock(lb, 0.0, F[e])
         if got is not None:
