@@ -20,12 +20,17 @@ an event.
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
 import pytest
 from _convergence import assert_within_bdf2s_own_error
 
-from lumped import SolverError, simulate
+from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
+from lumped.solvers.eventdriven.bridge import run_bridge
+from lumped.solvers.newton.options import NewtonOptions
 
 
 def _junction_on_locks_in_parallel(with_m1: bool = True) -> Scene:
@@ -90,19 +95,63 @@ def test_the_draw_agrees_with_bdf2():
     assert_within_bdf2s_own_error(scene, sol, ("m1", "m2", "j0"), dt, 0.5, 32)
 
 
-@pytest.mark.xfail(raises=SolverError, strict=True)
-def test_backward_euler_follows_a_break_away_on_a_thinning_dashpot_at_tiny_steps():
-    """Not fixed: the bridge's own failure on the draw. m1 (``m = 0.137``) breaks away
-    from rest on e1 alone (``n = 0.5``, ``gamma = 0.369``, ``tau = 1``) under ``-3.887``,
-    ``v' = -21.1``. Backward Euler at ``dt = 6.7e-12`` (the bridge's ``sqrt(rtol) h``)
-    fails at step 22, ``v = -3.1e-9``, its largest residual ``-3.1e-9``, all of ``q``: a
-    rate below ``gamma sqrt(ulp(tau)) = 5.5e-9`` has no force in floating point (``F -
-    tau = (q / gamma)^2 = 7e-17 < ulp(1)``), Newton sits at ``F = -tau``, the stuck branch
-    (``q - 0``), and never converges. From ``dt = 1e-11`` on the steps pass the band
-    (51 Newton iterations on a step)."""
-    scene = Scene([Mass("m1", m=0.1367559683814865, x0=0.0)],
-                  [Element("e1", get_law("herschel_bulkley").bind(
-                      gamma=0.3694690741303337, tau=1.0, n=0.5), "ground", "m1")],
-                  {"m1": -3.886707193086813})
-    sol = simulate(scene, method="bdf1", dt=6.7e-12, t_end=64 * 6.7e-12)
-    assert sol.ok
+# m1 alone on e1 (Herschel-Bulkley n = 0.5) under a load beyond its yield force
+_M1, _GAMMA1, _TAU1, _LOAD1 = 0.1367559683814865, 0.3694690741303337, 1.0, -3.886707193086813
+#: the bridge's step on the draw (``sqrt(rtol) h``)
+_DT_BRIDGE = 6.7e-12
+
+
+def _breaking_away() -> Scene:
+    return Scene([Mass("m1", m=_M1, x0=0.0)],
+                 [Element("e1", get_law("herschel_bulkley").bind(
+                     gamma=_GAMMA1, tau=_TAU1, n=0.5), "ground", "m1")],
+                 {"m1": _LOAD1})
+
+
+def _exact_break_away(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(v, F)`` of m1 breaking away: on the slip branch ``F = -tau - (v/gamma)^2``, so
+    ``m v' = f + tau + (v/gamma)^2``, a Riccati equation with ``v(0) = 0``: ``v = -c
+    tanh(c t / (m gamma^2))``, ``c = gamma sqrt(-f - tau)``."""
+    c = _GAMMA1 * math.sqrt(-_LOAD1 - _TAU1)
+    v = -c * np.tanh(c * t / (_M1 * _GAMMA1**2))
+    return v, -_TAU1 - (v / _GAMMA1) ** 2
+
+
+@pytest.mark.parametrize("method", ["bdf1", "bdf2"])
+def test_backward_euler_follows_a_break_away_on_a_thinning_dashpot_at_tiny_steps(method):
+    """The bridge's own failure on the draw. m1 (``m = 0.137``) breaks away from rest on
+    e1 alone (``n = 0.5``, ``gamma = 0.369``, ``tau = 1``) under ``-3.887``, ``v' =
+    -21.1``. Backward Euler at ``dt = 6.7e-12`` (the bridge's ``sqrt(rtol) h``) failed at
+    step 22 (bdf2: step 15), ``v = -3.1e-9``, its largest residual ``-3.1e-9``, all of
+    ``q``: a rate below ``gamma sqrt(ulp(tau)) = 5.5e-9`` has no force in floating point
+    (``F - tau = (q / gamma)^2 = 7e-17 < ulp(1)``), Newton sat at ``F = -tau``, the stuck
+    branch (``q - 0``), and never converged. The step is now solved with the slip branch
+    in its inverse form ``F = -tau - (q/gamma)^2``, read at ``F = -tau`` where it holds
+    (:mod:`lumped.solvers.implicit.conditioned`).
+
+    Checked against the exact motion: the method's own error is far below its Newton
+    tolerance here (``v''`` is ``1e-5``), so ``v`` to that tolerance summed over the steps
+    (``64 x 4 rtol`` relative) and ``F`` to ``10 rtol`` of ``tau``."""
+    sol = simulate(_breaking_away(), method=method, dt=_DT_BRIDGE, t_end=64 * _DT_BRIDGE)
+    assert sol.ok, sol.message
+    t = np.asarray(sol.t)
+    v_exact, F_exact = _exact_break_away(t)
+    np.testing.assert_allclose(sol.v["m1"], v_exact, rtol=64 * 4e-10,
+                               atol=1e-3 * abs(v_exact[1]))
+    np.testing.assert_allclose(sol.F["e1"], F_exact, rtol=0.0, atol=1e-9 * _TAU1)
+    # past the band of rates that have no force in floating point (|v| > 5.5e-9)
+    assert sol.v["m1"][-1] < -1.6 * _GAMMA1 * math.sqrt(math.ulp(_TAU1))
+
+
+def test_the_bridge_follows_the_break_away_from_rest():
+    """``radau5``'s bridge itself (:func:`~lumped.solvers.eventdriven.bridge.run_bridge`)
+    from m1 at rest on e1's yield force: 64 backward-Euler steps of ``6.7e-12`` (before:
+    ``backward Euler failed too``, at step 22)."""
+    run = run_bridge(_breaking_away(), 0.0, [0.0], [0.0], [-_TAU1], _DT_BRIDGE, 64,
+                     NewtonOptions(), 0.0)
+    assert not isinstance(run, str), run
+    t = np.arange(65) * _DT_BRIDGE
+    v_exact, F_exact = _exact_break_away(t)
+    np.testing.assert_allclose(run.vs, v_exact, rtol=64 * 4e-10,
+                               atol=1e-3 * abs(v_exact[1]))
+    np.testing.assert_allclose(run.Fs, F_exact, rtol=0.0, atol=1e-9 * _TAU1)

@@ -30,6 +30,13 @@ one (for the paper's scene ``clip(F(0) - k x0, -tau, tau)``, as
 :func:`lumped.solvers.closed.closed_form.initial_dashpot_force`), and junction velocities follow
 from the laws.
 
+**Steep branches.** A step whose plain Newton fails is solved next with every law's
+steep branches in their inverse form (:mod:`lumped.solvers.implicit.conditioned`):
+Herschel-Bulkley ``n < 1`` as ``F = sgn(q) (tau + (|q|/gamma)^(1/n))``, which fixes the
+force of a rate too small to have one in ``q = gamma (F - tau)^n`` (``|q| < gamma
+ulp(tau)^n``, a break-away from rest at small steps); then by the globalised solve
+(:func:`lumped.solvers.implicit.globalize.solve_globalized`), then by substeps.
+
 **Branches of non-monotone laws.** After each step, every element whose law is not a
 known monotone built-in is checked for a jump between branches: if ``dR/dq`` or
 ``dR/dF`` takes strictly opposite signs at the old and new point (or, when the step

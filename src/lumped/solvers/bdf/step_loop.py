@@ -28,11 +28,12 @@ from __future__ import annotations
 import math
 
 from ..implicit.branch_check import known_monotone, left_branch
+from ..implicit.conditioned import conditioned_kernels
 from ..implicit.globalize import laws_hold, solve_globalized
 from ..implicit.step_system import EPS, generate_evaluate, newton_failure
 from ..newton.criteria import residual_ok, update_ok
 from ..newton.linalg import FactorCache
-from ..newton.options import NewtonCode, NewtonOptions
+from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..newton.semismooth import newton_solve
 from ..nonsmooth.impacts import lockable_elements, locking_elements
 from ..nonsmooth.locks import IntervalLog, cyclic_elements, indeterminate_elements
@@ -71,6 +72,11 @@ class StepLoop:
             self.ev2 = generate_evaluate(scene, h2, self.uref, self.x_hat, self.f)
             self.full2 = generate_evaluate(scene, h2, self.uref, self.x_hat, self.f,
                                            roundoff=True)
+        #: the laws' conditioned kernels (``None``: no steep branch) and their step
+        #: systems per step size, built when a step first needs them
+        #: (:meth:`conditioned_solve`)
+        self.steep: list | None | bool = False
+        self.cond: dict[float, object] = {}
         self.checked = [e for e, el in enumerate(scene.elements)
                         if not known_monotone(el.law)]
         self.cache1, self.cache2 = FactorCache(), FactorCache()
@@ -177,6 +183,10 @@ class StepLoop:
                 if res.code is NewtonCode.SUCCESS and not laws_hold(scene, h, x_hat, res.u,
                                                                      rtol, atol):
                     res.code = NewtonCode.DIVERGED  # the last correction left a law
+                if res.code is not NewtonCode.SUCCESS:
+                    total_it += res.iterations
+                    res_ev += res.residual_evals
+                    res = self.conditioned_solve(h, v + F)
                 if res.code is not NewtonCode.SUCCESS:
                     total_it += res.iterations
                     res_ev += res.residual_evals
@@ -287,6 +297,35 @@ class StepLoop:
         self.locked, self.restart, self.n_impacts = locked, restart, n_impacts
         self.step = done_step
         return done_step
+
+    def conditioned_solve(self, h: float, u0: list[float]) -> NewtonResult:
+        """The step of size ``h`` from ``u0`` (the step's ``x_hat, uref, f`` set) solved
+        with every law's steep branches in their inverse form
+        (:func:`~lumped.solvers.implicit.conditioned.conditioned_kernels`, the same
+        zeros), by the minimum-norm Newton; a success only where those forms hold at the
+        solution (:func:`~lumped.solvers.implicit.globalize.laws_hold`).
+
+        Taken where the plain Newton of the laws' own forms fails, before the globalised
+        solve: a Herschel-Bulkley ``n < 1`` dashpot breaking away from rest at a rate
+        below ``gamma ulp(tau)^n`` has no floating-point force in ``q = gamma (F -
+        tau)^n``, and the plain Newton cycles between ``F = tau`` and its neighbour. A
+        step the plain Newton takes is not touched (its numbers are as before). Returns
+        a failed, empty result for a scene with no such branch."""
+        if self.steep is False:
+            self.steep = conditioned_kernels(self.scene)
+        if self.steep is None:
+            return NewtonResult(list(u0), NewtonCode.DIVERGED, 0, 0, 0, 0, [], 0, [])
+        evaluate = self.cond.get(h)
+        if evaluate is None:
+            evaluate = self.cond[h] = generate_evaluate(
+                self.scene, h, self.uref, self.x_hat, self.f, roundoff=True,
+                kernels=self.steep)
+        res = newton_solve(evaluate, u0, self.options, None, min_norm=True)
+        if res.code is NewtonCode.SUCCESS and not laws_hold(
+                self.scene, h, self.x_hat, res.u, self.options.rtol, self.options.atol,
+                self.steep):
+            res.code = NewtonCode.DIVERGED
+        return res
 
 
 def fast_step(evaluate, u0: list[float], cache: FactorCache, rtol: float,

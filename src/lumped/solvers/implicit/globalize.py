@@ -22,6 +22,7 @@ are generic (no law is recognised by name):
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 
 from ...scene import Junction, Scene
 from ..newton.criteria import residual_ok
@@ -36,7 +37,7 @@ __all__ = ["laws_hold", "solve_globalized", "stuck_guesses"]
 
 
 def laws_hold(scene: Scene, h: float, x_hat: list[float], u: list[float], rtol: float,
-              atol: float) -> bool:
+              atol: float, kernels: Sequence[Callable] | None = None) -> bool:
     """Every element's law holds at the step's solution ``u`` (velocities, forces) to
     Newton's residual test, ``|R| <= rtol S + atol`` (``S`` from
     :func:`~lumped.solvers.implicit.step_system.law_scale`), read from the kernels directly.
@@ -45,7 +46,9 @@ def laws_hold(scene: Scene, h: float, x_hat: list[float], u: list[float], rtol: 
     the update tolerance); taken with the Jacobian of one piece of a law in a direction
     the balances leave free (locks in parallel), it can leave a stuck dashpot ``1e-8``
     beyond its yield force. This check costs one kernel call per element and no
-    residual evaluation, so the counters of a step that passes are unchanged."""
+    residual evaluation, so the counters of a step that passes are unchanged.
+    ``kernels`` replaces the laws' own kernels (their conditioned forms,
+    :func:`~lumped.solvers.implicit.step_system.conditioned_kernels`)."""
     from .step_system import law_scale
 
     N = len(scene.nodes)
@@ -57,8 +60,9 @@ def laws_hold(scene: Scene, h: float, x_hat: list[float], u: list[float], rtol: 
         else:
             q = (u[b] if b >= 0 else 0.0) - (u[a] if a >= 0 else 0.0)
         F = u[N + e]
-        R, Rq, RF = el.law.kernel(q, F)
-        if not abs(R) <= rtol * law_scale(el.law.kernel, q, F, R, Rq, RF) + atol:
+        kernel = el.law.kernel if kernels is None else kernels[e]
+        R, Rq, RF = kernel(q, F)
+        if not abs(R) <= rtol * law_scale(kernel, q, F, R, Rq, RF) + atol:
             return False
     return True
 

@@ -104,12 +104,14 @@ def make_evaluate(scene: Scene, h: float, cm: Sequence[float], vbase: Sequence[f
 
 
 def generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[float],
-                       f: list[float], roundoff: bool = False):
+                       f: list[float], roundoff: bool = False,
+                       kernels: Sequence[Callable] | None = None):
     """The step system of :func:`make_evaluate` (regular steps, ``v = u``, without the
     per-element side outputs) as generated, unrolled straight-line Python for this scene:
     no loops, no index lookups, constants inlined. Only indices and float literals enter
     the source (never a name from the scene), so a scene file cannot inject code. The
-    source is kept in ``__source__``. ``roundoff`` as in :func:`make_evaluate`."""
+    source is kept in ``__source__``. ``roundoff`` and ``kernels`` as in
+    :func:`make_evaluate`."""
     N, E = len(scene.nodes), len(scene.elements)
     n = N + E
     masses = scene.masses
@@ -156,7 +158,7 @@ def generate_evaluate(scene: Scene, h: float, uref: list[float], x_hat: list[flo
     namespace: dict = {"uref": uref, "xh": x_hat, "f": f, "abs": abs, "law_scale": law_scale,
                        "__builtins__": {}}
     for e, el in enumerate(scene.elements):
-        namespace[f"k{e}"] = el.law.kernel
+        namespace[f"k{e}"] = el.law.kernel if kernels is None else kernels[e]
     exec(compile(src, "<lumped step system>", "exec"), namespace)  # noqa: S102 - our own code
     evaluate = namespace["evaluate"]
     evaluate.__source__ = src
