@@ -181,6 +181,20 @@ def test_a_skewed_dip_that_holds_ends_clear_in_a_few_passes(skew):
     assert 1e-3 <= g(h) <= 1.1e-3
 
 
+def test_a_root_bracket_after_a_dip_search_starts_at_a_value_that_held():
+    # a guard noisier than its tolerance (a random network's, issue 29: 4e-13 and
+    # -5.6e-12 at steps 5e-10 apart, tol 1.9e-14) met a value below zero at 0.3 before
+    # the search, which then meets the same value at 0.4: the root bracket's low end was
+    # the value at 0.3, and the Illinois secant divided by g_lo - g_hi = 0
+    landing = Landing((0, 0), 1.0, 0.5, 1.0)
+    landing.seen = [(0.2, 1e-3), (0.3, -1e-12), (0.5, 2e-3), (1.0, 0.5)]
+    landing.dip, landing.poly, landing.h_lo = True, False, 0.1
+    assert not landing.landed(-1e-12, 1e-14, 1.0, 0.4, None)
+    assert (landing.h_lo, landing.g_lo) == (0.2, 1e-3) and not landing.dip
+    h = landing.next_size(0.4, -1e-12, None)
+    assert 0.2 < h < 0.4 and landing.h_hi == 0.4
+
+
 @settings(max_examples=150)
 @given(h_min=st.floats(0.27, 0.37), skew=st.floats(-10.0, 10.0),
        scale=st.floats(0.1, 100.0), depth=st.floats(-1e-2, 1e-2))

@@ -132,9 +132,10 @@ class Landing:
             # (the polynomials' crossing is a dip, or their overshoot): search it
             self.dip, self.poly, self.h_lo, self.dip_at = True, False, self.lo0, len(seen)
             return self._search(h, tol, tiny)
-        if g_end < 0.0:  # the end values cross: a root bracket from here
-            self.dip = False
-            below = [(hk, gk) for hk, gk in seen if hk < h]
+        if g_end < 0.0:  # the end values cross: a root bracket from here, low end the
+            self.dip = False  # last value below h that held (a guard noisier than its
+            # tolerance met one below zero there before: Illinois divided by g_lo - g_hi = 0)
+            below = [(hk, gk) for hk, gk in seen if hk < h and gk >= 0.0]
             if below:
                 self.h_lo, self.g_lo = below[-1]
         bisect.insort(seen, (h, g_end))
