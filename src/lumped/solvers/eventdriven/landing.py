@@ -25,16 +25,22 @@ exactly the joint yield force of two stuck dashpots redid one step 300 times). A
 :data:`DIP_AFTER` tries in a row that held short of such a high end, with no crossing
 inside, and end values that dip (the lowest below half of each neighbour's, not at the
 high end), the landing *searches the dip* on end-of-step values ``g(h)``
-(:meth:`Landing.landed`): successive parabolas through the lowest value and its two
-neighbours (the vertex of ``g_1 + d_1 (h - h_1) + d_2 (h - h_1)(h - h_2)``, kept inside
-the bracket and off the values known, else a bisection of the wider gap beside the
-lowest). A value below ``-tol`` turns it into a root bracket (the load beyond its bound by
-more than round-off: the first root, the break-out), refined on end values alone by the
-parabola through the bracket's ends and the nearest value met, or the Illinois secant; a
-value within ``tol`` lands (the touch); a parabola whose vertex value exceeds ``tol`` by
-more than twice what it still promises below the lowest value lands on that lowest one
-(the guard's minimum holds: no crossing, the full laws choose there), as do values flat
-far from zero, a lowest value at the step's end with the vertex beyond it, and
+(:meth:`Landing.landed`): successive parabolas through the three lowest values met (as
+Brent's minimiser: the vertex of ``g_1 + d_1 (h - h_1) + d_2 (h - h_1)(h - h_2)``, kept
+inside the bracket beside the lowest value and off the values known, else a bisection of
+the wider gap beside the lowest; not the lowest value's neighbours, which keep a far
+value in the parabola and crawl up to a skewed dip from one side). A value below ``-tol`` turns
+it into a root bracket (the load beyond its bound by more than round-off: the first root,
+the break-out), refined on end values alone by the parabola through the bracket's ends and
+the nearest value met, or the Illinois secant; a value within ``tol`` lands (the touch).
+The guard's minimum holds (no crossing: the search lands on the lowest value, and the
+full laws choose there) only where the lowest value was met at the vertex the last
+parabola promised, within half its height above ``tol`` of that promise, and the next
+parabola's vertex value exceeds ``tol`` by more than twice what it promises below the
+lowest value. (A parabola's vertex value alone is no proof: where the guard is more skewed
+than a parabola, the parabola through a dip's far values misses a dip below zero, issue
+29.) The search lands on the lowest value too for values flat far from zero, a lowest
+value at the step's end with the vertex beyond it, and
 :data:`DIP_TRIES` values. Polynomial crossings inside are not followed in a dip search, and
 another guard's crossing inside moves the landing to that guard only where its end value
 crossed and this guard's held (:meth:`Landing.switches`): twin guards (two locks sharing
@@ -85,6 +91,8 @@ class Landing:
     dip_at: int = 0
     after: float | None = None
     final: bool = False
+    #: the vertex ``(h, g)`` of the search's last parabola, which ``after`` tries
+    promised: tuple[float, float] = (math.nan, math.nan)
     #: the steps' polynomial roots are tried (not after a dip: they overshoot there)
     poly: bool = True
 
@@ -124,9 +132,10 @@ class Landing:
             # (the polynomials' crossing is a dip, or their overshoot): search it
             self.dip, self.poly, self.h_lo, self.dip_at = True, False, self.lo0, len(seen)
             return self._search(h, tol, tiny)
-        if g_end < 0.0:  # the end values cross: a root bracket from here
-            self.dip = False
-            below = [(hk, gk) for hk, gk in seen if hk < h]
+        if g_end < 0.0:  # the end values cross: a root bracket from here, low end the
+            self.dip = False  # last value below h that held (a guard noisier than its
+            # tolerance met one below zero there before: Illinois divided by g_lo - g_hi = 0)
+            below = [(hk, gk) for hk, gk in seen if hk < h and gk >= 0.0]
             if below:
                 self.h_lo, self.g_lo = below[-1]
         bisect.insort(seen, (h, g_end))
@@ -147,24 +156,31 @@ class Landing:
             return hk == h
         left = seen[k - 1][0] if k > 0 else self.h_lo
         right = seen[k + 1][0] if k + 1 < len(seen) else hk
-        u = math.nan
-        if len(seen) >= 3:
-            i = min(max(k - 1, 0), len(seen) - 3)
-            (h1, g1), (h2, g2), (h3, g3) = seen[i:i + 3]
+        u = g_v = math.nan
+        if len(seen) >= 3:  # the parabola through the three lowest values (as Brent's)
+            (h1, g1), (h2, g2), (h3, g3) = sorted(sorted(seen, key=lambda p: p[1])[:3])
             d1 = (g2 - g1) / (h2 - h1)
             d2 = ((g3 - g2) / (h3 - h2) - d1) / (h3 - h1)
             if d2 > 0.0:
                 u = 0.5 * (h1 + h2) - 0.5 * d1 / d2
                 g_v = g1 + (u - h1) * (d1 + d2 * (u - h2))
-                if g_v - tol > 2.0 * (gk - g_v) or (k + 1 == len(seen) and u >= hk):
-                    u = hk  # the guard's minimum holds (or the values fall to the end)
+                h_p, g_p = self.promised
+                if (k + 1 == len(seen) and u >= hk) or (
+                        h_p == hk and gk - tol > 2.0 * abs(gk - g_p)
+                        and g_v - tol > 2.0 * (gk - g_v)):
+                    # the lowest value, met where the last parabola put its vertex, is
+                    # what it promised, and the next one promises little below: the
+                    # guard's minimum holds (or the values fall to the step's end)
+                    u = hk
         elif k == 0:
             left = hk  # the polynomial crossed down at the first try: the dip is after it
         if u == hk or (hk - left <= tiny and right - hk <= tiny):
             self.after, self.final = hk, True
             return hk == h
-        if not (left + tiny < u < right - tiny and min(abs(u - hj) for hj, _ in seen) > tiny):
+        vertex = left + tiny < u < right - tiny and min(abs(u - hj) for hj, _ in seen) > tiny
+        if not vertex:
             u = 0.5 * (left + hk) if hk - left > right - hk else 0.5 * (hk + right)
+        self.promised = (u, g_v) if vertex else (math.nan, math.nan)
         self.after = u
         return False
 
