@@ -40,9 +40,10 @@ def loaded(scene: Scene, plan) -> bool:
 def loop_parts(scene: Scene, plan) -> tuple | str:
     """The compiled loop's per-scene parts, or why the scene runs in Python. What depends
     on the structure alone is made once per structure (``plan.structure``: the elements
-    whose forces can be free on cycles, the fold-checked elements' array), the forcing's arrays
-    once per forcing objects (:func:`loop_forcing`); the scene's numbers are
-    :func:`~lumped.codegen.jit.jit_scene`'s."""
+    whose forces can be free on cycles, the fold-checked elements' array, the generated
+    module and its arrays: :func:`~lumped.codegen.jit.jit_scene` with ``kept``), the
+    forcing's arrays once per forcing objects (:func:`loop_forcing`); the scene's numbers
+    are :func:`~lumped.codegen.jit.jit_scene`'s."""
     from ...codegen.jit import jit_scene, numba_enabled
 
     if not numba_enabled():
@@ -56,7 +57,7 @@ def loop_parts(scene: Scene, plan) -> tuple | str:
         return (f"python: the forcing on node {node!r} is a function of t (compiled: "
                 f"constants, sine bursts and tables)")
     try:
-        js = jit_scene(scene)
+        js = jit_scene(scene, structure)
     except ValueError as err:  # a hand-written kernel: no generated code
         return f"python: {err}"
     checked = structure.get("checked_array")
