@@ -383,8 +383,8 @@ def _with_numbers(scene, module: ModuleType, arrays: tuple, consts: np.ndarray) 
     """The :class:`JitScene` of ``scene``'s numbers (its masses, law constants ``consts``
     and lock values) on its structure's ``module`` and ``arrays``
     (:func:`_structure_arrays`)."""
-    ea, eb, spring, law_index, offsets, locking, width = arrays
-    lock_q = np.full((len(scene.elements), width), np.nan)
+    ea, eb, spring, law_index, offsets, locking, blank = arrays
+    lock_q = blank.copy()
     if locking:
         from lumped.codegen.branches import law_branches
 
@@ -400,10 +400,11 @@ _ARRAYS: dict[str, tuple] = {}
 
 
 def _structure_arrays(scene, generated: SceneSource) -> tuple:
-    """``(ea, eb, spring, law_index, offsets, locking, width)`` of ``scene``'s structure:
+    """``(ea, eb, spring, law_index, offsets, locking, blank)`` of ``scene``'s structure:
     ``locking`` the ``(e, i)`` of every spring's branch that locks a position (its
-    :attr:`~lumped.codegen.branches.BranchInfo.lock_value` a number), ``width`` the
-    columns of :func:`position_locks`. Branches, their locking and whether the lock
+    :attr:`~lumped.codegen.branches.BranchInfo.lock_value` a number), ``blank`` an array
+    of ``nan`` the shape of :func:`position_locks` (a scene's is a copy with its lock
+    values written in). Branches, their locking and whether the lock
     value is a constant are a law's code, which the module text holds."""
     lock_q = position_locks(scene)
     locking = tuple((int(e), int(i)) for e, i in zip(*np.nonzero(~np.isnan(lock_q)),
@@ -411,7 +412,8 @@ def _structure_arrays(scene, generated: SceneSource) -> tuple:
     return (np.array(scene.elem_a, dtype=np.int64), np.array(scene.elem_b, dtype=np.int64),
             np.array([el.kind == "spring" for el in scene.elements], dtype=np.bool_),
             np.array(generated.law_index, dtype=np.int64),
-            np.array(generated.offsets, dtype=np.int64), locking, lock_q.shape[1])
+            np.array(generated.offsets, dtype=np.int64), locking,
+            np.full(lock_q.shape, np.nan))
 
 
 def position_locks(scene) -> np.ndarray:
