@@ -306,10 +306,15 @@ def structure_parts(scene: Scene, branches: list) -> dict:
     the scene; only then is its message written). The structure is each node's kind,
     each element's kind, ends and law (the unbound law object) and its law's branches
     apart from their numbers (:func:`branches_structure`); everything these parts read."""
-    laws = tuple(getattr(el.law, "law", el.law) for el in scene.elements)
-    key = (tuple(type(nd) for nd in scene.nodes), tuple(el.kind for el in scene.elements),
-           scene.elem_a, scene.elem_b, tuple(map(id, laws)),
-           tuple(branches_structure(lb) for lb in branches))
+    laws, kinds, shapes = [], [], []
+    for el, lb in zip(scene.elements, branches, strict=True):  # (one pass: a new scene's)
+        law = el.law
+        laws.append(getattr(law, "law", law))
+        kinds.append(el.kind)
+        shapes.append(branches_structure(lb))
+    laws = tuple(laws)
+    key = (tuple([type(nd) for nd in scene.nodes]), tuple(kinds), scene.elem_a,
+           scene.elem_b, tuple(map(id, laws)), tuple(shapes))
     with _SHARED_LOCK:
         got = _STRUCTURES.get(key)
         if got is not None:
