@@ -11,7 +11,7 @@ from lumped import simulate
 from lumped.codegen import jit, templates
 from lumped.codegen.jit import jit_scene
 from lumped.laws import get_law
-from lumped.scene import Element, Mass, Scene
+from lumped.scene import Element, Junction, Mass, Scene
 from lumped.solvers.eventdriven.setup import clear_plans, scene_plan
 from lumped.solvers.implicit import initial_kept
 
@@ -98,3 +98,26 @@ def test_a_kept_module_is_not_taken_for_another_structure_or_cache(monkeypatch, 
     again = _string(0.0, 51.0)
     assert np.array_equal(jit_scene(again, kept).consts, jit_scene(again).consts)
     assert calls == [again, again]
+
+
+def test_the_drivers_node_and_element_kinds_are_kept_per_structure():
+    """``setup.structure``: which nodes are masses, which elements springs or massless
+    dashpots, shared by the plans of a structure; the masses and the lightest one are each
+    scene's own."""
+    from lumped.solvers.eventdriven.setup import structure
+
+    for j in (1, 2, 3):  # (the spring's law class: made from its first laws)
+        simulate(_released(10.0 * (1.0 + 1e-6 * j)), **KW)
+    a, b = (_released(10.0 * (1.0 + 1e-6 * j), m=m) for j, m in ((4, 1.5), (5, 0.25)))
+    got_a, got_b = structure(a, scene_plan(a)), structure(b, scene_plan(b))
+    assert scene_plan(a).structure is scene_plan(b).structure
+    assert got_a[0] is got_b[0] and got_a[2] is got_b[2] and got_a[3] is got_b[3]
+    assert (got_a[0], got_a[2], got_a[3]) == ([True], [True, False], [False, False])
+    assert (got_a[1], got_a[4]) == ((1.5,), 1.5) and (got_b[1], got_b[4]) == ((0.25,), 0.25)
+    c = Scene([Mass("mass", m=2.0, x0=0.3), Junction("j")],
+              [Element("spring", get_law("linear_spring").bind(k=10.0), "ground", "mass"),
+               Element("d1", get_law("bingham").bind(gamma=0.2, tau=0.5), "mass", "j"),
+               Element("d2", get_law("bingham").bind(gamma=0.3, tau=0.5), "j", "ground")])
+    got_c = structure(c, scene_plan(c))  # another structure: its own kinds
+    assert (got_c[0], got_c[2], got_c[3], got_c[4]) == (
+        [True, False], [True, False, False], [False, False, True], 2.0)

@@ -353,19 +353,24 @@ def clear_plans() -> None:
 def structure(scene: Scene, plan) -> tuple[list[bool], tuple[float, ...], list[bool],
                                            list[bool], float]:
     """``(is_mass, masses, spring, massless, m_min)`` of the scene's nodes and elements,
-    made once per plan (the scene's structure; the lists are only read): which nodes are
-    masses, ``m_i`` (``0.0`` at a junction), which elements are springs, which are
-    dashpots between junctions and ground only (a lock there has its force from a
-    junction's balance), and the lightest mass."""
+    made once per plan (the lists are only read, and made once per structure, shared by
+    its plans: ``plan.structure``): which nodes are masses, ``m_i`` (``0.0`` at a
+    junction), which elements are springs, which are dashpots between junctions and
+    ground only (a lock there has its force from a junction's balance), and the lightest
+    mass."""
     got = plan.__dict__.get("radau5_structure")
     if got is None:
-        is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+        kinds = plan.structure.get("radau5_kinds")
+        if kinds is None:  # (node kinds, element kinds and ends: the structure's)
+            is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+            massless = [not any(p >= 0 and is_mass[p]
+                                for p in (scene.elem_a[e], scene.elem_b[e]))
+                        and el.kind == "dashpot" for e, el in enumerate(scene.elements)]
+            kinds = plan.structure["radau5_kinds"] = (
+                is_mass, [el.kind == "spring" for el in scene.elements], massless)
         masses = scene.masses
-        massless = [not any(p >= 0 and is_mass[p] for p in (scene.elem_a[e], scene.elem_b[e]))
-                    and el.kind == "dashpot" for e, el in enumerate(scene.elements)]
         got = plan.__dict__["radau5_structure"] = (
-            is_mass, masses, [el.kind == "spring" for el in scene.elements], massless,
-            min(mi for mi in masses if mi > 0.0))
+            kinds[0], masses, kinds[1], kinds[2], min(mi for mi in masses if mi > 0.0))
     return got
 
 
