@@ -329,9 +329,7 @@ def law_branches(bound) -> LawBranches:
         hit = None
     if hit is not None:
         return hit
-    from .parametric import law_class
-
-    parametric = law_class(bound)
+    parametric = _law_class()(bound)
     if parametric is not None:
         out = parametric.branches()
     else:
@@ -347,6 +345,20 @@ def law_branches(bound) -> LawBranches:
     except TypeError:
         pass
     return out
+
+
+def _law_class():
+    """:func:`lumped.codegen.parametric.law_class` (which imports this module), imported
+    once: an import inside a function costs about a microsecond a call."""
+    global _LAW_CLASS
+    if _LAW_CLASS is None:
+        from .parametric import law_class
+
+        _LAW_CLASS = law_class
+    return _LAW_CLASS
+
+
+_LAW_CLASS = None
 
 
 # ---------------------------------------------------------------------------------------

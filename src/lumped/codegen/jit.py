@@ -329,7 +329,7 @@ class JitScene:
     offsets: np.ndarray
 
 
-def jit_scene(scene) -> JitScene:
+def jit_scene(scene, kept: dict | None = None) -> JitScene:
     """Generate (or load) ``scene``'s compiled module and collect its arrays.
 
     The arrays of the structure (``ea``, ``eb``, ``spring``, ``law_index``, ``offsets``
@@ -337,10 +337,35 @@ def jit_scene(scene) -> JitScene:
     same for every value of the numbers, and shared (they are only read); ``masses``,
     ``consts`` and ``lock_q`` are the scene's numbers. A scene with moving supports is
     refused (``ValueError``): the compiled loops have no support offsets (the runners
-    send such scenes to the Python loop)."""
+    send such scenes to the Python loop).
+
+    ``kept`` (optional) is a dictionary the caller keeps per *structure*, shared only by
+    scenes with the same node kinds, element kinds and ends, and laws of the same
+    branches apart from their numbers (``radau5``'s
+    :func:`~lumped.solvers.eventdriven.setup.structure_parts`). The module, its arrays
+    and each element's law functions are kept in it, with the cache directory they were
+    loaded for: a scene of that structure whose laws' templates have those functions
+    (the same module text) takes them from there, and only its numbers (the laws'
+    constants, in the order of the module's :class:`SceneSource`, and the masses) are
+    read; the module's text is not made, hashed or looked up again. The result is the
+    one without ``kept``."""
     if getattr(scene, "support_ends", ()):
         raise ValueError(f"compiled loops do not take moving supports (scene supports: "
                          f"{', '.join(sorted(scene.supports))}); use 'bdf1' or 'bdf2'")
+    if kept is not None:
+        got = kept.get("jit_scene")
+        if got is not None:
+            where, module, arrays, functions = got
+            values: list[float] = []
+            for el, f in zip(scene.elements, functions, strict=True):
+                t = law_template(el.law)
+                if t.functions is not f and t.functions != f:
+                    break
+                values += t.values
+            else:
+                if str(cache_dir()) == where:
+                    return _with_numbers(scene, module, arrays,
+                                         np.array(values + [0.0], dtype=float))
     module, generated = scene_module(scene)
     arrays = _ARRAYS.get(generated.source)
     if arrays is None:
@@ -348,16 +373,26 @@ def jit_scene(scene) -> JitScene:
         if len(_ARRAYS) >= _STRUCTURES_KEPT:
             _ARRAYS.clear()
         _ARRAYS[generated.source] = arrays
-    ea, eb, spring, law_index, offsets, locking, width = arrays
-    lock_q = np.full((len(scene.elements), width), np.nan)
+    if kept is not None:
+        kept["jit_scene"] = (str(cache_dir()), module, arrays,
+                             tuple(law_template(el.law).functions for el in scene.elements))
+    return _with_numbers(scene, module, arrays, generated.consts)
+
+
+def _with_numbers(scene, module: ModuleType, arrays: tuple, consts: np.ndarray) -> JitScene:
+    """The :class:`JitScene` of ``scene``'s numbers (its masses, law constants ``consts``
+    and lock values) on its structure's ``module`` and ``arrays``
+    (:func:`_structure_arrays`)."""
+    ea, eb, spring, law_index, offsets, locking, blank = arrays
+    lock_q = blank.copy()
     if locking:
         from lumped.codegen.branches import law_branches
 
         for e, i in locking:
             lock_q[e, i] = law_branches(scene.elements[e].law).info[i].lock_value
     return JitScene(module=module, masses=np.array(scene.masses, dtype=float), ea=ea, eb=eb,
-                    spring=spring, law_index=law_index, lock_q=lock_q,
-                    consts=generated.consts, offsets=offsets)
+                    spring=spring, law_index=law_index, lock_q=lock_q, consts=consts,
+                    offsets=offsets)
 
 
 #: :func:`jit_scene`'s arrays of a structure, per module text.
@@ -365,10 +400,11 @@ _ARRAYS: dict[str, tuple] = {}
 
 
 def _structure_arrays(scene, generated: SceneSource) -> tuple:
-    """``(ea, eb, spring, law_index, offsets, locking, width)`` of ``scene``'s structure:
+    """``(ea, eb, spring, law_index, offsets, locking, blank)`` of ``scene``'s structure:
     ``locking`` the ``(e, i)`` of every spring's branch that locks a position (its
-    :attr:`~lumped.codegen.branches.BranchInfo.lock_value` a number), ``width`` the
-    columns of :func:`position_locks`. Branches, their locking and whether the lock
+    :attr:`~lumped.codegen.branches.BranchInfo.lock_value` a number), ``blank`` an array
+    of ``nan`` the shape of :func:`position_locks` (a scene's is a copy with its lock
+    values written in). Branches, their locking and whether the lock
     value is a constant are a law's code, which the module text holds."""
     lock_q = position_locks(scene)
     locking = tuple((int(e), int(i)) for e, i in zip(*np.nonzero(~np.isnan(lock_q)),
@@ -376,7 +412,8 @@ def _structure_arrays(scene, generated: SceneSource) -> tuple:
     return (np.array(scene.elem_a, dtype=np.int64), np.array(scene.elem_b, dtype=np.int64),
             np.array([el.kind == "spring" for el in scene.elements], dtype=np.bool_),
             np.array(generated.law_index, dtype=np.int64),
-            np.array(generated.offsets, dtype=np.int64), locking, lock_q.shape[1])
+            np.array(generated.offsets, dtype=np.int64), locking,
+            np.full(lock_q.shape, np.nan))
 
 
 def position_locks(scene) -> np.ndarray:

@@ -142,10 +142,9 @@ class LazyBranchInfo(BranchInfo):
     @classmethod
     def of(cls, info: BranchInfo, swapped: _Swapped) -> LazyBranchInfo:
         out = object.__new__(cls)
-        for name in ("index", "locks", "lock_value", "steep", "stage"):
-            object.__setattr__(out, name, getattr(info, name))
-        object.__setattr__(out, "_source", info)
-        object.__setattr__(out, "_swapped", swapped)
+        out.__dict__.update(index=info.index, locks=info.locks, lock_value=info.lock_value,
+                            steep=info.steep, stage=info.stage, _source=info,
+                            _swapped=swapped)  # (one update: a frozen dataclass's fields)
         return out
 
     def __getattr__(self, name: str):  # only for attributes not set: the lazy ones

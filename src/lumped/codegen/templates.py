@@ -19,6 +19,8 @@ import re
 from dataclasses import dataclass
 
 from .bounded_cache import remember
+from .parametric import law_class
+from .scene_key import law_key
 
 __all__ = ["kernel_sources", "lift_constants", "lift_function", "slot_arguments",
            "LawTemplate", "law_template", "template_from_scratch"]
@@ -168,9 +170,6 @@ def law_template(bound) -> LawTemplate:
     (its law object and the bits of its numbers, :func:`~lumped.codegen.scene_key.
     law_key`), so that a law whose numbers have no class (an integral ``k``, ``tau = 1``)
     is derived from scratch once per process, not at every scene built with it."""
-    from lumped.codegen.parametric import law_class
-    from lumped.codegen.scene_key import law_key
-
     key = law_key(bound)
     hit = _BY_LAW.get(key) if key is not None else None
     if hit is not None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...codegen.function_types import guards_type, law_type
+from ...codegen.jit import jit_scene, numba_enabled
 from ...scene import Scene
 
 __all__ = ["Pointer", "loaded", "locks_in_parallel", "loop_forcing", "loop_parts", "pointer"]
@@ -40,23 +41,22 @@ def loaded(scene: Scene, plan) -> bool:
 def loop_parts(scene: Scene, plan) -> tuple | str:
     """The compiled loop's per-scene parts, or why the scene runs in Python. What depends
     on the structure alone is made once per structure (``plan.structure``: the elements
-    whose forces can be free on cycles, the fold-checked elements' array), the forcing's arrays
-    once per forcing objects (:func:`loop_forcing`); the scene's numbers are
-    :func:`~lumped.codegen.jit.jit_scene`'s."""
-    from ...codegen.jit import jit_scene, numba_enabled
-
+    whose forces can be free on cycles, the fold-checked elements' array, the generated
+    module and its arrays: :func:`~lumped.codegen.jit.jit_scene` with ``kept``), the
+    forcing's arrays once per forcing objects (:func:`loop_forcing`); the scene's numbers
+    are :func:`~lumped.codegen.jit.jit_scene`'s."""
     if not numba_enabled():
         return "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
     structure = plan.structure
     if locks_in_parallel(plan):
         return "python: locked elements in parallel (minimum-norm forces)"
-    fkind, fpar = loop_forcing(scene)
-    if (fkind == 3).any():
-        node = scene.nodes[int(np.argmax(fkind == 3))].name
+    fkind, fpar, timed = _forcing(scene)
+    if timed >= 0:
+        node = scene.nodes[timed].name
         return (f"python: the forcing on node {node!r} is a function of t (compiled: "
                 f"constants, sine bursts and tables)")
     try:
-        js = jit_scene(scene)
+        js = jit_scene(scene, structure)
     except ValueError as err:  # a hand-written kernel: no generated code
         return f"python: {err}"
     checked = structure.get("checked_array")
@@ -67,9 +67,9 @@ def loop_parts(scene: Scene, plan) -> tuple | str:
             js.module.active_branch)
 
 
-#: ids of a scene's forcing objects -> (those objects, :func:`loop_forcing`'s arrays),
-#: the last few hundred asked (the objects are immutable; the compiled loop only reads
-#: the arrays).
+#: ids of a scene's forcing objects -> (those objects, :func:`loop_forcing`'s arrays, the
+#: first node whose forcing is a function of t or -1), the last few hundred asked (the
+#: objects are immutable; the compiled loop only reads the arrays).
 _FORCING: dict[tuple, tuple] = {}
 
 
@@ -78,10 +78,16 @@ def loop_forcing(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     (:func:`~lumped.scene.forcing_jit.forcing_arrays` with ``linear=True``, a
     :func:`~lumped.scene.forcing.zero_forcing` read as none), made once per forcing
     objects: a scene with new law numbers and the same forcing objects shares them."""
+    return _forcing(scene)[:2]
+
+
+def _forcing(scene: Scene) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`loop_forcing`'s arrays and the first node whose forcing the compiled loop
+    does not take (a function of t, kind 3), or -1; kept per forcing objects."""
     key = tuple(map(id, scene.forcing))
     got = _FORCING.get(key)
     if got is not None and all(a is b for a, b in zip(got[0], scene.forcing, strict=True)):
-        return got[1], got[2]
+        return got[1], got[2], got[3]
     from ...scene.forcing import zero_forcing
     from ...scene.forcing_jit import forcing_arrays
 
@@ -89,10 +95,11 @@ def loop_forcing(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     for i, fn in enumerate(scene.forcing):
         if fn is zero_forcing:  # f = 0.0, as no forcing
             fkind[i] = 0
+    timed = int(np.argmax(fkind == 3)) if (fkind == 3).any() else -1
     if len(_FORCING) >= 256:
         _FORCING.clear()
-    _FORCING[key] = (tuple(scene.forcing), fkind, fpar)
-    return fkind, fpar
+    _FORCING[key] = (tuple(scene.forcing), fkind, fpar, timed)
+    return fkind, fpar, timed
 
 
 def locks_in_parallel(plan) -> bool:

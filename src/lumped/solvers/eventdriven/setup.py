@@ -306,10 +306,15 @@ def structure_parts(scene: Scene, branches: list) -> dict:
     the scene; only then is its message written). The structure is each node's kind,
     each element's kind, ends and law (the unbound law object) and its law's branches
     apart from their numbers (:func:`branches_structure`); everything these parts read."""
-    laws = tuple(getattr(el.law, "law", el.law) for el in scene.elements)
-    key = (tuple(type(nd) for nd in scene.nodes), tuple(el.kind for el in scene.elements),
-           scene.elem_a, scene.elem_b, tuple(map(id, laws)),
-           tuple(branches_structure(lb) for lb in branches))
+    laws, kinds, shapes = [], [], []
+    for el, lb in zip(scene.elements, branches, strict=True):  # (one pass: a new scene's)
+        law = el.law
+        laws.append(getattr(law, "law", law))
+        kinds.append(el.kind)
+        shapes.append(branches_structure(lb))
+    laws = tuple(laws)
+    key = (tuple([type(nd) for nd in scene.nodes]), tuple(kinds), scene.elem_a,
+           scene.elem_b, tuple(map(id, laws)), tuple(shapes))
     with _SHARED_LOCK:
         got = _STRUCTURES.get(key)
         if got is not None:
@@ -348,19 +353,24 @@ def clear_plans() -> None:
 def structure(scene: Scene, plan) -> tuple[list[bool], tuple[float, ...], list[bool],
                                            list[bool], float]:
     """``(is_mass, masses, spring, massless, m_min)`` of the scene's nodes and elements,
-    made once per plan (the scene's structure; the lists are only read): which nodes are
-    masses, ``m_i`` (``0.0`` at a junction), which elements are springs, which are
-    dashpots between junctions and ground only (a lock there has its force from a
-    junction's balance), and the lightest mass."""
+    made once per plan (the lists are only read, and made once per structure, shared by
+    its plans: ``plan.structure``): which nodes are masses, ``m_i`` (``0.0`` at a
+    junction), which elements are springs, which are dashpots between junctions and
+    ground only (a lock there has its force from a junction's balance), and the lightest
+    mass."""
     got = plan.__dict__.get("radau5_structure")
     if got is None:
-        is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+        kinds = plan.structure.get("radau5_kinds")
+        if kinds is None:  # (node kinds, element kinds and ends: the structure's)
+            is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+            massless = [not any(p >= 0 and is_mass[p]
+                                for p in (scene.elem_a[e], scene.elem_b[e]))
+                        and el.kind == "dashpot" for e, el in enumerate(scene.elements)]
+            kinds = plan.structure["radau5_kinds"] = (
+                is_mass, [el.kind == "spring" for el in scene.elements], massless)
         masses = scene.masses
-        massless = [not any(p >= 0 and is_mass[p] for p in (scene.elem_a[e], scene.elem_b[e]))
-                    and el.kind == "dashpot" for e, el in enumerate(scene.elements)]
         got = plan.__dict__["radau5_structure"] = (
-            is_mass, masses, [el.kind == "spring" for el in scene.elements], massless,
-            min(mi for mi in masses if mi > 0.0))
+            kinds[0], masses, kinds[1], kinds[2], min(mi for mi in masses if mi > 0.0))
     return got
 
 

@@ -54,12 +54,21 @@ def known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
     ``v_b(0) - v_a(0)``: each end a mass or ground, none on a moving support."""
     if not candidates:
         return []
-    nodes, ea, eb = scene.nodes, scene.elem_a, scene.elem_b
-    on_support = {end.element for end in scene.support_ends}
-    return [e for e in candidates
-            if e not in on_support and scene.elements[e].kind == "dashpot"
+    kept = getattr(scene, "__dict__", {}).get("_known_rate_dashpots")
+    if kept is None or kept[0] is not scene.nodes or kept[1] is not scene.elements \
+            or kept[2] is not scene.support_ends:
+        nodes, ea, eb = scene.nodes, scene.elem_a, scene.elem_b
+        on_support = {end.element for end in scene.support_ends}
+        known = frozenset(
+            e for e, el in enumerate(scene.elements)
+            if e not in on_support and el.kind == "dashpot"
             and (ea[e] < 0 or isinstance(nodes[ea[e]], Mass))
-            and (eb[e] < 0 or isinstance(nodes[eb[e]], Mass))]
+            and (eb[e] < 0 or isinstance(nodes[eb[e]], Mass)))
+        kept = (scene.nodes, scene.elements, scene.support_ends, known)
+        if hasattr(scene, "__dict__"):  # (kept per scene: while its nodes, elements and
+            scene.__dict__["_known_rate_dashpots"] = kept  # supports are those objects)
+    known = kept[3]
+    return [e for e in candidates if e in known]
 
 
 def set_valued_at_rest(kernel) -> bool:
