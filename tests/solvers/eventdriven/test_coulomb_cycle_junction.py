@@ -1,17 +1,27 @@
-"""Two Coulomb elements in series through a junction, on a cycle with Bingham dashpots
-(draws of ``tests/solvers/test_random_networks.py`` at ``LUMPED_LARGE=1000``).
+"""Coulomb elements and Bingham dashpots on a cycle through junctions (draws of
+``tests/solvers/test_random_networks.py`` at ``LUMPED_LARGE=1000``).
 
+Two Coulomb elements in series through a junction (:func:`series_scene`):
 Once both Coulomb elements slip, the junction between them carries equal forces at their
 common bound and its velocity is left free by the laws (any split of the slip between
 the two): the stage Jacobian is singular. The Python loop solves it by the minimum-norm
 correction; ``compiled=True`` must hand such an attempt to that same solve and give the
 same run, bit for bit (it failed the step instead and took another mode).
+
+A stuck cycle (:func:`stuck_cycle_scene`): everything moves as one and the load through
+``j0`` splits between the Coulomb ``e1`` and the path ``e2``-``e3``, a split the laws
+leave free; the stage rule gives ``e1`` two thirds of it until it meets its bound
+``tau = 1`` inside a step, and holds it there. The collocation cubic through that kink
+overshot the bound on the dense output (``|F_e1| = 1.000335`` at ``t = 0.1375``, above
+the ``rtol`` of the random networks' test); the dense output now keeps the locks' forces
+in their intervals along the cycle, every node's balance kept.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from _yield_check import check_yield
 
 from lumped import Element, Junction, Mass, Scene, get_law, simulate
 from lumped.codegen.jit import numba_enabled
@@ -71,3 +81,29 @@ def test_the_free_junction_stays_between_its_neighbours_while_both_slip():
     assert np.all(np.abs(F2 - F3) <= tol) and np.all(np.abs(np.abs(F2) - 1.0) <= tol)
     v0, v1, v2 = s.v["j0"][late], s.v["m1"][late], s.v["j2"][late]
     assert np.all(v0 - tol <= v2) and np.all(v2 <= v1 + tol)
+
+
+def stuck_cycle_scene() -> Scene:
+    """e1: Coulomb j0 -> m1, in parallel with the stuck path e2 (Bingham), e3 (Coulomb)."""
+    return Scene(_nodes(), [
+        Element("e0", _bingham(5.623413251903491), "ground", "j0"),
+        Element("e1", _coulomb(1.0), "j0", "m1"),
+        Element("e2", _bingham(1.0), "j0", "j2"),
+        Element("e3", _coulomb(10.0), "m1", "j2")], {"m1": LOAD})
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_stuck_cycle_keeps_its_coulomb_force_within_the_bound_on_the_dense_output(compiled):
+    scene = stuck_cycle_scene()
+    s = _run(scene, compiled)
+    assert s.success
+    # the random networks' test: Coulomb forces within rtol of the forces' scale
+    v_max = float(np.abs(s.data[:, 2:1 + 2 * len(scene.nodes):2]).max())
+    check_yield(scene, s, min(1e-3, 100.0 * DT**2), DT**3 + DT**2 * v_max, DT**2)
+    # (the draw: 1.000335 at t = 0.1375; held in [-1, 1] now, also between nodes)
+    assert np.abs(s.F["e1"]).max() <= 1.0 + 1e-12
+    # the balance of the massless junctions, which the correction keeps
+    scale = 1.0 + float(np.abs(s.F["e0"]).max())
+    F = s.F
+    assert np.allclose(F["e1"] + F["e2"], F["e0"], rtol=0.0, atol=DT**2 * scale)
+    assert np.allclose(F["e2"], -F["e3"], rtol=0.0, atol=DT**2 * scale)
