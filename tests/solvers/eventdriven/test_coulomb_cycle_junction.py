@@ -39,18 +39,18 @@ def _coulomb(r: float):
     return get_law("coulomb").bind(tau=1.0, r=r)
 
 
-def _nodes() -> list:
-    return [Junction("j0", x0=0.0), Mass("m1", m=1.0, x0=1.0, v0=1.375),
-            Junction("j2", x0=1.0)]
+def _cycle(*links) -> Scene:
+    """``e0`` (Bingham, ground -> j0), then ``e1, e2, ...`` of ``links`` ``(law, a, b)``."""
+    nodes = [Junction("j0", x0=0.0), Mass("m1", m=1.0, x0=1.0, v0=1.375),
+             Junction("j2", x0=1.0)]
+    return Scene(nodes, [Element("e0", _bingham(5.623413251903491), "ground", "j0")] + [
+        Element(f"e{k + 1}", law, a, b) for k, (law, a, b) in enumerate(links)], {"m1": LOAD})
 
 
 def series_scene() -> Scene:
     """e2, e3: Coulomb in series through j2, in parallel with the Bingham e1."""
-    return Scene(_nodes(), [
-        Element("e0", _bingham(5.623413251903491), "ground", "j0"),
-        Element("e1", _bingham(1.0), "j0", "m1"),
-        Element("e2", _coulomb(1.0), "j0", "j2"),
-        Element("e3", _coulomb(10.0), "j2", "m1")], {"m1": LOAD})
+    return _cycle((_bingham(1.0), "j0", "m1"), (_coulomb(1.0), "j0", "j2"),
+                  (_coulomb(10.0), "j2", "m1"))
 
 
 def _run(scene: Scene, compiled: bool):
@@ -85,11 +85,8 @@ def test_the_free_junction_stays_between_its_neighbours_while_both_slip():
 
 def stuck_cycle_scene() -> Scene:
     """e1: Coulomb j0 -> m1, in parallel with the stuck path e2 (Bingham), e3 (Coulomb)."""
-    return Scene(_nodes(), [
-        Element("e0", _bingham(5.623413251903491), "ground", "j0"),
-        Element("e1", _coulomb(1.0), "j0", "m1"),
-        Element("e2", _bingham(1.0), "j0", "j2"),
-        Element("e3", _coulomb(10.0), "m1", "j2")], {"m1": LOAD})
+    return _cycle((_coulomb(1.0), "j0", "m1"), (_bingham(1.0), "j0", "j2"),
+                  (_coulomb(10.0), "m1", "j2"))
 
 
 @pytest.mark.parametrize("compiled", [False, True])
