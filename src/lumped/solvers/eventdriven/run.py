@@ -28,7 +28,6 @@ from . import fast as adaptive_fast
 from .bridge import MAX_BRIDGES, take_bridge
 from .budget import WorkBudget
 from .checks import StepChecks
-from .fast import compiled_loop
 from .landing import Landing
 from .mode_state import ModeState
 from .setup import compiled_stage_solver, read_options, scene_plan, structure, time_events
@@ -106,7 +105,7 @@ class Radau5Run(StepPass, StepChecks):
             "initial_newton_iterations": ic["newton_iterations"], "held_intervals": 0}
         self.status, self.message = Status.SUCCESS, ""
         self.budget = WorkBudget(opts["max_steps"], t_final)  # (lumped.solvers.eventdriven.budget)
-        self.fast, stats["loop"] = compiled_loop(scene, plan, opts["compiled"])
+        self.fast, stats["loop"] = adaptive_fast.compiled_loop(scene, plan, opts["compiled"])
 
         self.ms = ms = ModeState(scene, plan, settings, opts, rtol, atol, stats, zeno_window)
         ms.fast = self.fast
@@ -243,11 +242,12 @@ class Radau5Run(StepPass, StepChecks):
             return system.solve_damped(self.U, h, x, v, fk, kernels, scale, max_iters=iters)
         if self.stage_solve is None and self.opts["compiled"] is True and self.frame is None:
             self.stage_solve = compiled_stage_solver(self.scene, self.modes)  # the live list
-        if self.stage_solve is None or cones:  # (locks in parallel: the cone split)
+        got = None if self.stage_solve is None or cones else self.stage_solve(
+            self.U, h, x, v, fk, scale, iters)  # (None: singular, the minimum-norm solve)
+        if got is None:  # (locks in parallel: the cone split)
             return system.solve(self.U, h, x, v, fk, kernels, scale, max_iters=iters,
                                 cones=cones or None, least_squares=t == self.infeasible_at
                                 and self.modes == self.infeasible_modes)
-        got = self.stage_solve(self.U, h, x, v, fk, scale, iters)
         self.U = got[0] if got[0] is not None else self.U
         return got
 
@@ -322,8 +322,8 @@ class Radau5Run(StepPass, StepChecks):
             if self.fast is None and stats["steps"] >= adaptive_fast.COMPILE_AFTER and \
                     stats["loop"].startswith("python: not compiled yet"):
                 # a long run: compile the scene's loop now
-                self.fast, stats["loop"] = compiled_loop(self.scene, self.plan, None,
-                                                         stats["steps"])
+                self.fast, stats["loop"] = adaptive_fast.compiled_loop(
+                    self.scene, self.plan, None, stats["steps"])
                 self.ms.fast = self.fast
                 if self.fast is not None:
                     self.fast.setup(self.t_final, self.rtol, self.atol, self.m_min)

@@ -163,7 +163,13 @@ def step_floor(t: float, t_end: float) -> float:
 def compiled_stage_solver(scene: Scene, modes: list[int]):
     """The stage Newton compiled with numba (:mod:`lumped.solvers.radau.stage_jit`, the same
     operations as :meth:`StageSystem.solve`, bit for bit), on the scene's generated
-    branch kernels; ``(U, h, x, v, f, scale, max_iters) -> (U or None, its, nfac)``."""
+    branch kernels; ``(U, h, x, v, f, scale, max_iters) -> (U or None, its, nfac)``, or
+    ``None`` when a Jacobian was singular but finite: the compiled twin has no
+    minimum-norm solve, so the caller redoes the attempt with :meth:`StageSystem.solve`
+    from the same guess (as the compiled loop hands such a step to Python,
+    :data:`~lumped.solvers.eventdriven.loop_jit.SINGULAR`), and both loops pick the same
+    solution of a singular stage system (e.g. a junction between two slipping Coulomb
+    elements, whose velocity the laws leave free)."""
     from ...codegen.jit import jit_scene
     from ..radau.stage_jit import compiled_stage_solve, workspace
     from ..radau.tableau import A, W
@@ -182,6 +188,8 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
                    np.array(f, dtype=float), np.array(scale, dtype=float), 1e-3, max_iters,
                    *ws)
         out = ws[-1]
+        if not ok and out[2] == 1 and np.isfinite(ws[1]).all():
+            return None  # (singular: Python's minimum-norm solve)
         return (Ua.tolist() if ok else None), int(out[0]), int(out[1])
 
     return run

@@ -58,7 +58,7 @@ class LockedForces:
         # the forcing's kind codes ``(fkind, fpar)``, made at the first :meth:`loads`
         self._scene = scene
         self._kinds: tuple[np.ndarray, np.ndarray] | None = None
-        self._groups: list[tuple[tuple[int, ...], tuple[float, ...]]] = []
+        self._groups: list[tuple[tuple[int, ...], tuple[float, ...], tuple]] = []
         self._index: dict[tuple, int] = {}
         self._modes: dict[tuple, int] = {}
         self._maps: dict[tuple, tuple | None] = {}
@@ -66,16 +66,18 @@ class LockedForces:
     def group(self, branches: Sequence, modes: Sequence[int], cones: dict) -> int:
         """The index of the held mode's locks and their weights, ``-1`` for a mode without
         locks (its steps are left as interpolated)."""
-        key = (tuple(modes), tuple((e, c[1]) for e, c in cones.items()))
+        key = (tuple(modes), tuple((e, *c[1:]) for e, c in cones.items()))
         got = self._modes.get(key)
         if got is None:
             locks = tuple(e for e in range(self.E) if branches[e].info[modes[e]].locks)
             weights = tuple(float(cones[e][1]) if e in cones else 1.0 for e in locks)
+            bounds = tuple((float(cones[e][2]), float(cones[e][3])) if e in cones else
+                           (-math.inf, math.inf) for e in locks)
             got = -1
             if locks:
-                got = self._index.setdefault((locks, weights), len(self._groups))
+                got = self._index.setdefault((locks, weights, bounds), len(self._groups))
                 if got == len(self._groups):
-                    self._groups.append((locks, weights))
+                    self._groups.append((locks, weights, bounds))
             self._modes[key] = got
         return got
 
@@ -95,7 +97,7 @@ class LockedForces:
         key = (g, rest.tobytes())
         if key in self._maps:
             return self._maps[key]
-        locks, weights = self._groups[g]
+        locks, weights, _ = self._groups[g]
         still = [bool(r) for r in rest] + [True]  # (index -1: ground)
         free = [(e, w) for e, w in zip(locks, weights, strict=True)
                 if still[self.ea[e]] and still[self.eb[e]]]
@@ -148,3 +150,71 @@ class LockedForces:
             t = np.where(t == T0[i[rows]], np.nextafter(t, math.inf), t)
             r = self.loads(t)[:, nodes] + out[rows, Fcols] @ Kall.T
             out[rows[:, None], 1 + 2 * N + cols[None, :]] -= r @ P.T
+        for g in np.unique(G[i[sel]]):
+            self._keep_cones(int(g), out[:, Fcols], np.flatnonzero(sel & (G[i] == g)))
+
+    def _keep_cones(self, g: int, F: np.ndarray, rows: np.ndarray) -> None:
+        r"""Put the interpolated forces of group ``g``'s locks back into their intervals
+        ``[lo_e, hi_e]`` on the rows ``rows`` of ``F`` (a view of the output's forces,
+        changed in place), along the cycles of the locks.
+
+        The split of a load among locks in parallel is free (a cycle of locks carries
+        any circulating force): the stage rule puts it at ``F_e = c_e + w_e lambda``, and
+        holds a force that would leave its interval at the end it meets. Where it meets
+        it inside a step, the stage values follow ``lambda`` up to some node and the end
+        after it, and the collocation cubic through that kink overshoots the end (by
+        ``3e-4`` of a Coulomb bound ``tau = 1`` on a step of ``0.05``, above the error
+        the step was accepted with). A force out of its interval is put at the end,
+        ``d_V = clip(F_V) - F_V``, and the others of the group take the change by the
+        correction of least weighted norm that keeps every node's balance,
+
+        .. math::
+
+            \delta_R = -W_R K_R^T \left(K_R W_R K_R^T\right)^{+} K_V d_V,
+
+        ``K`` the incidence of the locks at their nodes (``+1`` at the end ``a``, ``-1``
+        at ``b``; a node's balance changes by ``K \delta``), ``W`` the half-widths: the
+        motion is unchanged and the locks stay in their intervals while their joint one
+        holds the load (at most 3 passes, each holding what left its interval; a row the
+        locks cannot carry together is left as interpolated). Rows within the intervals
+        are left bit for bit as they are."""
+        locks, weights, bounds = self._groups[g]
+        lo = np.array([b[0] for b in bounds])
+        hi = np.array([b[1] for b in bounds])
+        if not len(rows) or (np.isinf(lo).all() and np.isinf(hi).all()):
+            return
+        cols = np.array(locks)
+        Fl = F[rows[:, None], cols[None, :]]
+        bad = np.flatnonzero(((Fl < lo) | (Fl > hi)).any(axis=1))
+        if not len(bad):
+            return
+        nodes = sorted({i for e in locks for i in (self.ea[e], self.eb[e]) if i >= 0})
+        at = {i: r for r, i in enumerate(nodes)}
+        K = np.zeros((len(nodes), len(locks)))
+        for k, e in enumerate(locks):
+            if self.ea[e] >= 0:
+                K[at[self.ea[e]], k] += 1.0
+            if self.eb[e] >= 0:
+                K[at[self.eb[e]], k] -= 1.0
+        W = np.array(weights)
+        for r in bad:
+            f = Fl[r].copy()
+            held = np.zeros(len(locks), dtype=bool)
+            for _ in range(3):
+                out_ = (f < lo) | (f > hi)
+                if not out_.any():
+                    break
+                held |= out_
+                d = np.zeros(len(locks))
+                d[out_] = np.clip(f[out_], lo[out_], hi[out_]) - f[out_]
+                free = ~held
+                res = K @ d
+                KR = K[:, free]
+                delta = (W[free][:, None] * KR.T) @ np.linalg.pinv((KR * W[free]) @ KR.T) @ res
+                if not np.allclose(KR @ delta, res, rtol=0.0,
+                                   atol=1e-12 * (1.0 + np.abs(f).max())):
+                    break  # (the locks cannot carry the clipped load together)
+                f = f + d
+                f[free] -= delta
+            if ((f >= lo) & (f <= hi)).all():
+                F[rows[r], cols] = f
