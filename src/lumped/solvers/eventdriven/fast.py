@@ -3,7 +3,8 @@ r"""The bridge between the ``radau5`` driver and its compiled inner loop.
 :func:`compiled_loop` decides whether a scene runs its held-mode steps in
 :func:`lumped.solvers.eventdriven.loop_jit.advance` (and says why not when it does not), and
 :class:`CompiledLoop` moves the driver's state into that loop's arrays and back, and its
-accepted steps into the dense output and the output rows.
+accepted steps into the dense output and the output rows; :func:`compiled_stage_solver`
+gives the driver's own attempts (``compiled=True``) the compiled stage Newton.
 
 The compiled loop takes a scene when numba is enabled, every forcing is absent, zero,
 constant, a :class:`~lumped.scene.forcing.SineBurst` or a linearly interpolated table (a
@@ -30,7 +31,7 @@ from . import loop_jit as L
 from .fast_parts import loaded, loop_parts, pointer
 from .step import NOT_SOUGHT, creep_floor
 
-__all__ = ["CompiledLoop", "compiled_loop"]
+__all__ = ["CompiledLoop", "compiled_loop", "compiled_stage_solver"]
 
 #: Steps per block of output arrays (a full block returns to Python, which keeps it).
 BLOCK = 256
@@ -331,3 +332,39 @@ def _butcher() -> tuple[np.ndarray, np.ndarray]:
 _COUNTERS = (("steps", L.STEPS), ("rejected", L.REJECTED),
              ("newton_iterations", L.NEWTON_ITERATIONS), ("factorizations", L.FACTORIZATIONS),
              ("nfev", L.NFEV), ("njev", L.NJEV), ("max_newton_iterations", L.MAX_NEWTON_ITERATIONS))
+
+
+def compiled_stage_solver(scene: Scene, modes: list[int]):
+    """The stage Newton compiled with numba (:mod:`lumped.solvers.radau.stage_jit`, the same
+    operations as :meth:`StageSystem.solve`, bit for bit), on the scene's generated
+    branch kernels, ``modes`` read at each call (the run's live list);
+    ``(U, h, x, v, f, scale, max_iters) -> (U or None, its, nfac)``, or
+    ``None`` when a Jacobian was singular but finite: the compiled twin has no
+    minimum-norm solve, so the caller redoes the attempt with :meth:`StageSystem.solve`
+    from the same guess (as the compiled loop hands such a step to Python,
+    :data:`~lumped.solvers.eventdriven.loop_jit.SINGULAR`), and both loops pick the same
+    solution of a singular stage system (e.g. a junction between two slipping Coulomb
+    elements, whose velocity the laws leave free)."""
+    from ...codegen.jit import jit_scene
+    from ..radau.stage_jit import compiled_stage_solve, workspace
+    from ..radau.tableau import A, W
+
+    js = jit_scene(scene)
+    solve = compiled_stage_solve()
+    ws = workspace(len(scene.nodes), len(scene.elements))
+    A_np, W_np = np.array(A), np.array(W)
+    law = js.module.branch_law
+
+    def run(U, h, x, v, f, scale, max_iters):
+        Ua = np.array(U, dtype=float)
+        ok = solve(law, js.consts, js.masses, js.ea, js.eb, js.spring, js.lock_q,
+                   np.array(modes, dtype=np.int64),
+                   A_np, W_np, Ua, h, np.array(x, dtype=float), np.array(v, dtype=float),
+                   np.array(f, dtype=float), np.array(scale, dtype=float), 1e-3, max_iters,
+                   *ws)
+        out = ws[-1]
+        if not ok and out[2] == 1 and np.isfinite(ws[1]).all():
+            return None  # (singular: Python's minimum-norm solve)
+        return (Ua.tolist() if ok else None), int(out[0]), int(out[1])
+
+    return run

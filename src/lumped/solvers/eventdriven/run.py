@@ -30,7 +30,7 @@ from .budget import WorkBudget
 from .checks import StepChecks
 from .landing import Landing
 from .mode_state import ModeState
-from .setup import compiled_stage_solver, read_options, scene_plan, structure, time_events
+from .setup import read_options, scene_plan, structure, time_events
 from .step import StepPass, creep_floor, creep_stop
 
 __all__ = ["Radau5Run", "DEFAULT_RTOL", "DEFAULT_ATOL"]
@@ -241,7 +241,7 @@ class Radau5Run(StepPass, StepChecks):
         if damped:
             return system.solve_damped(self.U, h, x, v, fk, kernels, scale, max_iters=iters)
         if self.stage_solve is None and self.opts["compiled"] is True and self.frame is None:
-            self.stage_solve = compiled_stage_solver(self.scene, self.modes)  # the live list
+            self.stage_solve = adaptive_fast.compiled_stage_solver(self.scene, self.modes)
         got = None if self.stage_solve is None or cones else self.stage_solve(
             self.U, h, x, v, fk, scale, iters)  # (None: singular, the minimum-norm solve)
         if got is None:  # (locks in parallel: the cone split)

@@ -10,8 +10,6 @@ import weakref
 from collections import OrderedDict, deque
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from ...codegen.rebound import ReboundBranches
 from ...codegen.scene_key import scene_key
 from ...scene import Mass, Scene
@@ -21,7 +19,7 @@ from ...scene.supports import support_time_events
 from ..modes.stuck import forcing_kinds
 
 __all__ = ["EXTRA_OPTIONS", "read_options", "breakpoints", "time_events", "step_floor",
-           "compiled_stage_solver", "scope_error", "ScenePlan", "scene_plan", "clear_plans",
+           "scope_error", "ScenePlan", "scene_plan", "clear_plans",
            "SHARED_PLANS", "structure", "structure_parts", "branches_structure",
            "accumulating",
            "too_many"]
@@ -158,41 +156,6 @@ def step_floor(t: float, t_end: float) -> float:
     """The step floor of a run to ``t_end`` at ``t``: ``16 eps max(|t|, 1e-3 t_end)`` (the
     compiled loop, :mod:`lumped.solvers.eventdriven.loop_jit`, writes it out)."""
     return 16.0 * _EPS * max(abs(t), t_end * 1e-3)
-
-
-def compiled_stage_solver(scene: Scene, modes: list[int]):
-    """The stage Newton compiled with numba (:mod:`lumped.solvers.radau.stage_jit`, the same
-    operations as :meth:`StageSystem.solve`, bit for bit), on the scene's generated
-    branch kernels; ``(U, h, x, v, f, scale, max_iters) -> (U or None, its, nfac)``, or
-    ``None`` when a Jacobian was singular but finite: the compiled twin has no
-    minimum-norm solve, so the caller redoes the attempt with :meth:`StageSystem.solve`
-    from the same guess (as the compiled loop hands such a step to Python,
-    :data:`~lumped.solvers.eventdriven.loop_jit.SINGULAR`), and both loops pick the same
-    solution of a singular stage system (e.g. a junction between two slipping Coulomb
-    elements, whose velocity the laws leave free)."""
-    from ...codegen.jit import jit_scene
-    from ..radau.stage_jit import compiled_stage_solve, workspace
-    from ..radau.tableau import A, W
-
-    js = jit_scene(scene)
-    solve = compiled_stage_solve()
-    ws = workspace(len(scene.nodes), len(scene.elements))
-    A_np, W_np = np.array(A), np.array(W)
-    law = js.module.branch_law
-
-    def run(U, h, x, v, f, scale, max_iters):
-        Ua = np.array(U, dtype=float)
-        ok = solve(law, js.consts, js.masses, js.ea, js.eb, js.spring, js.lock_q,
-                   np.array(modes, dtype=np.int64),
-                   A_np, W_np, Ua, h, np.array(x, dtype=float), np.array(v, dtype=float),
-                   np.array(f, dtype=float), np.array(scale, dtype=float), 1e-3, max_iters,
-                   *ws)
-        out = ws[-1]
-        if not ok and out[2] == 1 and np.isfinite(ws[1]).all():
-            return None  # (singular: Python's minimum-norm solve)
-        return (Ua.tolist() if ok else None), int(out[0]), int(out[1])
-
-    return run
 
 
 @dataclass
