@@ -102,7 +102,7 @@ def test_the_compiled_loop_gives_the_python_loop_run(name):
 
 def test_the_old_impact_rule_on_the_loaded_chain_is_the_python_loop_one(monkeypatch):
     """With the mode after an impact read off the probe alone (the balance of
-    accelerations off, :func:`~lumped.solvers.modes.lock_events.hold_impacted_locks`),
+    accelerations off, :func:`~lumped.solvers.modes.after_impact.hold_impacted_locks`),
     the loaded chain reaches t = 0.19476 with both strings taut and a step near its floor:
     on one machine it bridged there (steps of 1.6e-8 s, the longest step 1.6e-3 s being
     the compiled loop's), on another its last bits take it through. Either way both loops

@@ -20,13 +20,11 @@ from collections.abc import Sequence
 
 from ...scene import Mass, Scene
 from ...scene.network import across
-from ..newton.scalar_root import scalar_root
 from ..nonsmooth.impacts import impact_solve
 from ..nonsmooth.lock_forces import forces_with_held
-from .guards import guard_tolerance
 
-__all__ = ["after_impact_forces", "apply_impacts", "hold_impacted_locks", "hold_rate_locks",
-           "lock_cones", "release_resting_locks", "snap_to_locks"]
+__all__ = ["after_impact_forces", "apply_impacts", "hold_rate_locks",
+           "lock_cones", "snap_to_locks"]
 
 _EPS = sys.float_info.epsilon
 
@@ -290,104 +288,3 @@ def after_impact_forces(scene: Scene, t: float, x: Sequence[float], v: Sequence[
                               math.nextafter(got[e], math.inf))):
             holding.append(e)
     return got, holding
-
-
-def hold_impacted_locks(scene: Scene, branches: Sequence, t: float, hits: Sequence[int],
-                        threshold: float, x: Sequence[float], v: Sequence[float],
-                        F: Sequence[float], new: list[int], F_p: list[float]) -> None:
-    """Put back on its lock each impacted element that the mode choice after the impact
-    read off it only by round-off (``new`` and ``F_p``, the choice's modes and forces, in
-    place).
-
-    The choice's probe cannot see a lock at rest: it moves ``q`` by ``h_p^2 a < ulp(L)``
-    (:func:`after_impact_forces`). Where it read an element of ``hits`` on a free branch
-    with ``q`` still on the lock's value to round-off, the balance of accelerations
-    decides: an element whose balance force lies strictly inside its lock's set stays
-    locked, with that force (``threshold``: the rate below which an element is at rest
-    relative to its ends). When all of them stay, every dashpot takes the balance's force
-    too, the probe's being one of the free branch's: a Herschel-Bulkley ``n = 1.5``
-    dashpot stopped by a string kept ``tau + (a h_p)^(1/n)``, ``2.3e-7`` above its yield
-    force ``tau`` (its rate over the probe, ``1e-10``, beside the slack string), for as
-    long as the string held its mass (issue 29). Its branch stays the choice's where that
-    branch's guards admit the force (a slip branch at ``F = tau``), else the law reads it
-    there."""
-    q = scene.elongations(x, v)
-    doubt = [e for e in hits if not branches[e].info[new[e]].locks
-             and any(info.locks and info.lock_value is not None
-                     and abs(q[e] - info.lock_value) <= 4.0 * _EPS * max(
-                         abs(info.lock_value), abs(q[e])) for info in branches[e].info)]
-    if not doubt:
-        return
-    forces, holding = after_impact_forces(scene, t, x, v, F, doubt, threshold)
-    for e in holding:
-        new[e] = branches[e].branch(q[e], forces[e])
-        F_p[e] = forces[e]
-    if len(holding) < len(doubt):
-        return
-    for e, el in enumerate(scene.elements):
-        f = forces[e]
-        if el.kind != "dashpot" or e in holding or f == F_p[e]:
-            continue
-        read = branches[e].branch(q[e], f)
-        if read >= 0 and any(g < -guard_tolerance(q[e], f)
-                             for g in branches[e].guards_for(new[e])(q[e], f)):
-            new[e] = read
-        F_p[e] = f
-
-
-def release_resting_locks(scene: Scene, branches: Sequence, t: float, old: Sequence[int],
-                          threshold: float, x: Sequence[float], v: Sequence[float],
-                          F: Sequence[float], new: list[int], F_p: list[float]) -> list[int]:
-    r"""Put on its slack branch each spring that the mode choice read onto a position lock
-    (``q = L``) it was not held on, at rest relative to its ends, where the balance of
-    accelerations does not hold it there (``new`` and ``F_p`` in place).
-
-    At rest on the lock (``|q - L|`` a few ulps, ``|q'| <= threshold``) the choice's probe
-    reads the lock's force only to ``m ulp(x) / h_p^2`` (:func:`after_impact_forces`):
-    a string that went taut by a plastic impact beside a Herschel-Bulkley ``n = 2``
-    dashpot between the same two masses was read taut while the load pulled the ends
-    together (the balance wants ``0.14 < k L = 2.9``: it goes slack at once, the dashpot
-    slipping from its yield force), and the run alternated between taut and slack with
-    steps of ``1e-12`` s until it was bridged (issue 29). The balance (with every element
-    whose law leaves its force free: stuck dashpots, other locks) decides without
-    dividing by ``h_p``; an element it puts on the lock's boundary (the kink ``F = k L``)
-    takes the non-locking branch that holds its law there, with that force.
-
-    Returns
-    -------
-    list of int
-        The elements put on a slack branch (empty: ``new``, ``F_p`` unchanged; also when
-        the balances have no solution).
-    """
-    q = scene.elongations(x, v)
-    cand = []
-    for e, el in enumerate(scene.elements):
-        info = branches[e].info[new[e]]
-        L = info.lock_value
-        if el.kind != "spring" or new[e] == old[e] or not info.locks or L is None or \
-                abs(q[e] - L) > 4.0 * _EPS * max(abs(L), abs(q[e])):
-            continue
-        a, b = scene.elem_a[e], scene.elem_b[e]
-        if abs(across(v, a, b)) <= threshold:
-            cand.append(e)
-    if not cand:
-        return []
-    forces, holding = after_impact_forces(scene, t, x, v, F, cand, threshold)
-    if forces == list(F):  # (no balance: the probe's choice stands)
-        return []
-    out = []
-    for e in (e for e in cand if e not in holding):
-        lb = branches[e]
-        for info in lb.info:
-            if info.locks:
-                continue
-            try:
-                f = scalar_root(lb.kernel_for(info.index), q[e], forces[e])[0]
-            except ValueError:
-                continue
-            if all(g >= -math.sqrt(_EPS) * (1.0 + abs(f)) for g in
-                   lb.guards_for(info.index)(q[e], f)):
-                new[e], F_p[e] = info.index, f
-                out.append(e)
-                break
-    return out
