@@ -136,6 +136,7 @@ def run_bdf(
     throw: bool = True,
     restitution: float = 0.0,
     start: tuple[float, list[float], list[float], list[float]] | None = None,
+    max_residual_evals: int | None = None,
 ) -> RunResult:
     """Advance ``scene`` by ``n_steps`` fixed steps of BDF1 or BDF2 (first step BDF1).
 
@@ -156,6 +157,11 @@ def run_bdf(
     solved by minimum-norm Newton corrections (the forces change as little as possible
     from the previous step), and the elements and intervals are reported
     (:mod:`lumped.solvers.nonsmooth.locks`).
+
+    **Work budget** (``max_residual_evals``, optional): the run stops, with ``status``
+    ``MAX_ITERS`` and a message, once its residual evaluations pass that number (checked
+    every :data:`BUDGET_CHUNK` steps; ``radau5``'s bridges use it, so that a span whose
+    steps all need the globalised solve ends in seconds, not hours).
     """
     if method not in GENERIC_METHODS:
         raise ValueError(f"`method` must be one of {GENERIC_METHODS}, got {method!r}")
@@ -174,7 +180,10 @@ def run_bdf(
         ic_stats = {"newton_iterations": 0}
     loop = StepLoop(source, scene, clock, law_q, method=method, dt=dt, options=options,
                     throw=throw, restitution=restitution, t0=t0, x=x, v=v, F=F)
-    loop.advance(n_steps)
+    if max_residual_evals is None:
+        loop.advance(n_steps)
+    else:
+        _advance_within(loop, n_steps, max_residual_evals, t0, dt)
     xs, vs, Fs = loop.xs, loop.vs, loop.Fs
     total_it, res_ev, jac_ev, facts, max_it = loop.counts
     steps = len(xs) // N - 1
@@ -192,3 +201,21 @@ def run_bdf(
     return RunResult(dt, N, E, xs, vs, Fs, stats, loop.status, loop.message, loop.events,
                      loop.log.result(), loop.knots)
 
+
+#: Steps between two checks of a run's work budget (:func:`run_bdf`).
+BUDGET_CHUNK = 16
+
+
+def _advance_within(loop: StepLoop, n_steps: int, budget: int, t0: float, dt: float) -> None:
+    """``loop.advance`` to ``n_steps`` in chunks of :data:`BUDGET_CHUNK` steps, stopped
+    with ``MAX_ITERS`` once its residual evaluations (``loop.counts[1]``) pass
+    ``budget``."""
+    for last in range(BUDGET_CHUNK, n_steps + BUDGET_CHUNK, BUDGET_CHUNK):
+        loop.advance(min(last, n_steps))
+        if loop.message or last >= n_steps:
+            return
+        if loop.counts[1] > budget:
+            loop.status = Status.MAX_ITERS
+            loop.message = (f"work budget: {loop.counts[1]} residual evaluations in "
+                            f"{loop.step} steps (at most {budget}) at t = {t0 + loop.step * dt!r}")
+            return

@@ -39,8 +39,9 @@ from ..radau.rows import row_of
 from ..radau.tableau import C
 from ..status import SolverError
 
-__all__ = ["BRIDGE_STEPS", "MAX_BRIDGES", "MAX_STEPS", "RETRY_SCALES", "bridge_steps",
-           "run_bridge", "linear_stages", "take_bridge"]
+__all__ = ["BRIDGE_STEPS", "BRIDGE_WORK", "BRIDGE_WORK_FLOOR", "MAX_BRIDGES", "MAX_STEPS",
+           "RETRY_SCALES", "RUN_BRIDGE_WORK", "bridge_steps", "run_bridge", "linear_stages",
+           "take_bridge"]
 
 #: Backward-Euler steps of the first bridge of a run (doubled for each further one).
 BRIDGE_STEPS = 32
@@ -48,6 +49,17 @@ BRIDGE_STEPS = 32
 MAX_STEPS = 20_000
 #: Bridges of one run at the most.
 MAX_BRIDGES = 12
+#: A bridge's work budget in residual evaluations: ``BRIDGE_WORK`` per step of its first
+#: try, at least ``BRIDGE_WORK_FLOOR``, for each of its tries (:func:`take_bridge`).
+#: Backward Euler's plain Newton takes 2-20 a step; the bridges of the test suite took at
+#: most 12 221 in all (191 a step, a shear-thinning break-away); a loaded 4-node network
+#: took 626 025 over 2048 steps of one bridge (77 s), its Newton up to 617 iterations a
+#: step, and its bridges doubling in length after it.
+BRIDGE_WORK, BRIDGE_WORK_FLOOR = 100, 50_000
+#: The bridges of one run together, in residual evaluations at the most (a minute or two
+#: of Python at the worst cost seen, ~120 µs an evaluation on 4 nodes; the tries a
+#: budget ended count in full): a run that crawls from bridge to bridge ends.
+RUN_BRIDGE_WORK = 1_000_000
 #: Step sizes a bridge tries in turn, as multiples of its own (the same span), when
 #: backward Euler fails at the one before.
 RETRY_SCALES = (1.0, 0.1, 4.0)
@@ -68,12 +80,18 @@ def bridge_steps(rtol: float, h_max: float, room: float, k: int
 
 
 def run_bridge(scene, t: float, x: list[float], v: list[float], F: list[float],
-               delta: float, n: int, options, restitution: float) -> RunResult | str:
+               delta: float, n: int, options, restitution: float,
+               budget: int | None = None) -> RunResult | str:
     """``n`` backward-Euler steps of size ``delta`` from ``(t, x, v, F)``: the run, or why
-    it failed (a Newton failure, a fold of a law, a value that is not finite)."""
+    it failed (a Newton failure, a fold of a law, a value that is not finite, or more
+    residual evaluations than ``budget``, by default ``max(BRIDGE_WORK n,
+    BRIDGE_WORK_FLOOR)``)."""
+    if budget is None:
+        budget = max(BRIDGE_WORK * n, BRIDGE_WORK_FLOOR)
     try:
         run = run_bdf(scene, method="bdf1", dt=delta, n_steps=n, options=options,
-                      throw=False, restitution=restitution, start=(t, x, v, F))
+                      throw=False, restitution=restitution, start=(t, x, v, F),
+                      max_residual_evals=budget)
     except (ArithmeticError, ValueError, SolverError) as err:
         return f"backward Euler failed too: {err}"
     if run.message:
@@ -98,24 +116,36 @@ def take_bridge(scene, start: tuple, k: int, rtol: float, h_max: float, t_final:
     F)``: its steps written to the dense output ``dense`` and the rows ``rows``, its
     impacts to ``events``, its intervals of forces that are not unique to ``log``
     (:class:`~lumped.solvers.nonsmooth.locks.IntervalLog`), its steps counted in
-    ``stats["bridged_steps"]``. Returns ``(t, x, v, F, to_end, delta)`` at its end
-    (``to_end`` when that is ``t_final``; ``delta`` its step), or why backward Euler
-    failed too."""
+    ``stats["bridged_steps"]``, its residual evaluations in ``stats["bridge_work"]``
+    (within :data:`RUN_BRIDGE_WORK` for the run). Returns ``(t, x, v, F, to_end,
+    delta)`` at its end (``to_end`` when that is ``t_final``; ``delta`` its step), or
+    why backward Euler failed too."""
     t0, x, v, F = start
     delta, n, to_end = bridge_steps(rtol, h_max, t_final - t0, k)
     span = n * delta
+    used = stats.get("bridge_work", 0)
+    run = (f"backward Euler not tried: the run's bridges used their work budget ({used} "
+           f"residual evaluations)")
     for scale in RETRY_SCALES:
+        budget = min(max(BRIDGE_WORK * n, BRIDGE_WORK_FLOOR), RUN_BRIDGE_WORK - used)
+        if budget <= 0:
+            break
         # the same span, with steps ``scale`` times as long: backward Euler's Newton can
         # miss a step at one size and not at others, where several dashpots sit at their
         # yield forces at once (a junction's Herschel-Bulkley n = 0.3 dashpot and a
         # Bingham one beside a taut string: steps of 0.1 and 27 times the size went
         # through, 1 and 10 times did not)
         n_s = min(MAX_STEPS, max(1, round(n / scale)))
-        run = run_bridge(scene, t0, x, v, F, span / n_s, n_s, options, restitution)
+        run = run_bridge(scene, t0, x, v, F, span / n_s, n_s, options, restitution, budget)
         if not isinstance(run, str):  # (run_bdf copies the start lists)
             delta, n = span / n_s, n_s
+            stats["bridge_work"] = used + run.stats["residual_evals"]
             break
+        if "work budget" in run:
+            used = stats["bridge_work"] = used + budget
     else:
+        return run
+    if isinstance(run, str):
         return run
     N, E = len(x), len(F)
     y = list(x) + list(v) + list(F)
