@@ -17,8 +17,8 @@ from collections.abc import Sequence
 
 from ...scene import Scene
 from ...scene.network import across
-from ..implicit.initial_slip import known_rate_dashpots, rest_edge, set_valued_at_rest
 from ..newton.scalar_root import scalar_root
+from .force_bounds import onto_rest_edges
 from .guards import guard_tolerance
 from .lock_events import after_impact_forces
 
@@ -51,15 +51,15 @@ def hold_impacted_locks(scene: Scene, branches: Sequence, t: float, hits: Sequen
     First, each yield dashpot between masses and ground that the impact left at rest
     (``|q| <= threshold``) with the choice's force just outside its set at rest (by at
     most ``sqrt(rtol) (1 + |F*|)``, the probe's resolution on a branch flat at its end)
-    takes the edge ``F*`` of that set: a Herschel-Bulkley ``n = 2`` dashpot beside a
-    stuck Coulomb element, its mass stopped by a string, kept the probe's ``tau +
-    3.9e-9`` for the whole hold (issue 29)."""
+    takes the edge ``F*`` of that set, as a switch at a guard event does
+    (:func:`~lumped.solvers.modes.force_bounds.onto_rest_edges`): a Herschel-Bulkley
+    ``n = 2`` dashpot beside a stuck Coulomb element, its mass stopped by a string, kept
+    the probe's ``tau + 3.9e-9`` for the whole hold (issue 29)."""
     q = scene.elongations(x, v)
-    for e in known_rate_dashpots(scene, list(range(len(F_p)))) if rtol > 0.0 else ():
-        kernel = scene.elements[e].law.kernel
-        if abs(q[e]) <= threshold and set_valued_at_rest(kernel):
-            edge = rest_edge(kernel, F_p[e])
-            if edge != F_p[e] and abs(edge - F_p[e]) <= math.sqrt(rtol) * (1.0 + abs(edge)):
+    if rtol > 0.0:  # (the impact changed every rate: each dashpot a candidate)
+        edges = onto_rest_edges(scene, range(len(F_p)), v, F_p, threshold, rtol)
+        for e, edge in enumerate(edges):
+            if edge != F_p[e]:
                 _take_force(branches[e], q[e], edge, new, F_p, e)
     doubt = [e for e in hits if not branches[e].info[new[e]].locks
              and any(info.locks and info.lock_value is not None

@@ -78,8 +78,8 @@ from ..implicit.initial_slip import known_rate_dashpots, rest_edge, set_valued_a
 from ..newton.criteria import ROUNDOFF
 from .lock_events import lock_cones
 
-__all__ = ["JOINT_MARGIN", "onto_joint_bounds", "onto_slip_ends", "slip_beyond_joint_bounds",
-           "split_near_joint_bounds"]
+__all__ = ["JOINT_MARGIN", "onto_joint_bounds", "onto_rest_edges", "onto_slip_ends",
+           "slip_beyond_joint_bounds", "split_near_joint_bounds"]
 
 #: How near an end of their joint interval (a fraction of the half-widths' sum) a load on
 #: stuck dashpots in parallel is held by a static split (see the module notes, 4): the
@@ -117,13 +117,22 @@ def onto_slip_ends(scene: Scene, old: Sequence[int], new: Sequence[int], v: list
                    F: list[float], tol: float, rtol: float) -> list[float]:
     """``F`` with each yield dashpot between masses and ground that switches from branch
     ``old[e]`` to ``new[e]`` at a rate ``|v_b - v_a| <= tol`` on the edge ``F*`` of its set
-    at rest nearest ``F_e`` (see the module notes; a force within that set stays), when
-    that moves it by at most ``sqrt(rtol) (1 + |F*|)``: the resolution of a force on a
-    branch flat at its end (``q ~ (|F| - tau)^2``) from rates known to ``rtol``. A larger
-    move is no probe's artefact (a steep law whose rate is within ``tol`` of 0 but whose
-    force is not its yield force) and is left alone. A new list."""
+    at rest nearest ``F_e`` (:func:`onto_rest_edges`). A new list."""
+    return onto_rest_edges(scene, [e for e in range(len(F)) if new[e] != old[e]], v, F, tol,
+                           rtol)
+
+
+def onto_rest_edges(scene: Scene, candidates: Sequence[int], v: list[float],
+                    F: list[float], tol: float, rtol: float) -> list[float]:
+    """``F`` with each yield dashpot of ``candidates`` between masses and ground at a rate
+    ``|v_b - v_a| <= tol`` on the edge ``F*`` of its set at rest nearest ``F_e`` (see the
+    module notes; a force within that set stays), when that moves it by at most
+    ``sqrt(rtol) (1 + |F*|)``: the resolution of a force on a branch flat at its end (``q
+    ~ (|F| - tau)^2``) from rates known to ``rtol``. A larger move is no probe's artefact
+    (a steep law whose rate is within ``tol`` of 0 but whose force is not its yield force)
+    and is left alone. A new list."""
     out = list(F)
-    for e in known_rate_dashpots(scene, [e for e in range(len(F)) if new[e] != old[e]]):
+    for e in known_rate_dashpots(scene, list(candidates)):
         a, b = scene.elem_a[e], scene.elem_b[e]
         if abs(across(v, a, b)) <= tol:
             kernel = scene.elements[e].law.kernel
