@@ -104,19 +104,25 @@ class LockedForces:
         nodes = sorted({i for e, _ in free for i in (self.ea[e], self.eb[e]) if i >= 0})
         got = None
         if nodes:
-            row = {i: r for r, i in enumerate(nodes)}
-            Kall = np.zeros((len(nodes), self.E))
-            for e in range(self.E):
-                if self.ea[e] in row:
-                    Kall[row[self.ea[e]], e] += 1.0
-                if self.eb[e] in row:
-                    Kall[row[self.eb[e]], e] -= 1.0
+            Kall = self._incidence(nodes, range(self.E))
             cols = [e for e, _ in free]
-            K, W = Kall[:, cols], np.array([w for _, w in free])
-            P = (W[:, None] * K.T) @ np.linalg.pinv((K * W) @ K.T)
+            P = _least_weighted(Kall[:, cols], np.array([w for _, w in free]))
             got = (np.array(cols), np.array(nodes), Kall, P)
         self._maps[key] = got
         return got
+
+    def _incidence(self, nodes: Sequence[int], elems: Sequence[int]) -> np.ndarray:
+        """The incidence of the elements ``elems`` (columns) at the nodes ``nodes`` (rows):
+        ``+1`` at an element's end ``a``, ``-1`` at ``b`` (a node's balance changes by
+        ``K delta`` when the forces change by ``delta``); ground has no row."""
+        row = {i: r for r, i in enumerate(nodes)}
+        K = np.zeros((len(nodes), len(elems)))
+        for k, e in enumerate(elems):
+            if self.ea[e] in row:
+                K[row[self.ea[e]], k] += 1.0
+            if self.eb[e] in row:
+                K[row[self.eb[e]], k] -= 1.0
+        return K
 
     def correct(self, ts: np.ndarray, out: np.ndarray, T0: np.ndarray, H: np.ndarray,
                 Y0: np.ndarray, D: np.ndarray, G: np.ndarray, skip: np.ndarray) -> None:
@@ -188,14 +194,8 @@ class LockedForces:
         bad = np.flatnonzero(((Fl < lo) | (Fl > hi)).any(axis=1))
         if not len(bad):
             return
-        nodes = sorted({i for e in locks for i in (self.ea[e], self.eb[e]) if i >= 0})
-        at = {i: r for r, i in enumerate(nodes)}
-        K = np.zeros((len(nodes), len(locks)))
-        for k, e in enumerate(locks):
-            if self.ea[e] >= 0:
-                K[at[self.ea[e]], k] += 1.0
-            if self.eb[e] >= 0:
-                K[at[self.eb[e]], k] -= 1.0
+        K = self._incidence(sorted({i for e in locks for i in (self.ea[e], self.eb[e])
+                                    if i >= 0}), locks)
         W = np.array(weights)
         for r in bad:
             f = Fl[r].copy()
@@ -210,7 +210,7 @@ class LockedForces:
                 free = ~held
                 res = K @ d
                 KR = K[:, free]
-                delta = (W[free][:, None] * KR.T) @ np.linalg.pinv((KR * W[free]) @ KR.T) @ res
+                delta = _least_weighted(KR, W[free]) @ res
                 if not np.allclose(KR @ delta, res, rtol=0.0,
                                    atol=1e-12 * (1.0 + np.abs(f).max())):
                     break  # (the locks cannot carry the clipped load together)
@@ -218,3 +218,9 @@ class LockedForces:
                 f[free] -= delta
             if ((f >= lo) & (f <= hi)).all():
                 F[rows[r], cols] = f
+
+
+def _least_weighted(K: np.ndarray, W: np.ndarray) -> np.ndarray:
+    """``P = W K^T (K W K^T)^+``: ``P r`` is the force change of least ``W^-1``-weighted
+    norm that changes the balances ``K`` by ``r``."""
+    return (W[:, None] * K.T) @ np.linalg.pinv((K * W) @ K.T)
