@@ -48,7 +48,7 @@ def laws_hold(scene: Scene, h: float, x_hat: list[float], u: list[float], rtol: 
     beyond its yield force. This check costs one kernel call per element and no
     residual evaluation, so the counters of a step that passes are unchanged.
     ``kernels`` replaces the laws' own kernels (their conditioned forms,
-    :func:`~lumped.solvers.implicit.step_system.conditioned_kernels`)."""
+    :func:`~lumped.solvers.implicit.conditioned.conditioned_kernels`)."""
     from .step_system import law_scale
 
     N = len(scene.nodes)
