@@ -440,3 +440,52 @@ def test_a_junction_held_by_springs_alone_while_its_coulomb_link_slips(compiled)
     after = np.asarray(sol.t) > sol.events[0].t
     np.testing.assert_allclose(np.asarray(sol.F["e0"])[after], -1.0, rtol=1e-9)
     assert_within_bdf2s_own_error(scene, sol, ("j0", "m1"), dt, 0.5, 4)
+
+
+def _equal_coulombs_in_series() -> Scene:
+    # a draw of the LUMPED_LARGE tight run (session 25, seed 22040 of ``long``, after 200
+    # passing), shrunk: two Coulomb elements of one tau in series through the junction
+    # j0, a spring across each, a Bingham dashpot on the mass
+    coulomb = get_law("coulomb").bind(tau=0.7233941627366748, r=1.0)
+    return Scene(
+        [Junction("j0", x0=-0.109375), Mass("m1", m=4.067944321083047, x0=-0.15625,
+                                               v0=0.109375)],
+        [Element("e0", coulomb, "ground", "j0"),
+         Element("e1", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground", "m1"),
+         Element("e2", get_law("linear_spring").bind(k=0.31622776601683794), "ground", "j0"),
+         Element("e3", coulomb, "j0", "m1"),
+         Element("e4", get_law("linear_spring").bind(k=0.6493816315762113), "j0", "m1")])
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_two_equal_coulomb_elements_slipping_in_series_leave_the_junction_to_its_springs(
+        compiled):
+    """From ``t = 0.198`` both Coulomb elements slip at ``tau``: the junction's balance
+    ``tau + k_2 x_j = tau + k_4 (x_m - x_j)`` holds its position (an index-2 velocity,
+    ``v_j = k_4 v_m / (k_2 + k_4)``), which only the springs' rows of the stage system
+    carry. At ``rtol = 1e-10`` their rounding (one ulp over ``h a_kl k``) exceeded the
+    velocity's tolerance on every step shorter than ``0.03``: every stage solve failed
+    from ``t = 0.2325`` down to ``h = 4e-15`` and the run stopped after 12 bridges by
+    backward Euler (the springs' floor now holds beyond that tolerance except on the
+    first step after an event, :mod:`lumped.solvers.radau.roundoff`)."""
+    scene = _equal_coulombs_in_series()
+    dt = 0.0125
+    sol = simulate(scene, method="radau5", dt=dt, t_end=0.5, rtol=1e-10, atol=1e-13,
+                   compiled=compiled)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message
+    assert sol.stats["rejected"] <= 20, sol.stats
+    start = [ev.t for ev in sol.events if ev.element == "e3"][0]
+    end = min(ev.t for ev in sol.events if ev.element == "e0")
+    assert 0.19 < start < 0.21 and 0.24 < end < 0.27, sol.events
+    ts = np.linspace(start, end, 101)[1:-1]
+    y = sol.sol(ts)
+    col = sol.columns.index
+    tau = 0.7233941627366748
+    np.testing.assert_allclose(y[:, col("F_e0")], tau, rtol=1e-12)
+    np.testing.assert_allclose(y[:, col("F_e3")], tau, rtol=1e-12)
+    k2, k4 = 0.31622776601683794, 0.6493816315762113
+    # (the dense output of an index-2 velocity: 1.2e-7 off on the first step, h = 0.017)
+    np.testing.assert_allclose(y[:, col("v_j0")], k4 / (k2 + k4) * y[:, col("v_m1")],
+                               rtol=1e-6, atol=1e-12)
+    assert_within_bdf2s_own_error(scene, sol, ("j0", "m1"), dt, 0.5, 4)

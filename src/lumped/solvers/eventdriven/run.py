@@ -1,13 +1,12 @@
 r"""One ``radau5`` run: its state and the loop of
 :func:`lumped.solvers.eventdriven.runner.run_radau5`.
 
-:class:`Radau5Run` holds what the loop carries from pass to pass (the state at ``t``, the
-step size and the controller's memory, the landing bracket of a guard, the flags of an
-event at ``t``, the counters) and takes one pass at a time: a stop bridged by backward
-Euler, a held interval, a stretch of held-mode steps in the compiled loop, or one step of
-the Python loop (:class:`lumped.solvers.eventdriven.step.StepPass`: solved, then accepted or
-redone shorter). The checks it reads off a solved step are
-:class:`lumped.solvers.eventdriven.checks.StepChecks`.
+:class:`Radau5Run` holds what the loop carries from pass to pass (the state at ``t``, the step
+size and the controller's memory, the landing bracket of a guard, the flags of an event at
+``t``, the counters) and takes one pass at a time: a stop bridged by backward Euler, a held
+interval, a stretch of held-mode steps in the compiled loop, or one step of the Python loop
+(:class:`lumped.solvers.eventdriven.step.StepPass`: solved, then accepted or redone shorter).
+The checks it reads off a solved step are :class:`lumped.solvers.eventdriven.checks.StepChecks`.
 """
 
 from __future__ import annotations
@@ -237,13 +236,14 @@ class Radau5Run(StepPass, StepChecks):
         scale = ([atol + rtol * abs(vi) for vi in v]
                  + [rtol * max(abs(Fe), self.Fref) for Fe in F]) * 3
         system, kernels, cones = self.system, self.kernels, self.cones
-        system.t_n = t  # (the stage times t + c_k h of the support offsets)
+        # (the stage times t + c_k h of the support offsets; the round-off floor, .roundoff)
+        system.t_n, system.after_event = t, self.ms.forces_from_probe
         if damped:
             return system.solve_damped(self.U, h, x, v, fk, kernels, scale, max_iters=iters)
         if self.stage_solve is None and self.opts["compiled"] is True and self.frame is None:
             self.stage_solve = adaptive_fast.compiled_stage_solver(self.scene, self.modes)
         got = None if self.stage_solve is None or cones else self.stage_solve(
-            self.U, h, x, v, fk, scale, iters)  # (None: singular, the minimum-norm solve)
+            self.U, h, x, v, fk, scale, iters, system.after_event)  # (None: singular, ...)
         if got is None:  # (locks in parallel: the cone split)
             return system.solve(self.U, h, x, v, fk, kernels, scale, max_iters=iters,
                                 cones=cones or None, least_squares=t == self.infeasible_at

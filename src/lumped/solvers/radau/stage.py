@@ -25,15 +25,13 @@ the nodes of the collocation polynomial (the dense output,
 :mod:`lumped.solvers.radau.tableau`).
 
 This module owns the stage system (:class:`StageSystem`: its residual and Jacobian, its
-simplified Newton with the active set of the cone split, the damped fallback, the element
-values at the polynomial's nodes) and the limits of the ``radau5`` loop
-(:data:`STALL_PASSES`, :data:`MAX_NEWTON`, :data:`DAMPED_AFTER`). The linear solves,
-plain and split among locks in parallel, are in :mod:`lumped.solvers.radau.cone_split`;
-the error estimate and its norm in :mod:`lumped.solvers.radau.error`.
-
-Everything here runs on flat lists of Python floats with scalar loops (numba-friendly).
-The unknowns are laid out stage by stage: ``U[k*n + i]`` is ``V_k,i`` for a node ``i < N``
-and ``U[k*n + N + e]`` is ``F_k,e``, ``n = N + E``.
+simplified Newton with the active set of the cone split, the damped fallback, the element values
+at the polynomial's nodes) and the limits of the ``radau5`` loop (:data:`STALL_PASSES`,
+:data:`MAX_NEWTON`, :data:`DAMPED_AFTER`). The linear solves, plain and split among locks in
+parallel, are in :mod:`lumped.solvers.radau.cone_split`; the error estimate and its norm in
+:mod:`lumped.solvers.radau.error`. Everything here runs on flat lists of Python floats with
+scalar loops (numba-friendly). The unknowns are laid out stage by stage: ``U[k*n + i]`` is
+``V_k,i`` for a node ``i < N`` and ``U[k*n + N + e]`` is ``F_k,e``, ``n = N + E``.
 """
 
 from __future__ import annotations
@@ -99,6 +97,7 @@ class StageSystem(ErrorEstimate):
         #: supports (the kernels read its offsets), else None; ``t_n`` the step's start
         self.frame = None
         self.t_n = 0.0
+        self.after_event = False  #: the step starts at an event (:mod:`.roundoff`)
 
     # -- the stage system ----------------------------------------------------------------
     def evaluate(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
@@ -292,7 +291,8 @@ class StageSystem(ErrorEstimate):
             if not math.isfinite(worst):
                 return None, it, nfac
             G, J2 = self.evaluate(U, h, x_n, v_n, f, kernels)
-            worst = roundoff_worst(du, U, J2, scale, self.junction, self.rate, f, tol, worst)
+            worst = roundoff_worst(du, U, J2, scale, self.junction, self.rate, f, tol, worst,
+                                   self.after_event)
             if worst <= tol:
                 # the pseudo-inverse of the cone split converges to a least-squares point
                 # when the locks cannot carry the load together: only a root is a solution

@@ -33,7 +33,7 @@ from ..newton.criteria import ROUNDOFF
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 
 __all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_solve",
-           "roundoff_test", "stage_solve_at", "stage_address", "STAGE_TYPE"]
+           "roundoff_test", "with_event_sign", "stage_solve_at", "stage_address", "STAGE_TYPE"]
 
 
 @njit(cache=True)
@@ -119,7 +119,7 @@ def stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W
 
 
 @njit(cache=True)
-def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst) -> float:
+def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst, after_event) -> float:
     """:func:`lumped.solvers.radau.roundoff.roundoff_worst` (read it for the maths), the
     junction's velocities read from ``masses`` (``m_i = 0``), the dashpots' rows from
     ``spring``, ``f[k, i]`` the external forces: the largest ``|du_j| / scale_j`` with a
@@ -161,7 +161,7 @@ def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst) -> float:
                         rho = s
             if rho > 0.0:
                 break
-        if rho > 0.0 and any_row and ROUNDOFF * rho > scale[j]:
+        if rho > 0.0 and any_row and after_event and ROUNDOFF * rho > scale[j]:
             rho = 0.0  # (the springs' rounding beyond the velocity's own tolerance)
         r = abs(du[j]) / max(scale[j], ROUNDOFF * rho / tol)
         if not r <= worst:
@@ -177,7 +177,8 @@ def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U
     failed (singular, non-finite or no convergence): the caller shrinks the step.
 
     ``out[3]`` (read) is the address of :func:`roundoff_worst_jit` compiled
-    (:func:`roundoff_test`; :func:`workspace` puts it there), or 0 for a scene without
+    (:func:`roundoff_test`; :func:`workspace` puts it there), negated on the first step
+    after an event (its ``after_event``: :func:`with_event_sign`), or 0 for a scene without
     junctions (``m_i = 0``), where that test returns ``worst`` as it is: the shared loop
     of ``radau5`` passes 0 there, and a machine whose scenes have no junction never
     compiles it."""
@@ -211,7 +212,8 @@ def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U
         stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n,
                        v_n, f, G, J)
         if out[3] != 0:  # a junction's velocity at its round-off (none without junctions)
-            worst = _roundoff_at(out[3])(du, U, J, scale, masses, spring, f, tol, worst)
+            worst = _roundoff_at(abs(out[3]))(du, U, J, scale, masses, spring, f, tol, worst,
+                                              out[3] < 0)
         if worst <= tol:
             return True
         if worst > 0.5 * prev:
@@ -268,7 +270,7 @@ if numba_enabled():
     _v, _m = _T.float64[:], _T.float64[:, :]  # (any layout: the loop passes views)
     #: The numba function type of :func:`roundoff_worst_jit`.
     ROUNDOFF_TYPE = _T.FunctionType(_T.float64(_v, _v, _m, _v, _v, _T.boolean[:], _m,
-                                               _T.float64, _T.float64))
+                                               _T.float64, _T.float64, _T.boolean))
     _roundoff_at = function_at(ROUNDOFF_TYPE)
     _law_at = function_at(BRANCH_LAW_TYPE)
     _vc, _ma, _iv = _T.float64[::1], _T.float64[:, ::1], _T.int64[::1]
@@ -291,6 +293,15 @@ def roundoff_test() -> int:
     if not numba_enabled():
         return 1
     return compiled_address(_ROUNDOFF, roundoff_worst_jit.py_func, ROUNDOFF_TYPE)
+
+
+def with_event_sign(address: int, after_event: bool) -> int:
+    """The round-off test's ``address`` as :func:`stage_solve` reads it from ``out[3]``:
+    negated on the first step after an event (``after_event`` of
+    :func:`roundoff_worst_jit`), ``0`` (no junctions) kept."""
+    return -abs(address) if after_event else abs(address)
+
+
 _STAGE: list = []
 
 
