@@ -292,7 +292,7 @@ class StageSystem(ErrorEstimate):
                 return None, it, nfac
             G, J2 = self.evaluate(U, h, x_n, v_n, f, kernels)
             worst = roundoff_worst(du, U, J2, scale, self.junction, self.rate, f, tol, worst,
-                                   self.after_event)
+                                   h, self.after_event)
             if worst <= tol:
                 # the pseudo-inverse of the cone split converges to a least-squares point
                 # when the locks cannot carry the load together: only a root is a solution

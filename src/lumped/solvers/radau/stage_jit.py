@@ -119,7 +119,7 @@ def stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W
 
 
 @njit(cache=True)
-def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst, after_event) -> float:
+def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst, h, after_event) -> float:
     """:func:`lumped.solvers.radau.roundoff.roundoff_worst` (read it for the maths), the
     junction's velocities read from ``masses`` (``m_i = 0``), the dashpots' rows from
     ``spring``, ``f[k, i]`` the external forces: the largest ``|du_j| / scale_j`` with a
@@ -161,9 +161,14 @@ def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst, after_eve
                         rho = s
             if rho > 0.0:
                 break
-        if rho > 0.0 and any_row and after_event and ROUNDOFF * rho > scale[j]:
-            rho = 0.0  # (the springs' rounding beyond the velocity's own tolerance)
-        r = abs(du[j]) / max(scale[j], ROUNDOFF * rho / tol)
+        tol_j = max(scale[j], ROUNDOFF * rho / tol)
+        if rho > 0.0 and any_row:  # (springs' rows alone: an index-2 velocity)
+            if after_event:
+                if ROUNDOFF * rho > scale[j]:
+                    tol_j = scale[j]  # (their rounding beyond the velocity's own tolerance)
+            elif h < 1.0:
+                tol_j = max(tol_j, scale[j] / h)
+        r = abs(du[j]) / tol_j
         if not r <= worst:
             worst = r
     return worst
@@ -213,7 +218,7 @@ def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U
                        v_n, f, G, J)
         if out[3] != 0:  # a junction's velocity at its round-off (none without junctions)
             worst = _roundoff_at(abs(out[3]))(du, U, J, scale, masses, spring, f, tol, worst,
-                                              out[3] < 0)
+                                              h, out[3] < 0)
         if worst <= tol:
             return True
         if worst > 0.5 * prev:
@@ -270,7 +275,8 @@ if numba_enabled():
     _v, _m = _T.float64[:], _T.float64[:, :]  # (any layout: the loop passes views)
     #: The numba function type of :func:`roundoff_worst_jit`.
     ROUNDOFF_TYPE = _T.FunctionType(_T.float64(_v, _v, _m, _v, _v, _T.boolean[:], _m,
-                                               _T.float64, _T.float64, _T.boolean))
+                                               _T.float64, _T.float64, _T.float64,
+                                               _T.boolean))
     _roundoff_at = function_at(ROUNDOFF_TYPE)
     _law_at = function_at(BRANCH_LAW_TYPE)
     _vc, _ma, _iv = _T.float64[::1], _T.float64[:, ::1], _T.int64[::1]
