@@ -1,6 +1,6 @@
 """Scenes drawn by the random-network suite that more than one test file runs (issue 29):
-the loaded chain of strings of radau5's tight-tolerance check, and a junction on springs
-whose Coulomb link slips."""
+the loaded chain of strings of radau5's tight-tolerance check, a junction on springs
+whose Coulomb link slips, and one beside another junction's dashpot stopping."""
 
 from __future__ import annotations
 
@@ -45,3 +45,32 @@ def junction_on_springs_slipping_on_coulomb() -> Scene:
          Element("e2", get_law("linear_spring").bind(k=0.9999999999976974), "j0", "m1"),
          Element("e3", get_law("linear_spring").bind(k=1.0), "j0", "ground")],
         {"m1": SineBurst(amplitude=2.499999999998849, omega=1.0, t_off=math.inf)})
+
+
+def spring_held_junction_beside_a_stop() -> Scene:
+    # A draw of the ``LUMPED_LARGE`` tight run (session 25, seed 22039 of ``long``, draw 456):
+    # junction j0 on a slipping Coulomb element and a spring to m1 whose ends sit far from
+    # its force (its velocity an index-2 variable the springs' rows hold to less than
+    # their rounding), junction j3's Herschel-Bulkley ``n = 0.8`` dashpot stopping in finite
+    # time, a load on m2: ``radau5`` crawled through bridges for more than 30 minutes, then
+    # stopped on its bridges' work budget (3.5 s, no bridge, since the index-2 scale of
+    # :mod:`lumped.solvers.radau.roundoff`).
+    return Scene(
+        [Junction("j0", x0=-9.165015417625238e-13),
+         Mass("m1", m=1.0, x0=7.352716816730862e-299, v0=-0.3878114301715043),
+         Mass("m2", m=0.16297975469725767, x0=0.37451683983764616, v0=1.2821745797731507),
+         Junction("j3", x0=-1.1125369292536007e-308)],
+        [Element("e0", get_law("coulomb").bind(tau=0.015457028057135072, r=2.154434690031884),
+                 "ground", "j0"),
+         Element("e1", get_law("string_spring").bind(k=5.721343474396009, L=0.3164303725222444),
+                 "j0", "m1"),
+         Element("e2", get_law("linear_spring").bind(k=1.0), "m1", "m2"),
+         Element("e3", get_law("newtonian").bind(c=0.05433652129603409), "m2", "j3"),
+         Element("e4", get_law("herschel_bulkley").bind(gamma=0.13895007859132505,
+                                                        tau=0.01917904279590328, n=0.8),
+                 "ground", "j3"),
+         Element("e5", get_law("string_spring").bind(k=0.3093114588771922, L=0.2172821837380576),
+                 "m2", "j3"),
+         Element("e6", get_law("herschel_bulkley").bind(gamma=1.0, tau=0.010241425498493753,
+                                                        n=0.8), "m1", "m2")],
+        {"m2": -3.5602049629881325})

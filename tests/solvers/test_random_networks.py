@@ -38,6 +38,7 @@ import os
 import numpy as np
 import pytest
 from _convergence import EXTRA_LEVELS, assert_converges
+from _lock_scenes import spring_held_junction_beside_a_stop
 from _yield_check import check_yield
 from hypothesis import HealthCheck, assume, event, example, given, settings
 from hypothesis import strategies as st
@@ -572,32 +573,9 @@ _COULOMBS_IN_SERIES = Scene(
     {"m0": 4.0})
 
 
-#: A draw of the ``LUMPED_LARGE`` tight run (session 25, seed 22039 of ``long``, draw 456):
-#: junction j0 on a slipping Coulomb element and a spring to m1 whose ends sit far from
-#: its force (its velocity an index-2 variable the springs' rows hold to less than
-#: their rounding), junction j3's Herschel-Bulkley ``n = 0.8`` dashpot stopping in finite
-#: time, a load on m2: ``radau5`` crawled through bridges for more than 30 minutes, then
-#: stopped on its bridges' work budget (3.5 s and one bridge since the index-2 scale of
-#: :mod:`lumped.solvers.radau.roundoff`).
-_SPRING_HELD_JUNCTION_BESIDE_A_STOP = Scene(
-    [Junction("j0", x0=-9.165015417625238e-13),
-     Mass("m1", m=1.0, x0=7.352716816730862e-299, v0=-0.3878114301715043),
-     Mass("m2", m=0.16297975469725767, x0=0.37451683983764616, v0=1.2821745797731507),
-     Junction("j3", x0=-1.1125369292536007e-308)],
-    [Element("e0", get_law("coulomb").bind(tau=0.015457028057135072, r=2.154434690031884),
-             "ground", "j0"),
-     Element("e1", get_law("string_spring").bind(k=5.721343474396009, L=0.3164303725222444),
-             "j0", "m1"),
-     Element("e2", get_law("linear_spring").bind(k=1.0), "m1", "m2"),
-     Element("e3", get_law("newtonian").bind(c=0.05433652129603409), "m2", "j3"),
-     Element("e4", get_law("herschel_bulkley").bind(gamma=0.13895007859132505,
-                                                    tau=0.01917904279590328, n=0.8),
-             "ground", "j3"),
-     Element("e5", get_law("string_spring").bind(k=0.3093114588771922, L=0.2172821837380576),
-             "m2", "j3"),
-     Element("e6", get_law("herschel_bulkley").bind(gamma=1.0, tau=0.010241425498493753,
-                                                    n=0.8), "m1", "m2")],
-    {"m2": -3.5602049629881325})
+#: A draw of the ``LUMPED_LARGE`` tight run (session 25, seed 22039 of ``long``, draw 456,
+#: :func:`_lock_scenes.spring_held_junction_beside_a_stop`).
+_SPRING_HELD_JUNCTION_BESIDE_A_STOP = spring_held_junction_beside_a_stop()
 
 
 @pytest.mark.parametrize("method", LOOPED)

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 from _convergence import assert_within_bdf2s_own_error
-from _lock_scenes import junction_on_springs_slipping_on_coulomb
+from _lock_scenes import junction_on_springs_slipping_on_coulomb, spring_held_junction_beside_a_stop
 
 from lumped import simulate
 from lumped.laws import get_law
@@ -467,7 +467,7 @@ def test_two_equal_coulomb_elements_slipping_in_series_leave_the_junction_to_its
     velocity's tolerance on every step shorter than ``0.03``: every stage solve failed
     from ``t = 0.2325`` down to ``h = 4e-15`` and the run stopped after 12 bridges by
     backward Euler (the springs' floor now holds beyond that tolerance except on the
-    first step after an event, :mod:`lumped.solvers.radau.roundoff`)."""
+    first step after an impact, :mod:`lumped.solvers.radau.roundoff`)."""
     scene = _equal_coulombs_in_series()
     dt = 0.0125
     sol = simulate(scene, method="radau5", dt=dt, t_end=0.5, rtol=1e-10, atol=1e-13,
@@ -489,3 +489,20 @@ def test_two_equal_coulomb_elements_slipping_in_series_leave_the_junction_to_its
     np.testing.assert_allclose(y[:, col("v_j0")], k4 / (k2 + k4) * y[:, col("v_m1")],
                                rtol=1e-6, atol=1e-12)
     assert_within_bdf2s_own_error(scene, sol, ("j0", "m1"), dt, 0.5, 4)
+
+
+def test_a_spring_held_junction_runs_through_a_stop_and_a_break_out_beside_it():
+    """j0's velocity is held by its spring's row alone (its Coulomb link slips), to less
+    than the spring's rounding (its ends far from its force); j3's Herschel-Bulkley
+    dashpot stops in finite time and breaks out again. The run crawled through bridges by
+    backward Euler for 30 minutes; with the index-2 tolerance of j0's velocity (also on
+    the first step after j3's break-out, an event that is no impact) it runs through with
+    no bridge, both loops bit for bit (:mod:`lumped.solvers.radau.roundoff`)."""
+    scene = spring_held_junction_beside_a_stop()
+    sols = [simulate(scene, method="radau5", dt=0.025, t_end=0.5, rtol=1e-10, atol=1e-13,
+                     compiled=compiled) for compiled in (False, True)]
+    for sol in sols:
+        assert sol.ok, sol.message
+        assert sol.stats.get("bridges", 0) == 0, sol.message
+    assert np.array_equal(sols[0].data, sols[1].data)
+    assert [ev.element for ev in sols[0].events if ev.element == "e4"] == ["e4", "e4"]

@@ -144,7 +144,7 @@ def test_a_run_whose_stage_solves_fail_stops_within_two_short_windows(monkeypatc
     from lumped.solvers.radau import stage
 
     monkeypatch.setattr(stage, "roundoff_worst", lambda du, U, J, scale, junction, rate,
-                        f, tol, worst, h=1.0, after_event=False: worst)
+                        f, tol, worst, h=1.0, after_impact=False: worst)
     sol = simulate(junction_on_springs_slipping_on_coulomb(), method="radau5", dt=0.025,
                    t_end=0.5, rtol=1e-10, atol=1e-13, compiled=False, throw=False)
     assert sol.status is Status.MAX_ITERS and "it is stuck" in sol.message
@@ -165,7 +165,7 @@ def test_the_compiled_loop_counts_every_try_against_the_budget(max_steps, monkey
     from lumped.solvers.radau import stage
 
     monkeypatch.setattr(stage, "roundoff_worst", lambda du, U, J, scale, junction, rate,
-                        f, tol, worst, h=1.0, after_event=False: worst)
+                        f, tol, worst, h=1.0, after_impact=False: worst)
     monkeypatch.setattr(fast, "roundoff_test", lambda: 0)
     sol = simulate(junction_on_springs_slipping_on_coulomb(), method="radau5", dt=0.025,
                    t_end=0.5, rtol=1e-10, atol=1e-13, compiled=True, max_steps=max_steps,

@@ -33,15 +33,15 @@ def _system():
     return J, U, scale
 
 
-def _both(du, J, U, scale, spring=SPRING, masses=MASSES, f=None, after_event=False, h=1.0):
+def _both(du, J, U, scale, spring=SPRING, masses=MASSES, f=None, after_impact=False, h=1.0):
     worst = float(np.max(np.abs(du) / scale))  # (the plain test, as the Newton finds it)
     n = len(U) // 3
     f = np.zeros((3, len(masses))) if f is None else f
     py = roundoff_worst(list(du), list(U), J.tolist(), list(scale),
                         junction_columns(masses, n), rate_rows(len(masses), spring), f.tolist(),
-                        TOL, worst, h, after_event)
+                        TOL, worst, h, after_impact)
     jit = roundoff_worst_jit(du, U, J, scale, np.array(masses), np.array(spring), f, TOL,
-                             worst, h, after_event)
+                             worst, h, after_impact)
     assert py == jit
     return py
 
@@ -74,16 +74,16 @@ def test_a_springs_row_sets_the_floor_where_no_dashpots_row_holds_the_velocity()
     du[1 + N_UNK] = 0.5 * ROUNDOFF * (0.03 + 1e-3 * 0.04) / 1e-3
     assert abs(du[1 + N_UNK]) / scale[1 + N_UNK] > TOL
     assert _both(du, J, U, scale, spring=[True]) == pytest.approx(0.5 * TOL, rel=1e-12)
-    # ... on the first step after an event, also where so short that the springs'
+    # ... on the first step after an impact, also where so short that the springs'
     # rounding (ulp / (h a k)) is within the velocity's own tolerance
-    assert _both(du, J, U, scale, spring=[True], after_event=True) == pytest.approx(
+    assert _both(du, J, U, scale, spring=[True], after_impact=True) == pytest.approx(
         0.5 * TOL, rel=1e-12)
 
 
 def test_a_springs_floor_beyond_the_velocitys_tolerance_holds_but_after_an_event():
     # a step so short that the springs' rounding (ulp / (h a k)) exceeds the velocity's
     # own tolerance: converged at that rounding (the velocity of an index-2 junction, read
-    # on the positions it moves), except on the first step after an event, where the
+    # on the positions it moves), except on the first step after an impact, where the
     # junction may still be jumping within the step (following an impact): not there
     J, U, scale = _system()
     for k in range(3):
@@ -92,7 +92,7 @@ def test_a_springs_floor_beyond_the_velocitys_tolerance_holds_but_after_an_event
     du[1 + N_UNK] = 0.5 * ROUNDOFF * (0.03 + 1e-9 * 0.04) / 1e-9
     assert ROUNDOFF * 0.03 / 1e-9 > scale[1 + N_UNK]
     worst = abs(du[1 + N_UNK]) / scale[1 + N_UNK]
-    assert _both(du, J, U, scale, spring=[True], after_event=True) == worst > TOL
+    assert _both(du, J, U, scale, spring=[True], after_impact=True) == worst > TOL
     assert _both(du, J, U, scale, spring=[True]) == pytest.approx(0.5 * TOL, rel=1e-12)
     # ... and a correction beyond that rounding fails on any step (of size 1 here)
     du[1 + N_UNK] = 2.0 * ROUNDOFF * (0.03 + 1e-9 * 0.04) / 1e-9
@@ -102,7 +102,7 @@ def test_a_springs_floor_beyond_the_velocitys_tolerance_holds_but_after_an_event
 def test_a_velocity_held_by_springs_alone_is_read_on_the_positions_it_moves():
     # an index-2 velocity (springs' rows alone): its tolerance is scale / h on a step h < 1
     # (the positions it moves, h times it), beyond the springs' rounding, except on the
-    # first step after an event; a velocity a dashpot's row holds keeps its own
+    # first step after an impact; a velocity a dashpot's row holds keeps its own
     J, U, scale = _system()
     du = np.zeros(9)
     du[1 + N_UNK] = 0.5 * TOL * scale[1 + N_UNK] / 1e-5
@@ -112,7 +112,7 @@ def test_a_velocity_held_by_springs_alone_is_read_on_the_positions_it_moves():
                                                                           rel=1e-12)
     floor = ROUNDOFF * (0.03 + 1e-3 * 0.04) / 1e-3 / TOL  # (the row's rounding)
     floored = abs(du[1 + N_UNK]) / floor
-    assert _both(du, J, U, scale, spring=[True], h=1e-5, after_event=True) == pytest.approx(
+    assert _both(du, J, U, scale, spring=[True], h=1e-5, after_impact=True) == pytest.approx(
         floored, rel=1e-12)
     assert floored > TOL
     assert _both(du, J, U, scale, spring=[False], h=1e-5) == pytest.approx(floored,

@@ -25,7 +25,7 @@ from ..modes.mode_guess_jit import compiled_probe_modes, probe_workspace
 from ..modes.on_demand import OnDemand
 from ..modes.stuck_jit import compiled_breakout_root, compiled_breakout_scan
 from ..radau.forces_jit import table_forcing
-from ..radau.stage_jit import roundoff_test, with_event_sign
+from ..radau.stage_jit import roundoff_test, with_impact_sign
 from ..radau.step_jit import fold_test
 from . import loop_jit as L
 from .fast_parts import loaded, loop_parts, pointer
@@ -195,7 +195,7 @@ class CompiledLoop:
 
     def attempt(self, t: float, h: float, x: list[float], v: list[float], F: list[float],
                 dF_n: list[float] | None, F_seen: float, prev_break: float, modes: list[int],
-                watched: list[int], after_event: bool):
+                watched: list[int], after_impact: bool):
         """One step of size ``h`` from ``t``, not accepted: ``(U or None, its, nfac,
         err_norm, F_seen, hit)`` as the Python loop computes them (``hit``: ``(s, (w, j))``,
         the first guard crossing on the step, :func:`lumped.solvers.modes.crossing_root.
@@ -222,8 +222,8 @@ class CompiledLoop:
         ist[L.HAVE_DF] = dF_n is not None
         if self.ws is None:
             self._workspace()
-        # (the first step after an event: the round-off floor within the tolerance)
-        self.iw[1, 3] = with_event_sign(self.iw[1, 3], after_event)
+        # (the first step after an impact: the round-off floor within the tolerance)
+        self.iw[1, 3] = with_impact_sign(self.iw[1, 3], after_impact)
         self._call(*self._arrays, *self.outputs)  # (an attempt writes no output)
         ok = int(ist[L.A_OK])
         if ok < 0:
@@ -281,7 +281,7 @@ class CompiledLoop:
         h_big = st["h_big"]
         if self.ws is None:
             self._workspace()
-        self.iw[1, 3] = with_event_sign(self.iw[1, 3], False)  # (no event at its start)
+        self.iw[1, 3] = with_impact_sign(self.iw[1, 3], False)  # (no event at its start)
         while True:  # the accepted steps written in place into the output's arrays
             ist[L.N_OUT] = 0
             T0, HS, Y0, D = dense.block(BLOCK)
@@ -341,8 +341,8 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
     """The stage Newton compiled with numba (:mod:`lumped.solvers.radau.stage_jit`, the same
     operations as :meth:`StageSystem.solve`, bit for bit), on the scene's generated
     branch kernels, ``modes`` read at each call (the run's live list);
-    ``(U, h, x, v, f, scale, max_iters, after_event) -> (U or None, its, nfac)`` (with
-    ``after_event`` the step starts at an event, :mod:`lumped.solvers.radau.roundoff`), or
+    ``(U, h, x, v, f, scale, max_iters, after_impact) -> (U or None, its, nfac)`` (with
+    ``after_impact`` the step starts at an impact, :mod:`lumped.solvers.radau.roundoff`), or
     ``None`` when a Jacobian was singular but finite: the compiled twin has no
     minimum-norm solve, so the caller redoes the attempt with :meth:`StageSystem.solve`
     from the same guess (as the compiled loop hands such a step to Python,
@@ -359,9 +359,9 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
     A_np, W_np = np.array(A), np.array(W)
     law = js.module.branch_law
 
-    def run(U, h, x, v, f, scale, max_iters, after_event):
+    def run(U, h, x, v, f, scale, max_iters, after_impact):
         Ua = np.array(U, dtype=float)
-        ws[-1][3] = with_event_sign(ws[-1][3], after_event)
+        ws[-1][3] = with_impact_sign(ws[-1][3], after_impact)
         ok = solve(law, js.consts, js.masses, js.ea, js.eb, js.spring, js.lock_q,
                    np.array(modes, dtype=np.int64),
                    A_np, W_np, Ua, h, np.array(x, dtype=float), np.array(v, dtype=float),

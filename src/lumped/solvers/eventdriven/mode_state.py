@@ -87,6 +87,7 @@ class ModeState:
         self.guessing = not plan.checked
         self.hint: int | None = None
         self.forces_from_probe = False  # the forces at t are an event probe's
+        self.impacted = False  # ... and that event applied an impact (velocities jumped)
         self.decided = [0.0]  # the sizes of the probes of the last choice, the deciding last
         self.plan = plan
 
@@ -146,6 +147,7 @@ class ModeState:
                             F)
         if isinstance(hit, str):
             return f"impact at t = {t!r}: {hit}"
+        self.impacted = bool(hit[0])
         if hit[0]:
             for e, impulse in hit[0]:
                 events.append(Event(t, names[e], "impact", modes[e], new[e], impulse=impulse,

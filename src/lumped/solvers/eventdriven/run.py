@@ -237,13 +237,13 @@ class Radau5Run(StepPass, StepChecks):
                  + [rtol * max(abs(Fe), self.Fref) for Fe in F]) * 3
         system, kernels, cones = self.system, self.kernels, self.cones
         # (the stage times t + c_k h of the support offsets; the round-off floor, .roundoff)
-        system.t_n, system.after_event = t, self.ms.forces_from_probe
+        system.t_n, system.after_impact = t, self.ms.forces_from_probe and self.ms.impacted
         if damped:
             return system.solve_damped(self.U, h, x, v, fk, kernels, scale, max_iters=iters)
         if self.stage_solve is None and self.opts["compiled"] is True and self.frame is None:
             self.stage_solve = adaptive_fast.compiled_stage_solver(self.scene, self.modes)
         got = None if self.stage_solve is None or cones else self.stage_solve(
-            self.U, h, x, v, fk, scale, iters, system.after_event)  # (None: singular, ...)
+            self.U, h, x, v, fk, scale, iters, system.after_impact)  # (None: singular, ...)
         if got is None:  # (locks in parallel: the cone split)
             return system.solve(self.U, h, x, v, fk, kernels, scale, max_iters=iters,
                                 cones=cones or None, least_squares=t == self.infeasible_at

@@ -49,7 +49,7 @@ after 15 000 rejected steps (issue 29). There the best of the springs' rows sets
 floor (``ROUNDOFF B_i / (h a_kl k)``, ``4e-13``), as long as it is within the velocity's
 own tolerance ``atol + rtol |v|`` (not on the short steps of an impact, where it would
 pass the jump above: a Coulomb element at a junction then stuck 1.2e-7 beyond its yield
-force). That limit stays on the first step after an event only (``after_event``: the
+force). That limit stays on the first step after an impact only (``after_impact``: the
 junction may jump within it). On any other step such a velocity is an index-2 variable
 of the DAE (no law fixes it, the springs' rows fix its position), and its tolerance is
 read on the positions it moves, ``scale_j / h`` for ``h < 1`` (Hairer and Wanner's
@@ -63,7 +63,9 @@ The springs' rounding is also short of the positions' own where a spring's ends 
 from its force (``k (|x_a| + |x_b|) >> |F|``: a junction on a spring of ``k = 5.7``, its
 ends at 0.035 and 0.038, carrying 0.015): its velocity cycled at 1.3 times that floor
 while an HB ``n = 0.8`` dashpot at another junction stopped, and the run crawled through
-bridges for 30 minutes (another draw; 3.5 s now, one bridge). The compiled twin is
+bridges for 30 minutes (another draw; 3.5 s now, no bridge: its last bridge followed a
+switch at another junction, whose first step needs no plain tolerance, as it has no
+impact). The compiled twin is
 :func:`lumped.solvers.radau.stage_jit.roundoff_worst_jit` (the same operations in the same
 order, bit for bit).
 """
@@ -94,14 +96,14 @@ def rate_rows(N: int, spring: Sequence[bool]) -> list[bool]:
 def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence[float]],
                    scale: Sequence[float], junction: Sequence[bool], rate: Sequence[bool],
                    f: Sequence[Sequence[float]], tol: float, worst: float,
-                   h: float = 1.0, after_event: bool = False) -> float:
+                   h: float = 1.0, after_impact: bool = False) -> float:
     r"""The largest ``|du_j| / scale_j`` of a Newton correction ``du`` (``worst``, as the
     caller found it), with the tolerance of a junction's velocity floored at its
     round-off: ``max(scale_j, rho_j / tol)``, ``rho_j = ROUNDOFF min_r (|J_rr| B_j +
     sum_{u != r} |J_ru| |U_u|) / |J_rj|`` over the rows ``r`` of laws in the rate
     (``rate[r]``, :func:`rate_rows`) that hold ``u_j`` (when none does: over every row
     that holds it, the springs': then at least ``scale_j / h`` for a step ``h < 1``, and
-    with ``after_event``, the first step after an event, not that but only ``rho_j`` if
+    with ``after_impact``, the first step after an impact, not that but only ``rho_j`` if
     ``rho_j <= scale_j``), ``r`` also the column of that law's force, and ``B_j = |f_k,i|
     + sum_u |J_ju| |U_u|`` the terms of the junction's balance (row ``j = k n + i``,
     ``f[k][i]`` the external force on it at stage ``k``; see the module notes), at the
@@ -143,7 +145,7 @@ def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence
                 break
         tol_j = max(scale[j], ROUNDOFF * rho / tol)
         if rho > 0.0 and any_row:  # (springs' rows alone: an index-2 velocity)
-            if after_event:
+            if after_impact:
                 if ROUNDOFF * rho > scale[j]:
                     tol_j = scale[j]  # (their rounding beyond the velocity's own tolerance)
             elif h < 1.0:

@@ -97,7 +97,7 @@ class StageSystem(ErrorEstimate):
         #: supports (the kernels read its offsets), else None; ``t_n`` the step's start
         self.frame = None
         self.t_n = 0.0
-        self.after_event = False  #: the step starts at an event (:mod:`.roundoff`)
+        self.after_impact = False  #: the step starts at an impact (:mod:`.roundoff`)
 
     # -- the stage system ----------------------------------------------------------------
     def evaluate(self, U: list[float], h: float, x_n: list[float], v_n: list[float],
@@ -292,7 +292,7 @@ class StageSystem(ErrorEstimate):
                 return None, it, nfac
             G, J2 = self.evaluate(U, h, x_n, v_n, f, kernels)
             worst = roundoff_worst(du, U, J2, scale, self.junction, self.rate, f, tol, worst,
-                                   h, self.after_event)
+                                   h, self.after_impact)
             if worst <= tol:
                 # the pseudo-inverse of the cone split converges to a least-squares point
                 # when the locks cannot carry the load together: only a root is a solution

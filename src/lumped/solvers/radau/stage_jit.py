@@ -33,7 +33,7 @@ from ..newton.criteria import ROUNDOFF
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
 
 __all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_solve",
-           "roundoff_test", "with_event_sign", "stage_solve_at", "stage_address", "STAGE_TYPE"]
+           "roundoff_test", "with_impact_sign", "stage_solve_at", "stage_address", "STAGE_TYPE"]
 
 
 @njit(cache=True)
@@ -119,7 +119,7 @@ def stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W
 
 
 @njit(cache=True)
-def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst, h, after_event) -> float:
+def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst, h, after_impact) -> float:
     """:func:`lumped.solvers.radau.roundoff.roundoff_worst` (read it for the maths), the
     junction's velocities read from ``masses`` (``m_i = 0``), the dashpots' rows from
     ``spring``, ``f[k, i]`` the external forces: the largest ``|du_j| / scale_j`` with a
@@ -163,7 +163,7 @@ def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst, h, after_
                 break
         tol_j = max(scale[j], ROUNDOFF * rho / tol)
         if rho > 0.0 and any_row:  # (springs' rows alone: an index-2 velocity)
-            if after_event:
+            if after_impact:
                 if ROUNDOFF * rho > scale[j]:
                     tol_j = scale[j]  # (their rounding beyond the velocity's own tolerance)
             elif h < 1.0:
@@ -183,7 +183,7 @@ def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U
 
     ``out[3]`` (read) is the address of :func:`roundoff_worst_jit` compiled
     (:func:`roundoff_test`; :func:`workspace` puts it there), negated on the first step
-    after an event (its ``after_event``: :func:`with_event_sign`), or 0 for a scene without
+    after an impact (its ``after_impact``: :func:`with_impact_sign`), or 0 for a scene without
     junctions (``m_i = 0``), where that test returns ``worst`` as it is: the shared loop
     of ``radau5`` passes 0 there, and a machine whose scenes have no junction never
     compiles it."""
@@ -301,11 +301,11 @@ def roundoff_test() -> int:
     return compiled_address(_ROUNDOFF, roundoff_worst_jit.py_func, ROUNDOFF_TYPE)
 
 
-def with_event_sign(address: int, after_event: bool) -> int:
+def with_impact_sign(address: int, after_impact: bool) -> int:
     """The round-off test's ``address`` as :func:`stage_solve` reads it from ``out[3]``:
-    negated on the first step after an event (``after_event`` of
+    negated on the first step after an impact (``after_impact`` of
     :func:`roundoff_worst_jit`), ``0`` (no junctions) kept."""
-    return -abs(address) if after_event else abs(address)
+    return -abs(address) if after_impact else abs(address)
 
 
 _STAGE: list = []
