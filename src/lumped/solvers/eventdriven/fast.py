@@ -281,7 +281,7 @@ class CompiledLoop:
         h_big = st["h_big"]
         if self.ws is None:
             self._workspace()
-        self.iw[1, 3] = with_impact_sign(self.iw[1, 3], False)  # (no event at its start)
+        self.iw[1, 3] = with_impact_sign(self.iw[1, 3], False)  # (no impact at its start)
         while True:  # the accepted steps written in place into the output's arrays
             ist[L.N_OUT] = 0
             T0, HS, Y0, D = dense.block(BLOCK)
