@@ -30,6 +30,7 @@ from ..newton.linalg import kept_factor_solver
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..newton.scalar_root import scalar_root
 from ..newton.semismooth import newton_solve
+from ..nonsmooth.groups import dashpot_links
 from ..nonsmooth.junction_balance import refuse_unbalanced_junctions
 from ..nonsmooth.lock_forces import taut_on_supports
 from ..status import SolverError
@@ -303,8 +304,8 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
         # two ends of a dashpot): one junction at a time, a junction held by a stuck
         # dashpot to a neighbour that is itself held (a dangling junction, F = 0) never
         # breaks free, though the pair must slip as a whole
-        links = [(ea[e], eb[e]) for e in range(E) if not spring[e]]
-        balanced = balance_sweeps(evaluate, project, list(u0), junctions, anchors, links)
+        balanced = balance_sweeps(evaluate, project, list(u0), junctions, anchors,
+                                  dashpot_links(scene))
         settled_points = []
         if balanced is not None:  # the junctions' monotone balances solved one by one
             starts.insert(1, balanced)
