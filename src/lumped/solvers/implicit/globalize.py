@@ -28,6 +28,7 @@ from ...scene import Junction, Scene
 from ..newton.criteria import residual_ok
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..newton.semismooth import newton_solve
+from ..nonsmooth.groups import dashpot_links
 from ..nonsmooth.impacts import lock_state, lockable_elements
 from ..nonsmooth.locks import split_free_forces
 from .balance_sweeps import balance_sweeps
@@ -141,8 +142,7 @@ def solve_globalized(scene: Scene, evaluate, h: float, x_hat: list[float], v: li
             yield from ((g, False) for g in stuck_guesses(scene, v, F))
             return
         N = len(scene.nodes)
-        links = [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
-                 if el.kind == "dashpot"]
+        links = dashpot_links(scene)
         # first as before (rates snapped to zero between neighbouring floats), then with
         # the widths of the positions' rounding (a node on a lock: see balance_sweeps)
         for widths in (None, [abs(math.ulp(xh)) / h for xh in x_hat[:N]]):

@@ -17,7 +17,7 @@ import itertools
 import math
 
 from ...scene import Junction, Scene
-from ..nonsmooth.groups import connected_groups
+from ..nonsmooth.groups import connected_groups, dashpot_links
 from ..nonsmooth.rest_balance import rest_forces, rest_inverse
 from .branch_check import known_monotone
 from .initial_slip import rest_edge
@@ -40,8 +40,7 @@ def cluster_guesses(scene: Scene, v0: list[float]) -> list[list[float]]:
     rest (each junction's balance holds on its own with the next element slipping)."""
     N = len(scene.nodes)
     junction = [isinstance(nd, Junction) for nd in scene.nodes]
-    links = [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
-             if el.kind == "dashpot"]
+    links = dashpot_links(scene)
     clusters = connected_groups([i for i in range(N) if junction[i]], links)
     members, anchors = [], []
     for group in clusters:

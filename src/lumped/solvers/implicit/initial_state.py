@@ -30,6 +30,7 @@ from ..newton.linalg import kept_factor_solver
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..newton.scalar_root import scalar_root
 from ..newton.semismooth import newton_solve
+from ..nonsmooth.groups import dashpot_links
 from ..nonsmooth.junction_balance import refuse_unbalanced_junctions
 from ..nonsmooth.lock_forces import taut_on_supports
 from ..status import SolverError
@@ -218,7 +219,8 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
     res = newton_solve(evaluate, u0, ic_options, min_norm=True, check_scaled=True,
                        equilibrate=True, factor=kept_factor_solver)
     if res.code is not NewtonCode.SUCCESS:
-        # restarts: the junctions' velocities from their balances solved one by one
+        # restarts: the junctions' velocities from their balances solved one by one and
+        # by clusters joined by dashpots
         # (lumped.solvers.implicit.balance_sweeps.balance_sweeps), then every junction
         # moving with each dashpot neighbour in turn (see
         # lumped.solvers.implicit.globalize.stuck_guesses), the masses' accelerations
@@ -298,7 +300,12 @@ def _limit_system(scene: Scene, pinned: list[float | None], q0: list[float], f: 
         def anchors(u: list[float]) -> list[float]:
             return [v0[i] if is_mass[i] else u[i] for i in range(N)]
 
-        balanced = balance_sweeps(evaluate, project, list(u0), junctions, anchors)
+        # junctions joined by dashpots also move as one (a cluster stuck together, the
+        # two ends of a dashpot): one junction at a time, a junction held by a stuck
+        # dashpot to a neighbour that is itself held (a dangling junction, F = 0) never
+        # breaks free, though the pair must slip as a whole
+        balanced = balance_sweeps(evaluate, project, list(u0), junctions, anchors,
+                                  dashpot_links(scene))
         settled_points = []
         if balanced is not None:  # the junctions' monotone balances solved one by one
             starts.insert(1, balanced)

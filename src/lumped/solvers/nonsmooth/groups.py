@@ -9,7 +9,9 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-__all__ = ["connected_groups"]
+from ...scene import Scene
+
+__all__ = ["connected_groups", "dashpot_links"]
 
 
 def connected_groups(nodes: Iterable[int],
@@ -38,3 +40,12 @@ def connected_groups(nodes: Iterable[int],
     for i in parent:
         groups.setdefault(find(i), []).append(i)
     return list(groups.values())
+
+
+def dashpot_links(scene: Scene) -> list[tuple[int, int]]:
+    """The ends ``(a, b)`` of every dashpot of ``scene`` (node indices, ``-1`` for
+    ground), in the elements' order: the pairs whose rate ``v_b - v_a`` a stuck dashpot
+    holds at zero, which the balance sweeps and the initial state's cluster guesses move
+    as one."""
+    return [(scene.elem_a[e], scene.elem_b[e]) for e, el in enumerate(scene.elements)
+            if el.kind == "dashpot"]
