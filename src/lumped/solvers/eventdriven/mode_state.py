@@ -2,12 +2,11 @@ r"""The mode of the ``radau5`` driver: which branch of its law every element is 
 and what happens at an event (a guard crossing, a time event, the start).
 
 :class:`ModeState` is the small state object of a ``radau5`` run
-(:class:`lumped.solvers.eventdriven.run.Radau5Run`) that owns the held branches
-(``modes``), their kernels and guards, the elements whose guards are watched, the
-force-split cones of locks in parallel, and the event record.
-:meth:`ModeState.at_event` chooses the mode after an event by a vanishing implicit step of
-the full laws (:func:`lumped.solvers.modes.choice.select_modes`), applies impacts, records the
-switches and tests for an accumulation of events.
+(:class:`lumped.solvers.eventdriven.run.Radau5Run`) that owns the held branches (``modes``),
+their kernels and guards, the elements whose guards are watched, the force-split cones of locks
+in parallel, and the event record. :meth:`ModeState.at_event` chooses the mode after an event by
+a vanishing implicit step of the full laws (:func:`lumped.solvers.modes.choice.select_modes`),
+applies impacts, records the switches and tests for an accumulation of events.
 """
 
 from __future__ import annotations
@@ -100,12 +99,16 @@ class ModeState:
         self.cones.clear()
         self.cones.update(mode_cones(self.scene, self.plan, new, F, parts))
 
+    @property
+    def after_impact(self) -> bool:
+        """The next step is the first after an impact (a junction may jump within it)."""
+        return self.forces_from_probe and self.impacted
+
     def change_mode(self, t: float, h_probe: float, cause: str, x: list[float],
                     v: list[float], F: list[float]) -> str:
         """Choose the mode after ``t`` and record the switches (``x, v, F`` in place);
         '' or a failure message."""
-        scene, lbs, modes, names, events = self.scene, self.lbs, self.modes, self.names, \
-            self.events
+        scene, lbs, modes, names, events = self.scene, self.lbs, self.modes, self.names, self.events
         rtol, atol, options = self.rtol, self.atol, self.settings.options
         support_time(scene, t)  # (moving supports: the laws at t; a probe at t + h_p sets t back)
         if self.fast is not None:

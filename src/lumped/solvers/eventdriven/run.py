@@ -237,7 +237,7 @@ class Radau5Run(StepPass, StepChecks):
                  + [rtol * max(abs(Fe), self.Fref) for Fe in F]) * 3
         system, kernels, cones = self.system, self.kernels, self.cones
         # (the stage times t + c_k h of the support offsets; the round-off floor, .roundoff)
-        system.t_n, system.after_impact = t, self.ms.forces_from_probe and self.ms.impacted
+        system.t_n, system.after_impact = t, self.ms.after_impact
         if damped:
             return system.solve_damped(self.U, h, x, v, fk, kernels, scale, max_iters=iters)
         if self.stage_solve is None and self.opts["compiled"] is True and self.frame is None:

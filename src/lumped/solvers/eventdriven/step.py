@@ -95,7 +95,7 @@ class StepPass:
         got = None if self.fast is None or self.flat_ends() else self.fast.attempt(
             t, h, self.x, self.v, self.F, self.dF_n, self.F_seen,
             self.breaks[self.bi - 1] if self.bi > 0 else math.nan, self.modes, self.watched,
-            self.ms.forces_from_probe and self.ms.impacted)
+            self.ms.after_impact)
         hit_c = None
         if got is not None:
             sol, its, nfac, err_norm, self.F_seen, hit_c = got
