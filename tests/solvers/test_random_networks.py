@@ -578,6 +578,25 @@ _COULOMBS_IN_SERIES = Scene(
 _SPRING_HELD_JUNCTION_BESIDE_A_STOP = spring_held_junction_beside_a_stop()
 
 
+#: A draw of the ``LUMPED_LARGE`` tight run (session 26, seed 22042 of ``long``, after 3630
+#: passing): a junction hung on a loaded mass by stuck dashpots, its mode kept at a guard by
+#: every probe (``eventdriven/test_radau5_tight_networks.py``, shrunk); two slack strings.
+_KEPT_BY_EVERY_PROBE = Scene(
+    [Mass("m0", m=1.2479652991315209), Junction("j1", x0=1e-08),
+     Mass("m2", m=7.83640712338274)],
+    [Element("e0", get_law("string_spring").bind(k=1.0, L=0.14760722768104553), "ground",
+             "m0"),
+     Element("e1", get_law("herschel_bulkley").bind(gamma=0.5364445264145451,
+                                                    tau=0.02433199029053824, n=1.5),
+             "ground", "j1"),
+     Element("e2", get_law("string_spring").bind(k=1.0, L=0.23506230531261194), "m0", "m2"),
+     Element("e3", get_law("herschel_bulkley").bind(gamma=0.1, tau=0.11065334455818125,
+                                                    n=1.0), "j1", "m2"),
+     Element("e4", get_law("bingham").bind(gamma=5.2343753905899035,
+                                           tau=0.07224799472467348), "m2", "j1")],
+    {"m2": 1.207233329573393})
+
+
 @pytest.mark.parametrize("method", LOOPED)
 @settings(_SETTINGS, max_examples=TIGHT_EXAMPLES)
 @given(scene=networks())
@@ -585,6 +604,7 @@ _SPRING_HELD_JUNCTION_BESIDE_A_STOP = spring_held_junction_beside_a_stop()
 @example(scene=_SPRING_HELD_JUNCTION_BESIDE_A_STOP)
 @example(scene=_STOP_AND_SLIP_BACK)
 @example(scene=_COULOMBS_IN_SERIES)
+@example(scene=_KEPT_BY_EVERY_PROBE)
 def test_random_network_tight_tolerance(method: str, scene: Scene) -> None:
     check_tight(scene, method, compiled=False)
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from _convergence import assert_within_bdf2s_own_error
 from _lock_scenes import junction_on_springs_slipping_on_coulomb, spring_held_junction_beside_a_stop
+from scipy.integrate import solve_ivp
 
 from lumped import simulate
 from lumped.laws import get_law
@@ -506,3 +507,57 @@ def test_a_spring_held_junction_runs_through_a_stop_and_a_break_out_beside_it():
         assert sol.stats.get("bridges", 0) == 0, sol.message
     assert np.array_equal(sols[0].data, sols[1].data)
     assert [ev.element for ev in sols[0].events if ev.element == "e4"] == ["e4", "e4"]
+
+
+def _junction_hung_on_a_loaded_mass_by_stuck_dashpots() -> Scene:
+    # seed 22042 of the long profile, draw 3631, shrunk (two slack strings dropped): the
+    # junction j1 slips on e1 (Herschel-Bulkley n = 1.5, flat at its yield force) while
+    # e3 and e4 in parallel hold it to the loaded mass m2
+    hb = get_law("herschel_bulkley")
+    return Scene(
+        [Junction("j1", x0=1e-08), Mass("m2", m=7.83640712338274)],
+        [Element("e1", hb.bind(gamma=0.5364445264145451, tau=0.02433199029053824, n=1.5),
+                 "ground", "j1"),
+         Element("e3", hb.bind(gamma=0.1, tau=0.11065334455818125, n=1.0), "j1", "m2"),
+         Element("e4", get_law("bingham").bind(gamma=5.2343753905899035,
+                                               tau=0.07224799472467348), "m2", "j1")],
+        {"m2": 1.207233329573393})
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_mode_kept_by_every_probe_takes_the_shortest_probes_state(compiled):
+    """At the guard event at ``t = 1e-14`` the full laws' probes of ``2.2e-13`` (diverged),
+    ``2.2e-10`` and ``2.2e-7`` s all keep the mode; the run took the longest one's state,
+    ``v_j1 = 3.4e-8`` against the mass's ``1.5e-15`` (e3 and e4 stuck tie them): the
+    collocation polynomial from that start dipped through e1's guard just after ``c_1 h``
+    on every step, however short, and the run stopped after 12 bridges (41 s). The
+    shortest probe's state: 215 steps. Until e3 and e4 break out (e1's force reaching
+    their joint yield force ``tau_3 + tau_4``), ``m v' = P - tau_1 - (v / gamma_1)^(1/n)``
+    with ``v_j1 = v``."""
+    scene = _junction_hung_on_a_loaded_mass_by_stuck_dashpots()
+    sol = simulate(scene, method="radau5", t_end=0.5, rtol=1e-10, atol=1e-13,
+                   compiled=compiled)
+    assert sol.ok, sol.message
+    assert sol.stats.get("bridges", 0) == 0, sol.message
+    m, P = 7.83640712338274, 1.207233329573393
+    gamma, tau, n = 0.5364445264145451, 0.02433199029053824, 1.5
+    held = 0.11065334455818125 + 0.07224799472467348
+
+    def rhs(t, y):
+        return [y[1], (P - tau - (max(y[1], 0.0) / gamma) ** (1.0 / n)) / m]
+
+    def breaks(t, y):
+        return tau + (max(y[1], 0.0) / gamma) ** (1.0 / n) - held
+
+    breaks.terminal = True
+    ref = solve_ivp(rhs, (0.0, 0.5), [0.0, 0.0], method="DOP853", rtol=1e-13, atol=1e-16,
+                    events=breaks, dense_output=True)
+    t_break = ref.t_events[0][0]
+    out = [ev for ev in sol.events if ev.element in ("e3", "e4")]
+    assert out and out[0].t == pytest.approx(t_break, rel=1e-9), sol.events
+    ts = np.linspace(0.0, t_break, 50)[1:-1]
+    y, col = sol.sol(ts), sol.columns.index
+    v = ref.sol(ts)[1]
+    np.testing.assert_allclose(y[:, col("v_m2")], v, rtol=1e-9)
+    np.testing.assert_allclose(y[:, col("v_j1")], y[:, col("v_m2")], rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(y[:, col("F_e1")], tau + (v / gamma) ** (1.0 / n), rtol=1e-8)

@@ -216,12 +216,9 @@ class ModeState:
         (a held share of a stuck cycle: its break-out time to 1e-10 at rtol 4e-5, against
         5e-6 from the state at ``t``).
 
-        The probe that keeps the mode may be ``10^6`` times the first (undecided probes are
-        tried longer): its state is one ``~1e-3`` s later. A junction hung on a mass by a
-        stuck Coulomb element took that state's velocity, a rate of ``0.04`` to ``0.23``
-        against the mass at ``t``, crossed its guard at ``t`` again, and the run crept on
-        by ``3e-14`` s a step until it was bridged (issue 29); taking the state at ``t``
-        on its second landing ends that."""
+        A junction hung on a mass by a stuck Coulomb element took the state of a probe
+        ``1e-3`` s long (a rate ``0.04`` to ``0.23`` off the mass's), crossed its guard at
+        ``t`` again, and crept on by ``3e-14`` s a step until bridged (issue 29)."""
         kept = cause == "guard" and new == self.modes and not impact
         steps = self.stats["steps"]
         again = kept and steps - self.kept_at_step <= _AGAIN
@@ -263,13 +260,16 @@ class ModeState:
         guard crossed at ``t`` too: 50 events at one ``t`` and a backward-Euler bridge.
         A probe of ``2e-6`` s reads both slipping.
 
-        When no probe up to ``10^6`` times the first reads a mode not left twice at
-        ``t``, the shortest probe's mode is held as a kept one (``returned``: the driver
-        reads its guards crossed at ``t`` as a tangency's round-off). A mass stuck by two
-        dashpots in parallel, one at its yield force, under a load still below their
-        joint yield force: probes of ``6e-9`` and ``6e-6`` s keep it stuck, one of
-        ``6e-3`` s looks beyond the time the load reaches the joint yield force and reads
-        both slipping, and a short probe from there reads both stuck again."""
+        When no probe up to ``10^6`` times the first reads another mode, the shortest
+        probe's mode and state are taken (the longest one's, ``1e6 h_p`` on, gave a junction
+        hung on a loaded mass by stuck dashpots its velocity ``2e-7`` s later: the step's
+        start off its stages, whose dense output crossed a guard at ``c_1 h``, ever smaller
+        steps and 12 bridges); where no probe reads a mode not left twice at ``t``, as a
+        kept one (``returned``: the driver reads its guards crossed at ``t`` as a tangency's
+        round-off). A mass stuck by two dashpots in parallel, one at its yield force, under
+        a load below their joint yield force: probes of ``6e-9`` and ``6e-6`` s keep it
+        stuck, one of ``6e-3`` s looks past the time the load reaches the joint yield force
+        and reads both slipping, and a short probe from there reads both stuck again."""
         scene, lbs, modes = self.scene, self.lbs, self.modes
         h0 = h_probe
         left = {m for m, (_, n) in self.left.items() if n >= 2} - {tuple(modes)}
@@ -288,7 +288,7 @@ class ModeState:
             sel = self._locked(sel, h_probe)
             if undecided(sel):  # the locks undid the guess, or a mode left twice at t
                 sel = ""
-        first = None  # the shortest probe's mode
+        first, h_first = None, h0  # the shortest probe's mode and size
         for _ in range(0 if sel else 3):
             sel = select_modes(scene, lbs, t, x, v, F, h_probe, self.settings.options)
             if not isinstance(sel, str):
@@ -296,15 +296,15 @@ class ModeState:
                 # slow break-out of locks in parallel under a load just past their joint
                 # yield force moves the probe by less than its round-off, issue 11)
                 sel = self._locked(sel, h_probe)
-                first = first or sel
+                if first is None:
+                    first, h_first = sel, h_probe
                 if not undecided(sel):
                     used.append(h_probe)
                     break
             h_probe *= 1000.0  # a failed or undecided probe: a longer one
-        if left and first is not None and not isinstance(sel, str) and undecided(sel):
-            # no probe reads a mode not left twice at t: the shortest probe's mode, its
-            # guards read at t as a tangency's (the driver's kept mode)
-            self.returned = True
+        if first is not None and not isinstance(sel, str) and undecided(sel):
+            used.append(h_first)  # no probe reads another mode: the shortest probe's
+            self.returned = bool(left)
             return first
         if isinstance(sel, str):
             # every probe failed: shorter ones, nearer the start (the semismooth Newton
