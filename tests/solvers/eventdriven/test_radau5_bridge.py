@@ -16,6 +16,7 @@ from _yield_check import check_yield
 from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
+from lumped.solvers.eventdriven import mode_state as mode_state_module
 from lumped.solvers.eventdriven import run as run_module
 from lumped.solvers.eventdriven.bridge import (
     BRIDGE_STEPS,
@@ -283,13 +284,33 @@ def test_a_mode_kept_at_a_guard_keeps_the_junction_state_at_t():
         assert np.abs(sol.x[name] - fine.x[name]).max() <= 5e-5
 
 
+def _kept_from_the_longest_probe(monkeypatch) -> None:
+    """Put back the kept mode's state of the code before issue 29: the longest probe's
+    (``10^6`` times the first), at every landing."""
+    choose = ModeState._choose
+
+    def longest(self, t, h_probe, cause, x, v, F):
+        sel = choose(self, t, h_probe, cause, x, v, F)
+        if cause == "guard" and not isinstance(sel, str) and sel[0] == self.modes:
+            far = mode_state_module.select_modes(self.scene, self.lbs, t, x, v, F,
+                                                 1e6 * h_probe, self.settings.options)
+            if not isinstance(far, str) and far[0] == sel[0]:
+                self.decided[:] = [h_probe]
+                return self._locked(far, 1e6 * h_probe)
+        return sel
+
+    monkeypatch.setattr(ModeState, "_choose", longest)
+    monkeypatch.setattr(ModeState, "state_stays", lambda self, *args: False)
+
+
 def test_a_creep_above_the_step_floor_is_bridged(monkeypatch):
-    """The scene above with the kept mode's state taken from the deciding probe, as before
+    """The scene above with the kept mode's state taken from the longest probe, as before
     issue 29: radau5 lands again and again on e2's guard with steps of 3e-14 s, 40 times
     the step floor, so the creep was not seen: 5000 steps took 77 s, and the LUMPED_LARGE
     run hung on the draw. Steps below 1e-12 of the run count as creeping too; the point
-    is bridged."""
-    monkeypatch.setattr(ModeState, "state_stays", lambda self, *args: False)
+    is bridged. (The shortest probe's state, taken now, runs through in 19 steps without
+    ``state_stays``: :func:`test_the_shortest_probes_state_needs_no_second_landing`.)"""
+    _kept_from_the_longest_probe(monkeypatch)
     scene, h = _junction_on_a_stuck_coulomb_element()
     kept = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=h**2, atol=h**3,
                     compiled=False, max_steps=5000)
@@ -306,6 +327,20 @@ def test_a_creep_above_the_step_floor_is_bridged(monkeypatch):
     assert sol.ok and kept.stats["steps"] < sol.stats["steps"] < 100
     assert sol.stats["bridges"] == 1 and "creep floor" in sol.message and "'e2'" in sol.message
     # the string's impacts, before and after the bridge
+    assert [ev.element for ev in sol.events if ev.kind == "impact"] == ["e3", "e3"]
+
+
+def test_the_shortest_probes_state_needs_no_second_landing(monkeypatch):
+    """The kept mode's state from the shortest probe that read it (issue 29's "a mode kept
+    at a guard event returns the longest probe's junction velocities"): the scene above
+    runs through without the state at ``t`` of a second landing (:meth:`ModeState.
+    state_stays` off), where the longest probe's state crept to a bridge."""
+    monkeypatch.setattr(ModeState, "state_stays", lambda self, *args: False)
+    scene, h = _junction_on_a_stuck_coulomb_element()
+    sol = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=h**2, atol=h**3,
+                   compiled=False, max_steps=5000)
+    assert sol.ok and sol.message == "" and sol.stats.get("bridges", 0) == 0
+    assert sol.stats["steps"] <= 25  # (19)
     assert [ev.element for ev in sol.events if ev.kind == "impact"] == ["e3", "e3"]
 
 
