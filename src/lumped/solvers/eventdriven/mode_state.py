@@ -200,8 +200,9 @@ class ModeState:
                                               ev.kind == "impact" for ev in events[-self.E:]):
                 events.append(Event(t, names[e], "switch", modes[e], new[e]))
                 self.recent.append(t)
+        now = [e for e in range(self.E) if lbs[e].info[new[e]].locks > lbs[e].info[modes[e]].locks]
         self.set_modes(new, F)
-        hold_rate_locks(scene, lbs, modes, v)
+        hold_rate_locks(scene, lbs, modes, v, now)  # (the locks that hold now: exactly)
         return ""
 
     def state_stays(self, t: float, cause: str, new: list[int], impact: bool,
@@ -261,11 +262,10 @@ class ModeState:
         A probe of ``2e-6`` s reads both slipping.
 
         When no probe up to ``10^6`` times the first reads another mode, the shortest
-        probe's mode and state are taken (the longest one's, ``1e6 h_p`` on, gave a junction
-        hung on a loaded mass by stuck dashpots its velocity ``2e-7`` s later: the step's
-        start off its stages, whose dense output crossed a guard at ``c_1 h``, ever smaller
-        steps and 12 bridges); where no probe reads a mode not left twice at ``t``, as a
-        kept one (``returned``: the driver reads its guards crossed at ``t`` as a tangency's
+        probe's mode and state are taken (the longest one's gave a junction hung on a
+        loaded mass by stuck dashpots its velocity ``2e-7`` s later: the step's start off
+        its stages, whose dense output crossed a guard at ``c_1 h``, 12 bridges); where no
+        probe reads a mode not left twice at ``t``, as a kept one (``returned``: the driver reads its guards crossed at ``t`` as a tangency's
         round-off). A mass stuck by two dashpots in parallel, one at its yield force, under
         a load below their joint yield force: probes of ``6e-9`` and ``6e-6`` s keep it
         stuck, one of ``6e-3`` s looks past the time the load reaches the joint yield force

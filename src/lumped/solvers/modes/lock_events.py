@@ -30,11 +30,15 @@ _EPS = sys.float_info.epsilon
 
 
 def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
-                    v: list[float]) -> list[int]:
+                    v: list[float], locked_now: Sequence[int] = ()) -> list[int]:
     """Set exactly the rate fixed by every dashpot on a rate-locking branch (``q = L``).
 
-    Only a dashpot between a mass and ground is set here (``v = +-L``, exactly); one
-    between two nodes is left as the probe step found it. Returns the elements set.
+    Only a dashpot between a mass and ground is set here (``v = +-L``, exactly), and one
+    between a junction and ground that the event just locked (``locked_now``: a junction
+    stopping in finite time, whose probe read the lock at a rate of ``-2e-7``: left so,
+    the step after the stop started off its stages and its dense output carried ``6e-8``
+    into the junction's rest); one between two nodes is left as the probe step found it.
+    Returns the elements set.
     """
     done = []
     for e, el in enumerate(scene.elements):
@@ -45,9 +49,9 @@ def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
             continue
         a, b = scene.elem_a[e], scene.elem_b[e]
         L = float(info.lock_value)
-        if a < 0 and b >= 0 and isinstance(scene.nodes[b], Mass):
+        if a < 0 and b >= 0 and (isinstance(scene.nodes[b], Mass) or e in locked_now):
             v[b] = L
-        elif b < 0 and a >= 0 and isinstance(scene.nodes[a], Mass):
+        elif b < 0 and a >= 0 and (isinstance(scene.nodes[a], Mass) or e in locked_now):
             v[a] = -L if L != 0.0 else 0.0
         else:
             continue
