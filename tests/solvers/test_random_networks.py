@@ -38,7 +38,7 @@ import os
 import numpy as np
 import pytest
 from _convergence import EXTRA_LEVELS, assert_converges
-from _lock_scenes import spring_held_junction_beside_a_stop
+from _lock_scenes import spring_held_junction_beside_a_stop, yield_slip_from_rest_at_a_held_junction
 from _yield_check import check_yield
 from hypothesis import HealthCheck, assume, event, example, given, settings
 from hypothesis import strategies as st
@@ -578,6 +578,13 @@ _COULOMBS_IN_SERIES = Scene(
 _SPRING_HELD_JUNCTION_BESIDE_A_STOP = spring_held_junction_beside_a_stop()
 
 
+#: A draw of the ``LUMPED_LARGE`` tight run (seed 22043, draw 3501): two Herschel-Bulkley
+#: dashpots slip from rest at ``t = 0`` into a junction a stuck one holds; row 0 read them
+#: at the start probe's rate, above their yield forces
+#: (:func:`lumped.solvers.implicit.initial_slip.junction_slips_at_start`).
+_YIELD_SLIP_FROM_REST_AT_A_HELD_JUNCTION = yield_slip_from_rest_at_a_held_junction()
+
+
 @pytest.mark.parametrize("method", LOOPED)
 @settings(_SETTINGS, max_examples=TIGHT_EXAMPLES)
 @given(scene=networks())
@@ -585,6 +592,7 @@ _SPRING_HELD_JUNCTION_BESIDE_A_STOP = spring_held_junction_beside_a_stop()
 @example(scene=_SPRING_HELD_JUNCTION_BESIDE_A_STOP)
 @example(scene=_STOP_AND_SLIP_BACK)
 @example(scene=_COULOMBS_IN_SERIES)
+@example(scene=_YIELD_SLIP_FROM_REST_AT_A_HELD_JUNCTION)
 def test_random_network_tight_tolerance(method: str, scene: Scene) -> None:
     check_tight(scene, method, compiled=False)
 

@@ -179,14 +179,14 @@ class ModeState:
                     v[p] = v_p[p]
             # at t = 0 the consistent initial forces stay, unless they miss a law at the
             # probe's junction velocities (the initial state can leave a junction between
-            # two slipping dashpots unresolved); dashpots at known rates then take their
-            # laws' forces at t = 0, not the probe's, a lock's its rest set's (initial_slip)
-            if cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
-                                                 scene.elongations(x, v), F):
-                F[:] = F_p
+            # two slipping dashpots unresolved); dashpots at known rates (and, after the
+            # probe's, yield ones at junctions) take their laws' at t = 0 (initial_slip)
+            taken = cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
+                                                      scene.elongations(x, v), F)
+            F[:] = F_p if taken else F
             if cause == "start":
                 v[:], F[:] = start_at_known_rates(scene, v, F, v_p, F_p, [
-                    lbs[e].info[k].locks for e, k in enumerate(new)])
+                    lbs[e].info[k].locks for e, k in enumerate(new)], (t, x) if taken else None)
             elif cause == "guard":  # (a yield dashpot at rate ~0 switching: at its edge)
                 F[:] = onto_slip_ends(scene, modes, new, v, F, scale_v, rtol)
         back = self.left.get(tuple(new))
