@@ -34,6 +34,8 @@ is known (each end a mass or ground, none on a moving support):
 
 The moved forces are those of elements between masses and ground only: no junction's
 balance reads them (the masses' accelerations do, which the initial state does not hold).
+``radau5``'s row 0 after its start probe (:func:`start_at_known_rates`) moves the yield
+dashpots at junctions too, and its locks with them (:func:`junction_slips_at_start`).
 """
 
 from __future__ import annotations
