@@ -1,6 +1,7 @@
 """Scenes drawn by the random-network suite that more than one test file runs (issue 29):
 the loaded chain of strings of radau5's tight-tolerance check, a junction on springs
-whose Coulomb link slips, and one beside another junction's dashpot stopping."""
+whose Coulomb link slips, one beside another junction's dashpot stopping, and yield
+dashpots slipping from rest at a junction held by a stuck one."""
 
 from __future__ import annotations
 
@@ -74,3 +75,21 @@ def spring_held_junction_beside_a_stop() -> Scene:
          Element("e6", get_law("herschel_bulkley").bind(gamma=1.0, tau=0.010241425498493753,
                                                         n=0.8), "m1", "m2")],
         {"m2": -3.5602049629881325})
+
+
+def yield_slip_from_rest_at_a_held_junction() -> Scene:
+    # the 3501st draw of the LUMPED_LARGE tight run (seed 22043): m0 at rest on a spring
+    # to ground, pulled down past the joint yield force of the Herschel-Bulkley dashpots
+    # e1 (n = 1.5) and e4 (n = 2), in parallel with the spring e3 from m0 to j1; j1 held
+    # to ground by the stuck e2 (tau = 1, n = 0.3). At t = 0 e1 and e4 start slipping
+    # from rest at their yield forces and e2 holds j1's balance, 0.512 < 1.
+    hb = get_law("herschel_bulkley")
+    return Scene(
+        [Mass("m0", m=6.547881831672482, x0=0.846867998508825, v0=-6.825760428477066e-80),
+         Junction("j1", x0=0.0)],
+        [Element("e0", get_law("linear_spring").bind(k=32.500043010079736), "ground", "m0"),
+         Element("e1", hb.bind(gamma=1.0, tau=0.9999999999976974, n=1.5), "m0", "j1"),
+         Element("e2", hb.bind(gamma=1.0, tau=1.0, n=0.3), "j1", "ground"),
+         Element("e3", get_law("linear_spring").bind(k=1.0), "m0", "j1"),
+         Element("e4", hb.bind(gamma=1.0000000000000002, tau=0.3590082822589278, n=2.0),
+                 "m0", "j1")])

@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 import pytest
+from _lock_scenes import yield_slip_from_rest_at_a_held_junction
 from _yield_check import check_yield
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -29,6 +30,7 @@ from hypothesis import strategies as st
 from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
+from lumped.solvers.implicit.initial_slip import junction_slips_at_start
 from lumped.solvers.implicit.initial_state import consistent_initial_state
 
 #: Every method that runs a network scene, with the settings of a short run.
@@ -210,6 +212,45 @@ def test_a_rate_the_start_probe_reverses_starts_at_rest(key, v0):
     assert F0 == pytest.approx(-1.0, rel=4e-16, abs=0.0)
     assert _law_holds(law.kernel, v_row0, F0)
     assert float(sol.F["d"][1]) <= F0
+
+
+@pytest.mark.parametrize("key", ["radau5-python", "radau5-compiled"])
+def test_yield_dashpots_at_a_held_junction_start_at_their_yield_forces(key):
+    # the tight property's draw (seed 22043, draw 3501): e1 (n = 1.5) and e4 (n = 2), m0
+    # to the junction j1, slip from rest at t = 0 while the stuck e2 holds j1. The start
+    # took its probe's forces (the initial ones, a split at rest, missed the slip's
+    # laws), read at the probe's rate h_p a = 2.06e-9 beside the start's rate of
+    # round-off (j1's probe velocity, -2.1e-35): e1 1.0000016 and e4 0.3590537, 1.6e-6
+    # and 4.5e-5 above their yield forces at rest (before: "e1 stuck above its yield
+    # force"). Row 0 now holds them at their yield forces and e2 takes j1's balance.
+    scene = yield_slip_from_rest_at_a_held_junction()
+    method, kwargs = METHODS[key]
+    sol = simulate(scene, method=method, dt=0.025 / 4, t_end=0.5, **kwargs)
+    assert sol.ok, sol.message
+    tau = {name: scene.elements[e].law.params["tau"] for e, name in ((1, "e1"), (4, "e4"))}
+    row0 = {name: float(sol.F[name][0]) for name in scene.element_names}
+    for name in ("e1", "e4"):
+        assert row0[name] == tau[name], (name, row0[name])  # the slip's sign: m0 goes down
+    assert row0["e2"] == pytest.approx(row0["e1"] + row0["e3"] + row0["e4"], rel=4e-16)
+    assert abs(row0["e2"]) < 1.0  # j1 stays held
+    assert float(sol.v["m0"][1]) < 0.0 and sol.F["e1"][1] > tau["e1"]  # and they slip
+    v_max = float(max(np.abs(sol.v[nd.name]).max() for nd in scene.nodes))
+    check_yield(scene, sol, 100.0 * kwargs["rtol"], kwargs["atol"] + kwargs["rtol"] * v_max,
+                kwargs["rtol"])
+
+
+def test_a_junction_dashpot_keeps_the_probes_force_where_no_lock_takes_the_change():
+    # m0 - HB (n = 2) - j1 - newtonian - ground, nothing locked: the dashpot's yield force
+    # at rest would leave j1 off its balance by the probe's excess, which no lock takes
+    law = get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=2.0)
+    scene = Scene([Mass("m0", m=1.0), Junction("j1")],
+                  [Element("e0", law, "m0", "j1"),
+                   Element("e1", get_law("newtonian").bind(c=1.0), "j1", "ground")])
+    F_probe = [1.0 + 1e-12, 1.0 + 1e-12]  # (j1 balanced: e0 pulls it as e1 holds it)
+    F = list(F_probe)
+    got = junction_slips_at_start(scene, 0.0, [0.0, 0.0], [0.0, 0.0], F, [-1e-24, 0.0],
+                                  F_probe, [False, False])
+    assert got is F
 
 
 def test_a_rate_the_first_instant_keeps_pins_the_force():

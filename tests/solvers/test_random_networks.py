@@ -38,7 +38,7 @@ import os
 import numpy as np
 import pytest
 from _convergence import EXTRA_LEVELS, assert_converges
-from _lock_scenes import spring_held_junction_beside_a_stop
+from _lock_scenes import spring_held_junction_beside_a_stop, yield_slip_from_rest_at_a_held_junction
 from _yield_check import check_yield
 from hypothesis import HealthCheck, assume, event, example, given, settings
 from hypothesis import strategies as st
@@ -597,6 +597,13 @@ _KEPT_BY_EVERY_PROBE = Scene(
     {"m2": 1.207233329573393})
 
 
+#: A draw of the ``LUMPED_LARGE`` tight run (seed 22043, draw 3501): two Herschel-Bulkley
+#: dashpots slip from rest at ``t = 0`` into a junction a stuck one holds; row 0 read them
+#: at the start probe's rate, above their yield forces
+#: (:func:`lumped.solvers.implicit.initial_slip.junction_slips_at_start`).
+_YIELD_SLIP_FROM_REST_AT_A_HELD_JUNCTION = yield_slip_from_rest_at_a_held_junction()
+
+
 @pytest.mark.parametrize("method", LOOPED)
 @settings(_SETTINGS, max_examples=TIGHT_EXAMPLES)
 @given(scene=networks())
@@ -605,6 +612,7 @@ _KEPT_BY_EVERY_PROBE = Scene(
 @example(scene=_STOP_AND_SLIP_BACK)
 @example(scene=_COULOMBS_IN_SERIES)
 @example(scene=_KEPT_BY_EVERY_PROBE)
+@example(scene=_YIELD_SLIP_FROM_REST_AT_A_HELD_JUNCTION)
 def test_random_network_tight_tolerance(method: str, scene: Scene) -> None:
     check_tight(scene, method, compiled=False)
 

@@ -179,14 +179,14 @@ class ModeState:
                     v[p] = v_p[p]
             # at t = 0 the consistent initial forces stay, unless they miss a law at the
             # probe's junction velocities (the initial state can leave a junction between
-            # two slipping dashpots unresolved); dashpots at known rates then take their
-            # laws' forces at t = 0, not the probe's, a lock's its rest set's (initial_slip)
-            if cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
-                                                 scene.elongations(x, v), F):
-                F[:] = F_p
+            # two slipping dashpots unresolved); dashpots at known rates (and, after the
+            # probe's, yield ones at junctions) take their laws' at t = 0 (initial_slip)
+            taken = cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
+                                                      scene.elongations(x, v), F)
+            F[:] = F_p if taken else F
             if cause == "start":
                 v[:], F[:] = start_at_known_rates(scene, v, F, v_p, F_p, [
-                    lbs[e].info[k].locks for e, k in enumerate(new)])
+                    lbs[e].info[k].locks for e, k in enumerate(new)], (t, x) if taken else None)
             elif cause == "guard":  # (a yield dashpot at rate ~0 switching: at its edge)
                 F[:] = onto_slip_ends(scene, modes, new, v, F, scale_v, rtol)
         back = self.left.get(tuple(new))
@@ -265,11 +265,11 @@ class ModeState:
         probe's mode and state are taken (the longest one's gave a junction hung on a
         loaded mass by stuck dashpots its velocity ``2e-7`` s later: the step's start off
         its stages, whose dense output crossed a guard at ``c_1 h``, 12 bridges); where no
-        probe reads a mode not left twice at ``t``, as a kept one (``returned``: the driver reads its guards crossed at ``t`` as a tangency's
-        round-off). A mass stuck by two dashpots in parallel, one at its yield force, under
-        a load below their joint yield force: probes of ``6e-9`` and ``6e-6`` s keep it
-        stuck, one of ``6e-3`` s looks past the time the load reaches the joint yield force
-        and reads both slipping, and a short probe from there reads both stuck again."""
+        probe reads a mode not left twice at ``t``, as a kept one (``returned``: the driver
+        reads its guards crossed at ``t`` as a tangency's round-off). A mass stuck by two
+        dashpots in parallel, one at its yield force, below their joint yield load: probes of
+        ``6e-9`` and ``6e-6`` s keep it stuck, one of ``6e-3`` s looks past the time the load
+        reaches it and reads both slipping, and a short one from there both stuck again."""
         scene, lbs, modes = self.scene, self.lbs, self.modes
         h0 = h_probe
         left = {m for m, (_, n) in self.left.items() if n >= 2} - {tuple(modes)}

@@ -34,6 +34,8 @@ is known (each end a mass or ground, none on a moving support):
 
 The moved forces are those of elements between masses and ground only: no junction's
 balance reads them (the masses' accelerations do, which the initial state does not hold).
+``radau5``'s row 0 after its start probe (:func:`start_at_known_rates`) moves the yield
+dashpots at junctions too, and its locks with them (:func:`junction_slips_at_start`).
 """
 
 from __future__ import annotations
@@ -44,9 +46,11 @@ from collections.abc import Callable, Sequence
 from ...scene import Mass, Scene
 from ...scene.network import across
 from ..newton.scalar_root import scalar_root
+from ..nonsmooth.lock_forces import forces_from_accelerations
 
 __all__ = ["known_rate_dashpots", "rates_below_resolution", "rest_edge",
-           "set_valued_at_rest", "settle_on_rest_set", "start_at_known_rates"]
+           "set_valued_at_rest", "settle_on_rest_set", "start_at_known_rates",
+           "junction_slips_at_start"]
 
 
 def known_rate_dashpots(scene: Scene, candidates: list[int]) -> list[int]:
@@ -206,7 +210,9 @@ def rest_edge(kernel, F: float) -> float:
 
 def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
                          v_probe: list[float], F_probe: list[float],
-                         locked: Sequence[bool] = ()) -> tuple[list[float], list[float]]:
+                         locked: Sequence[bool] = (),
+                         taken: tuple[float, list[float]] | None = None
+                         ) -> tuple[list[float], list[float]]:
     r"""Row 0 of the adaptive method: the dashpots at known rates on their laws at
     ``t = 0``, after its mode choice by a probe step of length ``h_p`` (``1e-9`` of the
     run, far longer than the initial state's ``eps``).
@@ -233,7 +239,9 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
        force there gets the root of ``R(q, F) = 0``
        (:func:`lumped.solvers.newton.scalar_root.scalar_root`, a sign change between
        neighbouring floats at worst: ``tau`` itself at ``q = 1e-113``); at rest
-       (``q = 0``) a force off the set at rest takes that set's edge nearest it.
+       (``q = 0``) a force off the set at rest takes that set's edge nearest it;
+    3. with ``taken`` (the probe's forces were taken), the yield dashpots at a junction
+       too (:func:`junction_slips_at_start`).
 
     Parameters
     ----------
@@ -246,6 +254,9 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
         The velocities and forces of the probe step that chose the mode.
     locked : sequence of bool, optional
         Per element, whether the chosen mode locks it (a stuck dashpot).
+    taken : tuple of (float, list of float), optional
+        ``(t, x)``, the time and displacements of the start, when ``F`` is the probe's
+        (the consistent initial forces missed a law): rule 3 applies.
 
     Returns
     -------
@@ -281,4 +292,75 @@ def start_at_known_rates(scene: Scene, v: list[float], F: list[float],
             F[e] = root
         elif q == 0.0:
             F[e] = rest_edge(kernel, start)
+    if taken is not None:
+        F = junction_slips_at_start(scene, taken[0], taken[1], v, F, v_probe, F_probe, locked)
     return v, F
+
+
+def junction_slips_at_start(scene: Scene, t: float, x: list[float], v: list[float],
+                            F: list[float], v_probe: list[float], F_probe: list[float],
+                            locked: Sequence[bool]) -> list[float]:
+    r"""Rule 3 of :func:`start_at_known_rates`: the yield dashpots with an end at a
+    junction on their laws at the start's rates, the locks rebalanced.
+
+    Where the start takes the probe's forces, a yield dashpot (set-valued at rest) that
+    the chosen mode does not lock and that joins a junction keeps the force its law gives
+    at the probe's rate ``h_p (a_b - a_a)``, not at the start's: one that slips from rest
+    there reads ``tau + (h_p |a| / gamma)^(1/n)`` (``1.6e-6`` beyond ``tau`` for ``n =
+    1.5``, ``4.5e-5`` for ``n = 2``, at ``h_p = 5e-10``, ``|a| = 4``) beside a start rate
+    of round-off (the probe's junction velocity, ``-2e-35``): a dashpot at rest above its
+    yield force. Each such dashpot takes, at the rate ``q_0`` of the start (the masses'
+    velocities and the probe's junction velocities), the edge of its set at rest nearest
+    the probe's force when ``q_0`` is 0 or of the other sign than the probe's rate (it
+    slips from rest, the paper's (16)), else its law's force at ``q_0`` where the law
+    fixes it (:func:`~lumped.solvers.newton.scalar_root.scalar_root`); one whose ``q_0``
+    is the probe's rate (no mass at its ends) keeps the probe's force. The elements the
+    mode locks (``locked``) then take the forces of the balance of accelerations
+    (:func:`~lumped.solvers.nonsmooth.lock_forces.forces_from_accelerations`), which
+    restores the junctions' balances. Where that balance has no solution, or leaves a
+    junction's balance worse than the probe's forces had it (beyond the round-off of its
+    terms; no lock at that junction takes the change), ``F`` is returned as it is.
+    Dashpots on a moving support are left alone (their rates carry the support's).
+
+    Returns
+    -------
+    list of float
+        The forces (``F`` itself when nothing changed or the balance fails).
+    """
+    ea, eb, nodes = scene.elem_a, scene.elem_b, scene.nodes
+    skip = set(known_rate_dashpots(scene, list(range(len(F))))) | {
+        end.element for end in scene.support_ends}
+    out = list(F)
+    for e, el in enumerate(scene.elements):
+        if el.kind != "dashpot" or e in skip or (e < len(locked) and locked[e]):
+            continue
+        kernel = el.law.kernel
+        if not set_valued_at_rest(kernel):
+            continue
+        q0, q_probe = across(v, ea[e], eb[e]), across(v_probe, ea[e], eb[e])
+        if q0 == q_probe:  # (no mass at its ends: the probe's force is the law's at q0)
+            continue
+        if q0 == 0.0 or _turned(q0, q_probe):
+            out[e] = rest_edge(kernel, F_probe[e])
+            continue
+        try:
+            root, fixed = scalar_root(kernel, q0, F_probe[e])
+        except ValueError:
+            continue
+        if fixed and math.isfinite(root):
+            out[e] = root
+    if out == F:
+        return F
+    got = forces_from_accelerations(scene, t, x, v, out,
+                                    [e for e in range(len(F)) if e < len(locked) and locked[e]])
+    if got is None or not all(map(math.isfinite, got)):
+        return F
+    before, after = scene.net_forces(t, F), scene.net_forces(t, got)
+    f = scene.external_forces(t)
+    for i, nd in enumerate(nodes):
+        if isinstance(nd, Mass):
+            continue
+        size = abs(f[i]) + sum(abs(got[e]) for e in range(len(F)) if i in (ea[e], eb[e]))
+        if abs(after[i]) > abs(before[i]) + 8.0 * 2.220446049250313e-16 * size:
+            return F
+    return got
