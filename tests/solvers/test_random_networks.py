@@ -38,7 +38,7 @@ import os
 import numpy as np
 import pytest
 from _convergence import EXTRA_LEVELS, assert_converges
-from _lock_scenes import spring_held_junction_beside_a_stop
+from _lock_scenes import junctions_locked_by_a_stuck_dashpot, spring_held_junction_beside_a_stop
 from _yield_check import check_yield
 from hypothesis import HealthCheck, assume, event, example, given, settings
 from hypothesis import strategies as st
@@ -577,6 +577,12 @@ _COULOMBS_IN_SERIES = Scene(
 #: :func:`_lock_scenes.spring_held_junction_beside_a_stop`).
 _SPRING_HELD_JUNCTION_BESIDE_A_STOP = spring_held_junction_beside_a_stop()
 
+#: A draw of the ``LUMPED_LARGE`` tight run (seed 22044, draw 5611,
+#: :func:`_lock_scenes.junctions_locked_by_a_stuck_dashpot`): two junctions locked
+#: together by a stuck dashpot, the one's dashpot to ground breaking out (``radau5``
+#: bridged 5 times and stopped on its work budget).
+_JUNCTIONS_LOCKED_BY_A_STUCK_DASHPOT = junctions_locked_by_a_stuck_dashpot()
+
 
 @pytest.mark.parametrize("method", LOOPED)
 @settings(_SETTINGS, max_examples=TIGHT_EXAMPLES)
@@ -585,6 +591,7 @@ _SPRING_HELD_JUNCTION_BESIDE_A_STOP = spring_held_junction_beside_a_stop()
 @example(scene=_SPRING_HELD_JUNCTION_BESIDE_A_STOP)
 @example(scene=_STOP_AND_SLIP_BACK)
 @example(scene=_COULOMBS_IN_SERIES)
+@example(scene=_JUNCTIONS_LOCKED_BY_A_STUCK_DASHPOT)
 def test_random_network_tight_tolerance(method: str, scene: Scene) -> None:
     check_tight(scene, method, compiled=False)
 
