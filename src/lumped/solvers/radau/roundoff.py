@@ -65,9 +65,18 @@ ends at 0.035 and 0.038, carrying 0.015): its velocity cycled at 1.3 times that 
 while an HB ``n = 0.8`` dashpot at another junction stopped, and the run crawled through
 bridges for 30 minutes (another draw; 3.5 s now, no bridge: its last bridge followed a
 switch at another junction, whose first step needs no plain tolerance, as it has no
-impact). The compiled twin is
-:func:`lumped.solvers.radau.stage_jit.roundoff_worst_jit` (the same operations in the same
-order, bit for bit).
+impact).
+
+A row may hold two junctions' velocities: a dashpot between them, stuck (``V_b - V_a =
+0``) or slipping. It ties them and fixes neither, so the rounding of its own terms is no
+floor for them: the other junction's velocity enters it at that velocity's own round-off
+(:func:`linked_roundoff`), where a row that holds no other junction velocity (its
+dashpot to ground, say) sets it. Two junctions locked by a stuck dashpot, the one on a
+Bingham dashpot to ground that had just broken out: read alone, the lock's row floored
+both velocities at ``1e-21`` against their rounding ``7e-16``, and backward Euler bridged
+5 times before the work budget stopped the run (issue 29). The compiled twin is
+:func:`lumped.solvers.radau.roundoff_jit.roundoff_worst_jit` (the same operations in the
+same order, bit for bit).
 """
 
 from __future__ import annotations
