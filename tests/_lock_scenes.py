@@ -1,7 +1,8 @@
 """Scenes drawn by the random-network suite that more than one test file runs (issue 29):
 the loaded chain of strings of radau5's tight-tolerance check, a junction on springs
-whose Coulomb link slips, one beside another junction's dashpot stopping, and yield
-dashpots slipping from rest at a junction held by a stuck one."""
+whose Coulomb link slips, one beside another junction's dashpot stopping, yield dashpots
+slipping from rest at a junction held by a stuck one, and two junctions locked together by
+a stuck dashpot while the one's dashpot to ground sticks and breaks out."""
 
 from __future__ import annotations
 
@@ -93,3 +94,30 @@ def yield_slip_from_rest_at_a_held_junction() -> Scene:
          Element("e3", get_law("linear_spring").bind(k=1.0), "m0", "j1"),
          Element("e4", hb.bind(gamma=1.0000000000000002, tau=0.3590082822589278, n=2.0),
                  "m0", "j1")])
+
+
+def junctions_locked_by_a_stuck_dashpot() -> Scene:
+    # A draw of the ``LUMPED_LARGE`` tight run (seed 22044, draw 5611): junctions j0 and j1
+    # locked together by e1 (Herschel-Bulkley ``n = 0.3``, its force 0.4 .. 0.85 of its
+    # yield force, stuck throughout), j0 on the Bingham dashpot e0 to ground, which slips,
+    # sticks at ``t = 0.20484`` and breaks out backwards at ``t = 0.22573``, springs to
+    # two masses, a sine burst on m2 up to ``t = 0.05``. Just after the break-out the
+    # junctions' velocity (``1e-6``) carried e0's rounding, ``ulp(B) gamma = 7e-16``, above
+    # the stage Newton's test ``1e-3 (atol + rtol |v|) = 1e-16``, where e1's row (``V_j1 -
+    # V_j0 = 0``) floored both at ``1e-21``: ``radau5`` bridged 5 times and the work budget
+    # stopped it at ``t = 0.2257586`` (:func:`lumped.solvers.radau.roundoff.linked_roundoff`).
+    hb = get_law("herschel_bulkley")
+    spring = get_law("linear_spring")
+    return Scene(
+        [Junction("j0", x0=-0.99999),
+         Junction("j1", x0=-0.43344976148403436),
+         Mass("m2", m=0.10000230261160267, x0=0.41572929332528274, v0=0.2194850500413712),
+         Mass("m3", m=1.0000230261160268, x0=-1.175494351e-38, v0=0.3333333333333333)],
+        [Element("e0", hb.bind(gamma=4.361695477664007, tau=0.034343951155054224, n=1.0),
+                 "ground", "j0"),
+         Element("e1", hb.bind(gamma=0.13105055149238326, tau=1.0, n=0.3), "j0", "j1"),
+         Element("e2", spring.bind(k=1.0), "j0", "m2"),
+         Element("e3", spring.bind(k=1.0), "j1", "m3"),
+         Element("e4", spring.bind(k=1.0), "j1", "m2"),
+         Element("e5", spring.bind(k=0.7394668943921522), "j0", "j1")],
+        {"m2": SineBurst(amplitude=-0.49222144396399664, omega=1.0, t_off=0.05)})

@@ -38,7 +38,11 @@ import os
 import numpy as np
 import pytest
 from _convergence import EXTRA_LEVELS, assert_converges
-from _lock_scenes import spring_held_junction_beside_a_stop, yield_slip_from_rest_at_a_held_junction
+from _lock_scenes import (
+    junctions_locked_by_a_stuck_dashpot,
+    spring_held_junction_beside_a_stop,
+    yield_slip_from_rest_at_a_held_junction,
+)
 from _yield_check import check_yield
 from hypothesis import HealthCheck, assume, event, example, given, settings
 from hypothesis import strategies as st
@@ -577,6 +581,12 @@ _COULOMBS_IN_SERIES = Scene(
 #: :func:`_lock_scenes.spring_held_junction_beside_a_stop`).
 _SPRING_HELD_JUNCTION_BESIDE_A_STOP = spring_held_junction_beside_a_stop()
 
+#: A draw of the ``LUMPED_LARGE`` tight run (seed 22044, draw 5611,
+#: :func:`_lock_scenes.junctions_locked_by_a_stuck_dashpot`): two junctions locked
+#: together by a stuck dashpot, the one's dashpot to ground breaking out (``radau5``
+#: bridged 5 times and stopped on its work budget).
+_JUNCTIONS_LOCKED_BY_A_STUCK_DASHPOT = junctions_locked_by_a_stuck_dashpot()
+
 
 #: A draw of the ``LUMPED_LARGE`` tight run (session 26, seed 22042 of ``long``, after 3630
 #: passing): a junction hung on a loaded mass by stuck dashpots, its mode kept at a guard by
@@ -613,6 +623,7 @@ _YIELD_SLIP_FROM_REST_AT_A_HELD_JUNCTION = yield_slip_from_rest_at_a_held_juncti
 @example(scene=_COULOMBS_IN_SERIES)
 @example(scene=_KEPT_BY_EVERY_PROBE)
 @example(scene=_YIELD_SLIP_FROM_REST_AT_A_HELD_JUNCTION)
+@example(scene=_JUNCTIONS_LOCKED_BY_A_STUCK_DASHPOT)
 def test_random_network_tight_tolerance(method: str, scene: Scene) -> None:
     check_tight(scene, method, compiled=False)
 

@@ -76,7 +76,8 @@ def test_a_junction_breaking_out_on_a_steep_law_is_not_stepped_over(e3):
 def _step_floor_scene() -> Scene:
     # a Herschel-Bulkley n = 0.3 dashpot to ground and two Coulomb elements meet at
     # junctions beside an implicit spring: at rtol 3.9e-5 the steps fell below their
-    # floor at t = 0.0327 ("step size 1.09e-16 below its floor")
+    # floor at t = 0.0327 ("step size 1.09e-16 below its floor"); they still do with the
+    # stage Newton's plain test of the junctions' velocities (:func:`_plain_junction_test`)
     return Scene([Junction("j0", x0=-0.9999999999999999),
                    Mass("m1", m=0.535894354301168, x0=0.17500680539852875, v0=2.0),
                    Junction("j2", x0=-0.8865281730212411),
@@ -98,9 +99,44 @@ def _step_floor_scene() -> Scene:
                            "j3")])
 
 
-def test_a_step_floor_at_a_junction_is_bridged():
+def _plain_junction_test(monkeypatch) -> None:
+    """The stage Newton's plain test of a junction's velocity in both loops, no floor at
+    its round-off (:mod:`lumped.solvers.radau.roundoff`). The floor of
+    :func:`_step_floor_scene` came from it: j2, hanging from j0 by the dashpot e2, tied
+    j0's velocity in e2's row, which floored j0's test at that row's own terms; since
+    :func:`~lumped.solvers.radau.roundoff.linked_roundoff` the scene runs through
+    (:func:`test_the_step_floor_scene_runs_through_at_its_junctions_round_off`). With the
+    plain test its steps still fall below their floor, in both loops alike."""
+    from lumped.solvers.eventdriven import fast
+    from lumped.solvers.radau import stage, stage_jit
+
+    monkeypatch.setattr(stage, "roundoff_worst", lambda du, U, J, scale, junction, rate,
+                        f, tol, worst, h=1.0, after_impact=False: worst)
+    monkeypatch.setattr(fast, "roundoff_test", lambda: 0)
+    monkeypatch.setattr(stage_jit, "roundoff_test", lambda: 0)
+
+
+def test_the_step_floor_scene_runs_through_at_its_junctions_round_off():
+    # the junction j2 on the dashpot e2 alone moves with j0 (F_e2 = 0): e2's row carries
+    # j0's velocity at j0's own round-off (linked_roundoff); before, it floored j0's test
+    # at e2's terms, every stage solve failed from t = 0.0327 down to the step floor and
+    # backward Euler bridged the stop (in both loops)
+    scene = _step_floor_scene()
+    h = 0.025 / 4
+    sols = [simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
+                     compiled=compiled) for compiled in (False, True)]
+    for sol in sols:
+        assert sol.ok and sol.stats.get("bridges", 0) == 0, sol.message
+    assert np.array_equal(sols[0].data, sols[1].data)
+    ref = simulate(scene, method="bdf1", dt=h / 64, t_end=0.5)
+    assert np.abs(sols[0].x["m1"] - ref.x["m1"][::64]).max() <= 2e-3
+    assert np.abs(sols[0].x["j0"] - ref.x["j0"][::64]).max() <= 2e-3
+
+
+def test_a_step_floor_at_a_junction_is_bridged(monkeypatch):
     # backward Euler bridges the step floor and radau5 goes on; the run converges with
     # the tolerance
+    _plain_junction_test(monkeypatch)
     scene = _step_floor_scene()
     h = 0.025 / 4
     off = simulate(scene, method="radau5", dt=h, t_end=0.5, rtol=h**2, atol=h**3,
@@ -140,6 +176,7 @@ def test_a_bridge_whose_backward_euler_fails_tries_other_steps(monkeypatch):
         return real(scene, t, x, v, F, delta, n, options, restitution, budget)
 
     monkeypatch.setattr(bridge, "run_bridge", first_fails)
+    _plain_junction_test(monkeypatch)
     h = 0.025 / 4
     sol = simulate(_step_floor_scene(), method="radau5", dt=h, t_end=0.5, rtol=h**2,
                    atol=h**3, compiled=False)

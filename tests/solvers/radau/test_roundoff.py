@@ -3,12 +3,19 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
 from lumped.solvers.newton.criteria import ROUNDOFF
-from lumped.solvers.radau.roundoff import junction_columns, rate_rows, roundoff_worst
-from lumped.solvers.radau.stage_jit import roundoff_worst_jit
+from lumped.solvers.radau.roundoff import (
+    junction_columns,
+    linked_roundoff,
+    rate_rows,
+    roundoff_worst,
+)
+from lumped.solvers.radau.roundoff_jit import roundoff_worst_jit
 
 # a mass (node 0) and a junction (node 1) on one element (n = 3 unknowns a stage, 9 in
 # all): the junction's balance row at each stage holds the element's force, the
@@ -189,3 +196,61 @@ def test_a_dashpots_force_at_a_junction_carries_the_rounding_of_the_balance():
     # ... and a correction beyond the balance's rounding still fails
     du[n + 1] = 2.0 * rho
     assert _both(du, J, U, scale, spring, masses, f) > TOL
+
+
+def _locked_junctions(gamma=4.36):
+    # junctions j0, j1 (nodes 0, 1; n = 5 a stage): e0 a Bingham dashpot ground -> j0
+    # slipping backwards (R = q - gamma (F + tau)), e1 stuck between them (R = q =
+    # V_j1 - V_j0: no force term), e2 a spring j1 -> ground holding j1's velocity through
+    # h A V (here 1e-3); their balances 0 = F_e1 - F_e0 (j0) and 0 = F_e2 - F_e1 (j1)
+    masses, spring, n = [0.0, 0.0], [False, False, True], 5
+    J = np.eye(3 * n)
+    U = np.zeros(3 * n)
+    for k in range(3):
+        j0, j1, r0, r1, r2 = (k * n + i for i in range(5))
+        J[j0, j0] = J[j1, j1] = 0.0
+        J[j0, r0], J[j0, r1] = 1.0, -1.0
+        J[j1, r1], J[j1, r2] = 1.0, -1.0
+        J[r0, j0], J[r0, r0] = 1.0, -gamma
+        J[r1, j1], J[r1, j0], J[r1, r1] = 1.0, -1.0, 0.0
+        J[r2, j1] = 1e-3
+        U[k * n:(k + 1) * n] = [-2e-6, -2e-6, -0.0343, -0.845, 0.8]
+    scale = 1e-13 + 1e-10 * np.abs(U)
+    return masses, spring, n, J, U, scale
+
+
+def test_a_junction_locked_to_another_carries_that_ones_round_off():
+    # issue 29, seed 22044: j0's velocity is set by e0's row to e0's rounding, gamma times
+    # the balance's (gamma (|F_e0| + |F_e1|)); e1's row only ties j1 to j0, and read
+    # alone (|V_j1| + |V_j0| = 4e-6) it floored both velocities at 1e-21: corrections of
+    # 7e-16 cycled above the plain test (1e-16) on every step after e0's break-out
+    gamma = 4.36
+    masses, spring, n, J, U, scale = _locked_junctions(gamma)
+    rho0 = gamma * (0.0343 + 0.845) + 2e-6  # (e0's row: the balance's terms, and V_j0)
+    rho1 = 2e-6 + rho0  # (e1's row: V_j1, and V_j0 at its round-off)
+    own = linked_roundoff(list(U), J.tolist(), junction_columns(masses, n),
+                          rate_rows(2, spring), [0.0343 + 0.845 if c else 0.0 for c in
+                                                 junction_columns(masses, n)])
+    assert own[n] == pytest.approx(rho0, rel=1e-12)
+    assert own[n + 1] == pytest.approx(rho1, rel=1e-12)
+    assert own[n + 2] == math.inf  # (no junction's velocity)
+    du = np.zeros(3 * n)
+    du[n], du[n + 1] = 0.5 * ROUNDOFF * rho0, -0.5 * ROUNDOFF * rho0  # (7e-16)
+    assert abs(du[n + 1]) / scale[n + 1] > TOL
+    assert _both(du, J, U, scale, spring, masses) == pytest.approx(0.5 * TOL, rel=1e-9)
+    # ... beyond that rounding, not
+    du[n + 1] = 2.0 * ROUNDOFF * rho1
+    assert _both(du, J, U, scale, spring, masses) > TOL
+
+
+def test_junctions_locked_together_on_springs_alone_keep_their_rows_as_they_are():
+    # no row of a law in the rate sets either velocity alone (e0 a spring now): nothing
+    # is known to carry along e1's row, which is read as before, |V_j1| + |V_j0|
+    masses, spring, n, J, U, scale = _locked_junctions()
+    spring = [True, False, True]
+    own = linked_roundoff(list(U), J.tolist(), junction_columns(masses, n),
+                          rate_rows(2, spring), [1.0] * (3 * n))
+    assert own == [math.inf] * (3 * n)
+    du = np.zeros(3 * n)
+    du[n + 1] = 2.0 * TOL * scale[n + 1]
+    assert _both(du, J, U, scale, spring, masses) == pytest.approx(2.0 * TOL, rel=1e-12)

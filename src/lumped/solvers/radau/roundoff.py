@@ -65,18 +65,28 @@ ends at 0.035 and 0.038, carrying 0.015): its velocity cycled at 1.3 times that 
 while an HB ``n = 0.8`` dashpot at another junction stopped, and the run crawled through
 bridges for 30 minutes (another draw; 3.5 s now, no bridge: its last bridge followed a
 switch at another junction, whose first step needs no plain tolerance, as it has no
-impact). The compiled twin is
-:func:`lumped.solvers.radau.stage_jit.roundoff_worst_jit` (the same operations in the same
-order, bit for bit).
+impact).
+
+A row may hold two junctions' velocities: a dashpot between them, stuck (``V_b - V_a =
+0``) or slipping. It ties them and fixes neither, so the rounding of its own terms is no
+floor for them: the other junction's velocity enters it at that velocity's own round-off
+(:func:`linked_roundoff`), where a row that holds no other junction velocity (its
+dashpot to ground, say) sets it. Two junctions locked by a stuck dashpot, the one on a
+Bingham dashpot to ground that had just broken out: read alone, the lock's row floored
+both velocities at ``1e-21`` against their rounding ``7e-16``, and backward Euler bridged
+5 times before the work budget stopped the run (issue 29). The compiled twin is
+:func:`lumped.solvers.radau.roundoff_jit.roundoff_worst_jit` (the same operations in the
+same order, bit for bit).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from ..newton.criteria import ROUNDOFF
 
-__all__ = ["junction_columns", "rate_rows", "roundoff_worst"]
+__all__ = ["junction_columns", "linked_roundoff", "rate_rows", "roundoff_worst"]
 
 
 def junction_columns(masses: Sequence[float], n: int) -> list[bool]:
@@ -100,14 +110,17 @@ def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence
     r"""The largest ``|du_j| / scale_j`` of a Newton correction ``du`` (``worst``, as the
     caller found it), with the tolerance of a junction's velocity floored at its
     round-off: ``max(scale_j, rho_j / tol)``, ``rho_j = ROUNDOFF min_r (|J_rr| B_j +
-    sum_{u != r} |J_ru| |U_u|) / |J_rj|`` over the rows ``r`` of laws in the rate
+    sum_{u != r} |J_ru| W_u) / |J_rj|`` over the rows ``r`` of laws in the rate
     (``rate[r]``, :func:`rate_rows`) that hold ``u_j`` (when none does: over every row
     that holds it, the springs': then at least ``scale_j / h`` for a step ``h < 1``, and
     with ``after_impact``, the first step after an impact, not that but only ``rho_j`` if
     ``rho_j <= scale_j``), ``r`` also the column of that law's force, and ``B_j = |f_k,i|
     + sum_u |J_ju| |U_u|`` the terms of the junction's balance (row ``j = k n + i``,
     ``f[k][i]`` the external force on it at stage ``k``; see the module notes), at the
-    iterate ``U`` and its Jacobian ``J``; no floor where no row holds ``u_j``.
+    iterate ``U`` and its Jacobian ``J``; no floor where no row holds ``u_j``. A term
+    ``W_u`` is ``|U_u|``, but another junction's velocity in the row enters at its own
+    round-off, ``max(|U_u|, rho_u)`` (:func:`linked_roundoff`; a dashpot between two
+    junctions, stuck or slipping).
 
     ``worst`` is returned as it is when it is within ``tol`` or when another unknown fails
     the test (only a junction's velocity at its round-off is let through).
@@ -124,20 +137,32 @@ def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence
         return worst
     worst = other
     n = len(U) // 3
-    for j in range(len(du)):
+    size = len(U)
+    bals = [0.0] * size
+    for j in range(size):
+        if junction[j]:
+            bal = abs(f[j // n][j % n])  # the junction's balance: row j
+            for u in range(size):
+                bal += abs(J[j][u]) * abs(U[u])
+            bals[j] = bal
+    own = linked_roundoff(U, J, junction, rate, bals)
+    for j in range(size):
         if not junction[j]:
             continue
-        bal = abs(f[j // n][j % n])  # the junction's balance: row j
-        for u in range(len(U)):
-            bal += abs(J[j][u]) * abs(U[u])
+        bal = bals[j]
         rho = 0.0
         for any_row in (False, True):  # the laws in the rate; else any row (springs')
             for r, row in enumerate(J):
                 c = abs(row[j]) if rate[r] or any_row else 0.0
                 if c > 0.0:
                     s = 0.0
-                    for u in range(len(U)):
-                        s += abs(row[u]) * (bal if u == r else abs(U[u]))
+                    for u in range(size):
+                        if u == r:
+                            s += abs(row[u]) * bal
+                        elif u != j and own[u] < math.inf and row[u] != 0.0:
+                            s += abs(row[u]) * max(abs(U[u]), own[u])
+                        else:
+                            s += abs(row[u]) * abs(U[u])
                     s = s / c
                     if rho == 0.0 or s < rho:
                         rho = s
@@ -154,3 +179,66 @@ def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence
         if not r <= worst:
             worst = r
     return worst
+
+
+def linked_roundoff(U: Sequence[float], J: Sequence[Sequence[float]],
+                    junction: Sequence[bool], rate: Sequence[bool],
+                    bals: Sequence[float]) -> list[float]:
+    r"""Per stage unknown: the round-off ``rho_u`` (over ``ROUNDOFF``) of a junction's
+    velocity that a row of a law in the rate holds with another junction's velocity (a
+    dashpot between two junctions), ``inf`` for every other unknown and where it is not
+    known.
+
+    Such a row ties the two velocities; it fixes neither: a dashpot stuck between the
+    junctions ``j0`` and ``j1`` (``V_j1 - V_j0 = 0``, no force term) holds ``j1`` at
+    ``j0``'s velocity, which ``j0``'s own dashpot to ground sets, with its rounding
+    (``ROUNDOFF gamma B_j0``, ``6.5e-15``). Read as ``ROUNDOFF (|V_j0| + |V_j1|)`` the row
+    floored both velocities at ``1e-21`` just after ``j0``'s dashpot broke out: the
+    corrections cycled at ``7e-16``, above the test's ``tol (atol + rtol |v|) = 1e-16``
+    at ``rtol = 1e-10``, every stage solve failed down to the step floor, and backward
+    Euler bridged 5 times before the work budget stopped the run (issue 29). So another
+    junction's velocity in a row enters at its own round-off, known once a row that holds
+    no other junction velocity (or one whose velocity is known) sets it: ``rho_j = min_r
+    (|J_rr| B_j + sum_{u != r} |J_ru| W_u) / |J_rj|`` over such rows, ``W_u = max(|U_u|,
+    rho_u)`` for another junction's velocity, ``|U_u|`` otherwise, swept until no value
+    falls (``bals[j]`` is ``B_j``, see :func:`roundoff_worst`). Without such a row
+    (nothing ties two junctions) every value is ``inf`` at once, and
+    :func:`roundoff_worst` reads its rows as before.
+    """
+    size = len(U)
+    own = [math.inf] * size
+    linked = False
+    for r in range(size):
+        if rate[r]:
+            count = 0
+            for u in range(size):
+                if junction[u] and J[r][u] != 0.0:
+                    count += 1
+            if count > 1:
+                linked = True
+    if not linked:
+        return own
+    for _ in range(size):
+        fell = False
+        for j in range(size):
+            if not junction[j]:
+                continue
+            for r in range(size):
+                row = J[r]
+                c = abs(row[j]) if rate[r] else 0.0
+                if c > 0.0:
+                    s = 0.0
+                    for u in range(size):
+                        if u == r:
+                            s += abs(row[u]) * bals[j]
+                        elif u != j and junction[u] and row[u] != 0.0:
+                            s += abs(row[u]) * max(abs(U[u]), own[u])
+                        else:
+                            s += abs(row[u]) * abs(U[u])
+                    s = s / c
+                    if 0.0 < s < own[j]:
+                        own[j] = s
+                        fell = True
+        if not fell:
+            break
+    return own

@@ -11,8 +11,9 @@ F_k,e`` for an element (``n = N + E``, stages ``k = 0, 1, 2``)::
     R_e^{(b_e)}(q_e(X_k, V_k), F_k,e) = 0,   X_k = x_n + h sum_l a_kl V_l
 
 and simplified Newton on it (converged when ``max_j |dU_j| / scale_j <= tol``, a junction's
-velocity also at its round-off, :func:`roundoff_worst_jit`; the Jacobian refactored when
-the contraction rate exceeds 1/2). Same LU as the reference (singleton rows first), so
+velocity also at its round-off,
+:func:`~lumped.solvers.radau.roundoff_jit.roundoff_worst_jit`; the Jacobian refactored
+when the contraction rate exceeds 1/2). Same LU as the reference (singleton rows first), so
 the two give the same numbers bit for bit.
 
 The scene's branch kernels come in as a function pointer, ``branch_law(e, i, q, F, lawc)`` of
@@ -29,8 +30,8 @@ import numpy as np
 
 from ...codegen.function_types import BRANCH_LAW_TYPE, compiled_address, function_at
 from ...codegen.jit import njit, numba_enabled
-from ..newton.criteria import ROUNDOFF
 from ..newton.linalg_jit import lu_factor_into, lu_solve_into
+from .roundoff_jit import roundoff_worst_jit
 
 __all__ = ["BRANCH_LAW_TYPE", "stage_evaluate", "stage_solve", "compiled_stage_solve",
            "roundoff_test", "with_impact_sign", "stage_solve_at", "stage_address", "STAGE_TYPE"]
@@ -116,62 +117,6 @@ def stage_evaluate(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W
                     J[col, base + b] += Rq
                 if a >= 0:
                     J[col, base + a] -= Rq
-
-
-@njit(cache=True)
-def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst, h, after_impact) -> float:
-    """:func:`lumped.solvers.radau.roundoff.roundoff_worst` (read it for the maths), the
-    junction's velocities read from ``masses`` (``m_i = 0``), the dashpots' rows from
-    ``spring``, ``f[k, i]`` the external forces: the largest ``|du_j| / scale_j`` with a
-    junction velocity's tolerance floored at its round-off (its dashpot's force at the
-    rounding of the junction's balance), when only junction velocities fail the test."""
-    if worst <= tol:
-        return worst
-    N = masses.shape[0]
-    size = U.shape[0]
-    n = size // 3
-    other = 0.0
-    for j in range(size):
-        i = j % n
-        if not (i < N and masses[i] == 0.0):
-            r = abs(du[j]) / scale[j]
-            if not r <= other:
-                other = r
-    if not other <= tol:
-        return worst
-    worst = other
-    for j in range(size):
-        i = j % n
-        if not (i < N and masses[i] == 0.0):
-            continue
-        bal = abs(f[j // n, i])  # the junction's balance: row j
-        for u in range(size):
-            bal += abs(J[j, u]) * abs(U[u])
-        rho = 0.0
-        for any_row in (False, True):  # the laws in the rate; else any row (springs')
-            for row in range(size):
-                e = row % n - N
-                c = abs(J[row, j]) if (e >= 0 and not spring[e]) or any_row else 0.0
-                if c > 0.0:
-                    s = 0.0
-                    for u in range(size):
-                        s += abs(J[row, u]) * (bal if u == row else abs(U[u]))
-                    s = s / c
-                    if rho == 0.0 or s < rho:
-                        rho = s
-            if rho > 0.0:
-                break
-        tol_j = max(scale[j], ROUNDOFF * rho / tol)
-        if rho > 0.0 and any_row:  # (springs' rows alone: an index-2 velocity)
-            if after_impact:
-                if ROUNDOFF * rho > scale[j]:
-                    tol_j = scale[j]  # (their rounding beyond the velocity's own tolerance)
-            elif h < 1.0:
-                tol_j = max(tol_j, scale[j] / h)
-        r = abs(du[j]) / tol_j
-        if not r <= worst:
-            worst = r
-    return worst
 
 
 def stage_solve(branch_law, lawc, masses, ea, eb, spring, lock_q, modes, A, W, U, h, x_n, v_n, f,
