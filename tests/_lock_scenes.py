@@ -121,3 +121,21 @@ def junctions_locked_by_a_stuck_dashpot() -> Scene:
          Element("e4", spring.bind(k=1.0), "j1", "m2"),
          Element("e5", spring.bind(k=0.7394668943921522), "j0", "j1")],
         {"m2": SineBurst(amplitude=-0.49222144396399664, omega=1.0, t_off=0.05)})
+
+
+def two_strings_stopped_together() -> Scene:
+    # the 2618th draw of the LUMPED_LARGE tight run (seed 22045): m0 taut on the string e0
+    # to ground, m1 pulled up by a load of 221 until the string e1 from m0 goes taut; both
+    # move up until m0 reaches e0's length again and an impact stops both, the load keeping
+    # both strings taut (tests/solvers/eventdriven/test_radau5_chain_impact.py)
+    string = get_law("string_spring")
+    return Scene(
+        [Mass("m0", m=1.0, x0=0.6710605383456154, v0=1.5015005446176177),
+         Mass("m1", m=1.0, x0=0.08534027660141175, v0=-1.4205672971659248e-99),
+         Mass("m2", m=1.0, x0=7.82877556810346e-306, v0=2.1141156561281768e-55)],
+        [Element("e0", string.bind(k=17.969410869328886, L=0.6720605383456154), "ground", "m0"),
+         Element("e1", string.bind(k=76.98447979814374, L=0.03205626107396782), "m0", "m1"),
+         Element("e2", get_law("implicit_spring").bind(k=0.1084546414232932, L0=0.001,
+                                                       F0=39.08534189049614), "m0", "m2"),
+         Element("e3", get_law("newtonian").bind(c=0.3763991381017348), "m2", "m0")],
+        {"m1": 221.02329860463186})

@@ -41,6 +41,7 @@ from _convergence import EXTRA_LEVELS, assert_converges
 from _lock_scenes import (
     junctions_locked_by_a_stuck_dashpot,
     spring_held_junction_beside_a_stop,
+    two_strings_stopped_together,
     yield_slip_from_rest_at_a_held_junction,
 )
 from _yield_check import check_yield
@@ -614,6 +615,12 @@ _KEPT_BY_EVERY_PROBE = Scene(
 _YIELD_SLIP_FROM_REST_AT_A_HELD_JUNCTION = yield_slip_from_rest_at_a_held_junction()
 
 
+#: A draw of the ``LUMPED_LARGE`` tight run (seed 22045, draw 2618,
+#: :func:`_lock_scenes.two_strings_stopped_together`): two masses on a taut string stopped
+#: together by the other string; the choice after the impact read the held string slack.
+_TWO_STRINGS_STOPPED_TOGETHER = two_strings_stopped_together()
+
+
 @pytest.mark.parametrize("method", LOOPED)
 @settings(_SETTINGS, max_examples=TIGHT_EXAMPLES)
 @given(scene=networks())
@@ -624,6 +631,7 @@ _YIELD_SLIP_FROM_REST_AT_A_HELD_JUNCTION = yield_slip_from_rest_at_a_held_juncti
 @example(scene=_KEPT_BY_EVERY_PROBE)
 @example(scene=_YIELD_SLIP_FROM_REST_AT_A_HELD_JUNCTION)
 @example(scene=_JUNCTIONS_LOCKED_BY_A_STUCK_DASHPOT)
+@example(scene=_TWO_STRINGS_STOPPED_TOGETHER)
 def test_random_network_tight_tolerance(method: str, scene: Scene) -> None:
     check_tight(scene, method, compiled=False)
 

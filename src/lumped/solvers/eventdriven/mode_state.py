@@ -17,7 +17,7 @@ from collections import deque
 from ...scene import Mass, Scene
 from ...scene.supports import support_time
 from ..implicit.initial_slip import start_at_known_rates
-from ..modes.after_impact import hold_impacted_locks, release_resting_locks
+from ..modes.after_impact import held_through, hold_impacted_locks, release_resting_locks
 from ..modes.choice import select_modes
 from ..modes.finite_stop import take_stop
 from ..modes.force_bounds import onto_slip_ends, slip_beyond_joint_bounds
@@ -167,8 +167,8 @@ class ModeState:
             if isinstance(sel, str):
                 return sel
             new, v_p, F_p = sel
-            hold_impacted_locks(scene, lbs, t, [e for e, _ in hit[0]], scale_v, x, v, F,
-                                new, F_p, rtol)
+            hold_impacted_locks(scene, lbs, t, held_through(scene, lbs, modes, hit[0]),
+                                scale_v, x, v, F, new, F_p, rtol)
         was = list(new)
         for e in release_resting_locks(scene, lbs, t, modes, scale_v, x, v, F, new, F_p):
             if any(e == k for k, _ in hit[0]):  # (impacted, then slack at once: recorded)
