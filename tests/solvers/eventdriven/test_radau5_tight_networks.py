@@ -486,9 +486,13 @@ def test_two_equal_coulomb_elements_slipping_in_series_leave_the_junction_to_its
     np.testing.assert_allclose(y[:, col("F_e0")], tau, rtol=1e-12)
     np.testing.assert_allclose(y[:, col("F_e3")], tau, rtol=1e-12)
     k2, k4 = 0.31622776601683794, 0.6493816315762113
-    # (the dense output of an index-2 velocity: 1.2e-7 off on the first step, h = 0.017)
+    # (the dense output of an index-2 velocity on the first step, h = 0.018: it starts
+    # from the event probe's velocity of j0, off by the positions' rounding over the
+    # probe, a few ulp(x) / h_p; 2.6e-9 (1.6e-7 relative) from the start as it was, 5.6e-8
+    # (3.5e-6) from the start's junctions at t = 0, which moves the event's state by
+    # round-off)
     np.testing.assert_allclose(y[:, col("v_j0")], k4 / (k2 + k4) * y[:, col("v_m1")],
-                               rtol=1e-6, atol=1e-12)
+                               rtol=5e-6, atol=1e-12)
     assert_within_bdf2s_own_error(scene, sol, ("j0", "m1"), dt, 0.5, 4)
 
 

@@ -21,6 +21,7 @@ from ..modes.after_impact import held_through, hold_impacted_locks, release_rest
 from ..modes.choice import select_modes
 from ..modes.finite_stop import take_stop
 from ..modes.force_bounds import onto_slip_ends, slip_beyond_joint_bounds
+from ..modes.junctions_at import junctions_at
 from ..modes.lock_events import apply_impacts, hold_rate_locks, snap_to_locks
 from ..modes.mode_guess import probe_state, try_modes
 from ..nonsmooth.locks import IntervalLog, indeterminate_elements, lock_parallel_rates, prefer_locks
@@ -174,16 +175,16 @@ class ModeState:
             if any(e == k for k, _ in hit[0]):  # (impacted, then slack at once: recorded)
                 events.append(Event(t, names[e], "switch", was[e], new[e]))
         if not self.state_stays(t, cause, new, bool(hit[0]), x, v, F):
-            for p in range(self.N):
-                if not self.is_mass[p]:
-                    v[p] = v_p[p]
-            # at t = 0 the consistent initial forces stay, unless they miss a law at the
-            # probe's junction velocities (the initial state can leave a junction between
-            # two slipping dashpots unresolved); dashpots at known rates (and, after the
-            # probe's, yield ones at junctions) take their laws' at t = 0 (initial_slip)
+            # the probe's junction velocities, at t = 0 those of t itself (junctions_at);
+            # there the consistent initial forces stay unless they miss a law (the initial
+            # state can leave a junction between two slipping dashpots unresolved), and
+            # dashpots at known rates (and yield ones at junctions) take their laws' at t
+            got = junctions_at(scene, lbs, new, t, x, v, v_p, F_p) if cause == "start" else None
+            v_t, F_t = got or (v_p, F_p)
+            v[:] = [vi if mass else w for vi, w, mass in zip(v, v_t, self.is_mass, strict=True)]
             taken = cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
                                                       scene.elongations(x, v), F)
-            F[:] = F_p if taken else F
+            F[:] = F_t if taken else F
             if cause == "start":
                 v[:], F[:] = start_at_known_rates(scene, v, F, v_p, F_p, [
                     lbs[e].info[k].locks for e, k in enumerate(new)], (t, x) if taken else None)
@@ -329,10 +330,9 @@ class ModeState:
         return sel
 
     def _locked(self, sel: tuple, h_probe: float) -> tuple[list[int], list[float], list[float]]:
-        """The probe's ``(modes, v_p, F_p)`` with the dashpots that sit on a lock put on it
-        (:func:`~lumped.solvers.nonsmooth.locks.prefer_locks`,
-        :func:`~lumped.solvers.nonsmooth.locks.lock_parallel_rates`; ``h_probe`` the probe's
-        size)."""
+        """The probe's ``(modes, v_p, F_p)`` (``h_probe`` its size) with the dashpots that
+        sit on a lock put on it (:func:`~lumped.solvers.nonsmooth.locks.prefer_locks`,
+        :func:`~lumped.solvers.nonsmooth.locks.lock_parallel_rates`)."""
         scene, lbs = self.scene, self.lbs
         new, v_p, F_p = sel
         new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked

@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 
 from ..modes.guards import fold_crossed
+from ..modes.junctions_at import rate_lock_chains
 from ..radau.flat_start import FlatEnds, flat_start
 from ..radau.rows import row_of
 from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
@@ -186,9 +187,8 @@ class StepPass:
         self._accept(sol, h, t_stop if to_stop else t + h, to_stop, h_min, quot, err_norm)
 
     def flat_ends(self) -> list[int]:
-        """The elements held on a branch flat at its end and starting at that end
-        (:class:`~lumped.solvers.radau.flat_start.FlatEnds`: once per state), none with
-        moving supports."""
+        """The elements held on a branch flat at its end and starting there, none with
+        moving supports (:class:`~lumped.solvers.radau.flat_start.FlatEnds`: once per state)."""
         if self.frame is not None:
             return []
         if getattr(self, "_flat", None) is None:
@@ -206,7 +206,7 @@ class StepPass:
             net_n = self.scene.net_forces(math.nextafter(t, math.inf) if (
                 bi > 0 and t == self.breaks[bi - 1]) else t, self.F)
             flat_start(self.system, U, h, self.x, self.v, self.F, net_n, self._flat.starts,
-                       self.guards, ends)
+                       self.guards, ends, rate_lock_chains(self.scene, self.lbs, self.modes))
         return U
 
     def _failed(self, h: float, h_min: float) -> None:

@@ -310,12 +310,14 @@ def junction_slips_at_start(scene: Scene, t: float, x: list[float], v: list[floa
     1.5``, ``4.5e-5`` for ``n = 2``, at ``h_p = 5e-10``, ``|a| = 4``) beside a start rate
     of round-off (the probe's junction velocity, ``-2e-35``): a dashpot at rest above its
     yield force. Each such dashpot takes, at the rate ``q_0`` of the start (the masses'
-    velocities and the probe's junction velocities), the edge of its set at rest nearest
-    the probe's force when ``q_0`` is 0 or of the other sign than the probe's rate (it
-    slips from rest, the paper's (16)), else its law's force at ``q_0`` where the law
-    fixes it (:func:`~lumped.solvers.newton.scalar_root.scalar_root`); one whose ``q_0``
-    is the probe's rate (no mass at its ends) keeps the probe's force. The elements the
-    mode locks (``locked``) then take the forces of the balance of accelerations
+    velocities and row 0's junction velocities: those of ``t`` itself,
+    :mod:`lumped.solvers.modes.junctions_at`, or the probe's where that fails), the edge
+    of its set at rest nearest the probe's force when ``q_0`` is 0 or of the other sign
+    than the probe's rate (it slips from rest, the paper's (16)), else its law's force at
+    ``q_0`` where the law fixes it
+    (:func:`~lumped.solvers.newton.scalar_root.scalar_root`); one whose ``q_0`` is the
+    probe's rate keeps its force. The elements the mode locks (``locked``) then take the
+    forces of the balance of accelerations
     (:func:`~lumped.solvers.nonsmooth.lock_forces.forces_from_accelerations`), which
     restores the junctions' balances. Where that balance has no solution, or leaves a
     junction's balance worse than the probe's forces had it (beyond the round-off of its
@@ -338,7 +340,7 @@ def junction_slips_at_start(scene: Scene, t: float, x: list[float], v: list[floa
         if not set_valued_at_rest(kernel):
             continue
         q0, q_probe = across(v, ea[e], eb[e]), across(v_probe, ea[e], eb[e])
-        if q0 == q_probe:  # (no mass at its ends: the probe's force is the law's at q0)
+        if q0 == q_probe:  # (the probe's force is the law's at q0)
             continue
         if q0 == 0.0 or _turned(q0, q_probe):
             out[e] = rest_edge(kernel, F_probe[e])

@@ -6,5 +6,6 @@
 :mod:`.mode_guess_jit`), :mod:`.lock_events` (impacts, locks and their cones at an
 event), :mod:`.split_kink` (kinks of the split among locks in a step) and :mod:`.stuck`
 (stuck intervals taken in one piece; their static balance :mod:`.static_balance`;
-compiled: :mod:`.stuck_jit`).
+compiled: :mod:`.stuck_jit`), :mod:`.junctions_at` (the junctions' velocities at the
+start's ``t`` itself, not at the end of its probe).
 """

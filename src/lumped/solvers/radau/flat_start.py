@@ -12,15 +12,21 @@ every step size down to the floor (issue 29: seed 191 of ``benchmarks/tight_hunt
 
 :func:`flat_start` starts such a stage on the branch instead: the velocities by an
 explicit predictor, ``V_k,i = v_n,i + c_k h net_i(t_n, F_n) / m_i`` (a junction keeps
-``v_n,i``), and the force of each element at its flat end from the branch's inverse at the
-predicted rate, ``F_k = G(q_k)`` (:meth:`lumped.codegen.branches.LawBranches.
+``v_n,i``, unless dashpots on rate locks tie it to a mass or ground: it then moves with
+them, ``follow``), and the force of each element at its flat end from the branch's inverse
+at the predicted rate, ``F_k = G(q_k)`` (:meth:`lumped.codegen.branches.LawBranches.
 flat_start_for`; ``tau + (q_k / gamma)^{1/n}``). The guess is kept only when each such
 element stays on its held branch (its stage guards ``>= 0`` at every stage): a load that
 drives it back off its branch leaves the constant guess. The other elements' guards are
-not read: the predictor moves each mass on its own, so a lock between two masses, or
-between a mass and a junction, reads a rate it does not hold (Newton restores it; seed
-191: a Coulomb element stuck between two masses read ``-6e-13``). Read from the law's
-branch, never from its name.
+not read: the predictor moves each mass on its own, so a lock between two masses reads a
+rate it does not hold (Newton restores it; seed 191: a Coulomb element stuck between two
+masses read ``-6e-13``). Read from the law's branch, never from its name.
+
+A junction that stuck dashpots tie to a mass starting from rest, beside a
+Herschel-Bulkley ``n = 1.5`` dashpot to ground that slips from rest at its yield force
+(row 0 of ``radau5``, its junction at the mass's rate 0, :mod:`lumped.solvers.modes.
+junctions_at`): kept at ``v_n = 0``, it gave that dashpot the rate 0 and ``F_k = tau``,
+Newton's ``dR/dF = 0`` again, and every step failed down to the floor (issue 29).
 """
 
 from __future__ import annotations
@@ -87,18 +93,24 @@ class FlatEnds:
 
 def flat_start(system, U: list[float], h: float, x_n: list[float], v_n: list[float],
                F_n: list[float], net_n: Sequence[float], starts: Sequence[Callable | None],
-               guards: Sequence[Callable], ends: Sequence[int]) -> bool:
+               guards: Sequence[Callable], ends: Sequence[int],
+               follow: Sequence[tuple[int, int, float]] = ()) -> bool:
     """Put the on-branch guess (see the module notes) into ``U`` (laid out as the stage
     system's, :class:`~lumped.solvers.radau.stage.StageSystem`) for a step of size ``h``
     from ``(x_n, v_n, F_n)``, ``net_n`` the nodes' net forces at ``t_n``, ``ends`` the
-    elements at their flat ends (:func:`at_flat_end`). Returns whether it did; ``U`` is
-    unchanged when the guess takes one of them off its held branch (or is not finite)."""
+    elements at their flat ends (:func:`at_flat_end`), ``follow`` the junctions that move
+    with a node, ``(j, i, L)``: ``V_k,j = V_k,i + L`` (``i = -1``: ground; in order, as
+    :func:`lumped.solvers.modes.junctions_at.rate_lock_chains` gives them). Returns
+    whether it did; ``U`` is unchanged when the guess takes one of them off its held
+    branch (or is not finite)."""
     N, n, m = system.N, system.n, system.m
     trial = list(U)
     for k in range(3):
         for i in range(N):
             if m[i] > 0.0:
                 trial[k * n + i] = v_n[i] + C[k] * h * net_n[i] / m[i]
+        for j, i, L in follow:  # (a junction on rate locks: its mass's rate)
+            trial[k * n + j] = (trial[k * n + i] if i >= 0 else 0.0) + L
     for e in ends:
         q = system.element_nodes(trial, h, x_n, v_n, F_n, e)[0]
         for k in range(3):
