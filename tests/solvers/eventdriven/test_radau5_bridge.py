@@ -304,17 +304,24 @@ def _junction_on_a_stuck_coulomb_element() -> tuple[Scene, float]:
     return scene, 0.016967846511721136
 
 
-def test_a_mode_kept_at_a_guard_keeps_the_junction_state_at_t():
+@pytest.mark.parametrize("second_landing", [True, False])
+def test_a_mode_kept_at_a_guard_keeps_the_junction_state_at_t(monkeypatch, second_landing):
     """At t = 0.2093 the full laws keep the mode at e2's guard only with the probe 10^6
     times the first, whose state is 4e-3 s later: the junction took its velocity, a rate of
     0.04-0.23 against m0 at t, crossed e2's guard at t again, and radau5 landed on it again and
     again with steps of 3e-14 s until the creep was bridged (41 steps; x off a tight run by
-    6.7e-4). A kept mode now keeps the junction velocities and forces at t (issue 29)."""
+    6.7e-4). A kept mode now keeps the junction velocities and forces at t (issue 29), and
+    takes the state of the shortest probe that read it (issue 29's "a mode kept at a guard
+    event returns the longest probe's junction velocities"): the scene runs through without
+    the state at ``t`` of a second landing too (``second_landing`` False:
+    :meth:`ModeState.state_stays` off), where the longest probe's state crept to a bridge."""
+    if not second_landing:
+        monkeypatch.setattr(ModeState, "state_stays", lambda self, *args: False)
     scene, h = _junction_on_a_stuck_coulomb_element()
     sol = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=h**2, atol=h**3,
                    compiled=False, max_steps=5000)
     assert sol.ok and sol.message == "" and sol.stats.get("bridges", 0) == 0
-    assert sol.stats["steps"] <= 25  # (20)
+    assert sol.stats["steps"] <= 25  # (20; 19 without the second landing's state)
     # the string's impacts
     assert [ev.element for ev in sol.events if ev.kind == "impact"] == ["e3", "e3"]
     fine = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=1e-10, atol=1e-12,
@@ -349,7 +356,7 @@ def test_a_creep_above_the_step_floor_is_bridged(monkeypatch):
     the step floor, so the creep was not seen: 5000 steps took 77 s, and the LUMPED_LARGE
     run hung on the draw. Steps below 1e-12 of the run count as creeping too; the point
     is bridged. (The shortest probe's state, taken now, runs through in 19 steps without
-    ``state_stays``: :func:`test_the_shortest_probes_state_needs_no_second_landing`.)"""
+    ``state_stays``: :func:`test_a_mode_kept_at_a_guard_keeps_the_junction_state_at_t`.)"""
     _kept_from_the_longest_probe(monkeypatch)
     scene, h = _junction_on_a_stuck_coulomb_element()
     kept = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=h**2, atol=h**3,
@@ -367,20 +374,6 @@ def test_a_creep_above_the_step_floor_is_bridged(monkeypatch):
     assert sol.ok and kept.stats["steps"] < sol.stats["steps"] < 100
     assert sol.stats["bridges"] == 1 and "creep floor" in sol.message and "'e2'" in sol.message
     # the string's impacts, before and after the bridge
-    assert [ev.element for ev in sol.events if ev.kind == "impact"] == ["e3", "e3"]
-
-
-def test_the_shortest_probes_state_needs_no_second_landing(monkeypatch):
-    """The kept mode's state from the shortest probe that read it (issue 29's "a mode kept
-    at a guard event returns the longest probe's junction velocities"): the scene above
-    runs through without the state at ``t`` of a second landing (:meth:`ModeState.
-    state_stays` off), where the longest probe's state crept to a bridge."""
-    monkeypatch.setattr(ModeState, "state_stays", lambda self, *args: False)
-    scene, h = _junction_on_a_stuck_coulomb_element()
-    sol = simulate(scene, method="radau5", dt=h, t_end=30 * h, rtol=h**2, atol=h**3,
-                   compiled=False, max_steps=5000)
-    assert sol.ok and sol.message == "" and sol.stats.get("bridges", 0) == 0
-    assert sol.stats["steps"] <= 25  # (19)
     assert [ev.element for ev in sol.events if ev.kind == "impact"] == ["e3", "e3"]
 
 
