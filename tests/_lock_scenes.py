@@ -139,3 +139,22 @@ def two_strings_stopped_together() -> Scene:
                                                        F0=39.08534189049614), "m0", "m2"),
          Element("e3", get_law("newtonian").bind(c=0.3763991381017348), "m2", "m0")],
         {"m1": 221.02329860463186})
+
+
+def mass_stopped_by_a_string_between_yield_dashpots() -> Scene:
+    # a draw of the LUMPED_LARGE tight run (seed 22046, draw 2841), shrunk: m0, pushed by a
+    # sine burst and dragging m3 through the Bingham dashpot e3, is stopped by the string
+    # e0 at x = 0.01 between a Bingham (e4) and a Herschel-Bulkley n = 2 (e5) dashpot to
+    # ground, and held there until the burst ends
+    # (tests/solvers/eventdriven/test_radau5_string_stop.py)
+    bingham = get_law("bingham")
+    return Scene(
+        [Mass("m0", m=1.0), Mass("m3", m=6.065507752210283, v0=0.3798747617885483)],
+        [Element("e0", get_law("string_spring").bind(k=1.1148689913102063, L=0.01),
+                 "ground", "m0"),
+         Element("e3", bingham.bind(gamma=1.0, tau=0.07504090132904585), "m0", "m3"),
+         Element("e4", bingham.bind(gamma=1.0, tau=0.03405872114191103), "m0", "ground"),
+         Element("e5", get_law("herschel_bulkley").bind(gamma=3.7106713747905107,
+                                                        tau=0.8867371614238684, n=2.0),
+                 "ground", "m0")],
+        {"m0": SineBurst(35.532712795499286, 2.154434690031884, 0.18186971159620458)})

@@ -343,7 +343,7 @@ def _kept_from_the_longest_probe(monkeypatch) -> None:
                                                  1e6 * h_probe, self.settings.options)
             if not isinstance(far, str) and far[0] == sel[0]:
                 self.decided[:] = [h_probe]
-                return self._locked(far, 1e6 * h_probe)
+                return self._locked(far, 1e6 * h_probe, x)
         return sel
 
     monkeypatch.setattr(ModeState, "_choose", longest)

@@ -24,7 +24,8 @@ from ..modes.force_bounds import onto_slip_ends, slip_beyond_joint_bounds
 from ..modes.junctions_at import junctions_at
 from ..modes.lock_events import apply_impacts, hold_rate_locks, snap_to_locks
 from ..modes.mode_guess import probe_state, try_modes
-from ..nonsmooth.locks import IntervalLog, indeterminate_elements, lock_parallel_rates, prefer_locks
+from ..modes.probe_locks import lock_probe_rates
+from ..nonsmooth.locks import IntervalLog, indeterminate_elements
 from ..status import Event, Status
 from .mode_parts import laws_hold, mode_cones, mode_parts
 from .setup import accumulating, too_many
@@ -170,6 +171,7 @@ class ModeState:
             new, v_p, F_p = sel
             hold_impacted_locks(scene, lbs, t, held_through(scene, lbs, modes, hit[0]),
                                 scale_v, x, v, F, new, F_p, rtol)
+            new, v_p, F_p = self._locked((new, v_p, F_p), h0 * 1000.0 ** k, x)  # (at rate 0)
         was = list(new)
         for e in release_resting_locks(scene, lbs, t, modes, scale_v, x, v, F, new, F_p):
             if any(e == k for k, _ in hit[0]):  # (impacted, then slack at once: recorded)
@@ -286,7 +288,7 @@ class ModeState:
                          modes if cause == "guard" else None, 3, self.fast, used=used)
                if guess else None) or ""
         if sel:
-            sel = self._locked(sel, h_probe)
+            sel = self._locked(sel, h_probe, x)
             if undecided(sel):  # the locks undid the guess, or a mode left twice at t
                 sel = ""
         first, h_first = None, h0  # the shortest probe's mode and size
@@ -296,7 +298,7 @@ class ModeState:
                 # (a mode the locks below turn back into the old one is undecided too: a
                 # slow break-out of locks in parallel under a load just past their joint
                 # yield force moves the probe by less than its round-off, issue 11)
-                sel = self._locked(sel, h_probe)
+                sel = self._locked(sel, h_probe, x)
                 if first is None:
                     first, h_first = sel, h_probe
                 if not undecided(sel):
@@ -316,7 +318,7 @@ class ModeState:
                 h_short = max(h0 * 1e-2**k, 1e2 * _EPS * max(1.0, abs(t)))
                 got = select_modes(scene, lbs, t, x, v, F, h_short, self.settings.options)
                 if not isinstance(got, str):
-                    return self._locked(got, h_short)
+                    return self._locked(got, h_short, x)
         if isinstance(sel, str) and cause == "guard" and self.cones:
             # ... and the guessed modes, locks in parallel by the minimum-norm correction
             # (a junction's Herschel-Bulkley n = 0.3 dashpot stopping exactly at its
@@ -326,21 +328,17 @@ class ModeState:
             got = try_modes(scene, lbs, guess, t, x, v, F, h0, modes, 3, None,
                             min_norm=True) if guess else None
             if got is not None:
-                return self._locked(got, h0)
+                return self._locked(got, h0, x)
         return sel
 
-    def _locked(self, sel: tuple, h_probe: float) -> tuple[list[int], list[float], list[float]]:
-        """The probe's ``(modes, v_p, F_p)`` (``h_probe`` its size) with the dashpots that
-        sit on a lock put on it (:func:`~lumped.solvers.nonsmooth.locks.prefer_locks`,
-        :func:`~lumped.solvers.nonsmooth.locks.lock_parallel_rates`)."""
-        scene, lbs = self.scene, self.lbs
-        new, v_p, F_p = sel
-        new = prefer_locks(scene, lbs, new, v_p, F_p)  # exactly on a lock: locked
-        # held at rate 0 by locks: locked, unless the probe moved it by more than the
-        # forces' round-off (sqrt(eps) of the largest) does over the probe step
-        rate_tol = 1.4901161193847656e-08 * h_probe * max(abs(f) for f in F_p) / self.m_min
-        new = lock_parallel_rates(scene, lbs, new, v_p, F_p, rate_tol)
-        return new, v_p, F_p
+    def _locked(self, sel: tuple, h_probe: float,
+                x: list[float]) -> tuple[list[int], list[float], list[float]]:
+        """The probe's ``(modes, v_p, F_p)`` (``h_probe`` its size, from positions ``x``)
+        with the dashpots it leaves at rate 0 on their locks
+        (:func:`~lumped.solvers.modes.probe_locks.lock_probe_rates`)."""
+        new, F_p = lock_probe_rates(self.scene, self.lbs, sel[0], sel[1], sel[2], x, h_probe,
+                                    self.m_min)
+        return new, sel[1], F_p
 
     def _guesses(self, cause: str, x: list[float], v: list[float], F: list[float],
                  cones: bool = False) -> list[list[int]]:
