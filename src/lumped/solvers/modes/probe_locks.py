@@ -22,11 +22,12 @@ rest_edge`), and locked there when the other locks hold its rate; one left slipp
 its force. Held on the flat slip branch at rate 0, the stage Newton meets a double root
 (its corrections halve each iteration) and fails at every step size: a mass stopped on a
 string at ``x = 0.01`` between a Bingham and a Herschel-Bulkley ``n = 2`` dashpot,
-three steps in four failed for 0.1 s of the run, 90 s in all (1 s now). This holds while
-another mass moves, so that the run steps; while every mass is at rest the run holds its
-state without steps (:mod:`lumped.solvers.modes.stuck`), where a dashpot on its slip
-branch at rate 0 keeps its yield force and the string carries the rest of the load (the
-split ``bdf2`` keeps; any split within the locks' sets is a solution).
+three steps in four failed for 0.1 s of the run, 90 s in all (1 s now). The positions'
+round-off counts only while some mass moves (beyond it), so that the run steps; while
+every mass is at rest the run holds its state without steps
+(:mod:`lumped.solvers.modes.stuck`), where a dashpot on its slip branch at rate 0 keeps
+its yield force and the string carries the rest of the load (the split ``bdf2`` keeps;
+any split within the locks' sets is a solution).
 """
 
 from __future__ import annotations
@@ -37,6 +38,8 @@ from ...scene import Mass, Scene
 from ...scene.network import across
 from ..implicit.initial_slip import rest_edge, set_valued_at_rest
 from ..nonsmooth.locks import lock_parallel_rates, prefer_locks
+
+__all__ = ["lock_probe_rates"]
 
 _EPS = 2.220446049250313e-16
 _SQRT_EPS = 1.4901161193847656e-08
