@@ -51,18 +51,12 @@ def test_a_string_held_rate_within_the_positions_round_off_locks_at_the_edges():
     assert F_out[0] == F[0] and F_out[3] == F[3]
 
 
-def test_a_rate_beyond_the_positions_round_off_keeps_the_slip_branches():
+@pytest.mark.parametrize(("factor", "v1"), [(4.0, 0.3), (0.5, 0.0)],
+                         ids=["beyond the round-off", "every mass at rest"])
+def test_the_slip_branches_stay(factor, v1):
+    # a rate beyond the positions' round-off slips; with every mass at rest the run is
+    # held without steps (modes.stuck), where the split of the slip branches stays
     h_p = 2e-8
-    v0 = 4.0 * 4 * EPS * 0.5 / h_p
-    scene, lbs, modes, v, F, x, h_p = _probe(v0, 0.3, h_p)
-    new, F_out = lock_probe_rates(scene, lbs, modes, v, F, x, h_p, 1.0)
-    assert new == modes and F_out == F
-
-
-def test_every_mass_at_rest_keeps_the_slip_branches_at_their_yield_forces():
-    # held without steps (modes.stuck): the split of the slip branches stays
-    h_p = 2e-8
-    v0 = 0.5 * 4 * EPS * 0.5 / h_p
-    scene, lbs, modes, v, F, x, h_p = _probe(v0, 0.0, h_p)
+    scene, lbs, modes, v, F, x, h_p = _probe(factor * 4 * EPS * 0.5 / h_p, v1, h_p)
     new, F_out = lock_probe_rates(scene, lbs, modes, v, F, x, h_p, 1.0)
     assert new == modes and F_out == F
