@@ -57,3 +57,26 @@ def test_a_start_velocity_the_probe_resolves_is_unchanged():
     assert sol.v["m0"][0] == 1e-6
     assert sol.F["e0"][0] > 1.0
     assert len(sol.events) == 1 and sol.events[0].t == pytest.approx(1e-6, rel=1e-4)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_mass_a_stuck_coulomb_link_holds_at_the_start_has_its_other_dashpots_at_rest(
+        compiled):
+    # A draw of the tight property (LUMPED_LARGE=1000, seed 22054, shrunk): one mass at
+    # v0 = 4.4e-13 on a Herschel-Bulkley n = 2 dashpot and a Coulomb link, both to ground;
+    # it stops at t = 2.2e-13, inside the start probe. The start's mode locks the Coulomb
+    # link only (the probe's rate, 3.8e-17, is not round-off of v0), and its lock sets
+    # v = 0; row 0 kept the Herschel-Bulkley force at v0, tau + sqrt(v0 / gamma) = 1 +
+    # 6.6e-7: v = 0 beside a force above the yield force. The mass the lock holds is now
+    # at the lock's rate before the known-rate dashpots take their forces.
+    scene = Scene([Mass("m0", m=1.0, x0=0.0, v0=4.4168442794232634e-13)],
+                  [Element("e0", get_law("herschel_bulkley").bind(gamma=1.0, tau=1.0, n=2.0),
+                           "ground", "m0"),
+                   Element("e1", get_law("coulomb").bind(tau=1.0, r=1.0), "ground", "m0")])
+    sol = simulate(scene, method="radau5", dt=0.025 / 4, t_end=0.5, rtol=RTOL, atol=ATOL,
+                   compiled=compiled)
+    assert sol.ok, sol.message
+    assert sol.v["m0"][0] == 0.0
+    assert abs(sol.F["e0"][0]) <= 1.0 and abs(sol.F["e1"][0]) <= 1.0
+    check_yield(scene, sol, 100.0 * RTOL, ATOL + RTOL * 1e-12, RTOL)
+    assert np.abs(sol.x["m0"]).max() <= ATOL

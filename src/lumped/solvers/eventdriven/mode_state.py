@@ -187,7 +187,8 @@ class ModeState:
             taken = cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
                                                       scene.elongations(x, v), F)
             F[:] = F_t if taken else F
-            if cause == "start":
+            if cause == "start":  # (a mass a rate lock holds: at that rate in row 0 too)
+                hold_rate_locks(scene, lbs, new, v)
                 v[:], F[:] = start_at_known_rates(scene, v, F, v_p, F_p, [
                     lbs[e].info[k].locks for e, k in enumerate(new)], (t, x) if taken else None)
             elif cause == "guard":  # (a yield dashpot at rate ~0 switching: at its edge)
