@@ -68,7 +68,7 @@ def run_chunk(method: str, examples: int, seed: int, cache: str, logs: Path) -> 
     """One chunk in a fresh process: its counts, return code and CPU seconds."""
     env = dict(os.environ, LUMPED_LARGE=str(examples), HYPOTHESIS_PROFILE="long",
                XDG_CACHE_HOME=cache)
-    cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+    cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-n", "0",
            TEST + PROPERTIES[method], f"--hypothesis-seed={seed}",
            "--hypothesis-show-statistics"]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)

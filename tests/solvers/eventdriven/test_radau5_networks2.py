@@ -269,7 +269,8 @@ def test_a_mode_kept_at_a_landing_does_not_creep():
                    atol=0.025**3, compiled=False, max_steps=1000)
     assert sol.ok and sol.message == "" and sol.stats.get("bridges", 0) == 0
     assert sol.stats["steps"] <= 15  # (11)
-    fine = simulate(scene, method="radau5", dt=0.025, t_end=0.5, rtol=1e-10, atol=1e-12,
+    # (the reference at rtol 1e-9: at 1e-10 this scene takes 80 s of the Python loop)
+    fine = simulate(scene, method="radau5", dt=0.025, t_end=0.5, rtol=1e-9, atol=1e-11,
                     compiled=False)
     assert fine.ok, fine.message
     late = sol.t > 0.158
