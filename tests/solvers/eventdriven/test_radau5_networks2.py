@@ -6,6 +6,7 @@ written out, with the property it broke checked directly."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from lumped import simulate
 from lumped.laws import get_law
@@ -332,3 +333,25 @@ def test_a_choice_at_the_step_floor_forgets_the_old_modes_tangencies():
     ref = simulate(scene, method="bdf2", dt=dt / 64, t_end=t_end)
     xs = slice(1, 1 + 2 * len(scene.nodes), 2)
     assert np.abs(sol.data[:, xs] - ref.data[::64, xs]).max() < 1e-3  # (3.5e-4)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_guard_held_at_round_off_after_a_stop_is_not_landed_on_again_and_again(compiled):
+    # the scene above at rtol 1e-10: both dashpots stop at t = 0.157 at exactly their
+    # yield forces (the finite-time stop of a massless junction ends there) and the
+    # Coulomb element's stuck guard then reads the junction's rate, round-off (1e-15),
+    # times r. Every step found it crossed inside (within 1e-13), landed on it, and the
+    # full laws kept the mode: from t = 0.33 on each step was 4e-6 s, 24 898 steps and
+    # 109 s. A guard crossed within the run's tolerance after a kept landing is read as
+    # held, as one crossed at t (issue 29)
+    scene = _junction_on_three_elements_in_parallel()
+    sol = simulate(scene, method="radau5", dt=0.025, t_end=0.5, rtol=1e-10, atol=1e-12,
+                   compiled=compiled, max_steps=5000)
+    assert sol.ok, sol.message
+    assert sol.stats["steps"] <= 600  # (333)
+    ref = simulate(scene, method="radau5", dt=0.025, t_end=0.5, rtol=1e-9, atol=1e-11,
+                   compiled=False)
+    assert np.abs(sol.x["m0"] - ref.x["m0"]).max() <= 1e-9  # (1.2e-14)
+    late = sol.t > 0.158  # stuck, within the yield forces
+    assert np.all(np.abs(sol.F["e1"][late]) <= 0.04428641309096424 * (1 + 1e-9))
+    assert np.all(np.abs(sol.F["e2"][late]) <= 0.44557693606331017 * (1 + 1e-9))

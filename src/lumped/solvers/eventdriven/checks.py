@@ -177,16 +177,16 @@ class StepChecks:
     def beyond_tangent(self, U: list[float], h: float) -> bool:
         """Whether a guard read as held (``tangent``) is off at a stage by more than the
         run's tolerance: not a tangency's round-off, another root of the held branch."""
-        system, x, v, F, rtol, atol = self.system, self.x, self.v, self.F, self.rtol, \
-            self.atol
+        return any(self.off_beyond(U, h, which) for which in self.tangent)
+
+    def off_beyond(self, U: list[float], h: float, which) -> bool:
+        """Whether guard ``which = (watched index, guard index)`` is off at a stage of the
+        step by more than the run's tolerance, ``g < -(atol + rtol (|q| + |F|))``."""
+        e, j = self.watched[which[0]], which[1]
         self.bare()
-        for w, j in self.tangent:
-            e = self.watched[w]
-            q, Fe = system.element_nodes(U, h, x, v, F, e)
-            for k in (1, 2, 3):
-                if self.guards[e](q[k], Fe[k])[j] < -(atol + rtol * (abs(q[k]) + abs(Fe[k]))):
-                    return True
-        return False
+        q, Fe = self.system.element_nodes(U, h, self.x, self.v, self.F, e)
+        return any(self.guards[e](q[k], Fe[k])[j] < -(self.atol + self.rtol * (
+            abs(q[k]) + abs(Fe[k]))) for k in (1, 2, 3))
 
     def end_guard(self, U: list[float], h: float, which) -> tuple[float, float]:
         """Guard ``which = (watched index, guard index)`` at the step's end, and its

@@ -29,15 +29,13 @@ from .setup import step_floor
 __all__ = ["CREEP_STEPS", "NOT_SOUGHT", "StepPass", "creep_floor", "creep_stop"]
 
 _EPS = 2.220446049250313e-16
-#: Accepted steps in a row shorter than the step floor after which a run that creeps
-#: (landing again and again on a guard, ``t`` moving by ulps) stops (and is bridged). At
-#: most 1 in a row in 5400 runs of random networks that did not creep (1800 draws, 3
-#: levels); 200 before, at 20-40 loop passes a creeping step (10 s a run).
+#: Accepted steps in a row below the step floor after which a run that creeps (landing on a
+#: guard again and again, ``t`` moving by ulps) stops (and is bridged). At most 1 in a row
+#: in 5400 runs of random networks that did not creep (1800 draws, 3 levels); 200 before.
 CREEP_STEPS = 20
 #: ... steps shorter than the step floor or than this fraction of the run.
 _CREEP_FRACTION = 1e-12
-#: Cuts of one step at kinks of the force split (:mod:`lumped.solvers.modes.split_kink`) before
-#: the step is taken as it is.
+#: Cuts of one step at kinks of the force split (:mod:`~lumped.solvers.modes.split_kink`).
 _KINK_CUTS = 8
 #: A compiled attempt's crossing when its root was not sought (its compiled root finder,
 #: :func:`lumped.solvers.eventdriven.loop_jit.attempt_root`, is not compiled yet): the
@@ -261,15 +259,16 @@ class StepPass:
             self.fast.root_from(hit_c, self.start_forces(sol)) if self.ms.forces_from_probe
             else hit_c)
         while kept and hit is not None and (hit[0] * h <= tiny or (
-                tangent and hit[0] <= 1.001 * C[0])):
+                tangent and hit[0] <= 1.001 * C[0]) or not self.off_beyond(sol, h, hit[1])):
             # the full laws kept the mode at t: a guard read crossed at t is a tangency
-            # (round-off), but another guard that crosses later in the step is still an
-            # event (a Coulomb element stuck at exactly its yield force beside two stuck
-            # dashpots hid their break-out, and the step went on to 2 % beyond their
-            # yield forces). One crossed by the first stage already is the state at t too
-            # (a stuck Coulomb element whose stage split sits a hair beyond its yield
-            # force, beside a junction's Herschel-Bulkley dashpot stopping: landed on
-            # again and again, the run crept on by 1e-15 s)
+            # (round-off), and so is one crossed later within the run's tolerance (a stuck
+            # Coulomb element at its yield force on a junction at a rate of round-off was
+            # landed on every 4e-6 s at rtol 1e-10); one beyond it is an event (a Coulomb
+            # element stuck at its yield force beside two stuck dashpots hid their
+            # break-out: the step went on to 2 % beyond their yield forces). One crossed by
+            # the first stage is the state at t too (a stuck Coulomb element's stage split
+            # a hair beyond its yield force beside a junction's stopping Herschel-Bulkley
+            # dashpot was landed on again and again: the run crept on by 1e-15 s)
             tangent.add(hit[1])
             hit = self.crossing(sol, h)
         if tangent and self.beyond_tangent(sol, h):
@@ -376,8 +375,9 @@ class StepPass:
             if is_break:
                 self.bi += 1
                 ms.time_event(t)
-            self.dF_n = self.h_acc = None
+            self.dF_n, self.h_acc, old = None, None, list(self.modes)
             self.stop(self.at_event(t, self.h, "guard"))
+            self.kept = self.modes == old or ms.returned  # (as for an event at t itself)
 
 
 def creep_floor(t: float, t_final: float) -> float:
