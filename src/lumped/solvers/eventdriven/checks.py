@@ -177,11 +177,27 @@ class StepChecks:
     def beyond_tangent(self, U: list[float], h: float) -> bool:
         """Whether a guard read as held (``tangent``) is off at a stage by more than the
         run's tolerance: not a tangency's round-off, another root of the held branch."""
-        return any(self.off_beyond(U, h, which) for which in self.tangent)
+        return any(self._off_beyond(U, h, which) for which in self.tangent)
 
-    def off_beyond(self, U: list[float], h: float, which) -> bool:
-        """Whether guard ``which = (watched index, guard index)`` is off at a stage of the
-        step by more than the run's tolerance, ``g < -(atol + rtol (|q| + |F|))``."""
+    def held_on_lock(self, U: list[float], h: float, which) -> bool:
+        """Whether guard ``which = (watched index, guard index)``, read crossed along the
+        step, holds at every stage at the rate its element's lock fixes: the element is
+        on a locking branch with a known value ``L`` and ``g(L, F_k) >= -guard_tolerance``
+        at the stages. On the lock the rate is ``L``; a crossing the stages' rates alone
+        make is their round-off (a stuck Coulomb element's guard ``tau - |F + r q|`` at a
+        junction's rate of ``1e-15``), not an event."""
+        e, j = self.watched[which[0]], which[1]
+        info = self.lbs[e].info[self.modes[e]]
+        if not info.locks or info.lock_value is None:
+            return False
+        L = float(info.lock_value)
+        self.bare()
+        Fe = self.system.element_nodes(U, h, self.x, self.v, self.F, e)[1]
+        return all(self.guards[e](L, Fe[k])[j] >= -guard_tolerance(L, Fe[k]) for k in (1, 2, 3))
+
+    def _off_beyond(self, U: list[float], h: float, which) -> bool:
+        """Whether guard ``which`` is off at a stage of the step by more than the run's
+        tolerance, ``g < -(atol + rtol (|q| + |F|))``."""
         e, j = self.watched[which[0]], which[1]
         self.bare()
         q, Fe = self.system.element_nodes(U, h, self.x, self.v, self.F, e)

@@ -259,11 +259,11 @@ class StepPass:
             self.fast.root_from(hit_c, self.start_forces(sol)) if self.ms.forces_from_probe
             else hit_c)
         while kept and hit is not None and (hit[0] * h <= tiny or (
-                tangent and hit[0] <= 1.001 * C[0]) or not self.off_beyond(sol, h, hit[1])):
+                tangent and hit[0] <= 1.001 * C[0]) or self.held_on_lock(sol, h, hit[1])):
             # the full laws kept the mode at t: a guard read crossed at t is a tangency
-            # (round-off), and so is one crossed later within the run's tolerance (a stuck
-            # Coulomb element at its yield force on a junction at a rate of round-off was
-            # landed on every 4e-6 s at rtol 1e-10); one beyond it is an event (a Coulomb
+            # (round-off), and so is one crossed later only by the stage rates' round-off
+            # on a lock (a stuck Coulomb element at its yield force on a junction: landed
+            # on every 4e-6 s at rtol 1e-10); one crossed otherwise is an event (a Coulomb
             # element stuck at its yield force beside two stuck dashpots hid their
             # break-out: the step went on to 2 % beyond their yield forces). One crossed by
             # the first stage is the state at t too (a stuck Coulomb element's stage split
