@@ -345,8 +345,8 @@ def test_a_guard_held_at_round_off_after_a_stop_is_not_landed_on_again_and_again
     # Coulomb element's stuck guard then reads the junction's rate, round-off (1e-15),
     # times r. Every step found it crossed inside (within 1e-13), landed on it, and the
     # full laws kept the mode: from t = 0.33 on each step was 4e-6 s, 24 898 steps and
-    # 109 s. A guard crossed within the run's tolerance after a kept landing is read as
-    # held, as one crossed at t (issue 29)
+    # 109 s. A guard crossed after a kept landing that holds at the lock's rate (q = 0) is
+    # read as held, as one crossed at t (issue 29)
     scene = _junction_on_three_elements_in_parallel()
     sol = simulate(scene, method="radau5", dt=0.025, t_end=0.5, rtol=1e-10, atol=1e-12,
                    compiled=compiled, max_steps=5000)
