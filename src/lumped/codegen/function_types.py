@@ -8,7 +8,11 @@ such an address back into a callable first-class function of a known type:
   dR/dF)``, element ``e`` held on branch ``i``;
 * :func:`guards_type`: ``branch_guards(e, i, q, F, out, c) -> count``, the guard values
   of element ``e`` on branch ``i`` written into ``out``;
-* :func:`branch_type`: ``active_branch(e, q, F, c) -> int``.
+* :func:`branch_type`: ``active_branch(e, q, F, c) -> int``;
+* :func:`template_law_type`, :func:`template_guards_type`, :func:`template_select_type`:
+  the same three for one law template, its element's constants from ``c[o]`` on
+  (``t_law(i, q, F, c, o)``, ``t_guards(i, q, F, out, c, o)``, ``t_select(q, F, c, o)``;
+  :mod:`lumped.codegen.template_module`).
 
 ``c`` is the scene's array of law constants (:attr:`lumped.codegen.jit.JitScene.consts`):
 the laws' numbers reach the compiled code at run time, so one compiled module serves
@@ -23,7 +27,8 @@ import functools
 from .jit import numba_module
 
 __all__ = ["BRANCH_LAW_TYPE", "function_at", "compiled_address", "law_type", "guards_type",
-           "branch_type", "scalar_loops"]
+           "branch_type", "scalar_loops", "template_law_type", "template_guards_type",
+           "template_select_type"]
 
 if numba_module is not None:
     from numba import types as _T
@@ -146,3 +151,25 @@ def branch_type():
     """The numba function type of ``active_branch(e, q, F, c) -> int`` (made once)."""
     f8 = _T.float64
     return _T.FunctionType(_T.int64(_T.int64, f8, f8, f8[::1]))
+
+
+@functools.cache
+def template_law_type():
+    """The numba function type of a template's ``t_law(i, q, F, c, o) -> (R, dR/dq,
+    dR/dF)`` (its element's constants from ``c[o]`` on)."""
+    f8, i8 = _T.float64, _T.int64
+    return _T.FunctionType(_T.UniTuple(f8, 3)(i8, f8, f8, f8[::1], i8))
+
+
+@functools.cache
+def template_guards_type():
+    """The numba function type of a template's ``t_guards(i, q, F, out, c, o) -> count``."""
+    f8, i8 = _T.float64, _T.int64
+    return _T.FunctionType(i8(i8, f8, f8, f8[::1], f8[::1], i8))
+
+
+@functools.cache
+def template_select_type():
+    """The numba function type of a template's ``t_select(q, F, c, o) -> int``."""
+    f8, i8 = _T.float64, _T.int64
+    return _T.FunctionType(i8(f8, f8, f8[::1], i8))

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...codegen.function_types import branch_type
 from ...scene import Scene
 from ...scene.forcing_jit import FORCE_LINEAR
 from ..modes.mode_guess_jit import compiled_probe_modes, probe_workspace
@@ -28,7 +27,7 @@ from ..radau.forces_jit import table_forcing
 from ..radau.stage_jit import roundoff_test, with_impact_sign
 from ..radau.step_jit import fold_test
 from . import loop_jit as L
-from .fast_parts import loaded, loop_parts, pointer
+from .fast_parts import dispatch_pointers, loaded, loop_parts
 from .step import NOT_SOUGHT, creep_floor
 
 __all__ = ["CompiledLoop", "compiled_loop", "compiled_stage_solver"]
@@ -78,7 +77,8 @@ class CompiledLoop:
 
     def __init__(self, js, law, guards, fkind: np.ndarray, fpar: np.ndarray,
                  checked: np.ndarray, branch) -> None:
-        # (``branch``: the scene's ``active_branch``, compiled for the probe only)
+        # (``branch``: ``() -> Pointer`` of the ``active_branch``, compiled for the probe
+        # only: :func:`~lumped.solvers.eventdriven.fast_parts.branch_pointer`)
         self.js, self.law, self.guards, self._branch = js, law, guards, branch
         self._probe: tuple | None = None
         self.fn = L.compiled_advance()
@@ -183,7 +183,7 @@ class CompiledLoop:
         js = self.js
         cands = np.array(candidates, dtype=np.int64).reshape(len(candidates), self.E)
         cur = _NO_MODE if current is None else np.array(current, dtype=np.int64)
-        branch = pointer(self._branch, branch_type())
+        branch = self._branch()
         k = fn(self.law.addr, branch.addr, js.consts, js.masses, js.ea, js.eb, js.spring,
                cands, cur, np.array(f, dtype=float), np.array(x, dtype=float),
                np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
@@ -349,15 +349,15 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
     :data:`~lumped.solvers.eventdriven.loop_jit.SINGULAR`), and both loops pick the same
     solution of a singular stage system (e.g. a junction between two slipping Coulomb
     elements, whose velocity the laws leave free)."""
-    from ...codegen.jit import jit_scene
+    from ...codegen.dispatch import dispatch_scene
     from ..radau.stage_jit import compiled_stage_solve, workspace
     from ..radau.tableau import A, W
 
-    js = jit_scene(scene)
+    js = dispatch_scene(scene)  # (the structure-generic kernels, as the compiled loop's)
     solve = compiled_stage_solve()
     ws = workspace(len(scene.nodes), len(scene.elements))
     A_np, W_np = np.array(A), np.array(W)
-    law = js.module.branch_law
+    law = dispatch_pointers()[0]
 
     def run(U, h, x, v, f, scale, max_iters, after_impact):
         Ua = np.array(U, dtype=float)
