@@ -1,4 +1,4 @@
-"""``radau5``'s compiled loop on a second structure, in one process: its first run, then warm.
+"""``radau5`` compiled on a second and a third structure, in one process: first, then warm.
 
 Usage, from the repository root (after ``pip install -e ".[test]"``)::
 
@@ -15,9 +15,12 @@ sources) is left as it is, so run the script once before to fill it. CPU times
    dashpot) with ``compiled=True``: the first structure, untimed in meaning (it loads
    the shared loop and compiles what the scene needs);
 2. the first run of the 3-mass chain (:func:`lumped.bench.network_scenes.bingham_chain`,
-   the same two laws on another topology) with ``compiled=True``: the second structure,
+   the same two laws on another topology, but Bingham dashpots whose ``gamma`` and
+   ``tau`` are not 1: another law template) with ``compiled=True``: the second structure,
    with the numba functions compiled during it (numba's compile events, never times);
-3. warm repeats of both runs (the same scene objects): the minimum and the median.
+3. the same for the 2-mass chain: a third structure whose laws' templates the 3-mass
+   chain compiled;
+4. warm repeats of the three runs (the same scene objects): the minimum and the median.
 
 Both runs on ``[0, 5]`` at ``rtol`` 1e-7 (``docs/benchmarks.md`` section 4c). Each time is
 also given over the yardstick (:func:`lumped.bench.measure_unit`, the smaller of before
@@ -73,12 +76,14 @@ def main() -> None:
     unit = measure_unit()
     paper = generic_scene(next(s for s in SCENES if s.name == "forcing-F2"))
     chain = bingham_chain(3)
-    record = {"first structure (forcing-F2)": _first_run(paper),
-              "second structure (chain-3)": _first_run(chain)}
-    warm: dict[str, list[float]] = {"forcing-F2": [], "chain-3": []}
+    short = bingham_chain(2)
+    firsts = {"first structure (forcing-F2)": paper, "second structure (chain-3)": chain,
+              "third structure (chain-2)": short}
+    record = {name: _first_run(scene) for name, scene in firsts.items()}
+    warm: dict[str, list[float]] = {"forcing-F2": [], "chain-3": [], "chain-2": []}
     for _ in range(args.repeats):  # interleaved, one of each per round
-        warm["forcing-F2"].append(_run(paper)[0])
-        warm["chain-3"].append(_run(chain)[0])
+        for name, scene in zip(warm, firsts.values(), strict=True):
+            warm[name].append(_run(scene)[0])
     unit = min(unit, measure_unit())
     record["warm"] = {name: {"min_s": min(ts), "median_s": statistics.median(ts)}
                       for name, ts in warm.items()}
@@ -88,7 +93,7 @@ def main() -> None:
         return
     print(f"python {sys.version.split()[0]}, yardstick Y = {unit * 1e3:.2f} ms, "
           f"load {os.getloadavg()[0]:.1f}")
-    for name in ("first structure (forcing-F2)", "second structure (chain-3)"):
+    for name in firsts:
         r = record[name]
         mods = sorted({n.rsplit(".", 1)[0] for n in r["compiled"]})
         print(f"{name}: first run {r['cpu_s']:.3f} s CPU = {r['cpu_s'] / unit:.3g} Y, "
