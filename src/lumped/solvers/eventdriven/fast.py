@@ -350,14 +350,18 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
     solution of a singular stage system (e.g. a junction between two slipping Coulomb
     elements, whose velocity the laws leave free)."""
     from ...codegen.dispatch import dispatch_scene
+    from ...codegen.jit import jit_scene, numba_enabled
     from ..radau.stage_jit import compiled_stage_solve, workspace
     from ..radau.tableau import A, W
 
-    js = dispatch_scene(scene)  # (the structure-generic kernels, as the compiled loop's)
+    if numba_enabled():  # the structure-generic kernels, as the compiled loop's
+        js, law = dispatch_scene(scene), dispatch_pointers()[0]
+    else:  # (plain Python: the scene module's functions)
+        js = jit_scene(scene)
+        law = js.module.branch_law
     solve = compiled_stage_solve()
     ws = workspace(len(scene.nodes), len(scene.elements))
     A_np, W_np = np.array(A), np.array(W)
-    law = dispatch_pointers()[0]
 
     def run(U, h, x, v, f, scale, max_iters, after_impact):
         Ua = np.array(U, dtype=float)
