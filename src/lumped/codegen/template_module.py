@@ -6,21 +6,24 @@ lifted into run-time constants; every element whose law has that template shares
 ``select_0``, ``branch_0_<i>``, ``guards_0_<i>``, ...) into a module of their own, in the
 disk cache of :mod:`lumped.codegen.module_cache` (named by a hash of its text, so keyed
 by the template's functions), with three dispatchers over the template's smooth
-branches, each reading its element's constants from ``c[o]`` on, ``o`` a run-time
-argument:
+branches, each reading its element's constants from ``c[0]`` on, ``c`` a pointer to
+where they start (``CPointer(float64)``: the element's offset applied by the caller,
+:mod:`lumped.codegen.dispatch`):
 
-``t_law(i, q, F, c, o) -> (R, dR/dq, dR/dF)``
+``t_law(i, q, F, c) -> (R, dR/dq, dR/dF)``
     Branch ``i``'s kernel in ``radau5``'s stage form (``nan`` for no such branch).
-``t_guards(i, q, F, out, c, o) -> int``
-    Branch ``i``'s guard values written to ``out``; their count (0 for no such branch).
-``t_select(q, F, c, o) -> int``
+``t_guards(i, q, F, out, c) -> int``
+    Branch ``i``'s guard values written to ``out`` (a pointer); their count (0 for no
+    such branch).
+``t_select(q, F, c) -> int``
     The active branch at ``(q, F)`` (the kernel's own rules; -1 where none holds).
 
 They are the per-element cases of a scene module's ``branch_law``, ``branch_guards`` and
-``active_branch`` (:mod:`lumped.codegen.jit`) with the element's offset a run-time
-argument instead of literal indices: the same operations on the same doubles, so the same
-numbers bit for bit. :func:`template_addresses` compiles them (numba's disk cache after
-the first time on a machine) and takes their addresses once per process;
+``active_branch`` (:mod:`lumped.codegen.jit`) with the element's constants read from
+where they start instead of from the scene's whole array: the same operations on the
+same doubles, so the same numbers bit for bit. :func:`template_addresses` compiles them
+(numba's disk cache after the first time on a machine) and takes their addresses once
+per process;
 :mod:`lumped.codegen.dispatch` calls them through those addresses from code compiled
 once for every scene, so a new structure whose laws' templates are compiled compiles
 nothing.
@@ -31,7 +34,12 @@ from __future__ import annotations
 import threading
 from types import ModuleType
 
-from .function_types import template_guards_type, template_law_type, template_select_type
+from .function_types import (
+    jit_address,
+    template_guards_type,
+    template_law_type,
+    template_select_type,
+)
 from .module_cache import (
     LOADED_MODULES,
     MODULE_LOCK,
@@ -74,16 +82,16 @@ def _module_text(t: LawTemplate) -> str:
     head = "@njit(cache=True, no_cpython_wrapper=True)"
 
     def call(stem: str, args: str) -> str:
-        return t.call(stem, 0, args, "c", 0, "o + ")
+        return t.call(stem, 0, args, "c", 0)
 
-    L += ["", head, "def t_law(i, q, F, c, o):"]
+    L += ["", head, "def t_law(i, q, F, c):"]
     for i in range(t.branches):
         L += [f"    if i == {i}:", f"        return {call(f'branch_{i}', 'q, F')}"]
     L += ["    return math.nan, math.nan, math.nan", "", "", head,
-          "def t_guards(i, q, F, out, c, o):"]
+          "def t_guards(i, q, F, out, c):"]
     for i in range(t.branches):
         L += [f"    if i == {i}:", f"        return {call(f'guards_{i}', 'q, F, out')}"]
-    L += ["    return 0", "", "", head, "def t_select(q, F, c, o):",
+    L += ["    return 0", "", "", head, "def t_select(q, F, c):",
           f"    return {call('select', 'q, F')}", ""]
     return "\n".join(L)
 
@@ -109,19 +117,19 @@ def template_module_cached(t: LawTemplate) -> bool:
 
 def template_addresses(t: LawTemplate) -> tuple[int, int, int]:
     """The addresses of ``t``'s ``t_law``, ``t_guards`` and ``t_select``, compiled (or
-    loaded from numba's disk cache) the first time a process asks, then kept."""
+    loaded from numba's disk cache) the first time a process asks, then kept: their
+    jit entries (numba's calling convention,
+    :func:`~lumped.codegen.function_types.jit_address`), which
+    :mod:`lumped.codegen.dispatch` calls directly."""
     key = (str(cache_dir()), t.functions)
     got = _ADDRESSES.get(key)
     if got is None:
-        from numba.experimental.function_type import _get_wrapper_address
-
         with _ADDRESS_LOCK:
             got = _ADDRESSES.get(key)
             if got is None:
                 module = template_module(t)
                 types = (template_law_type(), template_guards_type(), template_select_type())
-                law, guards, select = (
-                    _get_wrapper_address(getattr(module, name), ftype.signature)
-                    for name, ftype in zip(DISPATCHERS, types, strict=True))
+                law, guards, select = (jit_address(getattr(module, name), ftype)
+                                        for name, ftype in zip(DISPATCHERS, types, strict=True))
                 got = _ADDRESSES[key] = (law, guards, select, module)
     return got[0], got[1], got[2]

@@ -111,11 +111,9 @@ def lift_function(source: str, name: str) -> tuple[str, list[float]]:
     return f"@njit(cache=True{inline})\ndef {name}({args}{extra}):\n{body}", values
 
 
-def slot_arguments(array: str, start: int, count: int, base: str = "") -> str:
-    """``", array[start], array[start + 1], ..."``: the lifted values of one call; with
-    ``base`` (e.g. ``"o + "``) ``", array[o + start], ..."``, where the element's values
-    start at a run-time offset ``o``."""
-    return "".join(f", {array}[{base}{start + k}]" for k in range(count))
+def slot_arguments(array: str, start: int, count: int) -> str:
+    """``", array[start], array[start + 1], ..."``: the lifted values of one call."""
+    return "".join(f", {array}[{start + k}]" for k in range(count))
 
 
 @dataclass(frozen=True)
@@ -147,14 +145,11 @@ class LawTemplate:
         """How many values function ``stem`` takes."""
         return next(c for s, _, c in self.functions if s == stem)
 
-    def call(self, stem: str, j: int, args: str, array: str, start: int,
-             base: str = "") -> str:
+    def call(self, stem: str, j: int, args: str, array: str, start: int) -> str:
         """The call of function ``stem`` of law ``j`` on ``args``, its values read from
-        ``array`` where the element's values start at ``start`` (after a run-time
-        ``base``, e.g. ``"o + "``, when given: :func:`slot_arguments`)."""
+        ``array`` where the element's values start at ``start``."""
         name = f"{stem}_{j}" if "_" not in stem else stem.replace("_", f"_{j}_", 1)
-        slots = slot_arguments(array, start + self.offset(stem), self.count(stem), base)
-        return f"{name}({args}{slots})"
+        return f"{name}({args}{slot_arguments(array, start + self.offset(stem), self.count(stem))})"
 
     def source(self, j: int) -> list[str]:
         """The definitions of law ``j``'s functions."""
