@@ -11,8 +11,9 @@ constant, a :class:`~lumped.scene.forcing.SineBurst` or a linearly interpolated 
 :class:`lumped.io.Table` force, or the inertial force of a ground acceleration record;
 :data:`lumped.scene.forcing_jit.FORCE_LINEAR`, its code compiled for such a scene only;
 other callables of ``t`` run in Python), every law is a sympy residual (the generated
-kernels of :mod:`lumped.codegen.jit`), and no locked elements sit in parallel (their
-forces are the minimum-norm split, Python's)."""
+modules of its law templates, :mod:`lumped.codegen.template_module`, reached through the
+structure-generic kernels of :mod:`lumped.codegen.dispatch`), and no locked elements sit
+in parallel (their forces are the minimum-norm split, Python's)."""
 
 from __future__ import annotations
 
@@ -36,14 +37,16 @@ __all__ = ["CompiledLoop", "compiled_loop", "compiled_stage_solver"]
 BLOCK = 256
 
 
-#: With ``compiled=None``, a scene whose structure has no compiled module yet (none
-#: loaded in this process, none in the disk cache: the laws' numbers are run-time data,
-#: so any earlier run of the same laws and topology, with any numbers, built it) starts
-#: in the Python loop and is compiled once a run has taken this many steps (about 0.25 s
-#: of Python steps, the order of what compiling a new structure's kernels costs, about
-#: 0.8 s of CPU): a short run of a new structure never pays for a compile, a long one
-#: soon does; a structure compiled once runs compiled from step 0 on every later run.
-#: The two loops give the same numbers.
+#: With ``compiled=None``, a scene one of whose law templates has no compiled module yet
+#: (none loaded in this process, none in the disk cache: the laws' numbers are run-time
+#: data, and the loop's kernels are shared by every structure,
+#: :mod:`lumped.codegen.dispatch`, so any earlier run of the same laws, on any topology
+#: and with any numbers, built them) starts in the Python loop and is compiled once a run
+#: has taken this many steps (about 0.25 s of Python steps, the order of what compiling a
+#: new template's module costs, about 0.5-0.8 s of CPU): a short run never pays for a
+#: compile, a long one soon does; once its templates are compiled, a scene runs compiled
+#: from step 0 on every later run, whatever its topology. The two loops give the same
+#: numbers.
 COMPILE_AFTER = 2000
 
 
@@ -54,8 +57,8 @@ def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
     ``plan`` is the scene's :class:`~lumped.solvers.eventdriven.setup.ScenePlan` (the
     compiled parts are kept on it); ``option`` is the ``compiled`` keyword: ``False``
     asks for the Python loop, ``True`` for the compiled loop now, ``None`` for it now if
-    the scene's structure has its compiled module (in this process or the disk cache),
-    else once the run has taken :data:`COMPILE_AFTER` ``steps``. A scene with moving
+    the modules of the scene's law templates are compiled (in this process or the disk
+    cache), else once the run has taken :data:`COMPILE_AFTER` ``steps``. A scene with moving
     supports (a :class:`~lumped.scene.supports.SupportFrame`'s view) has none: the
     compiled loop has no support offsets."""
     if option is False:
