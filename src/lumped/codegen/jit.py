@@ -52,6 +52,10 @@ every entry point below takes last:
     all ``> 0`` strictly inside branch ``i``, some ``< 0`` outside; an event is a sign
     change) written to ``out[0 .. k-1]``; returns ``k`` (0 for a smooth law).
 
+``radau5``'s compiled loop takes these last three from :mod:`lumped.codegen.dispatch`
+instead: the same functions compiled once for every scene, over one module per law
+template, so that a new structure of known laws compiles nothing.
+
 The solvers are compiled once for all scenes (:mod:`lumped.solvers.bdf.core_jit`) and
 take ``evaluate`` and ``element_law`` as function pointers (numba's first-class
 function types): a new structure compiles only its own small functions, and new numbers
