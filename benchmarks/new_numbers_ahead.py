@@ -9,12 +9,12 @@ Usage, from the repository root::
 cost time themselves and count nested parts twice. Here nothing is wrapped: for each
 part a scene with new numbers (:func:`lumped.bench.new_numbers.scene_with_new_numbers`)
 has that part done *ahead*, untimed (the laws' kernels, branches and templates; the
-plan; ``jit_scene``; the consistent initial state, with the run's own arguments; all
-of them), and then its run is timed (CPU, :func:`time.process_time`). The difference
-to the run with nothing done ahead is what the part costs inside a run, caches and all:
-the most that taking that part's per-number work away can give. The kinds of run are
-interleaved, one of each per round, and the median of each is printed over the median
-warm repeat.
+plan; ``jit_scene``, or ``dispatch_scene`` for ``radau5``; the consistent initial state,
+with the run's own arguments; all of them), and then its run is timed (CPU,
+:func:`time.process_time`). The difference to the run with nothing done ahead is what
+the part costs inside a run, caches and all: the most that taking that part's
+per-number work away can give. The kinds of run are interleaved, one of each per round,
+and the median of each is printed over the median warm repeat.
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ from new_numbers_parts import arguments
 import lumped.solvers.eventdriven.run as run_module
 from lumped.bench.new_numbers import scene_with_new_numbers
 from lumped.codegen.branches import law_branches
+from lumped.codegen.dispatch import dispatch_scene
 from lumped.codegen.jit import jit_scene
 from lumped.codegen.templates import law_template
 from lumped.solvers.eventdriven.setup import scene_plan
@@ -73,11 +74,15 @@ def main() -> None:
     state = _initial_state_arguments(base, method, options)
     initial = run_module.consistent_initial_state
 
+    # (radau5's compiled loop takes the structure-generic kernels' scene, the BDFs' the
+    # scene module's)
+    parts = dispatch_scene if method == "radau5" else jit_scene
+
     def everything(scene) -> None:
-        _laws(scene), scene_plan(scene), jit_scene(scene), initial(scene, **state)
+        _laws(scene), scene_plan(scene), parts(scene), initial(scene, **state)
 
     ahead = {"nothing": lambda scene: None, "the laws' functions": _laws,
-             "the plan": scene_plan, "jit_scene": jit_scene,
+             "the plan": scene_plan, parts.__name__: parts,
              "the initial state": lambda scene: initial(scene, **state),
              "all four": everything}
     runs: dict[str, list[float]] = {name: [] for name in ahead}

@@ -37,6 +37,7 @@ PARTS = {
     "lumped.solvers.eventdriven.setup:scene_plan": "plan (content key, new plan)",
     "lumped.solvers.eventdriven.fast_parts:loop_parts": "compiled loop's parts",
     "lumped.codegen.jit:jit_scene": "  jit_scene",
+    "lumped.codegen.dispatch:dispatch_scene": "  dispatch_scene",
     "lumped.solvers.eventdriven.mode_parts:mode_parts": "mode kernels and guards",
 }
 def timed(spec: str, totals: dict) -> None:

@@ -8,7 +8,12 @@ such an address back into a callable first-class function of a known type:
   dR/dF)``, element ``e`` held on branch ``i``;
 * :func:`guards_type`: ``branch_guards(e, i, q, F, out, c) -> count``, the guard values
   of element ``e`` on branch ``i`` written into ``out``;
-* :func:`branch_type`: ``active_branch(e, q, F, c) -> int``.
+* :func:`branch_type`: ``active_branch(e, q, F, c) -> int``;
+* :func:`template_law_type`, :func:`template_guards_type`, :func:`template_select_type`:
+  the same three for one law template, ``c`` a pointer to its element's constants and
+  ``out`` a pointer (``t_law(i, q, F, c)``, ``t_guards(i, q, F, out, c)``,
+  ``t_select(q, F, c)``; :mod:`lumped.codegen.template_module`), called at their jit
+  entries (:func:`call_jit_at`, :func:`jit_address`).
 
 ``c`` is the scene's array of law constants (:attr:`lumped.codegen.jit.JitScene.consts`):
 the laws' numbers reach the compiled code at run time, so one compiled module serves
@@ -22,8 +27,9 @@ import functools
 
 from .jit import numba_module
 
-__all__ = ["BRANCH_LAW_TYPE", "function_at", "compiled_address", "law_type", "guards_type",
-           "branch_type", "scalar_loops"]
+__all__ = ["BRANCH_LAW_TYPE", "function_at", "call_jit_at", "jit_address", "compiled_address",
+           "law_type", "guards_type", "branch_type", "scalar_loops", "template_law_type",
+           "template_guards_type", "template_select_type", "data_at"]
 
 if numba_module is not None:
     from numba import types as _T
@@ -59,6 +65,52 @@ def function_at(ftype):
         return ptype(_T.int64), codegen
 
     return at
+
+
+def call_jit_at(ftype):
+    """An intrinsic ``(addr, *args) -> result``: a call of the numba-compiled function
+    whose *jit* entry is at ``addr`` (:func:`jit_address`), of the signature of the numba
+    function type ``ftype``, with numba's own calling convention.
+
+    :func:`function_at` calls a function's C wrapper, which in turn calls the function
+    itself; here the caller calls the function directly (what numba does for a
+    first-class function whose jit address it knows). For callees that cannot raise (the
+    generated kernels: ``error_model="numpy"``, no bounds checks); a callee's error
+    status is not read."""
+    from numba.extending import intrinsic
+
+    sig = ftype.signature
+
+    def codegen(context, builder, signature, args):
+        llty = context.call_conv.get_function_type(sig.return_type, sig.args).as_pointer()
+        fn = builder.inttoptr(args[0], llty)
+        _, res = context.call_conv.call_function(builder, fn, sig.return_type, sig.args,
+                                                 args[1:])
+        return res
+
+    typed = sig.return_type(_T.int64, *sig.args), codegen
+    # (an intrinsic takes no star arguments: one definition per arity)
+    if len(sig.args) == 3:
+        def call(typingctx, addr, a0, a1, a2):
+            return typed
+    elif len(sig.args) == 4:
+        def call(typingctx, addr, a0, a1, a2, a3):
+            return typed
+    elif len(sig.args) == 5:
+        def call(typingctx, addr, a0, a1, a2, a3, a4):
+            return typed
+    else:  # pragma: no cover - the templates' types have 3 to 5 arguments
+        raise ValueError(f"call_jit_at: no intrinsic of {len(sig.args)} arguments")
+    return intrinsic(call)
+
+
+def jit_address(dispatcher, ftype) -> int:
+    """The address of ``dispatcher``'s function itself (numba's calling convention, for
+    :func:`call_jit_at`) compiled for ``ftype``'s signature (compiled, or loaded from
+    numba's disk cache, if not yet)."""
+    from numba.experimental.function_type import _get_jit_address
+
+    return _get_jit_address(dispatcher, ftype.signature)
 
 
 def _no_pointer(obj):  # pragma: no cover - a value of _AddressCall never comes from Python
@@ -146,3 +198,43 @@ def branch_type():
     """The numba function type of ``active_branch(e, q, F, c) -> int`` (made once)."""
     f8 = _T.float64
     return _T.FunctionType(_T.int64(_T.int64, f8, f8, f8[::1]))
+
+
+@functools.cache
+def template_law_type():
+    """The numba function type of a template's ``t_law(i, q, F, c) -> (R, dR/dq, dR/dF)``
+    (``c`` a pointer to its element's constants)."""
+    f8, p = _T.float64, _T.CPointer(_T.float64)
+    return _T.FunctionType(_T.UniTuple(f8, 3)(_T.int64, f8, f8, p))
+
+
+@functools.cache
+def template_guards_type():
+    """The numba function type of a template's ``t_guards(i, q, F, out, c) -> count``
+    (``out`` and ``c`` pointers)."""
+    f8, p = _T.float64, _T.CPointer(_T.float64)
+    return _T.FunctionType(_T.int64(_T.int64, f8, f8, p, p))
+
+
+@functools.cache
+def template_select_type():
+    """The numba function type of a template's ``t_select(q, F, c) -> int``."""
+    f8, p = _T.float64, _T.CPointer(_T.float64)
+    return _T.FunctionType(_T.int64(f8, f8, p))
+
+
+def data_at():
+    """An intrinsic ``(a, k) -> pointer``: the address of ``a[k]`` (``a`` a contiguous
+    float64 array) as a ``CPointer(float64)``; nothing is checked and nothing but the
+    array's data pointer is read."""
+    from numba.extending import intrinsic
+
+    def codegen(context, builder, signature, args):
+        array = context.make_array(signature.args[0])(context, builder, args[0])
+        return builder.gep(array.data, [args[1]])
+
+    @intrinsic
+    def at(typingctx, a, k):
+        return _T.CPointer(_T.float64)(a, _T.int64), codegen
+
+    return at

@@ -52,6 +52,10 @@ every entry point below takes last:
     all ``> 0`` strictly inside branch ``i``, some ``< 0`` outside; an event is a sign
     change) written to ``out[0 .. k-1]``; returns ``k`` (0 for a smooth law).
 
+``radau5``'s compiled loop takes these last three from :mod:`lumped.codegen.dispatch`
+instead: the same functions compiled once for every scene, over one module per law
+template, so that a new structure of known laws compiles nothing.
+
 The solvers are compiled once for all scenes (:mod:`lumped.solvers.bdf.core_jit`) and
 take ``evaluate`` and ``element_law`` as function pointers (numba's first-class
 function types): a new structure compiles only its own small functions, and new numbers
@@ -89,7 +93,8 @@ from .module_cache import (
 from .templates import LawTemplate, law_template
 
 __all__ = ["njit", "numba_enabled", "cache_dir", "scene_source", "scene_module", "jit_scene",
-           "JitScene"]
+           "JitScene", "refuse_moving_supports", "structure_key", "structure_arrays",
+           "with_numbers"]
 
 try:  # numba is a runtime dependency, but the package still works without it
     import numba as numba_module
@@ -150,7 +155,7 @@ _SOURCES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 def scene_source(scene) -> SceneSource:
     """The generated module of ``scene`` (see :class:`SceneSource`); kept per scene
-    object, its text per structure (:func:`_structure_key`: one text for every value of
+    object, its text per structure (:func:`structure_key`: one text for every value of
     the numbers, made once)."""
     try:
         hit = _SOURCES.get(scene)
@@ -165,13 +170,13 @@ def scene_source(scene) -> SceneSource:
     return hit
 
 
-#: The text of a structure's module (:func:`_module_text`) per :func:`_structure_key`,
+#: The text of a structure's module (:func:`_module_text`) per :func:`structure_key`,
 #: the last :data:`_STRUCTURES_KEPT` structures asked.
 _STRUCTURES: dict[tuple, str] = {}
 _STRUCTURES_KEPT = 256
 
 
-def _structure_key(scene, templates: list[LawTemplate], law_index: list[int]) -> tuple:
+def structure_key(scene, templates: list[LawTemplate], law_index: list[int]) -> tuple:
     """Everything the module's text reads from ``scene`` and its templates: each
     template's functions (their texts and value counts, which fix the offsets), the
     element -> template map, which nodes have a mass, each element's kind and ends."""
@@ -182,7 +187,7 @@ def _structure_key(scene, templates: list[LawTemplate], law_index: list[int]) ->
 
 def _scene_source(scene) -> SceneSource:
     templates, law_index, consts, offsets = scene_templates(scene)
-    key = _structure_key(scene, templates, law_index)
+    key = structure_key(scene, templates, law_index)
     text = _STRUCTURES.get(key)
     if text is None:
         text = _module_text(scene, templates, law_index, offsets)
@@ -316,9 +321,10 @@ def scene_module(scene) -> tuple[ModuleType, SceneSource]:
 
 @dataclass(frozen=True)
 class JitScene:
-    """A scene's generated module and structure arrays (see the module notes)."""
+    """A scene's generated module and structure arrays (see the module notes); ``module``
+    is ``None`` for the structure-generic kernels of :mod:`lumped.codegen.dispatch`."""
 
-    module: ModuleType
+    module: ModuleType | None
     masses: np.ndarray
     ea: np.ndarray
     eb: np.ndarray
@@ -349,9 +355,7 @@ def jit_scene(scene, kept: dict | None = None) -> JitScene:
     constants, in the order of the module's :class:`SceneSource`, and the masses) are
     read; the module's text is not made, hashed or looked up again. The result is the
     one without ``kept``."""
-    if getattr(scene, "support_ends", ()):
-        raise ValueError(f"compiled loops do not take moving supports (scene supports: "
-                         f"{', '.join(sorted(scene.supports))}); use 'bdf1' or 'bdf2'")
+    refuse_moving_supports(scene)
     if kept is not None:
         got = kept.get("jit_scene")
         if got is not None:
@@ -364,25 +368,34 @@ def jit_scene(scene, kept: dict | None = None) -> JitScene:
                 values += t.values
             else:
                 if str(cache_dir()) == where:
-                    return _with_numbers(scene, module, arrays,
+                    return with_numbers(scene, module, arrays,
                                          np.array(values + [0.0], dtype=float))
     module, generated = scene_module(scene)
     arrays = _ARRAYS.get(generated.source)
     if arrays is None:
-        arrays = _structure_arrays(scene, generated)
+        arrays = structure_arrays(scene, generated.law_index, generated.offsets)
         if len(_ARRAYS) >= _STRUCTURES_KEPT:
             _ARRAYS.clear()
         _ARRAYS[generated.source] = arrays
     if kept is not None:
         kept["jit_scene"] = (str(cache_dir()), module, arrays,
                              tuple(law_template(el.law).functions for el in scene.elements))
-    return _with_numbers(scene, module, arrays, generated.consts)
+    return with_numbers(scene, module, arrays, generated.consts)
 
 
-def _with_numbers(scene, module: ModuleType, arrays: tuple, consts: np.ndarray) -> JitScene:
+def refuse_moving_supports(scene) -> None:
+    """``ValueError`` for a scene with moving supports: the compiled loops have no
+    support offsets (the runners send such scenes to the Python loop)."""
+    if getattr(scene, "support_ends", ()):
+        raise ValueError(f"compiled loops do not take moving supports (scene supports: "
+                         f"{', '.join(sorted(scene.supports))}); use 'bdf1' or 'bdf2'")
+
+
+def with_numbers(scene, module: ModuleType | None, arrays: tuple,
+                 consts: np.ndarray) -> JitScene:
     """The :class:`JitScene` of ``scene``'s numbers (its masses, law constants ``consts``
     and lock values) on its structure's ``module`` and ``arrays``
-    (:func:`_structure_arrays`)."""
+    (:func:`structure_arrays`)."""
     ea, eb, spring, law_index, offsets, locking, blank = arrays
     lock_q = blank.copy()
     if locking:
@@ -399,7 +412,7 @@ def _with_numbers(scene, module: ModuleType, arrays: tuple, consts: np.ndarray) 
 _ARRAYS: dict[str, tuple] = {}
 
 
-def _structure_arrays(scene, generated: SceneSource) -> tuple:
+def structure_arrays(scene, law_index: list[int], offsets: list[int]) -> tuple:
     """``(ea, eb, spring, law_index, offsets, locking, blank)`` of ``scene``'s structure:
     ``locking`` the ``(e, i)`` of every spring's branch that locks a position (its
     :attr:`~lumped.codegen.branches.BranchInfo.lock_value` a number), ``blank`` an array
@@ -411,8 +424,8 @@ def _structure_arrays(scene, generated: SceneSource) -> tuple:
                                                     strict=True))
     return (np.array(scene.elem_a, dtype=np.int64), np.array(scene.elem_b, dtype=np.int64),
             np.array([el.kind == "spring" for el in scene.elements], dtype=np.bool_),
-            np.array(generated.law_index, dtype=np.int64),
-            np.array(generated.offsets, dtype=np.int64), locking,
+            np.array(law_index, dtype=np.int64),
+            np.array(offsets, dtype=np.int64), locking,
             np.full(lock_q.shape, np.nan))
 
 

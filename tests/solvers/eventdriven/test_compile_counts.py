@@ -1,13 +1,16 @@
 """What ``radau5``'s compiled loop compiles (counted with numba's event API, never timed).
 
 The shared loop (:mod:`lumped.solvers.eventdriven.loop_jit`) is compiled once per machine
-and takes a scene's generated kernels as addresses: new numbers compile nothing, a new
-structure compiles its own kernels only; the fold test of a law that is not a known
-monotone one, and the code of a table forcing, are compiled for such a scene only. The
-compiled helpers of the events (the mode probe, the break-out scan and root of a stuck
-interval, an attempt's crossing root) are compiled only once a process needs them often
-(:mod:`lumped.solvers.modes.on_demand`), so a first run on a fresh machine does not pay
-for them; with or without them a run gives the Python loop's numbers.
+and takes the structure-generic kernels of :mod:`lumped.codegen.dispatch` as addresses,
+which reach each element's law template module through the constants' header: new
+numbers compile nothing, a new structure whose laws' templates are compiled compiles
+nothing, a new law template compiles its template module only; the fold test of a law
+that is not a known monotone one, and the code of a table forcing, are compiled for such
+a scene only. The compiled helpers of the events (the mode probe, the break-out scan and
+root of a stuck interval, an attempt's crossing root) are compiled only once a process
+needs them often (:mod:`lumped.solvers.modes.on_demand`), so a first run on a fresh
+machine does not pay for them; with or without them a run gives the Python loop's
+numbers.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from lumped import Element, Junction, Mass, Scene, get_law, simulate
 from lumped.bench.impact_scenes import impact_scene
 from lumped.codegen.jit import njit, numba_enabled
 from lumped.io import Table
+from lumped.laws import ElementLaw
 from lumped.scene.forcing import SineBurst
 from lumped.solvers.eventdriven import fast as fast_mod
 from lumped.solvers.eventdriven import loop_jit
@@ -101,25 +105,65 @@ def test_a_compiled_run_with_few_events_compiles_none_of_the_event_helpers(
     _same_run(got, ref)
 
 
-def test_a_new_structure_compiles_its_own_kernels_only():
-    simulate(_paper(), compiled=True, **KW)  # the shared loop, compiled or loaded
-    lin, bing = get_law("linear_spring"), get_law("bingham")
-    # a structure no other test builds: four masses in a chain, the burst on the third
-    nodes = [Mass(f"q{i}", m=1.0 + 0.1 * i, x0=0.0) for i in range(4)]
+def _chain(n: int, spring) -> Scene:
+    """``n`` masses in a chain, each link a spring (``spring(i)``, a bound law) and the
+    paper's Bingham dashpot (its template: ``gamma = tau = 1`` drop their factors from the
+    code, another value of either is another template), the burst on the last but one
+    mass: a structure no other test builds."""
+    damp = get_law("bingham").bind(gamma=1.0, tau=1.0)
+    nodes = [Mass(f"q{i}", m=1.0 + 0.1 * i, x0=0.0) for i in range(n)]
     elements = []
-    for i in range(4):
+    for i in range(n):
         a = "ground" if i == 0 else f"q{i - 1}"
-        elements += [Element(f"k{i}", lin.bind(k=40.0 + i), a, f"q{i}"),
-                     Element(f"d{i}", bing.bind(gamma=1.0, tau=0.5 + 0.1 * i), a, f"q{i}")]
-    scene = Scene(nodes, elements, {"q2": SineBurst(6.0, 7.0, 0.8)})
+        elements += [Element(f"k{i}", spring(i), a, f"q{i}"), Element(f"d{i}", damp, a, f"q{i}")]
+    return Scene(nodes, elements, {f"q{n - 2}": SineBurst(12.0, 7.0, 0.8)})
+
+
+def test_a_new_structure_of_compiled_templates_compiles_nothing(monkeypatch, tmp_path):
+    from lumped.codegen import module_cache
+
+    simulate(_paper(), compiled=True, **KW)  # the shared loop; the paper's laws' templates
+    lin = get_law("linear_spring")
+    scene = _chain(4, lambda i: lin.bind(k=40.0 + i))  # (those templates, other numbers)
+    _fresh_helpers(monkeypatch, tmp_path)  # (no event helper compiled in the run)
+    modules = len(module_cache.LOADED_MODULES)
     with _compiles() as names:
         got = simulate(scene, compiled=True, method="radau5", t_end=0.5, rtol=1e-6)
     assert got.stats["loop"] == "compiled" and got.ok
-    # the shared code was compiled before and is taken as it is; the scene's generated
-    # module (``lumped_jit_<hash>``) is compiled, or loaded if an earlier run left it on disk
-    ours = [n for n in names if n.startswith("lumped.")]
-    assert ours == []
-    assert all(n.startswith(("lumped_jit_", "numba.")) for n in names), names
+    # before: the structure's generated module (``lumped_jit_<hash>``) was compiled,
+    # about 0.5-1 s of CPU; now the structure-generic kernels reach the templates'
+    # compiled code through the header of the constants: no compile, no module
+    assert names == []
+    assert len(module_cache.LOADED_MODULES) == modules
+    ref = simulate(scene, compiled=False, method="radau5", t_end=0.5, rtol=1e-6)
+    assert np.array_equal(got.data, ref.data)
+    assert simulate(scene, method="radau5", t_end=0.5, rtol=1e-6).stats["loop"] == "compiled"
+
+
+#: A law no other test uses: its template is compiled only by the test below.
+_NEW_TEMPLATE = ElementLaw("only_in_the_compile_counts", "spring", "F = k*q + c*q**5",
+                           ["k", "c"])
+
+
+def test_a_new_law_template_compiles_its_template_module_only(monkeypatch, tmp_path):
+    from lumped.codegen.template_module import template_addresses, template_module
+    from lumped.codegen.templates import law_template
+
+    simulate(_paper(), compiled=True, **KW)  # the shared loop
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path))  # (no template module on disk)
+    for el in _paper().elements:  # the paper's laws' templates, in this cache
+        template_addresses(law_template(el.law))
+    scene = _chain(3, lambda i: _NEW_TEMPLATE.bind(k=30.0 + i, c=0.5))
+    with _compiles() as names:
+        got = simulate(scene, compiled=True, method="radau5", t_end=0.5, rtol=1e-6)
+    assert got.stats["loop"] == "compiled" and got.ok
+    # the new law's template module: its three dispatchers (and the kernels they call,
+    # compiled apart: the branch selector); no shared code, no module of the structure
+    ours = template_module(law_template(scene.elements[0].law)).__name__
+    assert {n.rsplit(".", 1)[0] for n in names if not n.startswith("numba.")} == {ours}
+    assert {f"{ours}.t_law", f"{ours}.t_guards", f"{ours}.t_select"} <= set(names)
+    ref = simulate(scene, compiled=False, method="radau5", t_end=0.5, rtol=1e-6)
+    assert np.array_equal(got.data, ref.data)
 
 
 def test_the_fold_test_is_compiled_for_a_law_not_known_monotone_only(monkeypatch):

@@ -1,14 +1,16 @@
-"""The compiled loop's generated module kept per *structure* (issue 27): a scene with new
-numbers takes its structure's module and arrays without making, hashing or looking up
-the module's text again, and reads its own numbers (never a kept scene's). Counted, never
-timed; every run equals a run from scratch."""
+"""The compiled loop's parts kept per *structure* (issue 27): a scene with new numbers takes
+its structure's arrays and header (``radau5``'s :func:`~lumped.codegen.dispatch.
+dispatch_scene`), or its module and arrays (:func:`~lumped.codegen.jit.jit_scene`), without
+making its templates' list or the module's text again, and reads its own numbers (never a
+kept scene's). Counted, never timed; every run equals a run from scratch."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from lumped import simulate
-from lumped.codegen import jit, templates
+from lumped.codegen import dispatch, jit, templates
+from lumped.codegen.dispatch import dispatch_scene
 from lumped.codegen.jit import jit_scene
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
@@ -55,23 +57,36 @@ def _counting_modules(monkeypatch) -> list:
     return calls
 
 
-def test_new_numbers_take_their_structures_module_and_their_own_numbers(monkeypatch):
+def _counting_templates(monkeypatch) -> list:
+    """The calls of :func:`~lumped.codegen.jit.scene_templates` by ``dispatch_scene``."""
+    calls: list = []
+    real = dispatch.scene_templates
+    monkeypatch.setattr(dispatch, "scene_templates", lambda s: calls.append(s) or real(s))
+    return calls
+
+
+def test_new_numbers_take_their_structures_parts_and_their_own_numbers(monkeypatch):
     for j in (1, 2, 3):  # (the spring's law class: made from its first laws)
         simulate(_released(10.0 * (1.0 + 1e-6 * j)), **KW)
     scenes = [_released(10.0 * (1.0 + 1e-6 * j), m=1.0 + 0.125 * j) for j in range(4, 8)]
-    simulate(scenes[0], **KW)  # (a law of the class: the structure's module is kept)
+    simulate(scenes[0], **KW)  # (a law of the class: the structure's parts are kept)
     calls = _counting_modules(monkeypatch)
+    listed = _counting_templates(monkeypatch)
     runs = [simulate(s, **KW) for s in scenes[1:]]
-    assert calls == []  # new numbers: the structure's module, its text not made again
+    # new numbers: the structure's arrays and header, its templates not listed again; no
+    # scene module at all (radau5's kernels are the structure-generic ones)
+    assert calls == [] and listed == []
     assert all(r.stats["loop"] == "compiled" for r in runs)
     kept = scene_plan(scenes[1]).structure
-    got = [jit_scene(s, kept) for s in scenes]
-    assert calls == []
+    got = [dispatch_scene(s, kept) for s in scenes]
+    assert calls == [] and listed == []
     monkeypatch.undo()
     for s, js in zip(scenes, got, strict=True):  # each scene's own numbers, not a kept one's
-        alone = jit_scene(s)
-        assert js.module is alone.module and js.ea is alone.ea
+        alone = dispatch_scene(s)
+        assert js.module is None and js.ea is alone.ea
         assert np.array_equal(js.consts, alone.consts)
+        head = 4 * len(s.elements)  # (the header, then the laws' constants)
+        assert np.array_equal(js.consts[head:], jit_scene(s).consts)
         assert np.array_equal(js.masses, alone.masses)
         assert np.array_equal(js.lock_q, alone.lock_q, equal_nan=True)
     assert len({js.consts.tobytes() for js in got}) == len(got)
@@ -98,6 +113,28 @@ def test_a_kept_module_is_not_taken_for_another_structure_or_cache(monkeypatch, 
     again = _string(0.0, 51.0)
     assert np.array_equal(jit_scene(again, kept).consts, jit_scene(again).consts)
     assert calls == [again, again]
+
+
+def test_kept_dispatch_parts_are_not_taken_for_another_structure_or_cache(monkeypatch,
+                                                                          tmp_path):
+    """As above for ``dispatch_scene``: another template (a string's lock value of 0)
+    lists its templates again and gets its own constants and header; parts kept for
+    another cache directory are not taken for this one (its templates' modules are
+    that cache's)."""
+    first = _string(0.25, 50.0)
+    kept: dict = {}
+    dispatch_scene(first, kept)
+    listed = _counting_templates(monkeypatch)
+    other = _string(0.0, 50.0)
+    js = dispatch_scene(other, kept)
+    assert listed == [other] and np.array_equal(js.consts, dispatch_scene(other).consts)
+    assert listed == [other, other]
+    assert not np.array_equal(js.consts[:8], dispatch_scene(first).consts[:8])  # (headers)
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path))
+    listed.clear()
+    again = _string(0.0, 51.0)
+    assert np.array_equal(dispatch_scene(again, kept).consts, dispatch_scene(again).consts)
+    assert listed == [again, again]
 
 
 def test_the_drivers_node_and_element_kinds_are_kept_per_structure():

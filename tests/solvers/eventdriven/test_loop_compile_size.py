@@ -138,11 +138,12 @@ def test_scalar_loops_compiles_without_the_loop_vectorizer_and_sets_it_back():
     assert np.array_equal(a, b)
 
 
-def test_a_new_structure_compiles_no_branch_kernel_apart(monkeypatch, tmp_path):
-    # a structure's branch kernels and guards are inlined (numba's IR) into its
-    # branch_law and branch_guards: compiled there once, not each on its own as well
-    # (before: each a compilation of its own, wrappers and LLVM, about 0.05 s apiece,
-    # 14 of them for the 3-mass chain)
+def test_a_new_law_template_compiles_no_branch_kernel_apart(monkeypatch, tmp_path):
+    # a law template's branch kernels and guards are inlined (numba's IR) into its
+    # dispatchers t_law and t_guards (lumped.codegen.template_module; a scene module's
+    # branch_law and branch_guards before): compiled there once, not each on its own as
+    # well (before: each a compilation of its own, wrappers and LLVM, about 0.05 s
+    # apiece, 14 of them for the 3-mass chain)
     import re
 
     from numba.core import config, event
@@ -163,11 +164,12 @@ def test_a_new_structure_compiles_no_branch_kernel_apart(monkeypatch, tmp_path):
                    Element("c2", coul.bind(tau=0.3, r=1.0), "p", "r")],
                   {"r": SineBurst(4.0, 6.0, 0.7)})
     monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path))  # (numba's disk cache: empty)
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path))  # (no template module either)
     with event.install_recorder("numba:compile") as rec:
         got = simulate(scene, method="radau5", t_end=0.4, rtol=1e-6, compiled=True)
     assert got.stats["loop"] == "compiled" and got.ok
     names = [ev.data["dispatcher"].py_func.__qualname__ for _, ev in rec.buffer
              if ev.is_start and ev.data["dispatcher"].py_func.__module__.startswith(
                  "lumped_jit_")]
-    assert "branch_law" in names and "branch_guards" in names
+    assert names.count("t_law") == 3 and names.count("t_guards") == 3  # (three templates)
     assert not [n for n in names if re.fullmatch(r"(branch|guards)_\d+_\d+", n)], names

@@ -210,12 +210,14 @@ _ONLY_HERE = ElementLaw("only_in_the_compile_test", "spring", "F = k*q + c*q**3"
 
 def test_by_default_a_new_structure_compiles_once_then_every_run_is_compiled(
         monkeypatch, tmp_path):
-    """``compiled=None``: a structure with no compiled module yet (none loaded, an empty
-    disk cache) starts in the Python loop and switches to the compiled loop after
-    ``COMPILE_AFTER`` steps, seamlessly (the same run as the Python loop's); a short run
-    stays in Python; then every run of that structure, with any numbers, starts compiled,
-    and new numbers build no module."""
-    from lumped.codegen import jit, module_cache
+    """``compiled=None``: a structure with no compiled modules yet (its laws' templates'
+    modules: none loaded, an empty disk cache) starts in the Python loop and switches to
+    the compiled loop after ``COMPILE_AFTER`` steps, seamlessly (the same run as the
+    Python loop's); a short run stays in Python; then every run of that structure, with
+    any numbers, starts compiled, and new numbers build no module."""
+    from lumped.codegen import module_cache
+    from lumped.codegen.template_module import template_module
+    from lumped.codegen.templates import law_template
     from lumped.solvers.eventdriven import fast as adaptive_fast
 
     COMPILE_AFTER = 200  # a shorter run than the default's
@@ -235,24 +237,27 @@ def test_by_default_a_new_structure_compiles_once_then_every_run_is_compiled(
     ref = simulate(first, compiled=False, **kw)
     modules = len(module_cache.LOADED_MODULES)
     lazy = simulate(first, **kw)
-    assert len(module_cache.LOADED_MODULES) == modules + 1  # the structure's one module
+    # the structure's modules: one per law template (the new law's and Bingham's, in the
+    # empty cache)
+    assert len(module_cache.LOADED_MODULES) == modules + 2
     assert ref.stats["steps"] > COMPILE_AFTER + 50
     assert lazy.stats["loop"] == f"compiled from step {COMPILE_AFTER}"
     assert np.array_equal(lazy.data, ref.data) and lazy.stats["nfev"] == ref.stats["nfev"]
     assert simulate(first, **kw).stats["loop"] == "compiled"
     # new numbers, never run before: compiled from step 0, no module built, and the
     # compiled run is the Python loop's
-    module = jit.jit_scene(first).module
-    signatures = {name: len(getattr(module, name).signatures)
-                  for name in ("branch_law", "branch_guards", "active_branch")}
+    dispatchers = [getattr(template_module(law_template(el.law)), name)
+                   for el in first.elements for name in ("t_law", "t_guards", "t_select")]
+    signatures = [len(d.signatures) for d in dispatchers]
+    assert signatures == [1] * 6
     for numbers in [(97.5, 0.25, 0.8, 1.5), (140.0, 1.75, 0.6, 0.9)]:
         other = scene(*numbers)
         new = simulate(other, method="radau5", t_end=0.2, rtol=1e-6)
         assert new.stats["loop"] == "compiled"
         assert np.array_equal(new.data, simulate(other, method="radau5", t_end=0.2,
                                                  rtol=1e-6, compiled=False).data)
-    assert len(module_cache.LOADED_MODULES) == modules + 1
-    assert {name: len(getattr(module, name).signatures) for name in signatures} == signatures
+    assert len(module_cache.LOADED_MODULES) == modules + 2
+    assert [len(d.signatures) for d in dispatchers] == signatures
 
 
 def test_the_compiled_keyword_is_checked():

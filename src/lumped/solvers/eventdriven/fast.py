@@ -11,14 +11,14 @@ constant, a :class:`~lumped.scene.forcing.SineBurst` or a linearly interpolated 
 :class:`lumped.io.Table` force, or the inertial force of a ground acceleration record;
 :data:`lumped.scene.forcing_jit.FORCE_LINEAR`, its code compiled for such a scene only;
 other callables of ``t`` run in Python), every law is a sympy residual (the generated
-kernels of :mod:`lumped.codegen.jit`), and no locked elements sit in parallel (their
-forces are the minimum-norm split, Python's)."""
+modules of its law templates, :mod:`lumped.codegen.template_module`, reached through the
+structure-generic kernels of :mod:`lumped.codegen.dispatch`), and no locked elements sit
+in parallel (their forces are the minimum-norm split, Python's)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ...codegen.function_types import branch_type
 from ...scene import Scene
 from ...scene.forcing_jit import FORCE_LINEAR
 from ..modes.mode_guess_jit import compiled_probe_modes, probe_workspace
@@ -28,7 +28,7 @@ from ..radau.forces_jit import table_forcing
 from ..radau.stage_jit import roundoff_test, with_impact_sign
 from ..radau.step_jit import fold_test
 from . import loop_jit as L
-from .fast_parts import loaded, loop_parts, pointer
+from .fast_parts import dispatch_pointers, loaded, loop_parts
 from .step import NOT_SOUGHT, creep_floor
 
 __all__ = ["CompiledLoop", "compiled_loop", "compiled_stage_solver"]
@@ -37,14 +37,16 @@ __all__ = ["CompiledLoop", "compiled_loop", "compiled_stage_solver"]
 BLOCK = 256
 
 
-#: With ``compiled=None``, a scene whose structure has no compiled module yet (none
-#: loaded in this process, none in the disk cache: the laws' numbers are run-time data,
-#: so any earlier run of the same laws and topology, with any numbers, built it) starts
-#: in the Python loop and is compiled once a run has taken this many steps (about 0.25 s
-#: of Python steps, the order of what compiling a new structure's kernels costs, about
-#: 0.8 s of CPU): a short run of a new structure never pays for a compile, a long one
-#: soon does; a structure compiled once runs compiled from step 0 on every later run.
-#: The two loops give the same numbers.
+#: With ``compiled=None``, a scene one of whose law templates has no compiled module yet
+#: (none loaded in this process, none in the disk cache: the laws' numbers are run-time
+#: data, and the loop's kernels are shared by every structure,
+#: :mod:`lumped.codegen.dispatch`, so any earlier run of the same laws, on any topology
+#: and with any numbers, built them) starts in the Python loop and is compiled once a run
+#: has taken this many steps (about 0.25 s of Python steps, the order of what compiling a
+#: new template's module costs, about 0.5-0.8 s of CPU): a short run never pays for a
+#: compile, a long one soon does; once its templates are compiled, a scene runs compiled
+#: from step 0 on every later run, whatever its topology. The two loops give the same
+#: numbers.
 COMPILE_AFTER = 2000
 
 
@@ -55,8 +57,8 @@ def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
     ``plan`` is the scene's :class:`~lumped.solvers.eventdriven.setup.ScenePlan` (the
     compiled parts are kept on it); ``option`` is the ``compiled`` keyword: ``False``
     asks for the Python loop, ``True`` for the compiled loop now, ``None`` for it now if
-    the scene's structure has its compiled module (in this process or the disk cache),
-    else once the run has taken :data:`COMPILE_AFTER` ``steps``. A scene with moving
+    the modules of the scene's law templates are compiled (in this process or the disk
+    cache), else once the run has taken :data:`COMPILE_AFTER` ``steps``. A scene with moving
     supports (a :class:`~lumped.scene.supports.SupportFrame`'s view) has none: the
     compiled loop has no support offsets."""
     if option is False:
@@ -78,7 +80,8 @@ class CompiledLoop:
 
     def __init__(self, js, law, guards, fkind: np.ndarray, fpar: np.ndarray,
                  checked: np.ndarray, branch) -> None:
-        # (``branch``: the scene's ``active_branch``, compiled for the probe only)
+        # (``branch``: ``() -> Pointer`` of the ``active_branch``, compiled for the probe
+        # only: :func:`~lumped.solvers.eventdriven.fast_parts.branch_pointer`)
         self.js, self.law, self.guards, self._branch = js, law, guards, branch
         self._probe: tuple | None = None
         self.fn = L.compiled_advance()
@@ -183,7 +186,7 @@ class CompiledLoop:
         js = self.js
         cands = np.array(candidates, dtype=np.int64).reshape(len(candidates), self.E)
         cur = _NO_MODE if current is None else np.array(current, dtype=np.int64)
-        branch = pointer(self._branch, branch_type())
+        branch = self._branch()
         k = fn(self.law.addr, branch.addr, js.consts, js.masses, js.ea, js.eb, js.spring,
                cands, cur, np.array(f, dtype=float), np.array(x, dtype=float),
                np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
@@ -349,15 +352,19 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
     :data:`~lumped.solvers.eventdriven.loop_jit.SINGULAR`), and both loops pick the same
     solution of a singular stage system (e.g. a junction between two slipping Coulomb
     elements, whose velocity the laws leave free)."""
-    from ...codegen.jit import jit_scene
+    from ...codegen.dispatch import dispatch_scene
+    from ...codegen.jit import jit_scene, numba_enabled
     from ..radau.stage_jit import compiled_stage_solve, workspace
     from ..radau.tableau import A, W
 
-    js = jit_scene(scene)
+    if numba_enabled():  # the structure-generic kernels, as the compiled loop's
+        js, law = dispatch_scene(scene), dispatch_pointers()[0]
+    else:  # (plain Python: the scene module's functions)
+        js = jit_scene(scene)
+        law = js.module.branch_law
     solve = compiled_stage_solve()
     ws = workspace(len(scene.nodes), len(scene.elements))
     A_np, W_np = np.array(A), np.array(W)
-    law = js.module.branch_law
 
     def run(U, h, x, v, f, scale, max_iters, after_impact):
         Ua = np.array(U, dtype=float)

@@ -1,26 +1,37 @@
 r"""The compiled loop's parts of a ``radau5`` scene (:mod:`lumped.solvers.eventdriven.fast`):
-whether its structure's module is loaded, its generated kernels' addresses, its forcing's
-arrays and whether it runs in Python instead (and why).
+whether its laws' compiled code exists, its kernels' addresses, its forcing's arrays and
+whether it runs in Python instead (and why).
+
+The loop reaches the laws through the structure-generic kernels of
+:mod:`lumped.codegen.dispatch` (compiled once per machine), which call each element's
+law template module (:mod:`lumped.codegen.template_module`, compiled once per template)
+through the header the scene's constants carry: a new structure whose laws' templates
+are compiled compiles nothing.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ...codegen.function_types import guards_type, law_type
-from ...codegen.jit import jit_scene, numba_enabled
+from ...codegen.dispatch import active_branch_address, dispatch_addresses, dispatch_scene
+from ...codegen.function_types import branch_type, guards_type, law_type
+from ...codegen.jit import numba_enabled
 from ...scene import Scene
 
-__all__ = ["Pointer", "loaded", "locks_in_parallel", "loop_forcing", "loop_parts", "pointer"]
+__all__ = ["Pointer", "branch_pointer", "dispatch_pointers", "loaded", "locks_in_parallel",
+           "loop_forcing", "loop_parts", "pointer"]
 
 
 def loaded(scene: Scene, plan) -> bool:
-    """The scene's structure has its generated module already, loaded in this process or
-    in the disk cache (an earlier run of the same laws and topology, with any numbers,
-    compiled it): nothing left to compile. Checked once per plan, and a yes kept per
+    """The modules of the scene's law templates exist already, loaded in this process or
+    in the disk cache (an earlier run of the same laws, on any topology and with any
+    numbers, compiled them): nothing left to compile but, on a machine that never ran
+    ``radau5`` compiled, the shared code. Checked once per plan, and a yes kept per
     structure (``plan.structure``, with the cache directory it holds for): a scene with
     new numbers makes no module text to ask."""
-    from ...codegen import jit, module_cache
+    from ...codegen import module_cache
+    from ...codegen.jit import scene_templates
+    from ...codegen.template_module import template_module_cached
 
     if getattr(plan, "module_loaded", None) is None:
         where = str(module_cache.cache_dir())
@@ -28,11 +39,11 @@ def loaded(scene: Scene, plan) -> bool:
             plan.module_loaded = True
             return True
         try:
-            source = jit.scene_source(scene).source
+            templates = scene_templates(scene)[0]
         except ValueError:  # a hand-written kernel: loop_parts says why
             plan.module_loaded = True
         else:
-            plan.module_loaded = module_cache.module_cached(source)
+            plan.module_loaded = all(template_module_cached(t) for t in templates)
             if plan.module_loaded:
                 plan.structure["module_loaded_in"] = where
     return plan.module_loaded
@@ -41,10 +52,12 @@ def loaded(scene: Scene, plan) -> bool:
 def loop_parts(scene: Scene, plan) -> tuple | str:
     """The compiled loop's per-scene parts, or why the scene runs in Python. What depends
     on the structure alone is made once per structure (``plan.structure``: the elements
-    whose forces can be free on cycles, the fold-checked elements' array, the generated
-    module and its arrays: :func:`~lumped.codegen.jit.jit_scene` with ``kept``), the
+    whose forces can be free on cycles, the fold-checked elements' array, the arrays and
+    the header of :func:`~lumped.codegen.dispatch.dispatch_scene` with ``kept``), the
     forcing's arrays once per forcing objects (:func:`loop_forcing`); the scene's numbers
-    are :func:`~lumped.codegen.jit.jit_scene`'s."""
+    are :func:`~lumped.codegen.dispatch.dispatch_scene`'s. The kernels are the
+    structure-generic ones, as pointers (:class:`Pointer`: ``branch_law``, ``branch_guards``;
+    ``active_branch`` as :func:`branch_pointer`, made when first asked)."""
     if not numba_enabled():
         return "python: numba is not available (or NUMBA_DISABLE_JIT is set)"
     structure = plan.structure
@@ -56,15 +69,41 @@ def loop_parts(scene: Scene, plan) -> tuple | str:
         return (f"python: the forcing on node {node!r} is a function of t (compiled: "
                 f"constants, sine bursts and tables)")
     try:
-        js = jit_scene(scene, structure)
+        js = dispatch_scene(scene, structure)
     except ValueError as err:  # a hand-written kernel: no generated code
         return f"python: {err}"
     checked = structure.get("checked_array")
     if checked is None:
         checked = structure["checked_array"] = np.array(plan.checked, dtype=np.int64)
-    return (js, pointer(js.module.branch_law, law_type()),
-            pointer(js.module.branch_guards, guards_type()), fkind, fpar, checked,
-            js.module.active_branch)
+    law, guards = dispatch_pointers()
+    return js, law, guards, fkind, fpar, checked, branch_pointer
+
+
+_DISPATCH: list = []
+_BRANCH: list = []
+
+
+def dispatch_pointers() -> tuple[Pointer, Pointer]:
+    """The structure-generic ``branch_law`` and ``branch_guards``
+    (:func:`~lumped.codegen.dispatch.dispatch_addresses`) as pointers (:class:`Pointer`), made
+    once per process."""
+    if not _DISPATCH:
+        from ...codegen import dispatch
+
+        law, guards = dispatch_addresses()
+        _DISPATCH.extend((Pointer(law, law_type(), dispatch),
+                          Pointer(guards, guards_type(), dispatch)))
+    return _DISPATCH[0], _DISPATCH[1]
+
+
+def branch_pointer() -> Pointer:
+    """The structure-generic ``active_branch`` as a :class:`Pointer`, compiled (or loaded)
+    the first time a process asks: only the mode probe calls it."""
+    if not _BRANCH:
+        from ...codegen import dispatch
+
+        _BRANCH.append(Pointer(active_branch_address(), branch_type(), dispatch))
+    return _BRANCH[0]
 
 
 #: ids of a scene's forcing objects -> (those objects, :func:`loop_forcing`'s arrays, the
