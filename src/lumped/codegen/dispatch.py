@@ -50,6 +50,7 @@ from .function_types import (
 from .jit import (
     JitScene,
     cache_dir,
+    kept_values,
     numba_module,
     refuse_moving_supports,
     scene_templates,
@@ -145,13 +146,8 @@ def dispatch_scene(scene, kept: dict | None = None) -> JitScene:
         got = kept.get("dispatch_scene")
         if got is not None and got[0] == where:
             _, arrays, head, functions = got
-            values: list[float] = []
-            for el, f in zip(scene.elements, functions, strict=True):
-                t = law_template(el.law)
-                if t.functions is not f and t.functions != f:
-                    break
-                values += t.values
-            else:
+            values = kept_values(scene, functions)
+            if values is not None:
                 return with_numbers(scene, None, arrays,
                                     np.array(head + values + [0.0], dtype=float))
     templates, law_index, consts, offsets = scene_templates(scene)

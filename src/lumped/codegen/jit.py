@@ -360,16 +360,10 @@ def jit_scene(scene, kept: dict | None = None) -> JitScene:
         got = kept.get("jit_scene")
         if got is not None:
             where, module, arrays, functions = got
-            values: list[float] = []
-            for el, f in zip(scene.elements, functions, strict=True):
-                t = law_template(el.law)
-                if t.functions is not f and t.functions != f:
-                    break
-                values += t.values
-            else:
-                if str(cache_dir()) == where:
-                    return with_numbers(scene, module, arrays,
-                                         np.array(values + [0.0], dtype=float))
+            values = kept_values(scene, functions)
+            if values is not None and str(cache_dir()) == where:
+                return with_numbers(scene, module, arrays,
+                                    np.array(values + [0.0], dtype=float))
     module, generated = scene_module(scene)
     arrays = _ARRAYS.get(generated.source)
     if arrays is None:
@@ -389,6 +383,19 @@ def refuse_moving_supports(scene) -> None:
     if getattr(scene, "support_ends", ()):
         raise ValueError(f"compiled loops do not take moving supports (scene supports: "
                          f"{', '.join(sorted(scene.supports))}); use 'bdf1' or 'bdf2'")
+
+
+def kept_values(scene, functions: tuple) -> list[float] | None:
+    """The laws' constants of ``scene``, element after element, if each element's law
+    template has the kept ``functions`` (those of the structure's first scene); else
+    ``None`` (another template: the structure's parts are made anew)."""
+    values: list[float] = []
+    for el, f in zip(scene.elements, functions, strict=True):
+        t = law_template(el.law)
+        if t.functions is not f and t.functions != f:
+            return None
+        values += t.values
+    return values
 
 
 def with_numbers(scene, module: ModuleType | None, arrays: tuple,
