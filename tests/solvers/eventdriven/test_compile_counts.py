@@ -148,8 +148,12 @@ _NEW_TEMPLATE = ElementLaw("only_in_the_compile_counts", "spring", "F = k*q + c*
 def test_a_new_law_template_compiles_its_template_module_only(monkeypatch, tmp_path):
     from lumped.codegen.template_module import template_addresses, template_module
     from lumped.codegen.templates import law_template
+    from lumped.solvers.radau import step_jit
 
     simulate(_paper(), compiled=True, **KW)  # the shared loop
+    # ... and the fold test, shared code that this law (not a known monotone one) needs:
+    # compiled (or loaded) here, whatever ran before in this process
+    step_jit.fold_test()
     monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path))  # (no template module on disk)
     for el in _paper().elements:  # the paper's laws' templates, in this cache
         template_addresses(law_template(el.law))
