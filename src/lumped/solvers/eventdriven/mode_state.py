@@ -181,7 +181,8 @@ class ModeState:
             # there the consistent initial forces stay unless they miss a law (the initial
             # state can leave a junction between two slipping dashpots unresolved), and
             # dashpots at known rates (and yield ones at junctions) take their laws' at t
-            got = junctions_at(scene, lbs, new, t, x, v, v_p, F_p) if cause == "start" else None
+            got = junctions_at(scene, lbs, new, t, x, v, v_p, F_p) if cause == "start" or \
+                hit[0] else None  # (after an impact too: a junction a string drags)
             v_t, F_t = got or (v_p, F_p)
             v[:] = [vi if mass else w for vi, w, mass in zip(v, v_t, self.is_mass, strict=True)]
             taken = cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
