@@ -22,7 +22,12 @@ from ..modes.choice import select_modes
 from ..modes.finite_stop import take_stop
 from ..modes.force_bounds import onto_slip_ends, slip_beyond_joint_bounds
 from ..modes.junctions_at import junctions_at
-from ..modes.lock_events import apply_impacts, hold_rate_locks, snap_to_locks
+from ..modes.lock_events import (
+    apply_impacts,
+    hold_rate_locks,
+    snap_to_locks,
+    tie_junctions_to_strings,
+)
 from ..modes.mode_guess import probe_state, try_modes
 from ..modes.probe_locks import lock_probe_rates
 from ..nonsmooth.locks import IntervalLog, indeterminate_elements
@@ -129,10 +134,8 @@ class ModeState:
         if held and v != v_free and not any(lbs[e].info[new[e]].locks for e in held) \
                 and any(new[e] != modes[e] for e in range(self.E) if e not in held):
             # the snap's premise failed (no element it held stays locked) and another
-            # element switched: a rate below the snap's tolerance, flipped by it, decided
-            # that switch (a Bingham dashpot between two masses sent to its other slip
-            # branch by the snap of a Herschel-Bulkley n = 2 dashpot at its flat yield
-            # end, then back, 1e-9 s later, 50 times). Choose from the state as it was.
+            # switched, by a rate the snap flipped (a Bingham dashpot sent to its other slip
+            # branch and back 50 times, 1e-9 s apart): choose from the state as it was
             v_snapped, v[:], self.hint = list(v), v_free, hint
             again = self._choose(t, h0, cause, x, v, F)
             if isinstance(again, str):
@@ -177,14 +180,14 @@ class ModeState:
             if any(e == k for k, _ in hit[0]):  # (impacted, then slack at once: recorded)
                 events.append(Event(t, names[e], "switch", was[e], new[e]))
         if not self.state_stays(t, cause, new, bool(hit[0]), x, v, F):
-            # the probe's junction velocities, at t = 0 those of t itself (junctions_at);
-            # there the consistent initial forces stay unless they miss a law (the initial
-            # state can leave a junction between two slipping dashpots unresolved), and
-            # dashpots at known rates (and yield ones at junctions) take their laws' at t
-            got = junctions_at(scene, lbs, new, t, x, v, v_p, F_p) if cause == "start" or \
-                hit[0] else None  # (after an impact too: a junction a string drags)
+            # the probe's junction velocities, at t = 0 those of t itself (junctions_at),
+            # where the initial forces stay unless they miss a law (a junction between two
+            # slipping dashpots), and dashpots at known rates take their laws' at t
+            got = junctions_at(scene, lbs, new, t, x, v, v_p, F_p) if cause == "start" else None
             v_t, F_t = got or (v_p, F_p)
             v[:] = [vi if mass else w for vi, w, mass in zip(v, v_t, self.is_mass, strict=True)]
+            if hit[0]:  # (a junction a taut string ties to a mass: that mass's velocity)
+                tie_junctions_to_strings(scene, lbs, new, v)
             taken = cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
                                                       scene.elongations(x, v), F)
             F[:] = F_t if taken else F
@@ -312,10 +315,8 @@ class ModeState:
             self.returned = bool(left)
             return first
         if isinstance(sel, str):
-            # every probe failed: shorter ones, nearer the start (the semismooth Newton
-            # diverged at 4e-9 s and longer where a stuck Bingham dashpot joined a
-            # junction's Herschel-Bulkley n = 0.3 dashpot and locks in parallel, and
-            # converged at 1e-10 s; issue 11)
+            # every probe failed: shorter ones (Newton diverged from 4e-9 s on and converged
+            # at 1e-10 s at a junction's HB n = 0.3 dashpot beside locks; issue 11)
             for k in (1, 2):
                 h_short = max(h0 * 1e-2**k, 1e2 * _EPS * max(1.0, abs(t)))
                 got = select_modes(scene, lbs, t, x, v, F, h_short, self.settings.options)
@@ -323,9 +324,8 @@ class ModeState:
                     return self._locked(got, h_short, x)
         if isinstance(sel, str) and cause == "guard" and self.cones:
             # ... and the guessed modes, locks in parallel by the minimum-norm correction
-            # (a junction's Herschel-Bulkley n = 0.3 dashpot stopping exactly at its
-            # kink beside a Bingham and a Coulomb element stuck in parallel: the full
-            # laws' semismooth Newton diverged at every probe size from 1e-12 to 1e-6 s)
+            # (a junction's HB n = 0.3 dashpot stopping at its kink beside two stuck links:
+            # the full laws' Newton diverged at every probe size from 1e-12 to 1e-6 s)
             guess = self._guesses(cause, x, v, F, cones=True)
             got = try_modes(scene, lbs, guess, t, x, v, F, h0, modes, 3, None,
                             min_norm=True) if guess else None

@@ -24,7 +24,7 @@ from ..nonsmooth.impacts import impact_solve
 from ..nonsmooth.lock_forces import forces_with_held
 
 __all__ = ["after_impact_forces", "apply_impacts", "hold_rate_locks",
-           "lock_cones", "snap_to_locks"]
+           "lock_cones", "snap_to_locks", "tie_junctions_to_strings"]
 
 _EPS = sys.float_info.epsilon
 
@@ -56,6 +56,29 @@ def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
         else:
             continue
         done.append(e)
+    return done
+
+
+def tie_junctions_to_strings(scene: Scene, branches: Sequence, modes: Sequence[int],
+                             v: list[float]) -> list[int]:
+    """Give each junction that a held position lock (a taut string, ``q = L``, so
+    ``q' = 0``) joins to a mass that mass's velocity, exactly (``v`` in place); the
+    junctions set. After an impact the junctions take the mode probe's velocities, at
+    ``t + h_p``: a junction a string had just gone taut on read ``-0.7866`` beside its
+    mass's ``-0.7768`` (the probe's ``h_p a``), and the first step from that state failed
+    at every size down to the step floor (its dense output's defect 561 against the
+    string's lock, whatever the step)."""
+    done = []
+    is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+    for e, el in enumerate(scene.elements):
+        a, b = scene.elem_a[e], scene.elem_b[e]
+        if el.kind != "spring" or a < 0 or b < 0 or is_mass[a] == is_mass[b]:
+            continue
+        info = branches[e].info[modes[e]]
+        if info.locks and info.lock_value is not None:
+            m, j = (a, b) if is_mass[a] else (b, a)
+            v[j] = v[m]
+            done.append(j)
     return done
 
 
