@@ -187,7 +187,7 @@ class ModeState:
             v_t, F_t = got or (v_p, F_p)
             v[:] = [vi if mass else w for vi, w, mass in zip(v, v_t, self.is_mass, strict=True)]
             if hit[0]:  # (a junction a taut string ties to a mass: that mass's velocity)
-                tie_junctions_to_strings(scene, lbs, new, v)
+                tie_junctions_to_strings(scene, lbs, new, v, scale_v)
             taken = cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
                                                       scene.elongations(x, v), F)
             F[:] = F_t if taken else F

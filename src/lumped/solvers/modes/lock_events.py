@@ -60,14 +60,16 @@ def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
 
 
 def tie_junctions_to_strings(scene: Scene, branches: Sequence, modes: Sequence[int],
-                             v: list[float]) -> list[int]:
+                             v: list[float], tol: float) -> list[int]:
     """Give each junction that a held position lock (a taut string, ``q = L``, so
-    ``q' = 0``) joins to a mass that mass's velocity, exactly (``v`` in place); the
-    junctions set. After an impact the junctions take the mode probe's velocities, at
-    ``t + h_p``: a junction a string had just gone taut on read ``-0.7866`` beside its
-    mass's ``-0.7768`` (the probe's ``h_p a``), and the first step from that state failed
-    at every size down to the step floor (its dense output's defect 561 against the
-    string's lock, whatever the step)."""
+    ``q' = 0``) joins to a mass, and whose velocity is off that mass's by more than
+    ``tol``, the mass's velocity exactly (``v`` in place); the junctions set. After an
+    impact the junctions take the mode probe's velocities, at ``t + h_p``: where every
+    short probe failed, a junction a string had just gone taut on read ``-0.7866`` (the
+    probe of ``1.6e-4`` s) beside its mass's ``-0.7768``, and the first step from that
+    state failed at every size down to the step floor (its dense output's defect 561
+    against the string's lock, whatever the step). One within ``tol`` (the run's velocity
+    tolerance) keeps the probe's, whose forces it matches."""
     done = []
     is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
     for e, el in enumerate(scene.elements):
@@ -75,8 +77,8 @@ def tie_junctions_to_strings(scene: Scene, branches: Sequence, modes: Sequence[i
         if el.kind != "spring" or a < 0 or b < 0 or is_mass[a] == is_mass[b]:
             continue
         info = branches[e].info[modes[e]]
-        if info.locks and info.lock_value is not None:
-            m, j = (a, b) if is_mass[a] else (b, a)
+        m, j = (a, b) if is_mass[a] else (b, a)
+        if info.locks and info.lock_value is not None and abs(v[j] - v[m]) > tol:
             v[j] = v[m]
             done.append(j)
     return done
