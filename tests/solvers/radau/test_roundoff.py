@@ -11,6 +11,7 @@ import pytest
 from lumped.solvers.newton.criteria import ROUNDOFF
 from lumped.solvers.radau.roundoff import (
     junction_columns,
+    linked_balances,
     linked_roundoff,
     rate_rows,
     roundoff_worst,
@@ -221,16 +222,22 @@ def _locked_junctions(gamma=4.36):
 
 def test_a_junction_locked_to_another_carries_that_ones_round_off():
     # issue 29, seed 22044: j0's velocity is set by e0's row to e0's rounding, gamma times
-    # the balance's (gamma (|F_e0| + |F_e1|)); e1's row only ties j1 to j0, and read
-    # alone (|V_j1| + |V_j0| = 4e-6) it floored both velocities at 1e-21: corrections of
-    # 7e-16 cycled above the plain test (1e-16) on every step after e0's break-out
+    # the balance's (gamma (|F_e0| + B_j1): e1's force is j1's balance); e1's row only
+    # ties j1 to j0, and read alone (|V_j1| + |V_j0| = 4e-6) it floored both velocities
+    # at 1e-21: corrections of 7e-16 cycled above the plain test (1e-16) on every step
+    # after e0's break-out
     gamma = 4.36
     masses, spring, n, J, U, scale = _locked_junctions(gamma)
-    rho0 = gamma * (0.0343 + 0.845) + 2e-6  # (e0's row: the balance's terms, and V_j0)
+    # e1's force is j1's balance with the spring's (F_e1 = F_e2): it carries that
+    # balance's rounding into j0's (linked_balances)
+    bals = linked_balances(list(U), J.tolist(), junction_columns(masses, n),
+                           rate_rows(2, spring), np.zeros((3, 2)).tolist())
+    assert bals[n] == 0.0343 + (0.845 + 0.8)
+    assert bals[n + 1] == (0.0343 + 0.845) + 0.8 and bals[n + 2] == 0.0  # (and back)
+    rho0 = gamma * (0.0343 + 0.845 + 0.8) + 2e-6  # (e0's row: the balance's terms, V_j0)
     rho1 = 2e-6 + rho0  # (e1's row: V_j1, and V_j0 at its round-off)
     own = linked_roundoff(list(U), J.tolist(), junction_columns(masses, n),
-                          rate_rows(2, spring), [0.0343 + 0.845 if c else 0.0 for c in
-                                                 junction_columns(masses, n)])
+                          rate_rows(2, spring), bals)
     assert own[n] == pytest.approx(rho0, rel=1e-12)
     assert own[n + 1] == pytest.approx(rho1, rel=1e-12)
     assert own[n + 2] == math.inf  # (no junction's velocity)
@@ -254,3 +261,43 @@ def test_junctions_locked_together_on_springs_alone_keep_their_rows_as_they_are(
     du = np.zeros(3 * n)
     du[n + 1] = 2.0 * TOL * scale[n + 1]
     assert _both(du, J, U, scale, spring, masses) == pytest.approx(2.0 * TOL, rel=1e-12)
+
+
+def test_a_dashpot_between_junctions_carries_the_other_balances_rounding():
+    # issue 29, the tight property's draw of seed 22131: j0 on a Newtonian dashpot to
+    # ground (e0, c0 = 0.0225) tied by another (e1, c2 = 0.0103) to j2, which two springs
+    # (e2, e3: the string's and an implicit spring's rows, holding V_j2 through h a)
+    # hold at 0.075 and 0.0785; their difference is e1's force, so j2's balance rounds
+    # it, and j0's velocity carries that over c0. Read from |F_e1| alone, V_j0's
+    # corrections cycled at 3.1e-16 above its floor and the run stopped after 12 bridges
+    c0, c2 = 0.0225, 0.0103
+    masses, spring, n = [0.0, 0.0], [False, False, True, True], 6
+    J = np.zeros((3 * n, 3 * n))
+    U = np.zeros(3 * n)
+    for k in range(3):
+        j0, j2, r0, r1, r2, r3 = (k * n + i for i in range(n))
+        J[j0, r0], J[j0, r1] = 1.0, -1.0  # 0 = F_e0 - F_e1
+        J[j2, r1], J[j2, r2], J[j2, r3] = 1.0, -1.0, -1.0  # 0 = F_e1 - F_e2 - F_e3
+        J[r0, j0], J[r0, r0] = -c0, 1.0
+        J[r1, j2], J[r1, j0], J[r1, r1] = -c2, c2, 1.0
+        J[r2, j2], J[r2, r2] = 1e-3, -1.0
+        J[r3, j2], J[r3, r3] = 1e-3, -1.0
+        U[k * n:(k + 1) * n] = [-1.88e-3, -0.347, -4.24e-5, -3.55e-3, -0.075, 0.0785]
+    scale = 1e-13 + 1e-10 * np.abs(U)
+    junction = junction_columns(masses, n)
+    bals = linked_balances(list(U), J.tolist(), junction, rate_rows(2, spring),
+                           np.zeros((3, 2)).tolist())
+    B2 = 3.55e-3 + 0.075 + 0.0785
+    assert bals[1] == pytest.approx(B2 + 4.24e-5, rel=1e-15)  # (and back: j0's)
+    assert bals[0] == pytest.approx(4.24e-5 + B2, rel=1e-15)  # (not 4.24e-5 + 3.55e-3)
+    assert [b for b, c in zip(bals, junction) if not c] == [0.0] * 12
+    du = np.zeros(3 * n)
+    du[n] = 3.1e-16  # (the cycle: 1.07e-3 of the plain test)
+    assert abs(du[n]) / scale[n] > TOL
+    # j0's floor from e0's row: ROUNDOFF (B_j0 + c0 |V_j0|) / c0 (6.2e-12 over TOL)
+    floor = ROUNDOFF * ((4.24e-5 + B2) / c0 + 1.88e-3) / TOL
+    assert _both(du, J, U, scale, spring, masses) == pytest.approx(3.1e-16 / floor,
+                                                                   rel=1e-9)
+    # ... beyond that rounding, not
+    du[n] = 2.0 * floor * TOL
+    assert _both(du, J, U, scale, spring, masses) > TOL

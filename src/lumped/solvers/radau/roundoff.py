@@ -86,7 +86,7 @@ from collections.abc import Sequence
 
 from ..newton.criteria import ROUNDOFF
 
-__all__ = ["junction_columns", "linked_roundoff", "rate_rows", "roundoff_worst"]
+__all__ = ["junction_columns", "linked_balances", "linked_roundoff", "rate_rows", "roundoff_worst"]
 
 
 def junction_columns(masses: Sequence[float], n: int) -> list[bool]:
@@ -136,15 +136,8 @@ def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence
     if not other <= tol:
         return worst
     worst = other
-    n = len(U) // 3
     size = len(U)
-    bals = [0.0] * size
-    for j in range(size):
-        if junction[j]:
-            bal = abs(f[j // n][j % n])  # the junction's balance: row j
-            for u in range(size):
-                bal += abs(J[j][u]) * abs(U[u])
-            bals[j] = bal
+    bals = linked_balances(U, J, junction, rate, f)
     own = linked_roundoff(U, J, junction, rate, bals)
     for j in range(size):
         if not junction[j]:
@@ -179,6 +172,56 @@ def roundoff_worst(du: Sequence[float], U: Sequence[float], J: Sequence[Sequence
         if not r <= worst:
             worst = r
     return worst
+
+
+def linked_balances(U: Sequence[float], J: Sequence[Sequence[float]],
+                    junction: Sequence[bool], rate: Sequence[bool],
+                    f: Sequence[Sequence[float]]) -> list[float]:
+    r"""Per stage unknown: the magnitude ``B_j`` of the terms of a junction's balance (row
+    ``j``, ``f[k][i]`` its external force at stage ``k``), 0 for every other unknown.
+
+    ``B_j = |f_k,i| + sum_u |J_ju| W_u`` with ``W_u = |U_u|``, except for the force of a
+    dashpot whose row also holds another junction's velocity ``j'`` (a dashpot between
+    two junctions): ``W_u = max(|U_u|, B_j')`` with ``B_j'`` the plain sum at ``j'``.
+    That force is fixed by ``j'``'s balance where no other law in the rate holds ``j'``
+    (``F_u = f_j' + ...``, its other elements springs), and so carries that balance's
+    rounding into ``j``'s. A junction ``j0`` on a Newtonian dashpot to ground (``c0 =
+    0.023``, carrying ``4e-5``) and a spring, tied by a dashpot (``c2 = 0.010``,
+    ``3.5e-3``) to a junction ``j2`` between two springs carrying ``0.078`` each: read
+    from ``|F_u|``, ``j0``'s balance was ``0.007`` and its velocity's round-off
+    ``ROUNDOFF 0.007 / c0 = 2.8e-16``, but ``j2``'s balance rounds ``F_u`` by ``ROUNDOFF
+    0.16``, and the stage corrections of ``V_j0`` cycled at ``3.1e-16`` (that rounding
+    over ``c0 + c2``); every stage solve failed down to the step floor, and
+    backward Euler bridged 12 times before the run stopped (the tight property, issue
+    29). Where no row of a law in the rate holds two junctions, ``B_j`` is the plain sum,
+    operation for operation.
+    """
+    n = len(U) // 3
+    size = len(U)
+    plain = [0.0] * size
+    for j in range(size):
+        if junction[j]:
+            bal = abs(f[j // n][j % n])  # the junction's balance: row j
+            for u in range(size):
+                bal += abs(J[j][u]) * abs(U[u])
+            plain[j] = bal
+    out = list(plain)
+    for j in range(size):
+        if not junction[j]:
+            continue
+        linked = False
+        bal = abs(f[j // n][j % n])
+        for u in range(size):
+            w = abs(U[u])
+            if rate[u] and J[j][u] != 0.0:
+                for o in range(size):
+                    if o != j and junction[o] and J[u][o] != 0.0 and plain[o] > w:
+                        w = plain[o]
+                        linked = True
+            bal += abs(J[j][u]) * w
+        if linked:
+            out[j] = bal
+    return out
 
 
 def linked_roundoff(U: Sequence[float], J: Sequence[Sequence[float]],

@@ -14,7 +14,7 @@ import numpy as np
 from ...codegen.jit import njit
 from ..newton.criteria import ROUNDOFF
 
-__all__ = ["linked_roundoff_jit", "roundoff_worst_jit"]
+__all__ = ["linked_balances_jit", "linked_roundoff_jit", "roundoff_worst_jit"]
 
 
 @njit(cache=True)
@@ -40,14 +40,7 @@ def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst, h, after_
     if not other <= tol:
         return worst
     worst = other
-    bals = np.zeros(size)
-    for j in range(size):
-        i = j % n
-        if i < N and masses[i] == 0.0:
-            bal = abs(f[j // n, i])  # the junction's balance: row j
-            for u in range(size):
-                bal += abs(J[j, u]) * abs(U[u])
-            bals[j] = bal
+    bals = linked_balances_jit(U, J, masses, spring, f)
     own = linked_roundoff_jit(U, J, masses, spring, bals)
     for j in range(size):
         i = j % n
@@ -84,6 +77,45 @@ def roundoff_worst_jit(du, U, J, scale, masses, spring, f, tol, worst, h, after_
         if not r <= worst:
             worst = r
     return worst
+
+
+@njit(cache=True)
+def linked_balances_jit(U, J, masses, spring, f):
+    """:func:`lumped.solvers.radau.roundoff.linked_balances` (read it for the maths): per
+    stage unknown, the magnitude of a junction's balance, a dashpot's force between two
+    junctions at the other junction's balance."""
+    N = masses.shape[0]
+    size = U.shape[0]
+    n = size // 3
+    plain = np.zeros(size)
+    for j in range(size):
+        i = j % n
+        if i < N and masses[i] == 0.0:
+            bal = abs(f[j // n, i])  # the junction's balance: row j
+            for u in range(size):
+                bal += abs(J[j, u]) * abs(U[u])
+            plain[j] = bal
+    out = plain.copy()
+    for j in range(size):
+        i = j % n
+        if not (i < N and masses[i] == 0.0):
+            continue
+        linked = False
+        bal = abs(f[j // n, i])
+        for u in range(size):
+            w = abs(U[u])
+            e = u % n - N
+            if e >= 0 and not spring[e] and J[j, u] != 0.0:
+                for o in range(size):
+                    io = o % n
+                    if (o != j and io < N and masses[io] == 0.0 and J[u, o] != 0.0
+                            and plain[o] > w):
+                        w = plain[o]
+                        linked = True
+            bal += abs(J[j, u]) * w
+        if linked:
+            out[j] = bal
+    return out
 
 
 @njit(cache=True)
