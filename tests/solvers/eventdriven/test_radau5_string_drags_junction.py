@@ -13,7 +13,7 @@ backward Euler finding the locks inconsistent:
 * the junction took the mode probe's velocity at ``t + h_p`` (``-0.7866``) beside its
   mass's ``-0.7768`` at ``t``, off the taut string's lock: the first step's dense output
   was off the lock by a defect of 561 at every step size
-  (:func:`lumped.solvers.modes.lock_events.tie_junctions_to_strings` now ties it).
+  (:func:`lumped.solvers.modes.lock_events.hold_strung_junctions` now ties it).
 """
 
 from __future__ import annotations

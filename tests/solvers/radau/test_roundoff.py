@@ -290,7 +290,7 @@ def test_a_dashpot_between_junctions_carries_the_other_balances_rounding():
     B2 = 3.55e-3 + 0.075 + 0.0785
     assert bals[1] == pytest.approx(B2 + 4.24e-5, rel=1e-15)  # (and back: j0's)
     assert bals[0] == pytest.approx(4.24e-5 + B2, rel=1e-15)  # (not 4.24e-5 + 3.55e-3)
-    assert [b for b, c in zip(bals, junction) if not c] == [0.0] * 12
+    assert [b for b, c in zip(bals, junction, strict=True) if not c] == [0.0] * 12
     du = np.zeros(3 * n)
     du[n] = 3.1e-16  # (the cycle: 1.07e-3 of the plain test)
     assert abs(du[n]) / scale[n] > TOL

@@ -25,8 +25,8 @@ from ..modes.junctions_at import junctions_at
 from ..modes.lock_events import (
     apply_impacts,
     hold_rate_locks,
+    hold_strung_junctions,
     snap_to_locks,
-    tie_junctions_to_strings,
 )
 from ..modes.mode_guess import probe_state, try_modes
 from ..modes.probe_locks import lock_probe_rates
@@ -186,8 +186,8 @@ class ModeState:
             got = junctions_at(scene, lbs, new, t, x, v, v_p, F_p) if cause == "start" else None
             v_t, F_t = got or (v_p, F_p)
             v[:] = [vi if mass else w for vi, w, mass in zip(v, v_t, self.is_mass, strict=True)]
-            if hit[0]:  # (a junction a taut string ties to a mass: that mass's velocity)
-                tie_junctions_to_strings(scene, lbs, new, v, scale_v)
+            if hit[0]:  # (a junction taut strings tie to a mass: that mass's velocity)
+                hold_strung_junctions(scene, lbs, new, v, scale_v)
             taken = cause != "start" or not laws_hold(mode_parts(self.plan, tuple(new))[0],
                                                       scene.elongations(x, v), F)
             F[:] = F_t if taken else F

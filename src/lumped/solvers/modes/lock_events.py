@@ -24,7 +24,7 @@ from ..nonsmooth.impacts import impact_solve
 from ..nonsmooth.lock_forces import forces_with_held
 
 __all__ = ["after_impact_forces", "apply_impacts", "hold_rate_locks",
-           "lock_cones", "snap_to_locks", "tie_junctions_to_strings"]
+           "hold_strung_junctions", "lock_cones", "snap_to_locks"]
 
 _EPS = sys.float_info.epsilon
 
@@ -59,29 +59,38 @@ def hold_rate_locks(scene: Scene, branches: Sequence, modes: Sequence[int],
     return done
 
 
-def tie_junctions_to_strings(scene: Scene, branches: Sequence, modes: Sequence[int],
-                             v: list[float], tol: float) -> list[int]:
-    """Give each junction that a held position lock (a taut string, ``q = L``, so
-    ``q' = 0``) joins to a mass, and whose velocity is off that mass's by more than
-    ``tol``, the mass's velocity exactly (``v`` in place); the junctions set. After an
-    impact the junctions take the mode probe's velocities, at ``t + h_p``: where every
-    short probe failed, a junction a string had just gone taut on read ``-0.7866`` (the
-    probe of ``1.6e-4`` s) beside its mass's ``-0.7768``, and the first step from that
+def hold_strung_junctions(scene: Scene, branches: Sequence, modes: Sequence[int],
+                          v: list[float], tol: float) -> list[int]:
+    r"""Put the junctions that held position locks (taut strings, ``q = L``, so ``q' =
+    0``) join to anything back on those locks, when one of them is off its lock's rate by
+    more than ``tol``; ``v`` in place. Returns the locks held (empty: ``v`` unchanged).
+
+    After an impact the junctions take the mode probe's velocities, at ``t + h_p``: where
+    every short probe failed, a junction a string had just gone taut on read ``-0.7866``
+    (the probe of ``1.6e-4`` s) beside its mass's ``-0.7768``, and the first step from that
     state failed at every size down to the step floor (its dense output's defect 561
-    against the string's lock, whatever the step). One within ``tol`` (the run's velocity
-    tolerance) keeps the probe's, whose forces it matches."""
-    done = []
-    is_mass = [isinstance(nd, Mass) for nd in scene.nodes]
+    against the string's lock, whatever the step). The velocities move to the nearest
+    ones in the kinetic-energy norm that hold every such lock's rate at 0
+    (:func:`lumped.solvers.nonsmooth.impacts.impact_solve` with targets, as
+    :func:`snap_to_locks`): a junction has no mass, so it takes the velocity its strings
+    tie it to, through a chain of junctions too, and no mass moves. Within ``tol`` (the
+    run's velocity tolerance) every junction keeps the probe's velocity, whose forces it
+    matches (set always, a Coulomb element stuck at a junction ``1e-8`` s after an
+    impact started ``1.2e-7`` beyond its yield force)."""
+    held, off = [], False
     for e, el in enumerate(scene.elements):
         a, b = scene.elem_a[e], scene.elem_b[e]
-        if el.kind != "spring" or a < 0 or b < 0 or is_mass[a] == is_mass[b]:
+        if el.kind != "spring" or not any(
+                i >= 0 and not isinstance(scene.nodes[i], Mass) for i in (a, b)):
             continue
         info = branches[e].info[modes[e]]
-        m, j = (a, b) if is_mass[a] else (b, a)
-        if info.locks and info.lock_value is not None and abs(v[j] - v[m]) > tol:
-            v[j] = v[m]
-            done.append(j)
-    return done
+        if info.locks and info.lock_value is not None:
+            held.append(e)
+            off = off or abs(across(v, a, b)) > tol
+    if not off:
+        return []
+    v[:] = impact_solve(scene, v, held, 0.0, target=[0.0] * len(held))[0]
+    return held
 
 
 def snap_to_locks(scene: Scene, branches: Sequence, x: list[float], v: list[float],
