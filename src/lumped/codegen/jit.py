@@ -58,8 +58,10 @@ template, so that a new structure of known laws compiles nothing.
 
 The solvers are compiled once for all scenes (:mod:`lumped.solvers.bdf.core_jit`) and
 take ``evaluate`` and ``element_law`` as function pointers (numba's first-class
-function types): a new structure compiles only its own small functions, and new numbers
-compile nothing.
+function types), and new numbers compile nothing. With numba, ``jit-bdf1``/``jit-bdf2``
+take those two from :mod:`lumped.codegen.step_dispatch` instead (compiled once for
+every scene, over one law module per law: a new structure of known laws compiles
+nothing); a scene module's run without numba (plain Python) and in tests.
 
 The scene's structure (arrays, runtime data, not baked into the code) is on
 :class:`JitScene` (:mod:`lumped.codegen.scene_numbers`): ``masses`` (``m_i``, 0 for a
