@@ -64,8 +64,22 @@ def _maxwell_drag() -> Scene:
                  {"mass": SineBurst(6.0, 4.0, 1.0)})
 
 
+def _long_chain(n: int = 6) -> Scene:
+    """``n`` masses in a chain on springs and Bingham dashpots: ``3 n`` unknowns, above
+    the fast loop's 16 (the port alone runs it, also with ``fast=True``)."""
+    nodes = [Mass(f"m{i}", m=1.0 + 0.1 * i) for i in range(n)]
+    elements = []
+    for i in range(n):
+        a = "ground" if i == 0 else f"m{i - 1}"
+        elements += [Element(f"s{i}", get_law("linear_spring").bind(k=30.0 + 5.0 * i), a,
+                             f"m{i}"),
+                     Element(f"d{i}", get_law("bingham").bind(gamma=0.5, tau=0.3), a,
+                             f"m{i}")]
+    return Scene(nodes, elements, {f"m{n - 1}": SineBurst(5.0, 6.0, 0.8)})
+
+
 SCENES = {"forcing-F2": lambda: scenario_scene("forcing-F2"), "chain-3": lambda: bingham_chain(3),
-          "maxwell-drag": _maxwell_drag}
+          "maxwell-drag": _maxwell_drag, "chain-6": _long_chain}
 
 
 def test_the_generic_port_has_no_module_of_the_structure():
