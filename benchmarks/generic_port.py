@@ -63,7 +63,7 @@ DT, N_STEPS = 1e-4, 50_000
 def _module_port(scene):
     """The port's parts on the scene's generated module (as before)."""
     js = jit_scene(scene)
-    return js, Port(js.module.evaluate, js.module.element_law, js.consts)
+    return js, Port(js.consts, lambda: (js.module.evaluate, js.module.element_law))
 
 
 def _calls(scene, formula: str) -> dict:
@@ -72,8 +72,7 @@ def _calls(scene, formula: str) -> dict:
     _, mport = _module_port(scene)
     N, E = len(scene.nodes), len(scene.elements)
     margs = args[:-8] + loop_workspace(N, E, mport.consts.shape[0]) + (mport.consts,)
-    return {"per structure": ((mport.evaluate, mport.element_law), margs),
-            "generic": ((port.evaluate, port.element_law), args)}
+    return {"per structure": (mport.callbacks(), margs), "generic": (port.callbacks(), args)}
 
 
 def warm(scene, formula: str, repeats: int) -> dict:

@@ -84,7 +84,7 @@ def per_step(n: int, repeats: int) -> dict[str, float]:
             variants[f"{label} jit-{formula}: fast path (default)"] = (
                 lambda s=scene, j=js, p=port, a=args: run_fast_path(s, j, p, a))
             variants[f"{label} jit-{formula}: faithful port (fast=False)"] = (
-                lambda p=port, a=args: loop(p.evaluate, p.element_law, *a, 0, -1))
+                lambda p=port, a=args: loop(*p.callbacks(), *a, 0, -1))
             if label == SCENE:
                 variants[f"{label} jit-{formula}: simulate() end to end"] = (
                     lambda f=formula, s=scene: simulate(s, method=f"jit-{f}", dt=DT,

@@ -35,14 +35,17 @@ its Jacobian entries, and ``G_a -= F_e``, ``S_a += |F_e|``, then ``G_b += F_e``,
 the same numbers bit for bit. Each law is one direct call through its address (a scene
 module's is inlined).
 
-:func:`step_scene` gives a scene's constants with the header; :func:`step_callbacks` the
-two functions compiled (numba's disk cache after the first time on a machine). A new
-structure whose laws' law modules are compiled compiles nothing.
+:func:`step_layout` gives a scene's constants with the header written when first needed
+(:func:`step_scene` at once); :func:`step_callbacks` the two functions compiled (numba's
+disk cache after the first time on a machine). A new structure whose laws' law modules
+are compiled compiles nothing; a run that never needs the two (``jit-bdf``'s fast loop
+taking a run whole) compiles neither them nor a law module.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -67,8 +70,8 @@ from .jit import (
 from .scene_numbers import JitScene, structure_arrays, with_numbers
 from .template_module import law_addresses
 
-__all__ = ["STEP_WIDTH", "evaluate", "element_law", "step_header", "step_scene",
-           "step_callbacks"]
+__all__ = ["STEP_WIDTH", "evaluate", "element_law", "step_header", "step_layout",
+           "step_scene", "step_callbacks"]
 
 #: Header values per element: its law module's two addresses, its constants' start, its
 #: ends and whether it is a spring.
@@ -166,32 +169,50 @@ def step_header(scene, templates, law_index: list[int], offsets: list[int]) -> l
     return out
 
 
-#: :func:`step_scene`'s parts of a structure (``(arrays, header)``), per (cache
+#: :func:`step_layout`'s parts of a structure (``[arrays, header or None]``), per (cache
 #: directory, :func:`~lumped.codegen.jit.structure_key`).
-_STRUCTURES: dict[tuple, tuple] = {}
+_STRUCTURES: dict[tuple, list] = {}
 _STRUCTURES_KEPT = 256
 
 
-def step_scene(scene) -> tuple[JitScene, np.ndarray]:
+def step_layout(scene) -> tuple[JitScene, np.ndarray, Callable[[], np.ndarray]]:
     """``scene``'s :class:`~lumped.codegen.scene_numbers.JitScene` without a module of its
-    own (``module=None``; its ``consts`` those of :func:`lumped.codegen.jit.jit_scene`)
-    and its constants for :func:`evaluate` and :func:`element_law`: its structure's
-    header, its laws' constants, its node count. Nothing is generated for the structure;
-    a law module not yet loaded is compiled or loaded. A scene with moving supports is
-    refused (``ValueError``), and so is a law with a hand-written kernel."""
+    own (``module=None``; its ``consts`` those of :func:`lumped.codegen.jit.jit_scene`),
+    its constants for :func:`evaluate` and :func:`element_law` (its laws' constants and
+    its node count after a header left blank, zeros) and a function that writes the
+    header into them and returns them (the first time for a structure in a process it
+    compiles or loads the laws' law modules, :func:`step_header`). Nothing is generated
+    for the structure. A scene with moving supports is refused (``ValueError``), and so
+    is a law with a hand-written kernel."""
     refuse_moving_supports(scene)
     templates, law_index, consts, offsets = scene_templates(scene)
     key = (str(cache_dir()), structure_key(scene, templates, law_index))
     got = _STRUCTURES.get(key)
     if got is None:
-        got = (structure_arrays(scene, law_index, offsets),
-               step_header(scene, templates, law_index, offsets))
+        got = [structure_arrays(scene, law_index, offsets), None]
         if len(_STRUCTURES) >= _STRUCTURES_KEPT:
             _STRUCTURES.clear()
         _STRUCTURES[key] = got
-    arrays, head = got
-    step = np.array(head + consts[:-1].tolist() + [float(len(scene.nodes))], dtype=float)
-    return with_numbers(scene, None, arrays, consts), step
+    width = STEP_WIDTH * len(law_index) + len(scene.nodes)
+    step = np.zeros(width + consts.shape[0])
+    step[width:-1] = consts[:-1]
+    step[-1] = float(len(scene.nodes))
+
+    def with_header() -> np.ndarray:
+        if got[1] is None:
+            got[1] = step_header(scene, templates, law_index, offsets)
+        step[:width] = got[1]
+        return step
+
+    return with_numbers(scene, None, got[0], consts), step, with_header
+
+
+def step_scene(scene) -> tuple[JitScene, np.ndarray]:
+    """:func:`step_layout` with the header written: the scene's
+    :class:`~lumped.codegen.scene_numbers.JitScene` and its constants for
+    :func:`evaluate` and :func:`element_law`."""
+    js, _, with_header = step_layout(scene)
+    return js, with_header()
 
 
 #: :func:`step_callbacks`'s compiled pair, once per process.

@@ -101,7 +101,7 @@ def run_fast_path(scene, js, port, args: tuple, start: int = 0,
         end = min(last, begin + chunk)
         if loop is None:
             loop = compiled_run_bdf_core()
-        rows = loop(port.evaluate, port.element_law, masses, ea, eb, spring,
+        rows = loop(*port.callbacks(), masses, ea, eb, spring,
                     checked, xs[begin].copy(), vs[begin].copy(), Fs[begin].copy(), dt,
                     n_steps, bdf2, rtol, atol, max_iters, max_backtracks, free_steps, fkind,
                     fpar, ftab, xs, vs, Fs, info, finfo, *work, begin, end)

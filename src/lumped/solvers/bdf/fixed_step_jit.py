@@ -36,7 +36,6 @@ tabulated on the grid in Python before the loop (a Python call per step).
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import NamedTuple
 
 import numpy as np
 
@@ -83,13 +82,23 @@ def refuse_position_locks(scene: Scene, method: str) -> None:
         raise ValueError(why)
 
 
-class Port(NamedTuple):
-    """The faithful port's callbacks and the constants they read: ``evaluate(u, p, G, J,
-    S, roundoff)``, ``element_law(e, q, F, c)`` and ``consts`` (``c``)."""
+class Port:
+    """The faithful port's callbacks, ``evaluate(u, p, G, J, S, roundoff)`` and
+    ``element_law(e, q, F, c)`` (:meth:`callbacks`), and the constants ``c`` they read
+    (:attr:`consts`, an array of its final size from the start: the loop's workspace is
+    sized by it). The callbacks are made, and the constants completed, at the first call
+    of :meth:`callbacks`: a run the fast loop takes whole compiles none of them."""
 
-    evaluate: Callable
-    element_law: Callable
-    consts: np.ndarray
+    def __init__(self, consts: np.ndarray, make: Callable[[], tuple]) -> None:
+        self.consts = consts
+        self._make = make
+        self._callbacks: tuple | None = None
+
+    def callbacks(self) -> tuple:
+        """``(evaluate, element_law)``, made (compiled or loaded) the first time."""
+        if self._callbacks is None:
+            self._callbacks = self._make()
+        return self._callbacks
 
 
 def port_parts(scene: Scene) -> tuple:
@@ -106,12 +115,17 @@ def port_parts(scene: Scene) -> tuple:
     from ...codegen.jit import jit_scene, numba_enabled
 
     if numba_enabled():
-        from ...codegen.step_dispatch import step_callbacks, step_scene
+        from ...codegen.step_dispatch import step_callbacks, step_layout
 
-        js, consts = step_scene(scene)
-        return js, Port(*step_callbacks(), consts)
+        js, consts, with_header = step_layout(scene)
+
+        def make() -> tuple:
+            with_header()
+            return step_callbacks()
+
+        return js, Port(consts, make)
     js = jit_scene(scene)
-    return js, Port(js.module.evaluate, js.module.element_law, js.consts)
+    return js, Port(js.consts, lambda: (js.module.evaluate, js.module.element_law))
 
 
 def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,
@@ -205,7 +219,7 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
 
         rows, stats = run_fast_path(scene, js, port, args)
     else:
-        rows = compiled_run_bdf_core()(port.evaluate, port.element_law, *args, 0, -1)
+        rows = compiled_run_bdf_core()(*port.callbacks(), *args, 0, -1)
     N, E = len(scene.nodes), len(scene.elements)
     xs, vs, Fs, info, finfo, wv = args[19:25]
     status, message = Status.SUCCESS, ""

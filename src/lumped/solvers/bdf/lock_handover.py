@@ -98,7 +98,8 @@ def run_locked(scene: Scene, *, method: str, dt: float, n_steps: int,
     lockable = np.array(lockable_elements(scene), dtype=np.int64)
     cyclic = np.array(cyclic_elements(scene), dtype=np.int64)
     was_locked = np.zeros(len(lockable), dtype=np.bool_)
-    law, lawc = port.element_law, port.consts
+    evaluate, law = port.callbacks()  # (the guard below reads the laws on every chunk)
+    lawc = port.consts
     counts = dict.fromkeys(_COUNTERS, 0)
     max_it = compiled = handovers = fast_steps = 0
     chunk, handback, since = FIRST_CHUNK, HISTORY, 0
@@ -128,7 +129,7 @@ def run_locked(scene: Scene, *, method: str, dt: float, n_steps: int,
                 counts[key] += st[key]
             max_it = max(max_it, st["max_newton_iterations"])
         else:  # (the faithful port: compiled only where it runs, as in run_fast_path)
-            filled = compiled_run_bdf_core()(port.evaluate, law, *args[:5], xs[row].copy(),
+            filled = compiled_run_bdf_core()(evaluate, law, *args[:5], xs[row].copy(),
                           vs[row].copy(), Fs[row].copy(), *args[8:], row, stop)
             for k, key in enumerate(_COUNTERS):
                 counts[key] += int(info[4 + k])
