@@ -80,11 +80,11 @@ def per_step(n: int, repeats: int) -> dict[str, float]:
     variants = {}
     for label, scene in _scenes().items():
         for formula in ("bdf1", "bdf2"):
-            js, args, _ = loop_arguments(scene, formula, DT, n, opts)
+            js, port, args, _ = loop_arguments(scene, formula, DT, n, opts)
             variants[f"{label} jit-{formula}: fast path (default)"] = (
-                lambda s=scene, j=js, a=args: run_fast_path(s, j, a))
+                lambda s=scene, j=js, p=port, a=args: run_fast_path(s, j, p, a))
             variants[f"{label} jit-{formula}: faithful port (fast=False)"] = (
-                lambda m=js.module, a=args: loop(m.evaluate, m.element_law, *a, 0, -1))
+                lambda p=port, a=args: loop(*p.callbacks(), *a, 0, -1))
             if label == SCENE:
                 variants[f"{label} jit-{formula}: simulate() end to end"] = (
                     lambda f=formula, s=scene: simulate(s, method=f"jit-{f}", dt=DT,
@@ -133,9 +133,9 @@ def burst_phase(repeats: int) -> dict[str, float]:
     scene = scenario_scene(SCENE)
     variants = {}
     for formula in ("bdf1", "bdf2"):
-        js, args, _ = loop_arguments(scene, formula, DT, n, NewtonOptions())
+        js, port, args, _ = loop_arguments(scene, formula, DT, n, NewtonOptions())
         variants[f"{SCENE} jit-{formula}: fast path, the burst only (t <= 1)"] = (
-            lambda j=js, a=args: run_fast_path(scene, j, a))
+            lambda j=js, p=port, a=args: run_fast_path(scene, j, p, a))
     cols = [np.zeros(n + 1) for _ in range(4)]
     for bdf2 in (False, True):
         variants[f"closed form {'BDF2' if bdf2 else 'BDF1'} compiled, the burst only"] = (

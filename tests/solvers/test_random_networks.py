@@ -20,8 +20,8 @@ the exact reference -- a new method is picked up, never skipped silently) it ass
 * the adaptive method at a tight tolerance (``rtol = 1e-10``, :func:`check_tight`) runs
   through and agrees with ``bdf2`` within ``bdf2``'s own error as ``dt`` halves.
 
-Budget: ``ci`` runs :data:`CI_EXAMPLES` examples per method (:data:`COMPILED_EXAMPLES`
-for the methods that compile each scene); ``LUMPED_LARGE=1`` runs
+Budget: ``ci`` runs :data:`CI_EXAMPLES` examples per method (``jit-bdf1``/``jit-bdf2``
+included: their port compiles nothing per structure); ``LUMPED_LARGE=1`` runs
 :data:`LARGE_EXAMPLES` (10 000, or ``N`` with ``LUMPED_LARGE=N``) for every method (see
 CHANGELOG). A method with
 a compiled and a Python loop (:data:`LOOPED`: ``radau5``) runs its Python loop on that
@@ -411,12 +411,13 @@ _SETTINGS = settings(max_examples=EXAMPLES, deadline=None,
                      suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 
 
-#: Methods that compile every new scene (numba, about a second each): a smaller budget.
-#: Each structure compiled in the process keeps about 8.5 MB there for good (numba never
-#: frees a compiled module; docs/benchmarks.md 4b): under ``LUMPED_LARGE`` on a cold disk
-#: cache the run needs tens of GB; a rerun loads the cached modules (1.5-2 MB each).
+#: The compiled fixed-step methods. Their short runs here (at most 40 steps) take the
+#: faithful port on the structure-generic step system (:mod:`lumped.codegen.step_dispatch`),
+#: which compiles nothing for a new structure (only a law module per new law template),
+#: so they run the full budget; before, every drawn structure compiled its own module
+#: (about a second, and 8.5 MB kept in the process for good) and they ran 4 examples.
 COMPILED = tuple(m for m in GENERIC if m.startswith("jit-"))
-COMPILED_EXAMPLES = LARGE_EXAMPLES if LARGE else 4
+COMPILED_EXAMPLES = EXAMPLES
 
 
 #: Methods with a compiled and a Python loop (``compiled=True/False``): ``compiled=None``

@@ -48,16 +48,13 @@ from .function_types import (
     template_select_type,
 )
 from .jit import (
-    JitScene,
     cache_dir,
-    kept_values,
     numba_module,
     refuse_moving_supports,
     scene_templates,
-    structure_arrays,
     structure_key,
-    with_numbers,
 )
+from .scene_numbers import JitScene, kept_values, structure_arrays, with_numbers
 from .template_module import template_addresses
 from .templates import LawTemplate, law_template
 

@@ -29,7 +29,8 @@ from .jit import numba_module
 
 __all__ = ["BRANCH_LAW_TYPE", "function_at", "call_jit_at", "jit_address", "compiled_address",
            "law_type", "guards_type", "branch_type", "scalar_loops", "template_law_type",
-           "template_guards_type", "template_select_type", "data_at"]
+           "template_guards_type", "template_select_type", "template_full_law_type",
+           "template_magnitude_type", "step_evaluate_type", "element_law_type", "data_at"]
 
 if numba_module is not None:
     from numba import types as _T
@@ -221,6 +222,38 @@ def template_select_type():
     """The numba function type of a template's ``t_select(q, F, c) -> int``."""
     f8, p = _T.float64, _T.CPointer(_T.float64)
     return _T.FunctionType(_T.int64(f8, f8, p))
+
+
+@functools.cache
+def template_full_law_type():
+    """The numba function type of a law module's ``t_full(q, F, c) -> (R, dR/dq, dR/dF)``
+    (:func:`~lumped.codegen.template_module.law_addresses`; ``c`` a pointer)."""
+    f8, p = _T.float64, _T.CPointer(_T.float64)
+    return _T.FunctionType(_T.UniTuple(f8, 3)(f8, f8, p))
+
+
+@functools.cache
+def template_magnitude_type():
+    """The numba function type of a law module's ``t_mag(q, F, c) -> M``."""
+    f8, p = _T.float64, _T.CPointer(_T.float64)
+    return _T.FunctionType(f8(f8, f8, p))
+
+
+@functools.cache
+def step_evaluate_type():
+    """The numba function type of the BDF step system ``evaluate(u, p, G, J, S,
+    roundoff) -> None`` (:mod:`lumped.codegen.jit`; the type the shared step loop,
+    :mod:`lumped.solvers.bdf.core_jit`, takes)."""
+    f8 = _T.float64
+    return _T.FunctionType(_T.none(f8[::1], f8[::1], f8[::1], f8[:, ::1], f8[::1],
+                                   _T.boolean))
+
+
+@functools.cache
+def element_law_type():
+    """The numba function type of ``element_law(e, q, F, c) -> (R, dR/dq, dR/dF)``."""
+    f8 = _T.float64
+    return _T.FunctionType(_T.UniTuple(f8, 3)(_T.int64, f8, f8, f8[::1]))
 
 
 def data_at():

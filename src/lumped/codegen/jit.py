@@ -58,15 +58,18 @@ template, so that a new structure of known laws compiles nothing.
 
 The solvers are compiled once for all scenes (:mod:`lumped.solvers.bdf.core_jit`) and
 take ``evaluate`` and ``element_law`` as function pointers (numba's first-class
-function types): a new structure compiles only its own small functions, and new numbers
-compile nothing.
+function types), and new numbers compile nothing. With numba, ``jit-bdf1``/``jit-bdf2``
+take those two from :mod:`lumped.codegen.step_dispatch` instead (compiled once for
+every scene, over one law module per law: a new structure of known laws compiles
+nothing); a scene module's run without numba (plain Python) and in tests.
 
 The scene's structure (arrays, runtime data, not baked into the code) is on
-:class:`JitScene`: ``masses`` (``m_i``, 0 for a junction), ``ea, eb`` (element ends,
--1 for ground), ``spring`` (True for a spring-like law), ``law_index`` (element -> ``j``),
-``consts`` and ``offsets``. A number changes the code only where it changes the
-generated source: a parameter equal to 0 or 1 (sympy drops the term or the factor), a
-sign, an exponent of 2 or 0.5 (a product, a square root), a steep branch's inverse form.
+:class:`JitScene` (:mod:`lumped.codegen.scene_numbers`): ``masses`` (``m_i``, 0 for a
+junction), ``ea, eb`` (element ends, -1 for ground), ``spring`` (True for a spring-like
+law), ``law_index`` (element -> ``j``), ``consts`` and ``offsets``. A number changes the
+code only where it changes the generated source: a parameter equal to 0 or 1 (sympy drops
+the term or the factor), a sign, an exponent of 2 or 0.5 (a product, a square root), a
+steep branch's inverse form.
 
 Without numba, or with ``NUMBA_DISABLE_JIT=1``, the same module runs as plain Python:
 correct and slow. The disk cache the modules live in is :mod:`lumped.codegen.module_cache`'s.
@@ -76,7 +79,6 @@ from __future__ import annotations
 
 import weakref
 from collections.abc import Callable
-from dataclasses import dataclass
 from types import ModuleType
 from typing import NamedTuple
 
@@ -90,11 +92,18 @@ from .module_cache import (
     loaded_key,
     module_name,
 )
+from .scene_numbers import (
+    JitScene,
+    kept_values,
+    position_locks,
+    structure_arrays,
+    with_numbers,
+)
 from .templates import LawTemplate, law_template
 
 __all__ = ["njit", "numba_enabled", "cache_dir", "scene_source", "scene_module", "jit_scene",
            "JitScene", "refuse_moving_supports", "structure_key", "structure_arrays",
-           "with_numbers"]
+           "with_numbers", "kept_values", "position_locks"]
 
 try:  # numba is a runtime dependency, but the package still works without it
     import numba as numba_module
@@ -319,20 +328,8 @@ def scene_module(scene) -> tuple[ModuleType, SceneSource]:
     return module, generated
 
 
-@dataclass(frozen=True)
-class JitScene:
-    """A scene's generated module and structure arrays (see the module notes); ``module``
-    is ``None`` for the structure-generic kernels of :mod:`lumped.codegen.dispatch`."""
-
-    module: ModuleType | None
-    masses: np.ndarray
-    ea: np.ndarray
-    eb: np.ndarray
-    spring: np.ndarray
-    law_index: np.ndarray
-    lock_q: np.ndarray
-    consts: np.ndarray
-    offsets: np.ndarray
+#: :func:`jit_scene`'s arrays of a structure, per module text.
+_ARRAYS: dict[str, tuple] = {}
 
 
 def jit_scene(scene, kept: dict | None = None) -> JitScene:
@@ -384,72 +381,3 @@ def refuse_moving_supports(scene) -> None:
         raise ValueError(f"compiled loops do not take moving supports (scene supports: "
                          f"{', '.join(sorted(scene.supports))}); use 'bdf1' or 'bdf2'")
 
-
-def kept_values(scene, functions: tuple) -> list[float] | None:
-    """The laws' constants of ``scene``, element after element, if each element's law
-    template has the kept ``functions`` (those of the structure's first scene); else
-    ``None`` (another template: the structure's parts are made anew)."""
-    values: list[float] = []
-    for el, f in zip(scene.elements, functions, strict=True):
-        t = law_template(el.law)
-        if t.functions is not f and t.functions != f:
-            return None
-        values += t.values
-    return values
-
-
-def with_numbers(scene, module: ModuleType | None, arrays: tuple,
-                 consts: np.ndarray) -> JitScene:
-    """The :class:`JitScene` of ``scene``'s numbers (its masses, law constants ``consts``
-    and lock values) on its structure's ``module`` and ``arrays``
-    (:func:`structure_arrays`)."""
-    ea, eb, spring, law_index, offsets, locking, blank = arrays
-    lock_q = blank.copy()
-    if locking:
-        from lumped.codegen.branches import law_branches
-
-        for e, i in locking:
-            lock_q[e, i] = law_branches(scene.elements[e].law).info[i].lock_value
-    return JitScene(module=module, masses=np.array(scene.masses, dtype=float), ea=ea, eb=eb,
-                    spring=spring, law_index=law_index, lock_q=lock_q, consts=consts,
-                    offsets=offsets)
-
-
-#: :func:`jit_scene`'s arrays of a structure, per module text.
-_ARRAYS: dict[str, tuple] = {}
-
-
-def structure_arrays(scene, law_index: list[int], offsets: list[int]) -> tuple:
-    """``(ea, eb, spring, law_index, offsets, locking, blank)`` of ``scene``'s structure:
-    ``locking`` the ``(e, i)`` of every spring's branch that locks a position (its
-    :attr:`~lumped.codegen.branches.BranchInfo.lock_value` a number), ``blank`` an array
-    of ``nan`` the shape of :func:`position_locks` (a scene's is a copy with its lock
-    values written in). Branches, their locking and whether the lock
-    value is a constant are a law's code, which the module text holds."""
-    lock_q = position_locks(scene)
-    locking = tuple((int(e), int(i)) for e, i in zip(*np.nonzero(~np.isnan(lock_q)),
-                                                    strict=True))
-    return (np.array(scene.elem_a, dtype=np.int64), np.array(scene.elem_b, dtype=np.int64),
-            np.array([el.kind == "spring" for el in scene.elements], dtype=np.bool_),
-            np.array(law_index, dtype=np.int64),
-            np.array(offsets, dtype=np.int64), locking,
-            np.full(lock_q.shape, np.nan))
-
-
-def position_locks(scene) -> np.ndarray:
-    """``lock_q[e, i]``: the elongation that branch ``i`` of spring ``e`` locks
-    (:attr:`~lumped.codegen.branches.BranchInfo.lock_value`, e.g. ``L`` of a taut string),
-    ``nan`` for other branches and for dashpots; one column per branch of the law with the
-    most. ``radau5`` holds such a lock on the velocity level (see
-    :meth:`lumped.solvers.radau.stage.StageSystem.evaluate`)."""
-    from lumped.codegen.branches import law_branches
-
-    lbs = [law_branches(el.law) for el in scene.elements]
-    out = np.full((len(lbs), max([lb.count for lb in lbs] + [1])), np.nan)
-    for e, (el, lb) in enumerate(zip(scene.elements, lbs, strict=True)):
-        if el.kind != "spring":
-            continue
-        for i, info in enumerate(lb.info):
-            if info.locks and info.lock_value is not None:
-                out[e, i] = info.lock_value
-    return out

@@ -73,3 +73,31 @@ def test_the_port_is_not_cached_on_a_fresh_machine(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                          text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize("method", ["jit-bdf1", "jit-bdf2"])
+def test_a_run_the_fast_loop_takes_whole_makes_no_port_callbacks(method, monkeypatch):
+    # the port's structure-generic step system (and the laws' law modules its header
+    # points to) are made at the first hand-over only, like the port itself
+    from lumped.codegen import step_dispatch
+
+    made: list[str] = []
+
+    def counted(name, real):
+        def wrapper(*args, **kwargs):
+            made.append(name)
+            return real(*args, **kwargs)
+        return wrapper
+
+    monkeypatch.setattr(step_dispatch, "step_callbacks",
+                        counted("step_callbacks", step_dispatch.step_callbacks))
+    monkeypatch.setattr(step_dispatch, "step_header",
+                        counted("step_header", step_dispatch.step_header))
+    monkeypatch.setattr(step_dispatch, "_STRUCTURES", {})  # (no header kept from before)
+    sol = simulate(scenario_scene("forcing-F2"), method=method, dt=1e-3, t_end=2.0,
+                   fast=True)
+    assert sol.stats["handovers"] == 0 and sol.stats["fast_steps"] == 2000
+    assert made == []
+    sol = simulate(scenario_scene("forcing-F2"), method=method, dt=1e-3, t_end=0.5,
+                   fast=False)
+    assert made == ["step_header", "step_callbacks"]

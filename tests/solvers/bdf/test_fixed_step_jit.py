@@ -196,20 +196,18 @@ def test_second_process_loads_the_compiled_loop_from_disk():
     simulate(scenario_scene("release-0.5"), method="jit-bdf2", dt=1e-3, t_end=0.01, fast=True)
     out = _run_child("""
         from lumped import simulate
-        from lumped.codegen.jit import jit_scene
+        from lumped.codegen.step_dispatch import step_callbacks
         from lumped.scenarios import scenario_scene
         from lumped.solvers.bdf.fast_codegen import fast_module
         from lumped.solvers.bdf.core_jit import compiled_run_bdf_core
         scene = scenario_scene("release-0.5")
         simulate(scene, method="jit-bdf2", dt=1e-3, t_end=0.01, fast=True)
         simulate(scene, method="jit-bdf2", dt=1e-3, t_end=0.01, fast=False)
-        m = jit_scene(scene).module
-        for f in (compiled_run_bdf_core(), m.evaluate, m.element_law,
-                  fast_module(scene).run_fast):
+        for f in (compiled_run_bdf_core(), *step_callbacks(), fast_module(scene).run_fast):
             print(sum(f.stats.cache_hits.values()), sum(f.stats.cache_misses.values()))
     """)
     counts = [tuple(map(int, line.split())) for line in out.splitlines()]
-    assert counts == [(1, 0)] * 4  # the loops and the scene's callbacks: loaded, not compiled
+    assert counts == [(1, 0)] * 4  # the loops and the port's callbacks: loaded, not compiled
 
 
 def test_disabled_jit_gives_the_same_numbers():

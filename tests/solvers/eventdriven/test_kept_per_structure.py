@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lumped import simulate
-from lumped.codegen import jit, parametric, rebound, templates
+from lumped.codegen import jit, parametric, rebound, scene_numbers, templates
 from lumped.codegen.branches import LawBranches, law_branches
 from lumped.codegen.jit import jit_scene, position_locks
 from lumped.codegen.templates import law_template
@@ -108,7 +108,8 @@ def _string(L: float, k: float) -> Scene:
 
 def test_a_structures_arrays_are_made_once_and_its_numbers_read_per_scene(monkeypatch):
     calls = []
-    monkeypatch.setattr(jit, "position_locks", lambda s: calls.append(s) or position_locks(s))
+    monkeypatch.setattr(scene_numbers, "position_locks",
+                        lambda s: calls.append(s) or position_locks(s))
     monkeypatch.setattr(jit, "_ARRAYS", {}, raising=False)
     scenes = [_string(0.25 + 0.01 * j, 50.0 + j) for j in range(3)]
     got = [jit_scene(s) for s in scenes]

@@ -14,15 +14,16 @@ operation for operation, on preallocated arrays:
 * the fold check of :mod:`lumped.solvers.implicit.branch_check` on the elements whose law is not a
   known monotone built-in.
 
-The scene enters through two compiled callbacks generated per scene by
-:mod:`lumped.codegen.jit`, ``evaluate(u, p, G, J, S, roundoff)`` (the step system, with
-``p = [h, m_i / h (N), v_hat (N), x_hat (N), f(t) (N), c]``, ``c`` the scene's law
-constants) and ``element_law(e, q, F, c)`` (element ``e``'s kernel), passed as
-*function pointers* (numba's first-class function types, :data:`EVALUATE_TYPE`,
-:data:`ELEMENT_LAW_TYPE`): the loop is compiled once for every scene
-(:func:`compiled_run_bdf_core`, cached on disk), and a new structure compiles only its
-own small functions; the laws' numbers are data (``lawc``), so new
-numbers compile nothing. Nothing else comes from the scene: the forcing is read
+The scene enters through two compiled callbacks, ``evaluate(u, p, G, J, S, roundoff)``
+(the step system, with ``p = [h, m_i / h (N), v_hat (N), x_hat (N), f(t) (N), c]``,
+``c`` the scene's law constants) and ``element_law(e, q, F, c)`` (element ``e``'s
+kernel), passed as *function pointers* (numba's first-class function types,
+:data:`EVALUATE_TYPE`, :data:`ELEMENT_LAW_TYPE`): the loop is compiled once for every
+scene (:func:`compiled_run_bdf_core`, cached on disk). The runs take the structure-generic
+pair of :mod:`lumped.codegen.step_dispatch` (compiled once for every scene too, so a new
+structure of compiled laws compiles nothing; a scene module of :mod:`lumped.codegen.jit`
+gives the same pair per structure, the same numbers); the laws' numbers are data
+(``lawc``), so new numbers compile nothing. Nothing else comes from the scene: the forcing is read
 from ``fkind, fpar, ftab`` by :func:`forcing_into` (kinds: 0 none, 1 constant
 ``fpar[i, 0]``, 2 sine burst ``fpar[i] = (A, omega, t_off)``, 3 a table
 ``ftab[step, i]`` computed before the loop).

@@ -41,26 +41,30 @@ import numpy as np
 __all__ = ["run_fast_path"]
 
 
-def run_fast_path(scene, js, args: tuple, start: int = 0,
+def run_fast_path(scene, js, port, args: tuple, start: int = 0,
                   stop: int | None = None) -> tuple[int, dict]:
     """Fill ``xs, vs, Fs, info, finfo`` of ``args`` (the arguments of
     :func:`~lumped.solvers.bdf.core_jit.run_bdf_core` after its callbacks, from
-    :func:`lumped.solvers.bdf.fixed_step_jit.loop_arguments`) by the fast path with
-    hand-over; return the rows filled and the counters (the reference's names, plus
-    ``fast_steps`` and ``handovers``).
+    :func:`lumped.solvers.bdf.fixed_step_jit.loop_arguments`, with ``js`` and ``port``)
+    by the fast path with hand-over to the faithful port on ``port``'s callbacks; return
+    the rows filled and the counters (the reference's names, plus ``fast_steps`` and
+    ``handovers``).
 
     Steps ``start + 1 .. stop`` (``stop=None``: to the last step), from the state at row
     ``start`` (and ``start - 1``, the BDF2 history) of ``xs, vs, Fs``; ``start = 0``
     writes the initial state ``x0, v0, F0`` of ``args`` there first."""
+    from ...codegen.jit import scene_source
+    from ...codegen.module_cache import module_name
     from .core_jit import compiled_run_bdf_core
     from .fast_codegen import MAX_FAST_ITERATIONS, fast_module
 
     (masses, ea, eb, spring, checked, x0, v0, F0, dt, n_steps, bdf2, rtol, atol, max_iters,
      max_backtracks, free_steps, fkind, fpar, ftab, xs, vs, Fs, info, finfo) = args[:24]
-    # what the generated source depends on: the laws and topology (the faithful module's
-    # name is the hash of its source), the massless nodes and the fold-checked elements
-    key = (js.module.__name__, (masses != 0.0).tobytes(), ea.tobytes(), eb.tobytes(),
-           spring.tobytes(), np.asarray(checked).tobytes())
+    # what the generated source depends on: the laws and topology (the hash of the
+    # structure's module text, kept per structure), the massless nodes and the
+    # fold-checked elements
+    key = (module_name(scene_source(scene).source), (masses != 0.0).tobytes(),
+           ea.tobytes(), eb.tobytes(), spring.tobytes(), np.asarray(checked).tobytes())
     fm = fast_module(scene, key)
     # the faithful port is compiled (or loaded from numba's disk cache) at the first
     # hand-over only: a run the fast loop takes whole never pays for it
@@ -97,7 +101,7 @@ def run_fast_path(scene, js, args: tuple, start: int = 0,
         end = min(last, begin + chunk)
         if loop is None:
             loop = compiled_run_bdf_core()
-        rows = loop(js.module.evaluate, js.module.element_law, masses, ea, eb, spring,
+        rows = loop(*port.callbacks(), masses, ea, eb, spring,
                     checked, xs[begin].copy(), vs[begin].copy(), Fs[begin].copy(), dt,
                     n_steps, bdf2, rtol, atol, max_iters, max_backtracks, free_steps, fkind,
                     fpar, ftab, xs, vs, Fs, info, finfo, *work, begin, end)

@@ -6,10 +6,12 @@ r"""``jit-bdf1`` / ``jit-bdf2``: the generic fixed-step BDF of
 system unrolled up to a few unknowns (a loop solve above), the laws' kernels called (LLVM
 inlines them), a Newton specialised to the scene's size, agreeing
 with the reference to the Newton tolerance (round-off on piecewise-linear laws). The
-steps it cannot take go to the faithful port, the scene's generated module
-(:mod:`lumped.codegen.jit`) on the step loop of :mod:`lumped.solvers.bdf.core_jit`: the
-step system, the semismooth Newton with its convergence tests and law-row scales, the
-singleton-first LU and the fold check, all compiled and cached on disk. That port
+steps it cannot take go to the faithful port, the step loop of
+:mod:`lumped.solvers.bdf.core_jit` on the structure-generic step system of
+:mod:`lumped.codegen.step_dispatch` (:func:`port_parts`): the step system, the
+semismooth Newton with its convergence tests and law-row scales, the singleton-first LU
+and the fold check, all compiled once per machine and cached on disk (and each law's
+kernel once per law), so the port of a new structure compiles nothing. That port
 (alone with ``fast=False``) follows :func:`lumped.solvers.bdf.fixed_step.run_bdf` (the
 readable reference) operation for operation: on systems of at most 8 unknowns the two
 give the same numbers bit for bit, and the same counters; above that the reference
@@ -33,6 +35,8 @@ tabulated on the grid in Python before the loop (a Python call per step).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ...scene import Scene
@@ -42,7 +46,7 @@ from ..implicit.step_system import newton_failure
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..status import BranchError, RawRun, Status
 
-__all__ = ["JIT_METHODS", "FAST_MIN_STEPS", "run_bdf_jit", "loop_arguments",
+__all__ = ["JIT_METHODS", "FAST_MIN_STEPS", "run_bdf_jit", "loop_arguments", "Port", "port_parts",
            "position_lock", "refuse_position_locks", "takes_fast_path"]
 
 #: Compiled method name -> step formula.
@@ -78,18 +82,64 @@ def refuse_position_locks(scene: Scene, method: str) -> None:
         raise ValueError(why)
 
 
+class Port:
+    """The faithful port's callbacks, ``evaluate(u, p, G, J, S, roundoff)`` and
+    ``element_law(e, q, F, c)`` (:meth:`callbacks`), and the constants ``c`` they read
+    (:attr:`consts`, an array of its final size from the start: the loop's workspace is
+    sized by it). The callbacks are made, and the constants completed, at the first call
+    of :meth:`callbacks`: a run the fast loop takes whole compiles none of them."""
+
+    def __init__(self, consts: np.ndarray, make: Callable[[], tuple]) -> None:
+        self.consts = consts
+        self._make = make
+        self._callbacks: tuple | None = None
+
+    def callbacks(self) -> tuple:
+        """``(evaluate, element_law)``, made (compiled or loaded) the first time."""
+        if self._callbacks is None:
+            self._callbacks = self._make()
+        return self._callbacks
+
+
+def port_parts(scene: Scene) -> tuple:
+    """``(jit_scene, port)``: the scene's arrays and numbers
+    (:class:`~lumped.codegen.scene_numbers.JitScene`) and the faithful port's
+    :class:`Port`.
+
+    With numba, the port's callbacks are the structure-generic step system of
+    :mod:`lumped.codegen.step_dispatch` (compiled once per machine; its laws' law modules
+    once per law), and the scene has no generated module (``module=None``): a new
+    structure compiles nothing. Without numba (or with ``NUMBA_DISABLE_JIT=1``) they are
+    the scene's generated module's (:func:`lumped.codegen.jit.jit_scene`), run as plain
+    Python. Both give the same numbers bit for bit."""
+    from ...codegen.jit import jit_scene, numba_enabled
+
+    if numba_enabled():
+        from ...codegen.step_dispatch import step_callbacks, step_layout
+
+        js, consts, with_header = step_layout(scene)
+
+        def make() -> tuple:
+            with_header()
+            return step_callbacks()
+
+        return js, Port(consts, make)
+    js = jit_scene(scene)
+    return js, Port(js.consts, lambda: (js.module.evaluate, js.module.element_law))
+
+
 def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,
                    options: NewtonOptions):
-    """``(jit_scene, args, ic_stats)``: the scene's compiled module; the arguments of
+    """``(jit_scene, port, args, ic_stats)``: the scene's arrays and numbers, the faithful
+    port's :class:`Port` (:func:`port_parts`); the arguments of
     :func:`lumped.solvers.bdf.core_jit.run_bdf_core` after its two callbacks, for one
-    run (consistent initial state, forcing, outputs, workspaces; ``args[19:25]`` are
-    ``xs, vs, Fs, info, finfo`` and Newton's vector workspace); the initial state's
-    Newton counters."""
-    from ...codegen.jit import jit_scene
+    run (consistent initial state, forcing, outputs, workspaces, the port's constants
+    last; ``args[19:25]`` are ``xs, vs, Fs, info, finfo`` and Newton's vector
+    workspace); the initial state's Newton counters."""
     from ..newton.semismooth_jit import workspace
     from .core_jit import loop_workspace
 
-    js = jit_scene(scene)
+    js, port = port_parts(scene)
     v, F, ic_stats = consistent_initial_state(scene, time_scale=dt, options=options)
     N, E = len(scene.nodes), len(scene.elements)
     from ...scene.forcing_jit import forcing_arrays
@@ -104,8 +154,8 @@ def loop_arguments(scene: Scene, formula: str, dt: float, n_steps: int,
             options.free_steps, fkind, fpar, ftab,
             np.empty((n_steps + 1, N)), np.empty((n_steps + 1, N)), np.empty((n_steps + 1, E)),
             np.zeros(9, dtype=np.int64), np.zeros(6), *workspace(N + E),
-            *loop_workspace(N, E, js.consts.shape[0]), js.consts)
-    return js, args, ic_stats
+            *loop_workspace(N, E, port.consts.shape[0]), port.consts)
+    return js, port, args, ic_stats
 
 
 def takes_fast_path(scene: Scene, n_steps: int, fast: bool | None) -> bool:
@@ -161,15 +211,15 @@ def run_bdf_jit(scene: Scene, *, method: str, dt: float, n_steps: int,
     options = options or NewtonOptions()
     from .core_jit import compiled_run_bdf_core
 
-    js, args, ic_stats = loop_arguments(scene, JIT_METHODS[method], dt, n_steps, options)
+    js, port, args, ic_stats = loop_arguments(scene, JIT_METHODS[method], dt, n_steps,
+                                              options)
     fast = takes_fast_path(scene, n_steps, fast)
     if fast:
         from .fast_jit import run_fast_path
 
-        rows, stats = run_fast_path(scene, js, args)
+        rows, stats = run_fast_path(scene, js, port, args)
     else:
-        rows = compiled_run_bdf_core()(js.module.evaluate, js.module.element_law, *args, 0,
-                                       -1)
+        rows = compiled_run_bdf_core()(*port.callbacks(), *args, 0, -1)
     N, E = len(scene.nodes), len(scene.elements)
     xs, vs, Fs, info, finfo, wv = args[19:25]
     status, message = Status.SUCCESS, ""

@@ -84,7 +84,7 @@ def run_locked(scene: Scene, *, method: str, dt: float, n_steps: int,
         raise ValueError(f"`method` must be one of {tuple(JIT_METHODS)}, got {method!r}")
     options = options or NewtonOptions()
     formula = JIT_METHODS[method]
-    js, args, ic_stats = loop_arguments(scene, formula, dt, n_steps, options)
+    js, port, args, ic_stats = loop_arguments(scene, formula, dt, n_steps, options)
     fast = takes_fast_path(scene, n_steps, fast)
     x0, v0, F0 = args[5:8]
     xs, vs, Fs, info = args[19:23]
@@ -98,7 +98,8 @@ def run_locked(scene: Scene, *, method: str, dt: float, n_steps: int,
     lockable = np.array(lockable_elements(scene), dtype=np.int64)
     cyclic = np.array(cyclic_elements(scene), dtype=np.int64)
     was_locked = np.zeros(len(lockable), dtype=np.bool_)
-    law, lawc = js.module.element_law, js.consts
+    evaluate, law = port.callbacks()  # (the guard below reads the laws on every chunk)
+    lawc = port.consts
     counts = dict.fromkeys(_COUNTERS, 0)
     max_it = compiled = handovers = fast_steps = 0
     chunk, handback, since = FIRST_CHUNK, HISTORY, 0
@@ -122,13 +123,13 @@ def run_locked(scene: Scene, *, method: str, dt: float, n_steps: int,
         if fast:
             from .fast_jit import run_fast_path
 
-            filled, st = run_fast_path(scene, js, args, row, stop)
+            filled, st = run_fast_path(scene, js, port, args, row, stop)
             fast_steps += st["fast_steps"]
             for key in _COUNTERS:
                 counts[key] += st[key]
             max_it = max(max_it, st["max_newton_iterations"])
         else:  # (the faithful port: compiled only where it runs, as in run_fast_path)
-            filled = compiled_run_bdf_core()(js.module.evaluate, law, *args[:5], xs[row].copy(),
+            filled = compiled_run_bdf_core()(evaluate, law, *args[:5], xs[row].copy(),
                           vs[row].copy(), Fs[row].copy(), *args[8:], row, stop)
             for k, key in enumerate(_COUNTERS):
                 counts[key] += int(info[4 + k])
