@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from solvers.eventdriven.test_compile_counts import _compiles  # (numba's compile events)
+from _compile_events import compiles as _compiles  # (numba's compile events)
 
 from lumped import Element, Mass, Scene, get_law, simulate
 from lumped.codegen.jit import numba_enabled

@@ -15,10 +15,9 @@ numbers.
 
 from __future__ import annotations
 
-import contextlib
-
 import numpy as np
 import pytest
+from _compile_events import compiles as _compiles
 
 from lumped import Element, Junction, Mass, Scene, get_law, simulate
 from lumped.bench.impact_scenes import impact_scene
@@ -33,21 +32,6 @@ from lumped.solvers.modes import mode_guess_jit, on_demand, stuck_jit
 pytestmark = pytest.mark.skipif(not numba_enabled(), reason="the compiled loop needs numba")
 
 KW = dict(method="radau5", t_end=3.0, rtol=1e-8, atol=1e-11)
-
-
-@contextlib.contextmanager
-def _compiles():
-    """The functions numba compiles in the block, as ``module.qualname`` (cache loads are
-    not compilations)."""
-    from numba.core import event
-
-    names: list[str] = []
-    with event.install_recorder("numba:compile") as rec:
-        yield names
-    for _, ev in rec.buffer:
-        if ev.is_start:
-            fn = ev.data["dispatcher"].py_func
-            names.append(f"{fn.__module__}.{fn.__qualname__}")
 
 
 def _same_run(got, ref) -> None:
