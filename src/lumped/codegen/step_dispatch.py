@@ -169,27 +169,29 @@ def step_header(scene, templates, law_index: list[int], offsets: list[int]) -> l
     return out
 
 
-#: :func:`step_layout`'s parts of a structure (``[arrays, header or None]``), per (cache
-#: directory, :func:`~lumped.codegen.jit.structure_key`).
+#: :func:`step_layout`'s parts of a structure (``[arrays, header or None, tally]``), per
+#: (cache directory, :func:`~lumped.codegen.jit.structure_key`).
 _STRUCTURES: dict[tuple, list] = {}
 _STRUCTURES_KEPT = 256
 
 
-def step_layout(scene) -> tuple[JitScene, np.ndarray, Callable[[], np.ndarray]]:
+def step_layout(scene) -> tuple[JitScene, np.ndarray, Callable[[], np.ndarray], list[int]]:
     """``scene``'s :class:`~lumped.codegen.scene_numbers.JitScene` without a module of its
     own (``module=None``; its ``consts`` those of :func:`lumped.codegen.jit.jit_scene`),
     its constants for :func:`evaluate` and :func:`element_law` (its laws' constants and
     its node count after a header left blank, zeros) and a function that writes the
     header into them and returns them (the first time for a structure in a process it
-    compiles or loads the laws' law modules, :func:`step_header`). Nothing is generated
-    for the structure. A scene with moving supports is refused (``ValueError``), and so
-    is a law with a hand-written kernel."""
+    compiles or loads the laws' law modules, :func:`step_header`), and the structure's
+    *tally*: a one-element list the caller may count in (the steps this process ran the
+    structure on the port, :func:`lumped.solvers.bdf.fixed_step_jit.takes_fast_path`).
+    Nothing is generated for the structure. A scene with moving supports is refused
+    (``ValueError``), and so is a law with a hand-written kernel."""
     refuse_moving_supports(scene)
     templates, law_index, consts, offsets = scene_templates(scene)
     key = (str(cache_dir()), structure_key(scene, templates, law_index))
     got = _STRUCTURES.get(key)
     if got is None:
-        got = [structure_arrays(scene, law_index, offsets), None]
+        got = [structure_arrays(scene, law_index, offsets), None, [0]]
         if len(_STRUCTURES) >= _STRUCTURES_KEPT:
             _STRUCTURES.clear()
         _STRUCTURES[key] = got
@@ -204,14 +206,14 @@ def step_layout(scene) -> tuple[JitScene, np.ndarray, Callable[[], np.ndarray]]:
         step[:width] = got[1]
         return step
 
-    return with_numbers(scene, None, got[0], consts), step, with_header
+    return with_numbers(scene, None, got[0], consts), step, with_header, got[2]
 
 
 def step_scene(scene) -> tuple[JitScene, np.ndarray]:
     """:func:`step_layout` with the header written: the scene's
     :class:`~lumped.codegen.scene_numbers.JitScene` and its constants for
     :func:`evaluate` and :func:`element_law`."""
-    js, _, with_header = step_layout(scene)
+    js, _, with_header, _ = step_layout(scene)
     return js, with_header()
 
 

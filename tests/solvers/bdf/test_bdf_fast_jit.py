@@ -60,7 +60,7 @@ def assert_close(a, b, bound=1e-10):
 @pytest.mark.parametrize("name", list(SCENES))
 def test_fast_path_takes_every_step_and_agrees_with_the_reference(name, formula):
     scene = SCENES[name]()
-    a = simulate(scene, method=f"jit-{formula}", dt=1e-3, t_end=4.0)
+    a = simulate(scene, method=f"jit-{formula}", dt=1e-3, t_end=4.0, fast=True)
     b = simulate(scene, method=formula, dt=1e-3, t_end=4.0)
     assert a.stats["fast_steps"] == a.stats["steps"] == 4000
     assert a.stats["handovers"] == 0 and "fallback" not in a.stats
@@ -107,28 +107,39 @@ def test_failures_are_reported_by_the_faithful_port():
         simulate(scene, method="jit-bdf1", dt=1e-3, t_end=1.0)
 
 
-def test_short_runs_of_a_new_structure_skip_the_fast_path_unless_asked(monkeypatch, tmp_path):
-    """``fast=None`` (the default) compiles the fast loop of a new structure only for runs
-    of at least ``FAST_MIN_STEPS`` steps; ``fast=True`` forces it; once built, every run
-    of the structure, with any numbers, takes it."""
-    from lumped.solvers.bdf import fast_codegen
-    from lumped.solvers.bdf.fixed_step_jit import FAST_MIN_STEPS
+def test_a_new_structure_runs_on_the_port_until_the_process_has_run_it_long(monkeypatch,
+                                                                          tmp_path):
+    """``fast=None`` (the default) runs a structure whose fast loop is not built on the
+    faithful port until this process has run it for ``FAST_MIN_STEPS`` steps in all (the
+    port's tally, this run's included); then it compiles the fast loop, and every later
+    run of the structure, with any numbers, takes it. ``fast=True`` takes it at once."""
+    from lumped.solvers.bdf import core_jit, fast_codegen, fixed_step_jit
 
     monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path))  # an empty disk cache
     monkeypatch.setattr(fast_codegen, "_BY_KEY", {})
     monkeypatch.setattr(fast_codegen, "LOADED_MODULES", {})
+    monkeypatch.setattr(core_jit, "port_cached", lambda: True)  # (as on a used machine)
+    monkeypatch.setattr(fixed_step_jit, "FAST_MIN_STEPS", 1000)
     scene = scenario_scene("release-0.5")
-    t_end = (FAST_MIN_STEPS - 1) * 1e-3
-    short = simulate(scene, method="jit-bdf2", dt=1e-3, t_end=t_end)
-    assert "fast_steps" not in short.stats
-    forced = simulate(scene, method="jit-bdf2", dt=1e-3, t_end=t_end, fast=True)
-    assert forced.stats["fast_steps"] == FAST_MIN_STEPS - 1
-    assert_close(forced, short)
+    first = simulate(scene, method="jit-bdf2", dt=1e-3, t_end=0.6)
+    assert "fast_steps" not in first.stats  # (600 steps: the port)
+    again = simulate(scene, method="jit-bdf2", dt=1e-3, t_end=0.6)
+    assert again.stats["fast_steps"] == 600  # (1200 in all: the fast loop, compiled)
+    assert_close(again, first)
+    assert fast_codegen.fast_module_cached(scene)
     other = Scene([Mass("mass", 2.5, x0=0.25)],
                   [Element("spring", get_law("linear_spring").bind(k=37.0), "ground", "mass"),
                    Element("dashpot", get_law("bingham").bind(gamma=1.0, tau=0.75), "ground",
                            "mass")])
     assert simulate(other, method="jit-bdf2", dt=1e-3, t_end=0.1).stats["fast_steps"] == 100
+    # a new structure (a Newtonian dashpot): the port, unless asked
+    viscous = Scene([Mass("mass", 2.5, x0=0.25)],
+                    [Element("spring", get_law("linear_spring").bind(k=37.0), "ground",
+                             "mass"),
+                     Element("dashpot", get_law("newtonian").bind(c=0.5), "ground", "mass")])
+    assert "fast_steps" not in simulate(viscous, method="jit-bdf2", dt=1e-3, t_end=0.1).stats
+    forced = simulate(viscous, method="jit-bdf2", dt=1e-3, t_end=0.1, fast=True)
+    assert forced.stats["fast_steps"] == 100
 
 
 def test_fast_keyword_is_checked():

@@ -85,7 +85,7 @@ def run_locked(scene: Scene, *, method: str, dt: float, n_steps: int,
     options = options or NewtonOptions()
     formula = JIT_METHODS[method]
     js, port, args, ic_stats = loop_arguments(scene, formula, dt, n_steps, options)
-    fast = takes_fast_path(scene, n_steps, fast)
+    fast = takes_fast_path(scene, n_steps, fast, port)
     x0, v0, F0 = args[5:8]
     xs, vs, Fs, info = args[19:23]
     N, E = xs.shape[1], Fs.shape[1]
