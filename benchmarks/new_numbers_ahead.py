@@ -9,7 +9,7 @@ Usage, from the repository root::
 cost time themselves and count nested parts twice. Here nothing is wrapped: for each
 part a scene with new numbers (:func:`lumped.bench.new_numbers.scene_with_new_numbers`)
 has that part done *ahead*, untimed (the laws' kernels, branches and templates; the
-plan; ``jit_scene``, or ``dispatch_scene`` for ``radau5``; the consistent initial state,
+plan; ``dispatch_scene`` for ``radau5``, ``port_parts`` for the BDFs; the consistent initial state,
 with the run's own arguments; all of them), and then its run is timed (CPU,
 :func:`time.process_time`). The difference to the run with nothing done ahead is what
 the part costs inside a run, caches and all: the most that taking that part's
@@ -30,8 +30,8 @@ import lumped.solvers.eventdriven.run as run_module
 from lumped.bench.new_numbers import scene_with_new_numbers
 from lumped.codegen.branches import law_branches
 from lumped.codegen.dispatch import dispatch_scene
-from lumped.codegen.jit import jit_scene
 from lumped.codegen.templates import law_template
+from lumped.solvers.bdf.fixed_step_jit import port_parts
 from lumped.solvers.eventdriven.setup import scene_plan
 
 
@@ -74,9 +74,9 @@ def main() -> None:
     state = _initial_state_arguments(base, method, options)
     initial = run_module.consistent_initial_state
 
-    # (radau5's compiled loop takes the structure-generic kernels' scene, the BDFs' the
-    # scene module's)
-    parts = dispatch_scene if method == "radau5" else jit_scene
+    # (radau5's compiled loop takes the structure-generic kernels' scene, the BDFs' port
+    # the structure-generic step system's)
+    parts = dispatch_scene if method == "radau5" else port_parts
 
     def everything(scene) -> None:
         _laws(scene), scene_plan(scene), parts(scene), initial(scene, **state)

@@ -36,7 +36,7 @@ PARTS = {
     "lumped.solvers.implicit.initial_state:initial_rest_forces": "  its try at rest",
     "lumped.solvers.eventdriven.setup:scene_plan": "plan (content key, new plan)",
     "lumped.solvers.eventdriven.fast_parts:loop_parts": "compiled loop's parts",
-    "lumped.codegen.jit:jit_scene": "  jit_scene",
+    "lumped.solvers.bdf.fixed_step_jit:port_parts": "  port_parts",
     "lumped.codegen.dispatch:dispatch_scene": "  dispatch_scene",
     "lumped.solvers.eventdriven.mode_parts:mode_parts": "mode kernels and guards",
 }
