@@ -31,25 +31,32 @@ from lumped.bench.new_numbers import scene_with_new_numbers
 from lumped.codegen.branches import law_branches
 from lumped.codegen.dispatch import dispatch_scene
 from lumped.codegen.templates import law_template
+from lumped.solvers.bdf import fixed_step_jit
 from lumped.solvers.bdf.fixed_step_jit import port_parts
 from lumped.solvers.eventdriven.setup import scene_plan
+
+
+def _driver(method: str):
+    """The module whose ``consistent_initial_state`` a run of ``method`` calls."""
+    return run_module if method == "radau5" else fixed_step_jit
 
 
 def _initial_state_arguments(base, method: str, options: dict) -> dict:
     """The keywords a run passes to the consistent initial state (its ``time_scale`` and
     Newton options), read off a run of ``base``."""
     seen: dict = {}
-    solve = run_module.consistent_initial_state
+    module = _driver(method)
+    solve = module.consistent_initial_state
 
     def recording(scene, **kwargs):
         seen.update(kwargs)
         return solve(scene, **kwargs)
 
-    run_module.consistent_initial_state = recording
+    module.consistent_initial_state = recording
     try:
         _cpu(scene_with_new_numbers(base), method, options)
     finally:
-        run_module.consistent_initial_state = solve
+        module.consistent_initial_state = solve
     if not seen:
         raise SystemExit("the run asked for no consistent initial state (a run at rest?)")
     return seen
@@ -72,7 +79,7 @@ def main() -> None:
         scene = scene_with_new_numbers(base)
         _cpu(scene, method, options), _cpu(scene, method, options)
     state = _initial_state_arguments(base, method, options)
-    initial = run_module.consistent_initial_state
+    initial = _driver(method).consistent_initial_state
 
     # (radau5's compiled loop takes the structure-generic kernels' scene, the BDFs' port
     # the structure-generic step system's)
