@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import pytest
+from _yielding_junction import yielding_junction
 
 from lumped import simulate
 from lumped.bench.network_scenes import bingham_chain
@@ -53,7 +54,8 @@ def _recorded_probes() -> list[tuple]:
 
     runs = [(*_bench("stick-breakout"), 1e-6), (*_bench("forcing-F2"), 1e-8),
             (*_bench("release-0.5"), 1e-4), (*_bench("forcing-F1"), 1e-4),
-            (bingham_chain(3), 5.0, 1e-6), (_junction_scene(), 2.0, 1e-6)]
+            (bingham_chain(3), 5.0, 1e-6), (_junction_scene(), 2.0, 1e-6),
+            (yielding_junction(), 0.5, 6.25e-4)]  # (a steep branch read by its rate)
     adaptive_modes.try_modes = record
     rest_run, runner.rest_run = runner.rest_run, lambda scene, settings: None  # (Python)
     try:

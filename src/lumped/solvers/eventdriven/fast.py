@@ -187,8 +187,8 @@ class CompiledLoop:
         cands = np.array(candidates, dtype=np.int64).reshape(len(candidates), self.E)
         cur = _NO_MODE if current is None else np.array(current, dtype=np.int64)
         branch = self._branch()
-        k = fn(self.law.addr, branch.addr, js.consts, js.masses, js.ea, js.eb, js.spring,
-               cands, cur, np.array(f, dtype=float), np.array(x, dtype=float),
+        k = fn(self.law.addr, branch.addr, self.guards.addr, js.consts, js.masses, js.ea,
+               js.eb, js.spring, cands, cur, np.array(f, dtype=float), np.array(x, dtype=float),
                np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
         return k, out
 

@@ -15,8 +15,9 @@ system in the unknowns ``u = (v, F)``,
 
 with ``q_e`` the elongation of ``x + h_p v`` (springs) or the rate of ``v`` (dashpots),
 solved by a plain Newton iteration on lists (Gaussian elimination with partial pivoting).
-The guess is accepted only when every element's branch function at the result,
-``law_branches(...).branch(q_e, F_e)``, gives the guessed branch: the result then solves
+The guess is accepted only when every element's branch at the result,
+``law_branches(...).branch(q_e, F_e)`` or inside the guessed branch by all its stage guards
+(:func:`read_branches`), gives the guessed branch: the result then solves
 the full laws' step too, and for laws without folds (the elements that
 :func:`~lumped.solvers.implicit.branch_check.known_monotone` accepts; a scene with other laws
 always takes the full search) that step has one solution, so the full search would read
@@ -34,7 +35,7 @@ import numpy as np
 from ...scene import Mass, Scene
 from ...scene.supports import support_time, support_time_restored
 
-__all__ = ["probe_state", "try_modes", "UNDECIDED", "REFUSED"]
+__all__ = ["probe_state", "read_branches", "try_modes", "UNDECIDED", "REFUSED"]
 
 #: The probe's verdicts besides a mode: no mode decided yet, or the guess refused
 #: (shared with its compiled twin, :mod:`lumped.solvers.modes.mode_guess_jit`).
@@ -87,7 +88,7 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
                 if got is None:
                     continue
                 v_p, F_p, q = got
-                read = [branches[e].branch(q[e], F_p[e]) for e in range(len(F))]
+                read = read_branches(branches, modes, q, F_p)
                 if read == list(modes):
                     if used is not None:
                         used.append(h_p)
@@ -97,6 +98,30 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
                 return None
             h_p *= 1000.0
         return None
+
+
+def read_branches(branches: Sequence, modes: Sequence[int], q: Sequence[float],
+                  F: Sequence[float]) -> list[int]:
+    """Each element's branch at the probe's result ``(q_e, F_e)``: the held branch
+    ``modes[e]`` where all its stage guards
+    (:meth:`~lumped.codegen.branches.LawBranches.stage_guards_for`) are positive, else
+    ``law_branches(...).branch(q_e, F_e)``.
+
+    The two differ only on a steep branch solved in its inverse form, whose guard reads
+    the rate ``w(q)`` where the law's own read takes the force: Herschel-Bulkley
+    ``n = 0.3`` (``tau = 0.316``) starting to slip at a rate of ``2e-9`` has the force
+    ``tau + 1e-29``, which rounds to ``tau``, where the law reads its stuck branch. The
+    right guess (slipping) was refused at the start, and the full search then took a
+    spurious root on the other slip branch's odd continuation (``F = -tau`` at a positive
+    rate): every step crossed a guard at once, 8 kept modes and 4 bridges, a stop at
+    ``1.5e-8`` s (issue 29, the property of both loops, seed 22228)."""
+    out = []
+    for e, (lb, b) in enumerate(zip(branches, modes, strict=True)):
+        if all(g > 0.0 for g in lb.stage_guards_for(b)(q[e], F[e])):
+            out.append(b)
+        else:
+            out.append(lb.branch(q[e], F[e]))
+    return out
 
 
 def probe_state(scene: Scene, branches: Sequence, modes: Sequence[int], t: float,

@@ -6,9 +6,9 @@ size): for each candidate mode in turn, the held-mode probe step by Newton's met
 :func:`~lumped.solvers.modes.mode_guess._solve`) and the branch read at the result, operation
 for operation (the numbers agree bit for bit; the Python functions are the readable
 reference and the test compares the two on probes from real scenes). The scene's
-kernels come in as the addresses of its generated ``branch_law`` and ``active_branch``
-(:mod:`lumped.codegen.jit`), so the code is compiled once for every scene and cached on
-disk.
+kernels come in as the addresses of its generated ``branch_law``, ``active_branch`` and
+``branch_guards`` (:mod:`lumped.codegen.jit`), so the code is compiled once for every
+scene and cached on disk.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from ...codegen.function_types import branch_type, function_at, law_type
+from ...codegen.function_types import branch_type, function_at, guards_type, law_type
 from ...codegen.jit import njit, numba_enabled
 from .mode_guess import REFUSED, UNDECIDED
 from .on_demand import compiled_once
@@ -31,16 +31,20 @@ _MAX_ITERS = 30
 CONFIRMED = 0  # (and above: the index of the confirmed candidate)
 
 
-def probe_modes(law_addr, branch_addr, lawc, masses, ea, eb, spring, cands, current, f, x, v, F,
-                h_p, out, wm):
+def probe_modes(law_addr, branch_addr, guards_addr, lawc, masses, ea, eb, spring, cands, current,
+                f, x, v, F, h_p, out, wm):
     """The first of the candidate modes (rows of ``cands``) that the full laws confirm
     after the probe step of size ``h_p`` (see :func:`lumped.solvers.modes.mode_guess.try_modes`):
     its index, with ``v_p`` and ``F_p`` in ``out[:N]`` and ``out[N:N + E]``; else
     :data:`UNDECIDED` when one candidate's result reads as ``current`` (an empty array:
     no current mode), or :data:`REFUSED`. ``lawc``: the scene's law constants. ``wm``
-    is work space, at least ``(n + 3, n)`` with ``n = N + E``."""
+    is work space, at least ``(n + 4, n)`` with ``n = N + E`` and room in its last row
+    for a branch's guards (:func:`probe_workspace`). The branch read is
+    :func:`~lumped.solvers.modes.mode_guess.read_branches`: the held branch where all its
+    stage guards are positive, else the law's."""
     branch_law = _law_at(law_addr)
     active_branch = _branch_at(branch_addr)
+    branch_guards = _guards_at(guards_addr)
     N = masses.shape[0]
     E = ea.shape[0]
     n = N + E
@@ -48,6 +52,7 @@ def probe_modes(law_addr, branch_addr, lawc, masses, ea, eb, spring, cands, curr
     G = wm[n, :n]
     u = wm[n + 1, :n]
     q = wm[n + 2, :E]
+    gbuf = wm[n + 3]
     undecided = False
     for c in range(cands.shape[0]):
         modes = cands[c]
@@ -57,7 +62,12 @@ def probe_modes(law_addr, branch_addr, lawc, masses, ea, eb, spring, cands, curr
         same = True
         cur = current.shape[0] > 0
         for e in range(E):
-            b = active_branch(e, q[e], u[N + e], lawc)
+            b = modes[e]
+            count = branch_guards(e, b, q[e], u[N + e], gbuf, lawc)
+            for j in range(count):
+                if not gbuf[j] > 0.0:
+                    b = active_branch(e, q[e], u[N + e], lawc)
+                    break
             if b != modes[e]:
                 same = False
             if cur and b != current[e]:
@@ -172,6 +182,7 @@ def _solve(J, G, n) -> bool:
 if numba_enabled():
     _law_at = function_at(law_type())
     _branch_at = function_at(branch_type())
+    _guards_at = function_at(guards_type())
 
 _COMPILED: list = []
 
@@ -189,10 +200,11 @@ def _signature():
     f8, i8 = T_.float64, T_.int64
     v, m = f8[::1], f8[:, ::1]
     iv = i8[::1]
-    return i8(i8, i8, v, v, iv, iv, T_.boolean[::1], i8[:, ::1], iv, v, v, v, v, f8, v, m)
+    return i8(i8, i8, i8, v, v, iv, iv, T_.boolean[::1], i8[:, ::1], iv, v, v, v, v, f8, v, m)
 
 
 def probe_workspace(N: int, E: int) -> tuple[np.ndarray, np.ndarray]:
-    """``(out, wm)`` of :func:`probe_modes` for ``N`` nodes and ``E`` elements."""
+    """``(out, wm)`` of :func:`probe_modes` for ``N`` nodes and ``E`` elements (the last
+    row of ``wm`` holds a branch's guards: room for 64, as the compiled loop's)."""
     n = N + E
-    return np.zeros(n), np.zeros((n + 3, max(n, 1)))
+    return np.zeros(n), np.zeros((n + 4, max(n, 64)))
