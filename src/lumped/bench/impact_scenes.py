@@ -21,6 +21,7 @@ import numpy as np
 
 from ..laws import get_law
 from ..scene import Element, Mass, Scene
+from .methods import steady_loop
 
 __all__ = ["IMPACT_TIME", "IMPACT_SCENES", "impact_scene", "lock_scene", "exact_impact",
            "impact_errors", "impact_markdown"]
@@ -76,8 +77,7 @@ def impact_errors(methods=("bdf1", "bdf2", "auto"), dts=(1e-2, 1e-3, 1e-4),
     rows = []
     for method in methods:
         for dt in dts:
-            # (a compiled method on its fast loop, as the bench times it)
-            fast = {"fast": True} if method.startswith("jit-") else {}
+            fast = steady_loop(method)
 
             def go(method=method, dt=dt, fast=fast):
                 return simulate(impact_scene(), method=method, dt=dt, t_end=t_end,

@@ -19,9 +19,18 @@ from .scenes import GRID_DT, BenchScene, Ladders, generic_scene
 __all__ = [
     "Solved",
     "Method",
+    "steady_loop",
     "tolerance_method",
     "x_on_grid",
 ]
+
+
+def steady_loop(method: str) -> dict[str, Any]:
+    """The ``simulate`` keywords that time ``method`` as the bench does: a compiled
+    ``jit-*`` method on its fast loop (``fast=True``), the steady state of a structure
+    run before, which an untimed warm-up compiles (the default runs a new structure's
+    first million steps on the port); ``{}`` for every other method."""
+    return {"fast": True} if method.startswith("jit-") else {}
 
 
 @dataclass(frozen=True)
@@ -109,10 +118,7 @@ def generic_method(method: str) -> Callable[[BenchScene, dict, Ladders], Callabl
 
         sc = generic_scene(scene)
         dt = setting["dt"]
-        # (a compiled method on its fast loop: the steady state of a structure run
-        # before, which the untimed warm-up compiles; the default would run a new
-        # structure's first million steps on the port)
-        fast = {"fast": True} if method.startswith("jit-") else {}
+        fast = steady_loop(method)
 
         def run() -> Solved:
             sol = simulate(sc, method=method, dt=dt, t_end=scene.t_end, throw=True, **fast)

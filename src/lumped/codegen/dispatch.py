@@ -47,14 +47,8 @@ from .function_types import (
     template_law_type,
     template_select_type,
 )
-from .jit import (
-    cache_dir,
-    numba_module,
-    refuse_moving_supports,
-    scene_templates,
-    structure_key,
-)
-from .scene_numbers import JitScene, kept_values, structure_arrays, with_numbers
+from .jit import cache_dir, numba_module, refuse_moving_supports, scene_templates
+from .scene_numbers import JitScene, kept_values, structure_record, with_numbers
 from .template_module import template_addresses
 from .templates import LawTemplate, law_template
 
@@ -122,12 +116,6 @@ def header(templates: list[LawTemplate], law_index: list[int],
     return out
 
 
-#: :func:`dispatch_scene`'s parts of a structure (``(arrays, header)``), per
-#: (cache directory, :func:`~lumped.codegen.jit.structure_key`).
-_STRUCTURES: dict[tuple, tuple] = {}
-_STRUCTURES_KEPT = 256
-
-
 def dispatch_scene(scene, kept: dict | None = None) -> JitScene:
     """The :class:`~lumped.codegen.jit.JitScene` of ``scene`` for the structure-generic
     kernels: its structure's arrays, its numbers, its law constants after the header,
@@ -148,15 +136,10 @@ def dispatch_scene(scene, kept: dict | None = None) -> JitScene:
                 return with_numbers(scene, None, arrays,
                                     np.array(head + values + [0.0], dtype=float))
     templates, law_index, consts, offsets = scene_templates(scene)
-    key = (where, structure_key(scene, templates, law_index))
-    got = _STRUCTURES.get(key)
-    if got is None:
-        arrays = structure_arrays(scene, law_index, offsets)
-        got = (arrays, header(templates, law_index, offsets))
-        if len(_STRUCTURES) >= _STRUCTURES_KEPT:
-            _STRUCTURES.clear()
-        _STRUCTURES[key] = got
-    arrays, head = got
+    record = structure_record(scene, templates, law_index, offsets)
+    arrays, head = record.arrays, record.headers.get("dispatch")
+    if head is None:
+        head = record.headers["dispatch"] = header(templates, law_index, offsets)
     if kept is not None:
         kept["dispatch_scene"] = (where, arrays, head,
                                   tuple(law_template(el.law).functions

@@ -97,6 +97,7 @@ from .scene_numbers import (
     kept_values,
     position_locks,
     structure_arrays,
+    structure_key,
     with_numbers,
 )
 from .templates import LawTemplate, law_template
@@ -183,15 +184,6 @@ def scene_source(scene) -> SceneSource:
 #: the last :data:`_STRUCTURES_KEPT` structures asked.
 _STRUCTURES: dict[tuple, str] = {}
 _STRUCTURES_KEPT = 256
-
-
-def structure_key(scene, templates: list[LawTemplate], law_index: list[int]) -> tuple:
-    """Everything the module's text reads from ``scene`` and its templates: each
-    template's functions (their texts and value counts, which fix the offsets), the
-    element -> template map, which nodes have a mass, each element's kind and ends."""
-    return (tuple(t.functions for t in templates), tuple(law_index),
-            tuple(m != 0.0 for m in scene.masses),
-            tuple(el.kind for el in scene.elements), scene.elem_a, scene.elem_b)
 
 
 def _scene_source(scene) -> SceneSource:

@@ -9,18 +9,23 @@ branches lock) as a :class:`JitScene`; :func:`kept_values` reads the laws' const
 scene whose laws have a kept structure's templates, without making anything anew.
 :func:`lumped.codegen.jit.jit_scene` (a structure's generated module) and
 :func:`lumped.codegen.dispatch.dispatch_scene` (the structure-generic kernels) share them.
+:func:`structure_record` is what a process keeps per structure for the structure-generic
+kernels of :mod:`lumped.codegen.dispatch` and :mod:`lumped.codegen.step_dispatch`: the
+arrays, each one's header and the port's tally, under :func:`structure_key`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import ModuleType
 
 import numpy as np
 
-from .templates import law_template
+from .module_cache import cache_dir
+from .templates import LawTemplate, law_template
 
-__all__ = ["JitScene", "kept_values", "with_numbers", "structure_arrays", "position_locks"]
+__all__ = ["JitScene", "Structure", "kept_values", "with_numbers", "structure_arrays",
+           "position_locks", "structure_key", "structure_record"]
 
 
 @dataclass(frozen=True)
@@ -104,3 +109,55 @@ def position_locks(scene) -> np.ndarray:
             if info.locks and info.lock_value is not None:
                 out[e, i] = info.lock_value
     return out
+
+
+def structure_key(scene, templates: list[LawTemplate], law_index: list[int]) -> tuple:
+    """Everything a structure's code reads from ``scene`` and its templates: each
+    template's functions (their texts and value counts, which fix the offsets), the
+    element -> template map, which nodes have a mass, each element's kind and ends."""
+    return (tuple(t.functions for t in templates), tuple(law_index),
+            tuple(m != 0.0 for m in scene.masses),
+            tuple(el.kind for el in scene.elements), scene.elem_a, scene.elem_b)
+
+
+@dataclass
+class Structure:
+    """What a process keeps of one structure for the structure-generic kernels.
+
+    Attributes
+    ----------
+    arrays : tuple
+        :func:`structure_arrays` (only read).
+    headers : dict
+        The header of each kind of kernel, made when first asked (it compiles or loads
+        the laws' modules): ``"dispatch"``, :func:`lumped.codegen.dispatch.header`;
+        ``"step"``, :func:`lumped.codegen.step_dispatch.step_header`.
+    tally : list of int
+        One element: the steps this process ran the structure on the faithful port
+        (:func:`lumped.solvers.bdf.fixed_step_jit.takes_fast_path`).
+    """
+
+    arrays: tuple
+    headers: dict[str, list[float]] = field(default_factory=dict)
+    tally: list[int] = field(default_factory=lambda: [0])
+
+
+#: :func:`structure_record`'s records, per (cache directory, :func:`structure_key`): the
+#: last :data:`_STRUCTURES_KEPT` structures asked.
+_STRUCTURES: dict[tuple, Structure] = {}
+_STRUCTURES_KEPT = 256
+
+
+def structure_record(scene, templates: list[LawTemplate], law_index: list[int],
+                     offsets: list[int]) -> Structure:
+    """The :class:`Structure` of ``scene`` (``templates, law_index, offsets`` from
+    :func:`lumped.codegen.jit.scene_templates`), made the first time the process asks
+    for its structure with the current cache directory."""
+    key = (str(cache_dir()), structure_key(scene, templates, law_index))
+    got = _STRUCTURES.get(key)
+    if got is None:
+        got = Structure(structure_arrays(scene, law_index, offsets))
+        if len(_STRUCTURES) >= _STRUCTURES_KEPT:
+            _STRUCTURES.clear()
+        _STRUCTURES[key] = got
+    return got

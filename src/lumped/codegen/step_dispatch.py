@@ -58,16 +58,8 @@ from .function_types import (
     template_full_law_type,
     template_magnitude_type,
 )
-from .jit import (
-    cache_dir,
-    njit,
-    numba_enabled,
-    numba_module,
-    refuse_moving_supports,
-    scene_templates,
-    structure_key,
-)
-from .scene_numbers import JitScene, structure_arrays, with_numbers
+from .jit import njit, numba_enabled, numba_module, refuse_moving_supports, scene_templates
+from .scene_numbers import JitScene, structure_record, with_numbers
 from .template_module import law_addresses
 
 __all__ = ["STEP_WIDTH", "evaluate", "element_law", "step_header", "step_layout",
@@ -169,12 +161,6 @@ def step_header(scene, templates, law_index: list[int], offsets: list[int]) -> l
     return out
 
 
-#: :func:`step_layout`'s parts of a structure (``[arrays, header or None, tally]``), per
-#: (cache directory, :func:`~lumped.codegen.jit.structure_key`).
-_STRUCTURES: dict[tuple, list] = {}
-_STRUCTURES_KEPT = 256
-
-
 def step_layout(scene) -> tuple[JitScene, np.ndarray, Callable[[], np.ndarray], list[int]]:
     """``scene``'s :class:`~lumped.codegen.scene_numbers.JitScene` without a module of its
     own (``module=None``; its ``consts`` those of :func:`lumped.codegen.jit.jit_scene`),
@@ -188,25 +174,20 @@ def step_layout(scene) -> tuple[JitScene, np.ndarray, Callable[[], np.ndarray], 
     (``ValueError``), and so is a law with a hand-written kernel."""
     refuse_moving_supports(scene)
     templates, law_index, consts, offsets = scene_templates(scene)
-    key = (str(cache_dir()), structure_key(scene, templates, law_index))
-    got = _STRUCTURES.get(key)
-    if got is None:
-        got = [structure_arrays(scene, law_index, offsets), None, [0]]
-        if len(_STRUCTURES) >= _STRUCTURES_KEPT:
-            _STRUCTURES.clear()
-        _STRUCTURES[key] = got
+    record = structure_record(scene, templates, law_index, offsets)
     width = STEP_WIDTH * len(law_index) + len(scene.nodes)
     step = np.zeros(width + consts.shape[0])
     step[width:-1] = consts[:-1]
     step[-1] = float(len(scene.nodes))
 
     def with_header() -> np.ndarray:
-        if got[1] is None:
-            got[1] = step_header(scene, templates, law_index, offsets)
-        step[:width] = got[1]
+        head = record.headers.get("step")
+        if head is None:
+            head = record.headers["step"] = step_header(scene, templates, law_index, offsets)
+        step[:width] = head
         return step
 
-    return with_numbers(scene, None, got[0], consts), step, with_header, got[2]
+    return with_numbers(scene, None, record.arrays, consts), step, with_header, record.tally
 
 
 def step_scene(scene) -> tuple[JitScene, np.ndarray]:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import pytest
 
 from lumped import simulate
+from lumped.codegen import scene_numbers
 from lumped.scenarios import scenario_scene
 from lumped.solvers.bdf import core_jit
 
@@ -93,7 +94,7 @@ def test_a_run_the_fast_loop_takes_whole_makes_no_port_callbacks(method, monkeyp
                         counted("step_callbacks", step_dispatch.step_callbacks))
     monkeypatch.setattr(step_dispatch, "step_header",
                         counted("step_header", step_dispatch.step_header))
-    monkeypatch.setattr(step_dispatch, "_STRUCTURES", {})  # (no header kept from before)
+    monkeypatch.setattr(scene_numbers, "_STRUCTURES", {})  # (no header kept from before)
     sol = simulate(scenario_scene("forcing-F2"), method=method, dt=1e-3, t_end=2.0,
                    fast=True)
     assert sol.stats["handovers"] == 0 and sol.stats["fast_steps"] == 2000
