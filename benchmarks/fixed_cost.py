@@ -26,13 +26,16 @@ and only what is kept per structure or per law serves new numbers.
 Each case is the CPU time (:func:`time.process_time`) of ``--calls`` calls, repeated
 ``--repeats`` times interleaved with the yardstick (:func:`lumped.bench.measure_unit`'s
 loop, one call per repeat); printed are the median per call in microseconds and the
-median over repeats of its ratio to one iteration of the yardstick loop (``u``), and
-issue 27's target (at most 50 us).
+median over repeats of its ratio to one iteration of the yardstick loop (``u``), the
+part of a call spent in Python's cyclic garbage collector (``gc us``: the wall time between
+the collector's start and stop callbacks, :data:`gc.callbacks`, per call), and issue 27's
+target (at most 50 us).
 """
 
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import platform
 import statistics
@@ -73,11 +76,36 @@ def _general_driver():
     return Off()
 
 
-def _time(fn, calls: int) -> float:
-    t0 = time.process_time()
-    for _ in range(calls):
-        fn()
-    return (time.process_time() - t0) / calls
+class _GcClock:
+    """The wall time Python's cyclic collector runs while the clock is on (its start and
+    stop callbacks, :data:`gc.callbacks`)."""
+
+    def __init__(self) -> None:
+        self.total, self._start = 0.0, 0.0
+
+    def __call__(self, phase: str, info: dict) -> None:
+        if phase == "start":
+            self._start = time.perf_counter()
+        else:
+            self.total += time.perf_counter() - self._start
+
+    def __enter__(self) -> _GcClock:
+        self.total = 0.0
+        gc.callbacks.append(self)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        gc.callbacks.remove(self)
+
+
+def _time(fn, calls: int) -> tuple[float, float]:
+    """``(CPU seconds per call, collector seconds per call)`` of ``calls`` calls."""
+    with _GcClock() as clock:
+        t0 = time.process_time()
+        for _ in range(calls):
+            fn()
+        cpu = time.process_time() - t0
+    return cpu / calls, clock.total / calls
 
 
 class _Fresh:
@@ -127,6 +155,7 @@ def main() -> None:
                     fn()
 
     per_call: dict = {key: [] for key in runs}
+    in_gc: dict = {key: [] for key in runs}
     ratios: dict = {key: [] for key in runs}
     units = []
     for _ in range(args.repeats):
@@ -138,21 +167,24 @@ def main() -> None:
             if isinstance(fn, _Fresh):
                 fn.ready(args.calls)
             if off is None:
-                sec = _time(fn, args.calls)
+                sec, collector = _time(fn, args.calls)
             else:
                 with off:
-                    sec = _time(fn, args.calls)
+                    sec, collector = _time(fn, args.calls)
             per_call[key].append(sec)
+            in_gc[key].append(collector)
             ratios[key].append(sec / unit)
 
     unit_ns = statistics.median(units) * 1e9
     print(f"python {platform.python_version()}, load {os.getloadavg()[0]:.1f}; yardstick "
           f"{unit_ns:.1f} ns per iteration (u); median of {args.repeats} repeats of "
           f"{args.calls} calls; issue 27's target {TARGET_US:g} us")
-    print(f"{'scene':15s} {'case':32s} {'us/run':>9s} {'u':>9s}")
+    print(f"{'scene':15s} {'case':32s} {'us/run':>9s} {'u':>9s} {'gc us':>9s}")
     for name, case in runs:
         us = statistics.median(per_call[(name, case)]) * 1e6
-        print(f"{name:15s} {case:32s} {us:9.1f} {statistics.median(ratios[(name, case)]):9.0f}")
+        gc_us = statistics.median(in_gc[(name, case)]) * 1e6
+        print(f"{name:15s} {case:32s} {us:9.1f} {statistics.median(ratios[(name, case)]):9.0f}"
+              f" {gc_us:9.1f}")
 
 
 if __name__ == "__main__":
