@@ -20,6 +20,7 @@ from collections.abc import Sequence
 
 from ...scene import Mass, Scene
 from ...scene.supports import support_time, support_time_restored
+from ..implicit.conditioned import conditioned_law
 from ..implicit.globalize import solve_globalized
 from ..implicit.step_system import make_evaluate
 from ..newton.criteria import residual_ok
@@ -74,8 +75,15 @@ def _select_modes(scene: Scene, branches: Sequence, t: float, x: list[float],
     x_hat = list(x)
     E = len(scene.elements)
     qs, rq, rf = [0.0] * E, [0.0] * E, [0.0] * E
-    # steep branches in their inverse form: the same zeros, a root Newton can reach
-    kernels = [branches[e].stage_law_for(el.law.kernel) or el.law.kernel
+    # steep branches in their inverse form: the same zeros, a root Newton can reach; at
+    # the yield force, where the force of a small rate rounds to tau and the law reads its
+    # stuck branch, the steep branch whose inverse form holds there and whose stage
+    # guards admit the rate (the conditioned law of the fixed-step methods). With the
+    # inverse forms alone, a junction's Herschel-Bulkley n = 0.3 dashpot starting to slip
+    # forward at 1e-9 had no root at tau (the stuck branch's residual is the rate) and
+    # Newton settled on the other slip branch's odd continuation, F = -tau at a positive
+    # rate, at every probe up to 2e-7 s (issue 29, seed 22228's start)
+    kernels = [conditioned_law(branches[e], el.law.kernel) or el.law.kernel
                for e, el in enumerate(scene.elements)]
     evaluate = make_evaluate(scene, h_probe, cm, [0.0] * N, [1.0] * N, uref, x_hat, f,
                               qs, rq, rf, roundoff=True, kernels=kernels)
