@@ -67,7 +67,7 @@ def at_roundoff(G: Sequence[float], S: Sequence[float]) -> bool:
 
     The first of Newton's two tests for a correction that is noise
     (:func:`lumped.solvers.newton.semismooth.newton_solve`; the second: the full
-    correction leaves the row bit for bit as it is). A scale ``S_i`` that counts terms
+    correction does not reduce the row). A scale ``S_i`` that counts terms
     which cancel exactly (``gamma (F - tau)`` read as ``gamma |F|``) is above the row's
     true rounding, so this test alone does not make a solution. Example: a taut string
     (``q - L = 0``) holding a mass at rest on a stuck junction, ``q = x_m - x_j`` on a

@@ -33,8 +33,9 @@ Convergence needs **both** tests:
   the piece on the other side proposes a long step. When no update test passes but
   every row is at the rounding of its terms, ``|G_i| <= 4 eps S_i``
   (:func:`~lumped.solvers.newton.criteria.at_roundoff`), the rows that the full
-  correction leaves bit for bit as they are (nonzero) are taken as solved: the
-  correction computed without them is tested (plain, then scaled). A lock row a
+  correction does not reduce (nonzero; left bit for bit as they are, or sent across
+  zero to the other side of the lattice) are taken as solved: the correction computed
+  without them is tested (plain, then scaled). A lock row a
   fraction of an ulp of the positions off asks the velocity for less than an ulp of
   ``x = x_hat + h v`` and the forces for ``m ulp(x) / h^2``: noise that no iteration
   removes.
@@ -260,19 +261,29 @@ def newton_solve(
                     u = [ui - di for ui, di in zip(u, d3, strict=True)]
                     return result(NewtonCode.SUCCESS)
             # Every row at the rounding of its terms, and some rows that the full
-            # correction leaves bit for bit as they are: their demand is noise (a lock row
-            # a fraction of an ulp of the positions off asks the velocity for less than an
-            # ulp of x = x_hat + h v, and through the momentum balance the forces for
-            # m ulp(x) / h^2, again and again). The correction without them decides. (A row
-            # scale above the row's true rounding, a law whose terms cancel exactly, e.g.
-            # gamma (F - tau) with gamma = 1e12, passes the first test; its row changes.)
+            # correction does not reduce (bit for bit as they are, or across zero to the
+            # other side of the lattice): their demand is noise (a lock row a fraction of
+            # an ulp of the positions off asks the velocity for less than an ulp of x =
+            # x_hat + h v, and through the momentum balance the forces for m ulp(x) / h^2,
+            # again and again). The correction without them decides, with the null step of
+            # locks in parallel removed as above. (A row scale above the row's true
+            # rounding, a law whose terms cancel exactly, e.g. gamma (F - tau) with gamma =
+            # 1e12, passes the first test; the correction reduces its row.) A taut string
+            # one ulp short of L after an impact, beside a stuck Coulomb element and
+            # another taut string on the same mass: its row flipped between +-1.1e-16 and
+            # Newton ran out of iterations (issue 29, seed 22320 of jit-bdf1's property).
             if at_roundoff(G, S):
                 G_try = evaluate([ui - di for ui, di in zip(u, du, strict=True)])[0]
                 n_res += 1
                 if finite(G_try):
-                    G_kept = [0.0 if gt == g else g for g, gt in zip(G, G_try, strict=True)]
+                    G_kept = [0.0 if abs(gt) >= abs(g) else g
+                              for g, gt in zip(G, G_try, strict=True)]
                     if G_kept != G:
                         d4 = solve(G_kept)
+                        if min_norm and finite(d4):
+                            d5 = null_step_removed(J, G_kept, d4, u)
+                            if d5 is not None:
+                                d4 = d5
                         if finite(d4) and (update_ok(d4, u, rtol, atol) or update_ok_scaled(
                                 d4, u, J, S, rtol, atol)):
                             u = [ui - di for ui, di in zip(u, d4, strict=True)]

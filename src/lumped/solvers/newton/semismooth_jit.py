@@ -189,7 +189,7 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
                     u[i] = u[i] - du[i]
                 break
             if at_roundoff(G, S):
-                # the rows the full correction leaves bit for bit are solved: the
+                # the rows the full correction does not reduce are solved: the
                 # correction without them decides
                 un, Gn, Sn, Jn = wv[WS_UN], wv[WS_GN], wv[WS_SN], wm[WS_JN]
                 for i in range(n):
@@ -200,7 +200,7 @@ def newton(evaluate, p, u, roundoff, rtol, atol, max_iters, max_backtracks, free
                     Gk = wv[WS_GA]
                     kept = False
                     for i in range(n):
-                        if Gn[i] == G[i]:
+                        if abs(Gn[i]) >= abs(G[i]):
                             Gk[i] = 0.0
                             kept = kept or G[i] != 0.0
                         else:
