@@ -107,8 +107,9 @@ def read_branches(branches: Sequence, modes: Sequence[int], q: Sequence[float],
     (:meth:`~lumped.codegen.branches.LawBranches.stage_guards_for`) are positive, else
     ``law_branches(...).branch(q_e, F_e)``.
 
-    The two differ only on a steep branch solved in its inverse form, whose guard reads
-    the rate ``w(q)`` where the law's own read takes the force: Herschel-Bulkley
+    The two differ only where a stage guard reads the rate ``w(q)`` and the law's own
+    read takes the force (a steep branch solved in its inverse form, or a branch flat at
+    its end, :meth:`~lumped.codegen.branches.LawBranches.stage_guards_for`): Herschel-Bulkley
     ``n = 0.3`` (``tau = 0.316``) starting to slip at a rate of ``2e-9`` has the force
     ``tau + 1e-29``, which rounds to ``tau``, where the law reads its stuck branch. The
     right guess (slipping) was refused at the start, and the full search then took a
