@@ -36,7 +36,13 @@ def check_yield(scene: Scene, sol, force_tol: float = 0.0, rate_tol: float = 0.0
     steep in the rate (Herschel-Bulkley ``n > 1``: ``dF/dq = 1 / (2 sqrt(gamma q))``
     for ``n = 2``) a rate error within the tolerance shows as a large force error (a
     rate of 7.6e-5 within a velocity tolerance of 1.1e-4, ``gamma = 0.3``: 0.008 in
-    force). A rate of exactly zero keeps the strict test.
+    force). A rate of exactly zero is known to the rounding of the two velocities it is
+    the difference of (:func:`_rate_rounding`), no better: where ``n > 1`` the law's force
+    ``tau + (q/gamma)^(1/n)`` has an infinite slope at ``q = 0``, so a dashpot slipping at
+    a rate that a parallel lock holds at zero carries ``tau`` only to
+    ``(eps |v| / gamma)^(1/n)`` (``n = 2``, ``gamma = 0.9``, ``|v| = 1``: ``1.6e-8``; seed
+    23009 of the tight run: ``8.1e-9`` above ``tau`` at a rate of ``6e-17``). A stuck
+    dashpot above ``tau`` by more than that still fails it.
 
     A Coulomb element's force never exceeds ``tau`` by more than ``rtol`` (the method's
     relative tolerance) of the forces' scale: on the dense output a force that sits at
@@ -60,7 +66,9 @@ def check_yield(scene: Scene, sol, force_tol: float = 0.0, rate_tol: float = 0.0
         slip_rate = p["gamma"] * np.maximum(F - tau, 0.0) ** p.get("n", 1.0)
         stuck_above = above & (q < 0.5 * slip_rate)
         if p.get("n", 1.0) < 1.0 or force_tol > 0.0:  # the force from the rate, in force units
-            q_hi = np.where(q > 0.0, q + rate_tol, 0.0)  # a rate known to rate_tol
+            # a rate known to rate_tol; a rate of exactly zero to the rounding of the
+            # velocities it is the difference of
+            q_hi = np.where(q > 0.0, q + rate_tol, _rate_rounding(v, el))
             F_law = tau + (q_hi / p["gamma"]) ** (1.0 / p.get("n", 1.0))
             over = F - F_law - (tau * 1e-9 + 1e-8 * scale + 1e-12 + force_tol * scale)
             assert not (stuck_above & (over > 0.0)).any(), f"{el.name} stuck above its yield force"
@@ -77,6 +85,14 @@ def check_yield(scene: Scene, sol, force_tol: float = 0.0, rate_tol: float = 0.0
             S = law_scale(el.law.kernel, float(q_signed[i]), Fi, R, Rq, RF)
             stuck_above[i] = abs(R) > 2.0 * (1e-10 * S + 1e-12)
         assert not stuck_above.any(), f"{el.name} stuck above its yield force"
+
+
+def _rate_rounding(v: dict, el) -> np.ndarray:
+    """``4 eps (|v_a| + |v_b|)``: the rounding of a rate ``v_b - v_a`` (a ground end has
+    ``v = 0``), sample by sample."""
+    va = np.abs(v.get(el.a, 0.0))
+    vb = np.abs(v.get(el.b, 0.0))
+    return 4.0 * np.finfo(float).eps * (va + vb)
 
 
 def run_checked(scene: Scene, method: str, dt: float, t_end: float):
