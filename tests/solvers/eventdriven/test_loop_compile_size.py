@@ -26,12 +26,9 @@ _APART = {"stage_solve", "stage_solve_at", "stage_evaluate", "step_error", "erro
 
 
 def _advance_signature():
-    from numba import types
+    from lumped.solvers.eventdriven import loop_jit
 
-    f8, i8 = types.float64, types.int64
-    v, m, m3, iv = f8[::1], f8[:, ::1], f8[:, :, ::1], i8[::1]
-    return (i8, i8, i8, v, v, iv, iv, types.boolean[::1], m, iv, iv, iv, m, m, iv, m, i8, v, iv,
-            v, v, v, v, v, iv, v, v, m, m3, m, m, m3, i8[:, ::1])
+    return loop_jit.advance_argument_types()
 
 
 def _typed(py_func, args) -> dict:

@@ -16,7 +16,7 @@ from lumped.codegen.stage_forms import flat_inverse
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene, SineBurst
 from lumped.solvers.eventdriven.step import StepPass
-from lumped.solvers.radau.flat_start import at_flat_end
+from lumped.solvers.radau.flat_start import at_flat_end, flat_base
 
 q, F = sp.symbols("q F")
 
@@ -51,14 +51,18 @@ def test_at_flat_end_reads_the_force_at_the_end_only():
     lb = law_branches(get_law("herschel_bulkley").bind(gamma=gamma, tau=tau, n=1.5))
     fwd = next(i for i in range(lb.count) if lb.flat_start_for(i) is not None
                and lb.flat_start_for(i)(1e-3, tau)[0] == 0.0)
-    start = lb.flat_start_for(fwd)
-    assert at_flat_end([start, None], [0.0, 0.0], [tau, 1.0]) == [0]
-    assert at_flat_end([start], [1e-6], [tau + 1e-6]) == []
+    base = flat_base(lb.flat_start_for(fwd))
+    assert base == (1.0, -tau)  # F - tau, read exactly
+    assert at_flat_end([base, None], [tau, 1.0]) == [0]
+    assert at_flat_end([base], [tau + 1e-6]) == []
+    assert at_flat_end([base], [tau * (1 + 1e-13)]) == [0]  # within AT_END
+    assert flat_base(None) is None
 
 
 def test_the_flat_ends_are_read_once_per_state():
     # a pass asks up to three times at one state (the run loop, the step, the stage
-    # guess): the ends are a function of the modes and x, v, F, read once (before: 3)
+    # guess): the ends are a function of the modes and F, read once (before: 3); the
+    # branches' bases once per modes
     tau = 0.25
     law = get_law("herschel_bulkley").bind(gamma=0.5, tau=tau, n=1.5)
     lb = law_branches(law)
@@ -76,11 +80,12 @@ def test_the_flat_ends_are_read_once_per_state():
     run.frame, run.lbs, run.scene, run.modes = None, [Branches()], scene, [fwd]
     run.x, run.v, run.F = [0.0], [0.0], [tau]
     assert [run.flat_ends() for _ in range(3)] == [[0]] * 3
-    assert len(reads) == 2  # (the base at F and at 0: one reading)
-    run.F = [tau + 1e-3]  # a new state: read again
-    assert run.flat_ends() == [] and len(reads) == 4
+    assert len(reads) == 2  # (the base at F = 2^200 and at 0: one reading)
+    run.F = [tau + 1e-3]  # a new state: the ends read again, the base kept
+    assert run.flat_ends() == [] and len(reads) == 2
     run.modes = [fwd]  # (the same modes, made anew)
-    assert run.flat_ends() == [] and len(reads) == 4
+    assert run.flat_ends() == [] and len(reads) == 2
+    assert run.flat_table().tolist() == [[1.0, -tau]] and len(reads) == 2
 
 
 def _flat_dashpot_on_a_mass_among_locks() -> Scene:

@@ -93,6 +93,7 @@ class CompiledLoop:
         self.outputs = self.ws = self.wm = self.iw = None  # on the first call
         self.fst, self.ist = np.zeros(16), np.zeros(22, dtype=np.int64)
         self.breaks, self.kinks = np.zeros(0), np.zeros(0, dtype=np.int64)
+        self.flat = np.full((self.E, 2), np.nan)  # (the held branches' flat ends: run())
         self._breaks_of: list | None = None  # the run's list they were made from
         self.calls, self._akey, self._arrays = 0, None, ()
 
@@ -133,14 +134,15 @@ class CompiledLoop:
                 ist[i] = stats[key]
         self.modes_a = np.array(modes, dtype=np.int64)
         self.watched_a = np.array(watched, dtype=np.int64)
+        self.flat = st["flat"]
         return x, v, F, dF
 
     def _call(self, x, v, F, dF, T0, HS, Y0, D, ROWS) -> None:
         self.fn(self.law.addr, self.guards.addr, self.fold, self.js.consts, self.js.masses,
                 self.js.ea, self.js.eb, self.js.spring, self.js.lock_q, self.modes_a,
                 self.watched_a, self.checked, self.A, self.W, self.fkind, self.fpar, self.table,
-                self.breaks, self.kinks, x, v, F, dF, self.fst, self.ist, T0, HS, Y0, D, ROWS,
-                self.ws, self.wm, self.iw)
+                self.breaks, self.kinks, self.flat, x, v, F, dF, self.fst, self.ist, T0, HS, Y0,
+                D, ROWS, self.ws, self.wm, self.iw)
         self.calls += 1
 
     def _workspace(self) -> None:
@@ -271,7 +273,9 @@ class CompiledLoop:
             rows) -> str:
         """Advance the driver's state ``st`` (keys ``t, h, x, v, F, dF_n, F_seen, h_acc,
         err_acc, h_good, h_big, stalled, creeping, t_stop, t_final, prev_break, rtol, atol,
-        m_min, max_steps, group``; ``group`` the dense output's group of the mode's locks)
+        m_min, max_steps, group, flat``; ``group`` the dense output's group of the mode's
+        locks, ``flat`` the held branches' flat ends,
+        :meth:`~lumped.solvers.radau.flat_start.FlatEnds.table`)
         in place; returns the reason the loop stopped (``REASONS``).
 
         ``h_big`` is the longest step the run accepted (the scale of a bridge's steps,

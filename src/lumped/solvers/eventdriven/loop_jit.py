@@ -30,7 +30,9 @@ or the stall limit (:data:`LIMIT`), the eighth Newton failure in a row (:data:`D
 Python redoes the pass with its line search), or ``ist[CREEPING]`` accepted steps in a row
 shorter than ``max(step floor, fst[CREEP_FLOOR])`` reach ``CREEP_STEPS`` (:data:`CREEP`,
 after that step, before the controller sizes the next: the creep test of the Python loop,
-``StepPass._accept`` of :mod:`lumped.solvers.eventdriven.step`, which stops the run). With
+``StepPass._accept`` of :mod:`lumped.solvers.eventdriven.step`, which stops the run), or a
+step would start with a held branch's force at its flat end (:data:`FLAT`: Python's stage
+guess starts on the branch there, :mod:`lumped.solvers.radau.flat_start`). With
 ``ist[SINGLE] = 1`` it makes one attempt of size ``h`` for the Python loop and returns
 (:data:`ATTEMPT`) its outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular),
 ``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]`` and the stage values in ``ws[0]``; the
@@ -56,14 +58,16 @@ from ...codegen.jit import njit, numba_enabled
 from ..modes.crossing_root import first_root
 from ..modes.on_demand import compiled_once
 from ..radau import stage_jit, step_jit
+from ..radau.flat_start import AT_END
 from ..radau.forces_jit import forces
 from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.step_jit import FOLDED_TYPE, finite, start_time
 from ..radau.tableau import END_SLOPES, C
 from .step import CREEP_STEPS
 
-__all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", "SINGULAR",
-           "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "DAMPED", "CREEP", "REASONS"]
+__all__ = ["advance", "advance_argument_types", "compiled_advance", "loop_workspace", "STOP",
+           "CROSSING", "SINGULAR", "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "DAMPED", "CREEP",
+           "FLAT", "REASONS"]
 
 # fst: float state
 (T, H, F_SEEN, H_ACC, ERR_ACC, H_GOOD, T_STOP, T_FINAL, RTOL, ATOL, M_MIN, PREV_BREAK,
@@ -73,10 +77,10 @@ __all__ = ["advance", "compiled_advance", "loop_workspace", "STOP", "CROSSING", 
  MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK,
  A_HIT, A_W, A_J, BI, CREEPING) = range(22)
 (STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD, STOPPED, DAMPED,
- CREEP) = range(1, 12)
+ CREEP, FLAT) = range(1, 13)
 REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "floor",
            FULL: "full", LIMIT: "limit", ATTEMPT: "attempt", STOPPED: "stopped",
-           FOLD: "fold", DAMPED: "damped", CREEP: "creep"}
+           FOLD: "fold", DAMPED: "damped", CREEP: "creep", FLAT: "flat"}
 
 STAGE_AT, ERROR_AT, CROSSED_AT = 4, 5, 6  # iw[1, ...]: the addresses (see the module notes)
 _EPS = 2.220446049250313e-16
@@ -85,8 +89,8 @@ _S1, _S2, _S3 = END_SLOPES
 
 
 def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock_q, modes,
-            watched, checked, A, W, fkind, fpar, table, breaks, kinks, x, v, F, dF, fst, ist,
-            T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
+            watched, checked, A, W, fkind, fpar, table, breaks, kinks, flat, x, v, F, dF, fst,
+            ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
     """Steps with the modes held until a reason to return (see the module notes).
 
     ``fold_addr``: the fold test's address (:func:`~lumped.solvers.radau.step_jit.fold_test`,
@@ -97,7 +101,11 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
     ``breaks`` are the forcing's breakpoints and ``kinks`` (1 or 0) whether each is a
     kink (:func:`~lumped.solvers.eventdriven.setup.time_events`): a step that ends on a
     kink goes on to the next breakpoint, as the Python loop does, instead of returning;
-    ``ist[BI]`` is the next breakpoint's index.
+    ``ist[BI]`` is the next breakpoint's index. ``flat`` (``E x 2``) holds ``(s, d)`` of
+    each held branch flat at its end (``nan`` for the others,
+    :meth:`lumped.solvers.radau.flat_start.FlatEnds.table`): a step that starts with such
+    an element's force at its end is the Python loop's (:data:`FLAT`), whose stage
+    guess starts on the branch there.
     ``ws`` (vectors), ``wm`` (matrices) and ``iw`` (ints) are :func:`loop_workspace`."""
     stage_solve = _stage_at(iw[1, STAGE_AT])
     step_error = _error_at(iw[1, ERROR_AT])
@@ -139,6 +147,13 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
                 to_stop = True
         elif h < 16.0 * _EPS * max(abs(t), t_final * 1e-3):
             reason = FLOOR
+        if not single and not reason:
+            for e in range(E):  # (flat_start.at_flat_end: the same numbers)
+                s_ = flat[e, 0]
+                if s_ == s_:
+                    sF = s_ * F[e]
+                    if abs(sF + flat[e, 1]) <= AT_END * max(abs(sF), abs(flat[e, 1])):
+                        reason = FLAT
         if reason:
             break
         if not single:
@@ -377,13 +392,20 @@ def compiled_advance():
     if not _COMPILED:
         from numba import types as T_
 
-        f8, i8 = T_.float64, T_.int64
-        v, m, m3, iv = f8[::1], f8[:, ::1], f8[:, :, ::1], i8[::1]
-        sig = T_.none(i8, i8, i8, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m, m, iv, m, i8,
-                      v, iv, v, v, v, v, v, iv, v, v, m, m3, m, m, m3, i8[:, ::1])
+        sig = T_.none(*advance_argument_types())
         with scalar_loops():
             _COMPILED.append(njit(sig, cache=True, no_cfunc_wrapper=True)(advance))
     return _COMPILED[0]
+
+
+def advance_argument_types() -> tuple:
+    """numba's types of :func:`advance`'s arguments, in order."""
+    from numba import types as T_
+
+    f8, i8 = T_.float64, T_.int64
+    v, m, m3, iv = f8[::1], f8[:, ::1], f8[:, :, ::1], i8[::1]
+    return (i8, i8, i8, v, v, iv, iv, T_.boolean[::1], m, iv, iv, iv, m, m, iv, m, i8, v, iv,
+            m, v, v, v, v, v, iv, v, v, m, m3, m, m, m3, i8[:, ::1])
 
 
 def loop_workspace(N: int, E: int, watched: int, cap: int):

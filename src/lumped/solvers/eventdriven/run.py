@@ -262,7 +262,8 @@ class Radau5Run(StepPass, StepChecks):
                 "prev_break": breaks[bi - 1] if bi > 0 else math.nan, "bi": bi,
                 "breaks": breaks, "kinks": self.kinks, "rtol": self.rtol,
                 "atol": self.atol, "m_min": self.m_min,
-                "max_steps": self.budget.compiled_cap(self.stats), "group": self.lock_group()}
+                "max_steps": self.budget.compiled_cap(self.stats), "group": self.lock_group(),
+                "flat": self.flat_table()}
 
     def bridge_over(self) -> bool:
         """Backward Euler over the stop (``status``, ``message``) from the last accepted

@@ -189,9 +189,17 @@ class StepPass:
         moving supports (:class:`~lumped.solvers.radau.flat_start.FlatEnds`: once per state)."""
         if self.frame is not None:
             return []
+        return self._flat_reader()(self.modes, self.F)
+
+    def flat_table(self):
+        """The held branches' flat ends for the compiled loop
+        (:meth:`~lumped.solvers.radau.flat_start.FlatEnds.table`)."""
+        return self._flat_reader().table(self.modes)
+
+    def _flat_reader(self) -> FlatEnds:
         if getattr(self, "_flat", None) is None:
             self._flat = FlatEnds(self.lbs)
-        return self._flat(self.scene, self.modes, self.x, self.v, self.F)
+        return self._flat
 
     def stage_guess(self, h: float, damped: bool = False) -> list[float]:
         """The stage guess of a step of size ``h``: ``(v_n, F_n)`` at every stage, or,

@@ -31,11 +31,14 @@ Newton's ``dR/dF = 0`` again, and every step failed down to the floor (issue 29)
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
+
+import numpy as np
 
 from .tableau import C
 
-__all__ = ["AT_END", "FlatEnds", "at_flat_end", "flat_start"]
+__all__ = ["AT_END", "FlatEnds", "at_flat_end", "flat_base", "flat_start"]
 
 #: A force is at its branch's flat end when its base ``|s F + d|`` is within this
 #: fraction of ``max(|s F|, |d|)`` (a few thousand ulps: the end located to round-off by
@@ -43,52 +46,83 @@ __all__ = ["AT_END", "FlatEnds", "at_flat_end", "flat_start"]
 AT_END = 1e-12
 
 
-def at_flat_end(starts: Sequence[Callable | None], q_n: Sequence[float],
-                F_n: Sequence[float]) -> list[int]:
-    """The elements whose held branch is flat at its end (``starts[e]``, the branch's
+#: The force at which :func:`flat_base` reads a base's slope: ``s X + d`` rounds to
+#: ``s X`` exactly (a power of two: ``s X`` is exact) for any shift ``|d| < 2^147``.
+_FAR = 2.0 ** 200
+
+
+def flat_base(start: Callable | None) -> tuple[float, float] | None:
+    """``(s, d)`` of a flat start's base ``s F + d`` (affine in ``F``, no ``q``:
+    :func:`~lumped.codegen.stage_forms.flat_inverse`), read off the start itself: ``d`` at
+    ``F = 0`` and ``s`` at ``F = 2^200``, both exact; ``None`` for ``None``."""
+    if start is None:
+        return None
+    return start(0.0, _FAR)[0] / _FAR, start(0.0, 0.0)[0]
+
+
+def at_flat_end(bases: Sequence[tuple[float, float] | None], F_n: Sequence[float]
+                ) -> list[int]:
+    """The elements whose held branch is flat at its end (``bases[e]``, the
+    :func:`flat_base` of the branch's
     :meth:`~lumped.codegen.branches.LawBranches.flat_start_for`, not ``None``) and whose
-    force ``F_n[e]`` is at that end."""
+    force ``F_n[e]`` is at that end: ``|s F + d| <= AT_END max(|s F|, |d|)``. The compiled
+    loop (:func:`lumped.solvers.eventdriven.loop_jit.advance`) makes the same test on the
+    same numbers (:meth:`FlatEnds.table`) before each step, and leaves such a step to
+    this loop."""
     out = []
-    for e, start in enumerate(starts):
-        if start is None:
+    for e, sd in enumerate(bases):
+        if sd is None:
             continue
-        base = start(q_n[e], F_n[e])[0]
-        b0 = start(q_n[e], 0.0)[0]  # d, the base at F = 0
-        if abs(base) <= AT_END * max(abs(base - b0), abs(b0)):
+        sF = sd[0] * F_n[e]
+        if abs(sF + sd[1]) <= AT_END * max(abs(sF), abs(sd[1])):
             out.append(e)
     return out
 
 
 class FlatEnds:
     """:func:`at_flat_end` of a run's held modes and state, once per state: the held
-    branches' flat starts (:attr:`starts`, ``flat_start_for``) are read once per modes,
-    the elements at their ends once per ``(x, v, F)``, of which they are a function (no
-    moving supports: ``q`` is ``x`` and ``v``'s), however often the loop asks at one
+    branches' flat starts (:attr:`starts`, ``flat_start_for``) and their bases
+    (:attr:`bases`, :func:`flat_base`) are read once per modes, the elements at their ends
+    once per ``F``, of which they are a function, however often the loop asks at one
     state (the run loop, the step, the stage guess)."""
 
     def __init__(self, lbs: Sequence) -> None:
         self.lbs = lbs
         self.modes: tuple[int, ...] | None = None
         self.starts: list[Callable | None] = []
+        self.bases: list[tuple[float, float] | None] = []
+        self._table: np.ndarray | None = None
         self._any = False
-        self._state: list[list[float]] | None = None
+        self._state: list[float] | None = None
         self._ends: list[int] = []
 
-    def __call__(self, scene, modes: Sequence[int], x: list[float], v: list[float],
-                 F: list[float]) -> list[int]:
-        """The elements at their flat ends in the state ``(x, v, F)`` of ``scene``."""
+    def _read(self, modes: Sequence[int]) -> None:
         key = tuple(modes)
         if key != self.modes:
-            self.modes, self._state = key, None
+            self.modes, self._state, self._table = key, None, None
             self.starts = [getattr(lb, "flat_start_for", lambda i: None)(i)
                            for lb, i in zip(self.lbs, key, strict=True)]
+            self.bases = [flat_base(start) for start in self.starts]
             self._any = any(self.starts)
+
+    def __call__(self, modes: Sequence[int], F: list[float]) -> list[int]:
+        """The elements at their flat ends with the forces ``F`` on ``modes``."""
+        self._read(modes)
         if not self._any:
             return []
-        if self._state != [x, v, F]:
-            self._state = [list(x), list(v), list(F)]
-            self._ends = at_flat_end(self.starts, scene.elongations(x, v), F)
+        if self._state != F:
+            self._state = list(F)
+            self._ends = at_flat_end(self.bases, F)
         return list(self._ends)
+
+    def table(self, modes: Sequence[int]) -> np.ndarray:
+        """:attr:`bases` of ``modes`` as an ``(E, 2)`` array, ``nan`` where a branch has
+        no flat end: the compiled loop's copy of :func:`at_flat_end`'s numbers."""
+        self._read(modes)
+        if self._table is None:
+            self._table = np.array([sd if sd is not None else (math.nan, math.nan)
+                                    for sd in self.bases], dtype=float).reshape(-1, 2)
+        return self._table
 
 
 def flat_start(system, U: list[float], h: float, x_n: list[float], v_n: list[float],
