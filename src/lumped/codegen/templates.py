@@ -131,6 +131,8 @@ class LawTemplate:
     functions: tuple[tuple[str, str, int], ...]
     values: tuple[float, ...]
     branches: int
+    #: the most guards of one branch (the compiled loops have room for :data:`GUARD_ROOM`)
+    guards: int = 0
 
     def offset(self, stem: str) -> int:
         """Where function ``stem``'s values start in :attr:`values`."""
@@ -155,6 +157,13 @@ class LawTemplate:
         """The definitions of law ``j``'s functions."""
         return [text.replace("@J@", str(j)) for _, text, _ in self.functions]
 
+
+#: The most guards one branch of a law may have in the compiled loops: the room their
+#: work arrays keep for a branch's guard values (:func:`lumped.solvers.eventdriven.
+#: loop_jit.loop_workspace`, :func:`lumped.solvers.modes.mode_guess_jit.probe_workspace`).
+#: A scene with a law that has more runs in Python
+#: (:func:`lumped.solvers.eventdriven.fast_parts.loop_parts`): numba checks no bounds.
+GUARD_ROOM = 64
 
 _TEMPLATES: dict[tuple, LawTemplate] = {}
 #: :func:`law_template` per bound law's content (:func:`lumped.codegen.scene_key.law_key`).
@@ -203,7 +212,8 @@ def template_from_scratch(bound, lb=None) -> LawTemplate:
         text, vals = lift_function(src, name)
         functions.append((stem, text, len(vals)))
         values += vals
-    hit = _TEMPLATES[key] = LawTemplate(tuple(functions), tuple(values), len(branches))
+    hit = _TEMPLATES[key] = LawTemplate(tuple(functions), tuple(values), len(branches),
+                                        max((len(codes) for _, codes in branches), default=0))
     return hit
 
 

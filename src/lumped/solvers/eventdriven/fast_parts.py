@@ -16,6 +16,7 @@ import numpy as np
 from ...codegen.dispatch import active_branch_address, dispatch_addresses, dispatch_scene
 from ...codegen.function_types import branch_type, guards_type, law_type
 from ...codegen.jit import numba_enabled
+from ...codegen.templates import GUARD_ROOM, law_template
 from ...scene import Scene
 
 __all__ = ["Pointer", "branch_pointer", "dispatch_pointers", "loaded", "locks_in_parallel",
@@ -72,6 +73,13 @@ def loop_parts(scene: Scene, plan) -> tuple | str:
         js = dispatch_scene(scene, structure)
     except ValueError as err:  # a hand-written kernel: no generated code
         return f"python: {err}"
+    most = structure.get("guards")
+    if most is None:
+        most = structure["guards"] = max((law_template(el.law).guards
+                                          for el in scene.elements), default=0)
+    if most > GUARD_ROOM:
+        return (f"python: a law with {most} guards on one branch (the compiled loop has "
+                f"room for {GUARD_ROOM})")
     checked = structure.get("checked_array")
     if checked is None:
         checked = structure["checked_array"] = np.array(plan.checked, dtype=np.int64)

@@ -55,6 +55,7 @@ import numpy as np
 
 from ...codegen.function_types import function_at, guards_type, scalar_loops
 from ...codegen.jit import njit, numba_enabled
+from ...codegen.templates import GUARD_ROOM
 from ..modes.crossing_root import first_root
 from ..modes.on_demand import compiled_once
 from ..radau import stage_jit, step_jit
@@ -410,7 +411,8 @@ def advance_argument_types() -> tuple:
 
 def loop_workspace(N: int, E: int, watched: int, cap: int):
     """``(outputs, ws, wm, iw)``: the output arrays ``(T0, HS, Y0, D, ROWS)`` for ``cap``
-    steps and the work arrays of :func:`advance`."""
+    steps and the work arrays of :func:`advance` (``ws[8]`` holds a branch's guards: room
+    for :data:`~lumped.codegen.templates.GUARD_ROOM`)."""
     ny = 2 * N + E
     s = 3 * (N + E)
     outputs = (np.zeros(cap), np.zeros(cap), np.zeros((cap, ny)), np.zeros((cap, 3, ny)),
@@ -419,4 +421,4 @@ def loop_workspace(N: int, E: int, watched: int, cap: int):
     iw = np.zeros((3, max(big, CROSSED_AT + 1)), dtype=np.int64)
     iw[1, STAGE_AT] = stage_jit.stage_address()
     iw[1, ERROR_AT], iw[1, CROSSED_AT] = step_jit.error_address(), step_jit.crossed_address()
-    return outputs, np.zeros((10, max(big, 64))), np.zeros((7, big, big)), iw
+    return outputs, np.zeros((10, max(big, GUARD_ROOM))), np.zeros((7, big, big)), iw

@@ -19,6 +19,7 @@ import numpy as np
 
 from ...codegen.function_types import branch_type, function_at, guards_type, law_type
 from ...codegen.jit import njit, numba_enabled
+from ...codegen.templates import GUARD_ROOM
 from .mode_guess import REFUSED, UNDECIDED
 from .on_demand import compiled_once
 
@@ -205,6 +206,7 @@ def _signature():
 
 def probe_workspace(N: int, E: int) -> tuple[np.ndarray, np.ndarray]:
     """``(out, wm)`` of :func:`probe_modes` for ``N`` nodes and ``E`` elements (the last
-    row of ``wm`` holds a branch's guards: room for 64, as the compiled loop's)."""
+    row of ``wm`` holds a branch's guards: room for
+    :data:`~lumped.codegen.templates.GUARD_ROOM`, as the compiled loop's)."""
     n = N + E
-    return np.zeros(n), np.zeros((n + 4, max(n, 64)))
+    return np.zeros(n), np.zeros((n + 4, max(n, GUARD_ROOM)))
