@@ -25,8 +25,8 @@ from lumped.codegen.jit import njit, numba_enabled
 from lumped.io import Table
 from lumped.laws import ElementLaw
 from lumped.scene.forcing import SineBurst
+from lumped.solvers.eventdriven import attempt_root_jit, loop_jit
 from lumped.solvers.eventdriven import fast as fast_mod
-from lumped.solvers.eventdriven import loop_jit
 from lumped.solvers.modes import mode_guess_jit, on_demand, stuck_jit
 
 pytestmark = pytest.mark.skipif(not numba_enabled(), reason="the compiled loop needs numba")
@@ -59,12 +59,12 @@ def _fresh_helpers(monkeypatch, cache_dir) -> None:
     from numba.core import config
 
     for mod, name in ((stuck_jit, "_COMPILED"), (stuck_jit, "_SCAN"),
-                      (mode_guess_jit, "_COMPILED"), (loop_jit, "_ROOT")):
+                      (mode_guess_jit, "_COMPILED"), (attempt_root_jit, "_ROOT")):
         monkeypatch.setattr(mod, name, [], raising=False)
     for name, make in (("_SCAN", "compiled_breakout_scan"), ("_ROOT", "compiled_breakout_root"),
                        ("_PROBE", "compiled_probe_modes"),
                        ("_ATTEMPT_ROOT", "compiled_attempt_root")):
-        owner = loop_jit if name == "_ATTEMPT_ROOT" else (
+        owner = attempt_root_jit if name == "_ATTEMPT_ROOT" else (
             mode_guess_jit if name == "_PROBE" else stuck_jit)
         monkeypatch.setattr(fast_mod, name, on_demand.OnDemand(getattr(owner, make)),
                             raising=False)

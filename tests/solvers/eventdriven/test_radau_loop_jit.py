@@ -20,7 +20,7 @@ from lumped.codegen.jit import numba_enabled
 from lumped.laws import ElementLaw
 from lumped.scenarios import scenario_scene
 from lumped.scene.forcing import SineBurst
-from lumped.solvers.eventdriven import mode_state, step
+from lumped.solvers.eventdriven import creep, mode_state
 from lumped.solvers.eventdriven.at_rest import REST_LOOP
 
 pytestmark = pytest.mark.skipif(not numba_enabled(), reason="the compiled loop needs numba")
@@ -122,11 +122,11 @@ def test_the_old_impact_rule_on_the_loaded_chain_is_the_python_loop_one(monkeypa
 
 def test_a_run_that_creeps_stops_in_the_compiled_loop_as_in_the_python_loop(monkeypatch):
     """The creep test of the Python loop's accepted steps (20 in a row below the creep
-    floor, :mod:`lumped.solvers.eventdriven.step`) is the compiled loop's too: with the
+    floor, :mod:`lumped.solvers.eventdriven.creep`) is the compiled loop's too: with the
     floor raised to 0.9 % of the run, the released mass's steps creep from the start;
     both loops stop at the 20th step, are bridged 7 times and give the same run, bit for
     bit. (The compiled loop had no creep test: it went on to ``t_end`` with no bridge.)"""
-    monkeypatch.setattr(step, "_CREEP_FRACTION", 9e-3)
+    monkeypatch.setattr(creep, "_CREEP_FRACTION", 9e-3)
     kw = dict(method="radau5", t_end=0.5, rtol=1e-8, atol=1e-11)
     ref = simulate(scenario_scene("release-0.5"), compiled=False, **kw)
     fast = simulate(scenario_scene("release-0.5"), compiled=True, **kw)

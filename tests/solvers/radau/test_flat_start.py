@@ -85,7 +85,7 @@ def test_the_flat_ends_are_read_once_per_state():
     assert run.flat_ends() == [] and len(reads) == 2
     run.modes = [fwd]  # (the same modes, made anew)
     assert run.flat_ends() == [] and len(reads) == 2
-    assert run.flat_table().tolist() == [[1.0, -tau]] and len(reads) == 2
+    assert run.flat_reader().table(run.modes).tolist() == [[1.0, -tau]] and len(reads) == 2
 
 
 def _flat_dashpot_on_a_mass_among_locks() -> Scene:

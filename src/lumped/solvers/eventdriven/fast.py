@@ -28,8 +28,10 @@ from ..radau.forces_jit import table_forcing
 from ..radau.stage_jit import roundoff_test, with_impact_sign
 from ..radau.step_jit import fold_test
 from . import loop_jit as L
+from .attempt_root_jit import compiled_attempt_root
+from .creep import creep_floor
 from .fast_parts import dispatch_pointers, loaded, loop_parts
-from .step import NOT_SOUGHT, creep_floor
+from .step import NOT_SOUGHT
 
 __all__ = ["CompiledLoop", "compiled_loop", "compiled_stage_solver"]
 
@@ -325,7 +327,7 @@ _NO_MODE = np.zeros(0, dtype=np.int64)
 _SCAN = OnDemand(compiled_breakout_scan)
 _ROOT = OnDemand(compiled_breakout_root)
 _PROBE = OnDemand(compiled_probe_modes)
-_ATTEMPT_ROOT = OnDemand(L.compiled_attempt_root)
+_ATTEMPT_ROOT = OnDemand(compiled_attempt_root)
 _BUTCHER: list = []
 
 

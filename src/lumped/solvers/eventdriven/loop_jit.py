@@ -36,7 +36,8 @@ guess starts on the branch there, :mod:`lumped.solvers.radau.flat_start`). With
 ``ist[SINGLE] = 1`` it makes one attempt of size ``h`` for the Python loop and returns
 (:data:`ATTEMPT`) its outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular),
 ``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]`` and the stage values in ``ws[0]``; the
-crossing's root is :func:`attempt_root`'s, compiled apart (only when needed).
+crossing's root is :func:`lumped.solvers.eventdriven.attempt_root_jit.attempt_root`'s,
+compiled apart (only when needed).
 
 State in and out: ``x, v, F, dF``, ``fst`` (floats, ``T .. CREEP_FLOOR``) and ``ist``
 (ints, ``HAVE_ACC .. CREEPING``). The forcing is ``(fkind, fpar, table)`` of
@@ -53,18 +54,16 @@ import math
 
 import numpy as np
 
-from ...codegen.function_types import function_at, guards_type, scalar_loops
+from ...codegen.function_types import function_at, scalar_loops
 from ...codegen.jit import njit, numba_enabled
 from ...codegen.templates import GUARD_ROOM
-from ..modes.crossing_root import first_root
-from ..modes.on_demand import compiled_once
 from ..radau import stage_jit, step_jit
 from ..radau.flat_start import AT_END
 from ..radau.forces_jit import forces
 from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.step_jit import FOLDED_TYPE, finite, start_time
 from ..radau.tableau import END_SLOPES, C
-from .step import CREEP_STEPS
+from .creep import CREEP_STEPS
 
 __all__ = ["advance", "advance_argument_types", "compiled_advance", "loop_workspace", "STOP",
            "CROSSING", "SINGULAR", "FLOOR", "FULL", "LIMIT", "ATTEMPT", "FOLD", "DAMPED", "CREEP",
@@ -344,45 +343,12 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
     ist[REASON] = reason
 
 
-def attempt_root(guards_addr, lawc, ea, eb, spring, modes, watched, A, x, v, F, fst, ist, ws,
-                 wm) -> None:
-    """After an attempt (``ist[SINGLE] = 1``, solved, ``ist[A_OK] = 1``): the first
-    crossing's root on the attempt's step into ``fst[A_ROOT]`` (``-1.0`` if none), on guard
-    ``ist[A_J]`` of watched element ``ist[A_W]``, and ``ist[A_HIT]``
-    (:func:`lumped.solvers.modes.crossing_root.first_root`, the Python loop's algorithm).
-    Apart from :func:`advance` (:func:`compiled_attempt_root`): compiled only when a
-    process lands often, the Python loop's own crossing test before."""
-    N = x.shape[0]
-    n = N + ea.shape[0]
-    nw = max(watched.shape[0], 1)
-    fst[A_ROOT] = first_root(_guards_at(guards_addr), lawc, ea, eb, spring, modes, watched, A,
-                             fst[H], x, v, F, ws[0, :3 * n], N, n, wm[5, :nw, :4],
-                             wm[6, :nw, :4], ws[8], ist[A_W:A_J + 1])
-    ist[A_HIT] = fst[A_ROOT] >= 0.0
-
-
 if numba_enabled():
-    _guards_at, _folded_at = function_at(guards_type()), function_at(FOLDED_TYPE)
+    _folded_at = function_at(FOLDED_TYPE)
     _stage_at = function_at(stage_jit.STAGE_TYPE)
     _error_at, _crossed_at = function_at(step_jit.ERROR_TYPE), function_at(step_jit.CROSSED_TYPE)
 
 _COMPILED: list = []
-_ROOT: list = []
-
-
-def compiled_attempt_root(compile: bool = True):
-    """:func:`attempt_root` compiled once for every scene (numba's disk cache after the
-    first time on a machine), or ``None`` without numba; ``compile=False``: only if numba's
-    disk cache holds it (:func:`lumped.solvers.modes.on_demand.compiled_once`)."""
-    return compiled_once(_ROOT, attempt_root, _root_signature, compile)
-
-
-def _root_signature():
-    from numba import types as T_
-
-    f8, i8 = T_.float64, T_.int64
-    v, m, m3, iv = f8[::1], f8[:, ::1], f8[:, :, ::1], i8[::1]
-    return T_.none(i8, v, iv, iv, T_.boolean[::1], iv, iv, m, v, v, v, v, iv, m, m3)
 
 
 def compiled_advance():

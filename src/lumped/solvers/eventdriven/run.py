@@ -27,16 +27,16 @@ from . import fast as adaptive_fast
 from .bridge import MAX_BRIDGES, take_bridge
 from .budget import WorkBudget
 from .checks import StepChecks
+from .creep import creep_floor, creep_stop
 from .landing import Landing
 from .mode_state import ModeState
 from .setup import read_options, scene_plan, structure, time_events
-from .step import StepPass, creep_floor, creep_stop
+from .step import StepPass
 
 __all__ = ["Radau5Run", "DEFAULT_RTOL", "DEFAULT_ATOL"]
 
 DEFAULT_RTOL = 1e-6
 DEFAULT_ATOL = 1e-9
-_EPS = 2.220446049250313e-16
 #: Choices of the mode at (nearly) one time that keep it (a series of
 #: :meth:`~lumped.solvers.eventdriven.budget.WorkBudget.kept`) after which the run stops
 #: there (and is bridged): a stall. At most 1 in 6300 runs of random networks that did not
@@ -257,13 +257,12 @@ class Radau5Run(StepPass, StepChecks):
         return {"t": self.t, "h": self.h, "x": self.x, "v": self.v, "F": self.F,
                 "dF_n": self.dF_n, "F_seen": self.F_seen, "h_acc": self.h_acc,
                 "err_acc": self.err_acc, "h_good": self.h_good, "h_big": self.h_big,
-                "stalled": self.stalled, "creeping": self.creeping,
-                "t_stop": self.t_stop(), "t_final": self.t_final,
-                "prev_break": breaks[bi - 1] if bi > 0 else math.nan, "bi": bi,
-                "breaks": breaks, "kinks": self.kinks, "rtol": self.rtol,
+                "stalled": self.stalled, "creeping": self.creeping, "t_stop": self.t_stop(),
+                "t_final": self.t_final, "prev_break": breaks[bi - 1] if bi > 0 else math.nan,
+                "bi": bi, "breaks": breaks, "kinks": self.kinks, "rtol": self.rtol,
                 "atol": self.atol, "m_min": self.m_min,
                 "max_steps": self.budget.compiled_cap(self.stats), "group": self.lock_group(),
-                "flat": self.flat_table()}
+                "flat": self.flat_reader().table(self.modes)}
 
     def bridge_over(self) -> bool:
         """Backward Euler over the stop (``status``, ``message``) from the last accepted

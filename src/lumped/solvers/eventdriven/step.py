@@ -23,22 +23,17 @@ from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.tableau import A as _A
 from ..radau.tableau import C
 from ..status import Status
+from .creep import CREEP_STEPS, creep_floor, creep_stop
 from .landing import Landing
 from .setup import step_floor
 
-__all__ = ["CREEP_STEPS", "NOT_SOUGHT", "StepPass", "creep_floor", "creep_stop"]
+__all__ = ["NOT_SOUGHT", "StepPass"]
 
 _EPS = 2.220446049250313e-16
-#: Accepted steps in a row below the step floor after which a run that creeps (landing on a
-#: guard again and again, ``t`` moving by ulps) stops (and is bridged). At most 1 in a row
-#: in 5400 runs of random networks that did not creep (1800 draws, 3 levels); 200 before.
-CREEP_STEPS = 20
-#: ... steps shorter than the step floor or than this fraction of the run.
-_CREEP_FRACTION = 1e-12
 #: Cuts of one step at kinks of the force split (:mod:`~lumped.solvers.modes.split_kink`).
 _KINK_CUTS = 8
 #: A compiled attempt's crossing when its root was not sought (its compiled root finder,
-#: :func:`lumped.solvers.eventdriven.loop_jit.attempt_root`, is not compiled yet): the
+#: :func:`lumped.solvers.eventdriven.attempt_root_jit.attempt_root`, is not compiled yet): the
 #: Python test runs, the same algorithm.
 NOT_SOUGHT = "not sought"
 
@@ -52,6 +47,8 @@ class StepPass:
     ``floor_tried``, ``tangent``, the counters ``stalled``, ``creeping``, ``kink_cuts``
     and ``stats``, and ``status``/``message`` on a stop; its output ``dense`` and ``rows``.
     """
+
+    _flat: FlatEnds | None = None
 
     def _step(self) -> None:
         """One pass of the Python loop: a step from ``t`` solved, checked and accepted,
@@ -187,18 +184,12 @@ class StepPass:
     def flat_ends(self) -> list[int]:
         """The elements held on a branch flat at its end and starting there, none with
         moving supports (:class:`~lumped.solvers.radau.flat_start.FlatEnds`: once per state)."""
-        if self.frame is not None:
-            return []
-        return self._flat_reader()(self.modes, self.F)
+        return [] if self.frame is not None else self.flat_reader()(self.modes, self.F)
 
-    def flat_table(self):
-        """The held branches' flat ends for the compiled loop
-        (:meth:`~lumped.solvers.radau.flat_start.FlatEnds.table`)."""
-        return self._flat_reader().table(self.modes)
-
-    def _flat_reader(self) -> FlatEnds:
-        if getattr(self, "_flat", None) is None:
-            self._flat = FlatEnds(self.lbs)
+    def flat_reader(self) -> FlatEnds:
+        """The run's :class:`~lumped.solvers.radau.flat_start.FlatEnds` (made when first
+        asked; its ``table`` is the compiled loop's copy)."""
+        self._flat = self._flat or FlatEnds(self.lbs)
         return self._flat
 
     def stage_guess(self, h: float, damped: bool = False) -> list[float]:
@@ -386,23 +377,3 @@ class StepPass:
             self.dF_n, self.h_acc, old = None, None, list(self.modes)
             self.stop(self.at_event(t, self.h, "guard"))
             self.kept = self.modes == old or ms.returned  # (as for an event at t itself)
-
-
-def creep_floor(t: float, t_final: float) -> float:
-    """The creep floor of a step from ``t`` in a run to ``t_final``: the step floor
-    (:func:`~lumped.solvers.eventdriven.setup.step_floor`), or :data:`_CREEP_FRACTION` of
-    the run if more. ``creep_floor(0.0, t_final)`` is its part that does not depend on
-    ``t`` (the step floor grows with ``|t|``), which the compiled loop takes
-    (:mod:`lumped.solvers.eventdriven.loop_jit`, ``fst[CREEP_FLOOR]``)."""
-    return max(step_floor(t, t_final), _CREEP_FRACTION * t_final)
-
-
-def creep_stop(t: float, creeping: int, floor: float, el) -> tuple[Status, str]:
-    """The stop of a run that creeps: ``creeping`` accepted steps in a row, the last
-    ending at ``t``, below the creep ``floor``; ``el`` the element whose guard the steps
-    landed on (``None``: not landings)."""
-    return Status.STEP_TOO_SMALL, (
-        f"radau5 stopped at t = {t!r}: {creeping} accepted steps in a row below "
-        f"the creep floor {floor!r} (the run creeps"
-        + (f", landing again and again on a guard of element {el.name!r} (law "
-           f"{el.law_name!r})" if el is not None else "") + ")")
