@@ -10,7 +10,7 @@ and their functions' texts written when first read (:class:`ReboundBranches`).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import fields
+from dataclasses import fields, replace
 from typing import TYPE_CHECKING
 
 import sympy as sp
@@ -57,8 +57,7 @@ class Rebound:
     def template(self):
         """The law's :class:`~lumped.codegen.templates.LawTemplate`."""
         t = self.cls._d.template  # (its class's, with this law's values)
-        return type(t)(t.functions, slots(self.cls._d.template_recipes, self.values),
-                       t.branches)
+        return replace(t, values=slots(self.cls._d.template_recipes, self.values))
 
 
 class ReboundBranches(LawBranches):
