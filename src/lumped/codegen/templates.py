@@ -158,11 +158,12 @@ class LawTemplate:
         return [text.replace("@J@", str(j)) for _, text, _ in self.functions]
 
 
-#: The most guards one branch of a law may have in the compiled loops: the room their
-#: work arrays keep for a branch's guard values (:func:`lumped.solvers.eventdriven.
-#: loop_jit.loop_workspace`, :func:`lumped.solvers.modes.mode_guess_jit.probe_workspace`).
-#: A scene with a law that has more runs in Python
-#: (:func:`lumped.solvers.eventdriven.fast_parts.loop_parts`): numba checks no bounds.
+#: The most guards one branch of a law may have in the compiled loops, the room their
+#: work arrays keep for a branch's guard values
+#: (:func:`~lumped.solvers.eventdriven.loop_jit.loop_workspace`,
+#: :func:`~lumped.solvers.modes.mode_guess_jit.probe_workspace`); a scene with a law that
+#: has more runs in Python (:func:`~lumped.solvers.eventdriven.fast_parts.loop_parts`), as
+#: numba checks no bounds.
 GUARD_ROOM = 64
 
 _TEMPLATES: dict[tuple, LawTemplate] = {}
