@@ -210,18 +210,21 @@ _ONLY_HERE = ElementLaw("only_in_the_compile_test", "spring", "F = k*q + c*q**3"
 
 def test_by_default_a_new_structure_compiles_once_then_every_run_is_compiled(
         monkeypatch, tmp_path):
-    """``compiled=None``: a structure with no compiled modules yet (its laws' templates'
-    modules: none loaded, an empty disk cache) starts in the Python loop and switches to
-    the compiled loop after ``COMPILE_AFTER`` steps, seamlessly (the same run as the
-    Python loop's); a short run stays in Python; then every run of that structure, with
-    any numbers, starts compiled, and new numbers build no module."""
+    """``compiled=None``, the shared loop compiled: a structure with no compiled modules
+    yet (its laws' templates' modules: none loaded, an empty disk cache) starts in the
+    Python loop and switches to the compiled loop after ``COMPILE_AFTER`` steps,
+    seamlessly (the same run as the Python loop's); a short run stays in Python; then
+    every run of that structure, with any numbers, starts compiled, and new numbers build
+    no module."""
     from lumped.codegen import module_cache
     from lumped.codegen.template_module import template_module
     from lumped.codegen.templates import law_template
-    from lumped.solvers.eventdriven import fast as adaptive_fast
+    from lumped.solvers.eventdriven import compile_when
+    from lumped.solvers.eventdriven.loop_jit import compiled_advance
 
+    compiled_advance()  # (the shared loop: compiled in this process, or loaded)
     COMPILE_AFTER = 200  # a shorter run than the default's
-    monkeypatch.setattr(adaptive_fast, "COMPILE_AFTER", COMPILE_AFTER)
+    monkeypatch.setattr(compile_when, "COMPILE_AFTER", COMPILE_AFTER)
     monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path))
 
     def scene(k, c, gamma, tau):

@@ -29,8 +29,9 @@ from ..radau.stage_jit import roundoff_test, with_impact_sign
 from ..radau.step_jit import fold_test
 from . import loop_jit as L
 from .attempt_root_jit import compiled_attempt_root
+from .compile_when import waiting
 from .creep import creep_floor
-from .fast_parts import dispatch_pointers, loaded, loop_parts
+from .fast_parts import dispatch_pointers, loop_parts
 from .step import NOT_SOUGHT
 
 __all__ = ["CompiledLoop", "compiled_loop", "compiled_stage_solver"]
@@ -39,17 +40,6 @@ __all__ = ["CompiledLoop", "compiled_loop", "compiled_stage_solver"]
 BLOCK = 256
 
 
-#: With ``compiled=None``, a scene one of whose law templates has no compiled module yet
-#: (none loaded in this process, none in the disk cache: the laws' numbers are run-time
-#: data, and the loop's kernels are shared by every structure,
-#: :mod:`lumped.codegen.dispatch`, so any earlier run of the same laws, on any topology
-#: and with any numbers, built them) starts in the Python loop and is compiled once a run
-#: has taken this many steps (about 0.25 s of Python steps, the order of what compiling a
-#: new template's module costs, about 0.5-0.8 s of CPU): a short run never pays for a
-#: compile, a long one soon does; once its templates are compiled, a scene runs compiled
-#: from step 0 on every later run, whatever its topology. The two loops give the same
-#: numbers.
-COMPILE_AFTER = 2000
 
 
 def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
@@ -58,9 +48,10 @@ def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
 
     ``plan`` is the scene's :class:`~lumped.solvers.eventdriven.setup.ScenePlan` (the
     compiled parts are kept on it); ``option`` is the ``compiled`` keyword: ``False``
-    asks for the Python loop, ``True`` for the compiled loop now, ``None`` for it now if
-    the modules of the scene's law templates are compiled (in this process or the disk
-    cache), else once the run has taken :data:`COMPILE_AFTER` ``steps``. A scene with moving
+    asks for the Python loop, ``True`` for the compiled loop now, ``None`` for it when a
+    run that has taken ``steps`` steps should build it
+    (:func:`~lumped.solvers.eventdriven.compile_when.waiting`: at once if it is
+    compiled on this machine, else after some Python steps). A scene with moving
     supports (a :class:`~lumped.scene.supports.SupportFrame`'s view) has none: the
     compiled loop has no support offsets."""
     if option is False:
@@ -69,8 +60,9 @@ def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
         return None, "python: moving supports (no compiled loop)"
     with plan.lock:
         if plan.fast is None:
-            if option is None and steps < COMPILE_AFTER and not loaded(scene, plan):
-                return None, "python: not compiled yet (a short run)"
+            why = None if option is not None else waiting(scene, plan, steps)
+            if why is not None:
+                return None, why
             plan.fast = loop_parts(scene, plan)
     if isinstance(plan.fast, str):
         return None, plan.fast

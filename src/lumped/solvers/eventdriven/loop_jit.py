@@ -57,6 +57,7 @@ import numpy as np
 from ...codegen.function_types import function_at, scalar_loops
 from ...codegen.jit import njit, numba_enabled
 from ...codegen.templates import GUARD_ROOM
+from ..modes.on_demand import compiled_once
 from ..radau import stage_jit, step_jit
 from ..radau.flat_start import AT_END
 from ..radau.forces_jit import forces
@@ -349,20 +350,29 @@ if numba_enabled():
     _error_at, _crossed_at = function_at(step_jit.ERROR_TYPE), function_at(step_jit.CROSSED_TYPE)
 
 _COMPILED: list = []
+_LOOKED: list = []  # (numba's disk cache looked at for it: compiled_advance)
 
 
-def compiled_advance():
+def compiled_advance(compile: bool = True):
     """:func:`advance` compiled once for every scene (numba's disk cache after the first
-    time on a machine), or ``None`` without numba."""
+    time on a machine), or ``None`` without numba. With ``compile=False`` only loaded
+    from numba's disk cache (looked at once a process; ``None`` if it is not there)."""
     if not numba_enabled():
         return None
     if not _COMPILED:
-        from numba import types as T_
-
-        sig = T_.none(*advance_argument_types())
+        if not compile:
+            looked, _LOOKED[:] = bool(_LOOKED), [True]
+            return None if looked else compiled_once(_COMPILED, advance, _signature, False,
+                                                     no_cfunc_wrapper=True)
         with scalar_loops():
-            _COMPILED.append(njit(sig, cache=True, no_cfunc_wrapper=True)(advance))
+            _COMPILED.append(njit(_signature(), cache=True, no_cfunc_wrapper=True)(advance))
     return _COMPILED[0]
+
+
+def _signature():
+    from numba import types as T_
+
+    return T_.none(*advance_argument_types())
 
 
 def advance_argument_types() -> tuple:

@@ -23,6 +23,7 @@ from ..radau.rows import Rows, output_data, row_of
 from ..radau.stage import StageSystem
 from ..radau.tableau import C
 from ..status import BranchError, RawRun, SolverError, Status
+from . import compile_when
 from . import fast as adaptive_fast
 from .bridge import MAX_BRIDGES, take_bridge
 from .budget import WorkBudget
@@ -105,7 +106,6 @@ class Radau5Run(StepPass, StepChecks):
         self.status, self.message = Status.SUCCESS, ""
         self.budget = WorkBudget(opts["max_steps"], t_final)  # (lumped.solvers.eventdriven.budget)
         self.fast, stats["loop"] = adaptive_fast.compiled_loop(scene, plan, opts["compiled"])
-
         self.ms = ms = ModeState(scene, plan, settings, opts, rtol, atol, stats, zeno_window)
         ms.fast = self.fast
         # (the mode's lists, changed in place by ``ms``)
@@ -319,8 +319,8 @@ class Radau5Run(StepPass, StepChecks):
                 if self._hold():
                     continue
             stats = self.stats
-            if self.fast is None and stats["steps"] >= adaptive_fast.COMPILE_AFTER and \
-                    stats["loop"].startswith("python: not compiled yet"):
+            if self.fast is None and stats["loop"].startswith(compile_when.WAITING) and \
+                    compile_when.due(stats["steps"]):
                 # a long run: compile the scene's loop now
                 self.fast, stats["loop"] = adaptive_fast.compiled_loop(
                     self.scene, self.plan, None, stats["steps"])

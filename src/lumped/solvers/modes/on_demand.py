@@ -30,31 +30,33 @@ __all__ = ["AFTER", "OnDemand", "compile_all", "compiled_once"]
 AFTER = 1000
 
 
-def compiled_once(store: list, py_func: Callable, signature: Callable, compile: bool = True):
+def compiled_once(store: list, py_func: Callable, signature: Callable, compile: bool = True,
+                  **options):
     """``py_func`` compiled for the numba signature ``signature()`` once per process (kept
     in ``store``; numba's disk cache after the first time on a machine), or ``None``
     without numba. With ``compile=False`` it is only loaded from numba's disk cache: the
-    dispatcher if the cache holds it (nothing compiled), else ``None`` (nothing kept)."""
+    dispatcher if the cache holds it (nothing compiled), else ``None`` (nothing kept).
+    ``options``: more of numba's ``jit`` options (``no_cfunc_wrapper``)."""
     if not numba_enabled():
         return None
     if not store:
         if compile:
-            store.append(njit(signature(), cache=True)(py_func))
+            store.append(njit(signature(), cache=True, **options)(py_func))
         else:
-            got = _from_disk(py_func, signature())
+            got = _from_disk(py_func, signature(), **options)
             if got is None:
                 return None
             store.append(got)
     return store[0]
 
 
-def _from_disk(py_func: Callable, sig):
+def _from_disk(py_func: Callable, sig, **options):
     """A dispatcher of ``py_func`` with the overload for ``sig`` loaded from numba's disk
     cache, as :meth:`numba.core.dispatcher.Dispatcher.compile` loads it, or ``None`` when
     the cache does not hold it (then nothing is compiled). These are numba's internal
     calls: where a numba version lacks them, the answer is ``None`` (the reference runs,
     and the helper is compiled at :data:`AFTER` calls as where the cache is empty)."""
-    disp = njit(cache=True)(py_func)
+    disp = njit(cache=True, **options)(py_func)
     try:
         cres = disp._cache.load_overload(sig, disp.targetctx)
     except (AttributeError, TypeError):  # numba's internals changed: compile later
