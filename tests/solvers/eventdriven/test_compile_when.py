@@ -26,11 +26,11 @@ pytestmark = pytest.mark.skipif(not numba_enabled(), reason="numba is disabled")
 KW = dict(method="radau5", t_end=1.0, rtol=1e-9, atol=1e-12)
 
 
-def _scene() -> Scene:
+def _scene(k: float) -> Scene:
     """The paper's oscillator under F2 with numbers no other test runs (a plan of its own,
-    no compiled loop kept on it)."""
+    no compiled loop kept on it: each test here passes its own ``k``)."""
     return Scene([Mass("mass", m=1.0625)],
-                 [Element("s", get_law("linear_spring").bind(k=97.375), "ground", "mass"),
+                 [Element("s", get_law("linear_spring").bind(k=k), "ground", "mass"),
                   Element("d", get_law("bingham").bind(gamma=1.125, tau=0.9375), "ground",
                           "mass")],
                  forces={"mass": SineBurst(10.0, 5.0 * math.pi, 1.0)})
@@ -48,7 +48,7 @@ def fresh_machine(monkeypatch):
 
 
 def test_runs_wait_for_the_shared_loop_then_compile_it_once(fresh_machine):
-    scene = _scene()
+    scene = _scene(97.375)
     ref = simulate(scene, compiled=False, **KW)
     n = ref.stats["steps"]
     assert n > 300
@@ -71,7 +71,7 @@ def test_runs_wait_for_the_shared_loop_then_compile_it_once(fresh_machine):
 
 def test_a_run_of_its_own_compiles_after_shared_compile_after_steps(fresh_machine):
     """A long run on a fresh machine compiles mid-run (not after ``COMPILE_AFTER``)."""
-    scene = _scene()
+    scene = _scene(96.625)
     ref = simulate(scene, compiled=False, **KW)
     n = ref.stats["steps"]
     fresh_machine.setattr(compile_when, "SHARED_COMPILE_AFTER", n // 2)
