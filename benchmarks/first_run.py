@@ -19,7 +19,10 @@ Inside it, CPU times (:func:`time.process_time`, all threads of that process) of
 
 Cases: ``radau5`` at ``rtol`` 1e-7 (default ``atol``, default options: what ``auto``
 runs), ``radau5`` with ``compiled=True`` (the compiled loop from step 0, whatever the
-length of the run), and ``jit-bdf2`` at ``dt`` 1e-4; on the paper's scene (``forcing-F2``
+length of the run), ``jit-bdf2`` at ``dt`` 1e-4, and ``radau5`` at ``rtol`` 1e-11
+(``atol`` 1e-14, default options: a run of thousands of steps, past the 2000 after which
+a run of a structure whose law templates are new compiles them;
+:mod:`lumped.solvers.eventdriven.compile_when`); on the paper's scene (``forcing-F2``
 of :mod:`lumped.scenarios`: m = 1, k = 100, gamma = 1, tau = 1, F2 = 10 sin(5 pi t) on
 [0, 1]) and the 3-mass chain (:func:`lumped.bench.network_scenes.bingham_chain`), both
 on ``[0, 5]``. ``--quick``: the paper's scene, ``radau5`` (default options) and
@@ -57,6 +60,7 @@ CASES = {
     "radau5": ("radau5", {"rtol": RTOL}),
     "radau5 compiled=True": ("radau5", {"rtol": RTOL, "compiled": True}),
     "jit-bdf2": ("jit-bdf2", {"dt": DT}),
+    "radau5 rtol=1e-11": ("radau5", {"rtol": 1e-11, "atol": 1e-14}),
 }
 QUICK_CASES = ("radau5", "jit-bdf2")
 
