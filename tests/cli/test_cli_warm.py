@@ -34,6 +34,25 @@ def test_warm_compiles_the_loop_of_a_scene_at_rest(tmp_path, monkeypatch, capsys
     assert any((cache / "jit").glob("*.py"))
 
 
+def test_warm_compiles_the_kernels_a_first_run_would_compile(tmp_path, monkeypatch, capsys):
+    """The kernels the compiled loop calls through addresses (the stage solve, the error
+    estimate, the crossing test) and the probe's branch selector are compiled at their
+    first use; warm's short run of a scene at rest uses none of them, and a user's first
+    run after ``lumped warm forcing-F2.toml`` compiled them (5.3 s of CPU). Here every
+    store starts empty, as in a process that never compiled them."""
+    from lumped.solvers.eventdriven import fast_parts
+    from lumped.solvers.radau import stage_jit, step_jit
+
+    stores = [(stage_jit, "_STAGE"), (step_jit, "_ERROR"), (step_jit, "_CROSSED"),
+              (fast_parts, "_BRANCH")]
+    for module, name in stores:
+        monkeypatch.setattr(module, name, [])
+    monkeypatch.setenv("LUMPED_CACHE_DIR", str(tmp_path / "cache"))
+    assert main(["warm", str(EXAMPLES / "release-0.005.toml"), "--method", "radau5"]) == 0
+    capsys.readouterr()
+    assert all(getattr(module, name) for module, name in stores)
+
+
 def test_method_is_repeatable_and_a_locked_scene_is_compiled_too(capsys):
     # a taut string (position lock) runs compiled in jit-bdf1 since issue 27 (the
     # reference takes only the steps across a new lock): warm compiles its loops

@@ -78,21 +78,21 @@ def run(args: argparse.Namespace) -> int:
 def _warm(scene, method: str, dt: float, tol: dict) -> str:
     """Run ``method`` on ``scene`` for :data:`STEPS` steps; what it compiled, in words."""
     from ..simulate import simulate
-    from ..solvers.eventdriven.at_rest import REST_LOOP
 
     t_end = STEPS * dt
     if method == "radau5":
-        sol = simulate(scene, method="radau5", t_end=t_end, compiled=True, **tol)
-        loop = str(sol.stats.get("loop", ""))
-        if loop == REST_LOOP:  # held at rest, no loop ran: compile it for runs that move
-            from ..solvers.eventdriven.fast import compiled_loop
-            from ..solvers.eventdriven.setup import scene_plan
-
-            loop = compiled_loop(scene, scene_plan(scene), True)[1]
-        if not loop.startswith("compiled"):  # e.g. locked elements in parallel
-            return f"the Python loop runs this scene: {loop or 'no loop named'}"
+        from ..solvers.eventdriven.fast import compiled_loop
+        from ..solvers.eventdriven.setup import scene_plan
         from ..solvers.modes.on_demand import compile_all
 
+        simulate(scene, method="radau5", t_end=t_end, compiled=True, **tol)
+        # the loop for the runs that move, whether or not this one did (a scene held at
+        # rest runs no loop): every kernel it calls, though the short run may have stepped
+        # or probed not at all
+        fast, loop = compiled_loop(scene, scene_plan(scene), True)
+        if fast is None:  # e.g. locked elements in parallel
+            return f"the Python loop runs this scene: {loop or 'no loop named'}"
+        fast.compile_kernels()
         compile_all()  # (a first run compiles them only once a process needs them often)
         return "the event-driven Radau IIA loop and its event helpers"
     sol = simulate(scene, method=method, dt=dt, t_end=t_end, fast=True)

@@ -146,6 +146,16 @@ class CompiledLoop:
         self.outputs, self.ws, self.wm, self.iw = L.loop_workspace(self.N, self.E, self.E, 1)
         self.iw[1, 3] = roundoff_test() if (self.js.masses == 0.0).any() else 0  # junctions
 
+    def compile_kernels(self) -> None:
+        """Compile (or load from numba's disk cache) every kernel this loop calls through
+        an address: the stage solve, the error estimate and the crossing test (its work
+        arrays) and the probe's branch selector. A run compiles each at its first use;
+        ``lumped warm`` calls this, as its short run may never step or probe (a scene held
+        at rest)."""
+        if self.ws is None:
+            self._workspace()
+        self._branch()
+
     @property
     def breakout_scan(self):
         """:func:`lumped.solvers.modes.stuck_jit.breakout_scan` compiled, or ``None`` while
