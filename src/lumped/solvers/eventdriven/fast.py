@@ -40,8 +40,6 @@ __all__ = ["CompiledLoop", "compiled_loop", "compiled_stage_solver"]
 BLOCK = 256
 
 
-
-
 def compiled_loop(scene: Scene, plan, option: bool | None, steps: int = 0
                   ) -> tuple[CompiledLoop | None, str]:
     """``(loop, "compiled")`` or ``(None, why the Python loop runs)``.
