@@ -63,69 +63,74 @@ def _error(sol, x_ref, dt) -> float:
     return float(np.max(np.abs(x - x_ref)) / np.max(np.abs(x_ref)))
 
 
+def _scene_runs(m: float, k: float, forced: bool, gamma: float, rtols: list[float],
+                found: dict) -> str:
+    """Run one scene at every ``rtol``, note what misses a target in ``found`` and return
+    its printed line."""
+    x0, forcing, t_end, dt = _setup(m, k, forced)
+    x_ref = reference_for_grid(BinghamOscillator(m, k, gamma, TAU), x0=x0, forcing=forcing,
+                               dt=dt, t_end=t_end).x
+    law = get_law("bingham").bind(gamma=gamma, tau=TAU)
+    where = (m, k, forced, gamma)
+    errs, steps = [], 0
+    for rtol in rtols:
+        try:
+            sol = _run(law, m, k, x0, forcing, t_end, rtol)
+        except Exception as err:  # noqa: BLE001 (reported, counted)
+            found["failures"].append((*where, rtol, repr(err)[:120]))
+            errs.append(math.nan)
+            continue
+        if not sol.ok or sol.stats.get("bridges", 0):
+            found["failures"].append((*where, rtol, sol.message[:120]))
+        errs.append(_error(sol, x_ref, dt))
+        steps = sol.stats["steps"]
+        if rtol == 1e-11:
+            found["worst11"] = max(found["worst11"], errs[-1])
+            if errs[-1] > 1e-8:
+                found["misses"].append((*where, errs[-1]))
+    # the error falls with rtol: no rise above 10x the previous level's (the error's own
+    # noise at round-off: below 1e-13 relative is level)
+    for a, b, r in zip(errs, errs[1:], rtols[1:], strict=False):
+        if b > 10.0 * a and b > 1e-13 and b > r:
+            found["rises"].append((*where, r, a, b))
+    coul = ""
+    if gamma == 1e12:
+        c = _run(get_law("coulomb").bind(tau=TAU, r=1.0), m, k, x0, forcing, t_end,
+                 rtols[-1])
+        ratio = steps / max(c.stats["steps"], 1)
+        coul = f" coulomb {c.stats['steps']} steps ({ratio:.2f}x)"
+        if ratio > 2.0:
+            found["slow"].append((m, k, forced, ratio))
+    return (f"m={m:g} k={k:g} {'forced' if forced else 'free  '} gamma={gamma:g}: "
+            + " ".join(f"{e:.1e}" for e in errs) + f" | {steps} steps{coul}")
+
+
+def _report(title: str, items: list) -> None:
+    print(f"{title}: {len(items)}")
+    for item in items:
+        print("  ", item)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rtols", type=float, nargs="+", default=list(RTOLS))
     parser.add_argument("--quick", action="store_true", help="gamma 1 and 1e12 only")
     args = parser.parse_args()
     gammas = (1e0, 1e12) if args.quick else GAMMAS
-    failures, rises, misses, slow = [], [], [], []
-    worst11 = 0.0
+    found = {"failures": [], "rises": [], "misses": [], "slow": [], "worst11": 0.0}
     t0 = time.process_time()
     for m in MS:
         for k in KS:
             for forced in (False, True):
-                x0, forcing, t_end, dt = _setup(m, k, forced)
                 for gamma in gammas:
-                    osc = BinghamOscillator(m, k, gamma, TAU)
-                    x_ref = reference_for_grid(osc, x0=x0, forcing=forcing, dt=dt,
-                                               t_end=t_end).x
-                    law = get_law("bingham").bind(gamma=gamma, tau=TAU)
-                    errs, steps = [], 0
-                    for rtol in args.rtols:
-                        try:
-                            sol = _run(law, m, k, x0, forcing, t_end, rtol)
-                        except Exception as err:  # noqa: BLE001 (reported, counted)
-                            failures.append((m, k, forced, gamma, rtol, repr(err)[:120]))
-                            errs.append(math.nan)
-                            continue
-                        if not sol.ok or sol.stats.get("bridges", 0):
-                            failures.append((m, k, forced, gamma, rtol, sol.message[:120]))
-                        errs.append(_error(sol, x_ref, dt))
-                        steps = sol.stats["steps"]
-                        if rtol == 1e-11:
-                            worst11 = max(worst11, errs[-1])
-                            if errs[-1] > 1e-8:
-                                misses.append((m, k, forced, gamma, errs[-1]))
-                    # the error falls with rtol: no rise above 10x the previous level's
-                    # (the error's own noise at round-off: below 1e-13 relative is level)
-                    for a, b, r in zip(errs, errs[1:], args.rtols[1:], strict=False):
-                        if b > 10.0 * a and b > 1e-13 and b > r:
-                            rises.append((m, k, forced, gamma, r, a, b))
-                    coul = ""
-                    if gamma == 1e12:
-                        c = _run(get_law("coulomb").bind(tau=TAU, r=1.0), m, k, x0, forcing,
-                                 t_end, args.rtols[-1])
-                        ratio = steps / max(c.stats["steps"], 1)
-                        coul = f" coulomb {c.stats['steps']} steps ({ratio:.2f}x)"
-                        if ratio > 2.0:
-                            slow.append((m, k, forced, ratio))
-                    print(f"m={m:g} k={k:g} {'forced' if forced else 'free  '} "
-                          f"gamma={gamma:g}: " + " ".join(f"{e:.1e}" for e in errs)
-                          + f" | {steps} steps{coul}", flush=True)
+                    print(_scene_runs(m, k, forced, gamma, args.rtols, found), flush=True)
     print(f"\nCPU {time.process_time() - t0:.0f} s; rtols {args.rtols}")
-    print(f"failures (no success, an exception or a bridge): {len(failures)}")
-    for f in failures:
-        print("  ", f)
-    print(f"error rising with a tighter rtol (10x, above 1e-13 and above rtol): {len(rises)}")
-    for r in rises:
-        print("  ", r)
-    print(f"rtol 1e-11: worst relative error {worst11:.2e}; above 1e-8: {len(misses)}")
-    for r in misses:
-        print("  ", r)
-    print(f"gamma 1e12 over 2x the coulomb law's steps: {len(slow)}")
-    for r in slow:
-        print("  ", r)
+    _report("failures (no success, an exception or a bridge)", found["failures"])
+    _report("error rising with a tighter rtol (10x, above 1e-13 and above rtol)",
+            found["rises"])
+    print(f"rtol 1e-11: worst relative error {found['worst11']:.2e}; ", end="")
+    _report("above 1e-8", found["misses"])
+    _report("gamma 1e12 over 2x the coulomb law's steps", found["slow"])
 
 
 if __name__ == "__main__":
