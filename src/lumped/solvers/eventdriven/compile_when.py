@@ -67,7 +67,7 @@ def waiting(scene: Scene, plan, steps: int) -> str | None:
     if not numba_enabled():
         return None
     if not shared_compiled():
-        if _WAITED[0] + steps >= SHARED_COMPILE_AFTER:
+        if _budget_spent(steps):
             return None
         return (f"{WAITING} (radau5's shared loop is not compiled on this machine: "
                 "`lumped warm` compiles it)")
@@ -79,8 +79,13 @@ def waiting(scene: Scene, plan, steps: int) -> str | None:
 def due(steps: int) -> bool:
     """A cheap first test of :func:`waiting` for the run loop, at every step of a
     waiting run: whether ``steps`` reach the step count of either rule."""
-    return steps >= COMPILE_AFTER and (
-        _WAITED[0] + steps >= SHARED_COMPILE_AFTER or shared_compiled())
+    return steps >= COMPILE_AFTER and (_budget_spent(steps) or shared_compiled())
+
+
+def _budget_spent(steps: int) -> bool:
+    """The Python steps of this process's waiting runs, with ``steps`` of the current one,
+    reach :data:`SHARED_COMPILE_AFTER`."""
+    return _WAITED[0] + steps >= SHARED_COMPILE_AFTER
 
 
 def waited(stats: dict) -> None:
