@@ -53,15 +53,16 @@ def check_yield(scene: Scene, sol, force_tol: float = 0.0, rate_tol: float = 0.0
     relative tolerance) of the forces' scale: on the dense output a force that sits at
     its bound (just stuck, or slipping) is interpolated between nodes that hold it."""
     v = {nd.name: sol.v[nd.name] for nd in scene.nodes}
+    # Newton's tolerance is relative to the forces at the sample; the adaptive method's
+    # force tolerance to the run's largest
+    scale = np.abs(sol.forces).max(axis=1)
+    run_scale = float(scale.max(initial=0.0))
     for el in scene.elements:
         if el.law_name not in YIELDING:
             continue
         p = el.law.params
         tau = p["tau"]
         F = np.abs(sol.F[el.name])
-        # Newton's tolerance is relative to the forces that meet at the element's nodes
-        scale = np.abs(sol.forces).max(axis=1)
-        run_scale = float(scale.max(initial=0.0))
         above = F > tau * (1 + 1e-9) + 1e-8 * scale + 1e-12
         if el.law_name == "coulomb":
             assert not (above & (F > tau + rtol * scale)).any(), \
