@@ -7,6 +7,7 @@ exist, are finite and positive where measured, and ``nan`` where not.
 from __future__ import annotations
 
 import argparse
+import csv
 import math
 
 import pytest
@@ -18,6 +19,7 @@ from lumped.cli import bench as cmd_bench
 TINY = bench.Ladders(dts=(1e-2,), eps=(), rtols=(), tol_rtols=(1e-6,), min_time=0.0)
 SCENE = next(s for s in bench.SCENES if s.name == "release-0.5")
 NAMES = ("closed-bdf2", "radau5", "scipy-events-DOP853")
+USERS_COLUMNS = ("cpu_new_s", "ratio_new", "new_over_warm", "cpu_new_first_s", "new_repeats")
 
 
 @pytest.fixture(scope="module")
@@ -36,6 +38,9 @@ def test_compiled_methods_report_a_run_with_new_numbers(report):
         assert math.isfinite(value) and value > 0.0
     assert r.ratio_new == pytest.approx(r.cpu_new_s / report.unit_s)
     assert r.new_over_warm == pytest.approx(r.cpu_new_s / r.cpu_s)
+    # the smallest of as many runs with new numbers as the warm timing took calls
+    assert 1 <= r.new_repeats <= min(r.repeats, bench.runner.NEW_REPEATS)
+    assert r.cpu_new_s <= r.cpu_new_first_s
     for name in ("closed-bdf2", "scipy-events-DOP853"):  # nothing compiled per scene
         assert not by[name].has_new_numbers
         assert math.isnan(by[name].ratio_new) and math.isnan(by[name].new_over_warm)
@@ -44,7 +49,7 @@ def test_compiled_methods_report_a_run_with_new_numbers(report):
 def test_the_columns_reach_the_csv_and_the_tables(report, tmp_path):
     bench.write_outputs(report, tmp_path)
     header = (tmp_path / "runs.csv").read_text().splitlines()[0].split(",")
-    assert {"cpu_new_s", "ratio_new", "new_over_warm"} <= set(header)
+    assert set(USERS_COLUMNS) <= set(header)
     back = {r.method: r for r in bench.read_csv(tmp_path / "runs.csv")}
     assert back["radau5"].cpu_new_s == next(r for r in report.runs
                                             if r.method == "radau5").cpu_new_s
@@ -59,12 +64,15 @@ def test_the_columns_reach_the_csv_and_the_tables(report, tmp_path):
 def test_a_csv_without_the_columns_still_reads(report, tmp_path):
     """A runs.csv written before the user's columns reads, with them ``nan``."""
     bench.write_csv(report.runs, tmp_path / "runs.csv")
-    lines = (tmp_path / "runs.csv").read_text().splitlines()
-    cut = len(",cpu_new_s,ratio_new,new_over_warm")
-    old = [lines[0][:-cut]] + [",".join(line.split(",")[:-3]) for line in lines[1:]]
-    (tmp_path / "old.csv").write_text("\n".join(old) + "\n")
+    with (tmp_path / "runs.csv").open(newline="") as fh:
+        table = list(csv.reader(fh))
+    keep = [i for i, name in enumerate(table[0]) if name not in USERS_COLUMNS]
+    assert len(keep) == len(table[0]) - len(USERS_COLUMNS)
+    with (tmp_path / "old.csv").open("w", newline="") as fh:
+        csv.writer(fh).writerows([[row[i] for i in keep] for row in table])
     rows = bench.read_csv(tmp_path / "old.csv")
     assert len(rows) == len(report.runs) and all(not r.has_new_numbers for r in rows)
+    assert all(r.new_repeats == 0 and math.isnan(r.cpu_new_first_s) for r in rows)
 
 
 def test_new_numbers_differ_every_time_and_touch_only_k():

@@ -71,10 +71,11 @@ class Method:
         Call the solve once, untimed, before timing it (a JIT compile, or filling an
         on-disk cache, is not part of the measured time).
     new_numbers : bool
-        After the warm timing, time one run with new numbers (the user's column): the
+        After the warm timing, time runs with new numbers (the user's column): the
         scene's ``k`` scaled by a factor never used before in the process
-        (:func:`lumped.bench.new_numbers.new_factor`), on a scene object no other run has
-        touched, timed once. For methods that compile per scene or keep caches.
+        (:func:`lumped.bench.new_numbers.new_factor`), a new one and a new scene object
+        for each run (see :mod:`lumped.bench.runner`). For methods that compile per
+        scene or keep caches.
     default : bool
         Run by default (``lumped bench`` without ``--methods``); ``False`` for an entry
         that is run only when named.

@@ -259,12 +259,14 @@ def new_numbers_tables(report: BenchReport, targets: Sequence[float] = TARGETS) 
         return []
     fresh = summarize_runs(report.runs, targets, new_numbers=True)
     lines = ["#### With new numbers (the user's columns)", "",
-             "Each setting of these methods ran once more after its warm timing, with new "
-             "numbers: the scene's k times 1 + 1e-6 (n + r) (never run before), "
-             "on a scene object no other run touched, timed once (no warm-up, no repeat): "
-             "what a user who edits a number gets. Each cell: the fastest such run "
-             "reaching the target (its error is the warm run's), as CPU time / yardstick "
-             "(setting; its time with new numbers / its warm time).", "",
+             "Each setting of these methods ran again after its warm timing, with new "
+             "numbers: the scene's k times 1 + 1e-6 (n + r) (never run before), a new k "
+             "and a new scene object no other run touched for each run, no warm-up: what "
+             "a user who edits a number gets. As many such runs as the warm timing took "
+             "calls (at most 20), the smallest time kept (the warm time's statistic; "
+             "`cpu_new_first_s` in runs.csv is the first run alone). Each cell: the "
+             "fastest setting reaching the target (its error is the warm run's), as CPU "
+             "time / yardstick (setting; its time with new numbers / its warm time).", "",
              "| scene | target | " + " | ".join(names) + " |",
              "|---" * (len(names) + 2) + "|"]
     for scene in report.scenes:

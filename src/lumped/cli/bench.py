@@ -4,8 +4,9 @@ Writes ``runs.csv`` (every run), ``summary.md`` (fastest run per scene, error ta
 and method; creep; observed orders) and ``work_precision.png`` (when matplotlib is
 installed) into ``DIR``, then prints the ratio of our best method's time to the fastest
 scipy time per scene and error target, warm and with new numbers (the user's columns:
-each setting of our compiled methods run once more with a ``k`` never run before in the
-process, timed once).  Progress shows on a terminal (not with ``--quiet``).  See
+each setting of our compiled methods run again with a ``k`` never run before in the
+process, a new ``k`` for each run, as many runs as the warm timing took; the smallest
+time kept, as for the warm time).  Progress shows on a terminal (not with ``--quiet``).  See
 :mod:`lumped.bench` for what is measured.
 """
 
@@ -83,6 +84,6 @@ def run(args: argparse.Namespace) -> int:
         print(bench.ratio_table(report), end="")
         if any(r.has_new_numbers for r in report.runs):
             print("With new numbers (the user's columns: k never run before in the process, "
-                  "timed once), our best / the fastest scipy peer:")
+                  "a new k each run), our best / the fastest scipy peer:")
             print(bench.ratio_table(report, new_numbers=True), end="")
     return 0
