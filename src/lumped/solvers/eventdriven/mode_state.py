@@ -20,7 +20,7 @@ from ..implicit.initial_slip import start_at_known_rates
 from ..modes.after_impact import held_through, hold_impacted_locks, release_resting_locks
 from ..modes.choice import select_modes
 from ..modes.finite_stop import take_stop
-from ..modes.force_bounds import onto_slip_ends, slip_beyond_joint_bounds
+from ..modes.force_bounds import group_modes, onto_slip_ends
 from ..modes.junctions_at import junctions_at
 from ..modes.lock_events import (
     apply_impacts,
@@ -142,7 +142,7 @@ class ModeState:
                 v[:] = v_snapped
             else:
                 sel = again
-        new, v_p, F_p = slip_beyond_joint_bounds(scene, lbs, sel[0], t, F), sel[1], sel[2]
+        new, v_p, F_p = group_modes(scene, lbs, sel[0], t, F, rtol), sel[1], sel[2]
         got = probe_state(scene, lbs, new, t, x, v, F, h0) if self.decided[-1] > h0 and \
             not self.cones and not all(self.is_mass) else None  # (a long probe's junctions)
         if got:  # (... at t + h0; a lock's force stays the long probe's, not m ulp / h0^2)
