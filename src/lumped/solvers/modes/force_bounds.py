@@ -73,11 +73,13 @@ r"""Forces the stage Newton leaves off the bounds their laws put them on, put ba
    The mode probe reads such a dashpot on its slip branch when its force lands a hair
    beyond its yield force (the rate's round-off through the flat law: ``8e-9`` above
    ``tau`` on a Herschel-Bulkley ``n = 2`` dashpot beside a stuck Bingham one), and every
-   step from there failed Newton and was halved: 510 steps and 1115 rejected over
-   ``0.02`` s, 35 s of CPU to the end of a run that takes under 2 s. Its stuck branch
-   holds the same motion (rate 0, its force within its set at rest): put on it, the two
-   are locks in parallel whose split is free (:mod:`lumped.solvers.radau.cone_split`),
-   and the run takes 122 steps and 16 rejected over that span, with the same motion.
+   step from there failed Newton and was halved: 510 steps and 1115 rejected over the
+   ``0.02`` s after the stick, 2355 steps, 6379 rejected and 40 s of CPU over ``[0,
+   0.5]`` (seed 23009's draw of the tight-tolerance property). Its stuck branch holds the
+   same motion (rate 0, its force within its set at rest): put on it, the two are locks
+   in parallel whose split is free (:mod:`lumped.solvers.radau.cone_split`), and the run
+   takes 122 steps and 16 rejected over those ``0.02`` s, 128 and 16 over ``[0, 0.5]``
+   (1.5 s), its motion within ``3e-15`` of the slow run's.
    Only a dashpot whose force is within its stuck interval to the resolution of a force
    on a flat branch, ``sqrt(rtol) (1 + |F|)`` (as 2.), is moved.
 """
