@@ -14,13 +14,22 @@ scene object with it, which no other run has touched.
 from __future__ import annotations
 
 import itertools
+import math
 import random
 from collections.abc import Iterable
-from dataclasses import replace
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
-from .scenes import BenchScene
+import numpy as np
 
-__all__ = ["new_factor", "bench_scene_with_new_numbers", "scene_with_new_numbers"]
+from .scenes import BenchScene, Ladders
+from .timing import time_call
+
+if TYPE_CHECKING:
+    from .methods import Method
+
+__all__ = ["NEW_REPEATS", "NewTimes", "new_factor", "bench_scene_with_new_numbers",
+           "scene_with_new_numbers", "time_new_numbers"]
 
 _COUNTER = itertools.count(1)
 #: Drawn once per process (from the operating system's entropy): earlier processes,
@@ -64,3 +73,41 @@ def scene_with_new_numbers(scene, factor: float | None = None, *,
         values = {p: v * factor if p in names else v for p, v in el.law.params.items()}
         elements.append(Element(el.name, el.law.law.bind(**values), el.a, el.b, el.F0))
     return Scene(scene.nodes, elements, scene.force_specs, ground_motion=scene.ground_motion)
+
+
+#: At most this many runs with new numbers per setting of ``lumped bench`` (the user's
+#: columns, :mod:`lumped.bench.runner`).
+NEW_REPEATS = 20
+
+
+@dataclass(frozen=True)
+class NewTimes:
+    """The runs with new numbers of one setting: the smallest CPU time (``best``), the
+    first run's, how many ran, and why they stopped (``''`` when none failed)."""
+
+    best: float
+    first: float
+    runs: int
+    message: str
+
+
+def time_new_numbers(scene: BenchScene, method: Method, setting: dict, ladders: Ladders,
+                     repeats: int) -> NewTimes:
+    """``repeats`` runs of ``setting``, each with new numbers of its own on a new scene
+    object (:func:`bench_scene_with_new_numbers`), each timed once by ``method.solve``
+    (a :class:`~lumped.bench.methods.Method`); all ``nan`` with the reason when one
+    fails (the warm row stands)."""
+    times: list[float] = []
+    for _ in range(max(repeats, 1)):
+        fresh = bench_scene_with_new_numbers(scene)
+        try:
+            runner = method.solve(fresh, setting, ladders)
+            solved, cpu, _ = time_call(runner, min_time=0.0, max_repeats=1)
+            if not np.all(np.isfinite(solved.x)):
+                raise FloatingPointError("non-finite x in the solution")
+        except Exception as err:  # say why this column is empty
+            return NewTimes(math.nan, math.nan, 0,
+                            f"new numbers (k x {fresh.osc.k / scene.osc.k!r}): "
+                            f"{type(err).__name__}: {err}")
+        times.append(cpu)
+    return NewTimes(min(times), times[0], len(times), "")

@@ -26,7 +26,8 @@ event-driven exact solution of :mod:`lumped.reference`:
   with numbers of its own, with no warm-up: what a user who edits a number gets (the
   loops compiled for the scene's *structure* are loaded, nothing compiled for these
   numbers is). As many such runs as the warm timing took calls (``new_repeats``, at most
-  :data:`NEW_REPEATS`), and the smallest time is kept: the statistic of ``cpu_s``, so
+  :data:`~lumped.bench.new_numbers.NEW_REPEATS`), and the smallest time is kept: the
+  statistic of ``cpu_s``, so
   that ``new_over_warm`` (``cpu_new_s / cpu_s``) compares like with like (a time taken
   once reads 10-30 % above the smallest of several on a shared machine, whatever the
   numbers). ``cpu_new_first_s`` is the first of those runs alone (on the first setting
@@ -81,7 +82,7 @@ import numpy as np
 from .event_peer import event_peer_methods
 from .event_study import event_study
 from .methods import Method, Solved, closed_form_method, generic_method, tolerance_method
-from .new_numbers import bench_scene_with_new_numbers
+from .new_numbers import NEW_REPEATS, NewTimes, time_new_numbers
 from .peers import scipy_method, scipy_solver
 from .scenes import FULL, GRID_DT, PAPER_SCENES, SCENES, BenchScene, Ladders, reference_grid
 from .timing import measure_unit, time_call
@@ -277,7 +278,7 @@ def run_one(
                          ratio=spent / unit, repeats=1)
     new = NewTimes(nan, nan, 0, "")
     if method.new_numbers:
-        new = _time_new_numbers(scene, method, setting, ladders, min(calls, NEW_REPEATS))
+        new = time_new_numbers(scene, method, setting, ladders, min(calls, NEW_REPEATS))
     return RunResult(**row, status="ok", message=new.message, max_err=max_err,
                      end_err=end_err, steps=solved.steps, nfev=solved.nfev, cpu_s=cpu,
                      ratio=cpu / unit, repeats=calls, cpu_new_s=new.best,
@@ -286,40 +287,6 @@ def run_one(
                      cpu_new_first_s=new.first, new_repeats=new.runs)
 
 
-#: At most this many runs with new numbers per setting (see the module notes).
-NEW_REPEATS = 20
-
-
-@dataclass(frozen=True)
-class NewTimes:
-    """The runs with new numbers of one setting: the smallest CPU time (``best``), the
-    first run's, how many ran, and why they stopped (``''`` when none failed)."""
-
-    best: float
-    first: float
-    runs: int
-    message: str
-
-
-def _time_new_numbers(scene: BenchScene, method: Method, setting: dict,
-                      ladders: Ladders, repeats: int) -> NewTimes:
-    """``repeats`` runs of ``setting``, each with new numbers of its own on a new scene
-    object (see the module notes), each timed once; all ``nan`` with the reason when one
-    fails (the warm row stands)."""
-    times: list[float] = []
-    for _ in range(max(repeats, 1)):
-        fresh = bench_scene_with_new_numbers(scene)
-        try:
-            runner = method.solve(fresh, setting, ladders)
-            solved, cpu, _ = time_call(runner, min_time=0.0, max_repeats=1)
-            if not np.all(np.isfinite(solved.x)):
-                raise FloatingPointError("non-finite x in the solution")
-        except Exception as err:  # say why this column is empty
-            return NewTimes(math.nan, math.nan, 0,
-                            f"new numbers (k x {fresh.osc.k / scene.osc.k!r}): "
-                            f"{type(err).__name__}: {err}")
-        times.append(cpu)
-    return NewTimes(min(times), times[0], len(times), "")
 
 
 @dataclass
