@@ -108,7 +108,7 @@ def test_one_module_per_structure_the_numbers_are_data(js):
 def _numbers_pool(scene, count: int = 8) -> list:
     """``count`` scenes of ``scene``'s structure with other numbers in every law (a seeded
     draw: gamma in [1.5, 3.5], tau in [0.05, 4.5] -- gamma tau < 16, no steep branch --,
-    k in [0.1, 1e4], c in [0.01, 10])."""
+    k in [0.1, 1e4], c in [0.01, 10]), and one more with every multiplier 1."""
     rng = np.random.default_rng(20261127)
     pool = []
     for _ in range(count):
@@ -119,10 +119,17 @@ def _numbers_pool(scene, count: int = 8) -> list:
             Element("s", get_law("string_spring").bind(k=k, L=0.5), "m", "n"),
             Element("c", CUBIC.bind(k=k, c=c), "ground", "n"),
             Element("d2", get_law("bingham").bind(gamma=gamma, tau=tau), "n", "ground")]))
+    # ... and every number 1 (a factor sympy would drop from the code if it took 1.0 for
+    # the integer 1)
+    pool.append(Scene(scene.nodes, [
+        Element("d", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground", "m"),
+        Element("s", get_law("string_spring").bind(k=1.0, L=1.0), "m", "n"),
+        Element("c", CUBIC.bind(k=1.0, c=1.0), "ground", "n"),
+        Element("d2", get_law("bingham").bind(gamma=1.0, tau=0.5), "n", "ground")]))
     return pool
 
 
-@given(q=finite, F=finite, which=st.integers(0, 7))
+@given(q=finite, F=finite, which=st.integers(0, 8))
 def test_new_numbers_reuse_the_module_and_match_python(js, q, F, which):
     # the compiled functions given another parameter set at run time compute what that
     # set's own Python kernels compute
@@ -148,11 +155,11 @@ def test_new_numbers_share_the_module_unless_they_change_the_code(js):
     assert all(jit_scene(s).module is j.module for s in pool)
     assert len({tuple(jit_scene(s).consts) for s in pool}) == len(pool)
     # gamma tau >= 16 makes a Bingham branch steep: radau5 takes its inverse form, other
-    # code; and gamma = 1 drops a factor
-    for gamma, tau in [(40.0, 1.0), (1.0, 1.0)]:
-        other = Scene(scene.nodes, [Element("d", get_law("bingham").bind(gamma=gamma, tau=tau),
+    # code; gamma = 1 does not (1.0 * y is y to the bit: the factor stays in the code)
+    for gamma, same in [(40.0, False), (1.0, True)]:
+        other = Scene(scene.nodes, [Element("d", get_law("bingham").bind(gamma=gamma, tau=1.0),
                                             "ground", "m"), *scene.elements[1:]])
-        assert scene_source(other).source != scene_source(scene).source
+        assert (scene_source(other).source == scene_source(scene).source) is same, gamma
 
 
 def test_module_file_is_named_by_its_source_hash(js):

@@ -78,7 +78,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from .rewrite import (
     check_supported,
-    constant_of,
+    constants_of,
     magnitude_expression,
     outer_piecewise,
     prepare,
@@ -426,7 +426,7 @@ def compile_function(
     if not isinstance(expr, sp.Expr):
         raise TypeError(f"`expr` must be a sympy expression, got {type(expr).__name__}")
     check_supported(expr)
-    values = {sym: constant_of(sym, v) for sym, v in params.items()}
+    values = constants_of(expr, params)
     names = [f"x{i}" for i in range(len(args))]
     plain = {a: sp.Symbol(n) for a, n in zip(args, names, strict=True)}
     with distribute(False):

@@ -30,6 +30,8 @@ from sympy.core.parameters import distribute
 
 __all__ = [
     "check_supported",
+    "constant_of",
+    "constants_of",
     "diff_branchwise",
     "magnitude_expression",
     "prepare",
@@ -233,12 +235,33 @@ def rewrite_kinks(expr: sp.Basic) -> sp.Basic:
     return walk(expr)
 
 
-def constant_of(sym: sp.Symbol, value: float) -> sp.Number:
+def constant_of(sym: sp.Symbol, value: float, exponent: bool = True) -> sp.Number:
+    """The sympy number a parameter's ``value`` is substituted as.
+
+    Integral values become sympy Integers where the parameter is an ``exponent`` (of a
+    power in the expression), so that ``n = 1`` gives ``x**1 = x`` and ``n = 2`` a
+    product: the branch's shape, as for the other integral values. Elsewhere ``+-1`` stay
+    floats: sympy drops a factor ``Integer(1)`` from the code, so ``gamma = 1`` gave
+    another text of the compiled module than every other ``gamma``, and a user who
+    edited it compiled a law module (0.5-0.8 s) for one number; ``1.0*y`` is ``y`` to
+    the bit, so the numbers are the same.
+    """
     x = float(value)
     if not math.isfinite(x):
         raise ValueError(f"parameter `{sym}` must be finite, got {x!r}")
-    # integral values become sympy Integers, so that e.g. n = 1 gives x**1 = x exactly
-    return sp.Integer(int(x)) if x.is_integer() and abs(x) < 2**53 else sp.Float(x)
+    if not x.is_integer() or abs(x) >= 2**53 or (not exponent and abs(x) == 1.0):
+        return sp.Float(x)
+    return sp.Integer(int(x))
+
+
+def constants_of(expr: sp.Expr, params: Mapping[sp.Symbol, float]) -> dict:
+    """``{symbol: constant_of(symbol, value, exponent)}`` for ``params`` in ``expr``,
+    ``exponent`` whether the symbol appears in the exponent of one of its powers."""
+    exponents: set = set()
+    for node in sp.preorder_traversal(expr):
+        if isinstance(node, sp.Pow):
+            exponents |= node.exp.free_symbols
+    return {sym: constant_of(sym, value, sym in exponents) for sym, value in params.items()}
 
 
 def prepare(
@@ -254,7 +277,7 @@ def prepare(
     if not isinstance(q, sp.Symbol) or not isinstance(F, sp.Symbol) or q == F:
         raise TypeError("`q` and `F` must be two distinct sympy symbols")
     check_supported(residual)
-    values = {sym: constant_of(sym, value) for sym, value in params.items()}
+    values = constants_of(residual, params)
     qq, FF = sp.Symbol("q"), sp.Symbol("F")
     with distribute(False):
         expr = residual.xreplace(values).xreplace({q: qq, F: FF})

@@ -89,10 +89,33 @@ def test_a_compiled_run_with_few_events_compiles_none_of_the_event_helpers(
     _same_run(got, ref)
 
 
+def test_an_edit_from_one_to_another_number_compiles_nothing(monkeypatch, tmp_path):
+    # gamma = 1 and k = 1 used to be templates of their own (sympy dropped the integer
+    # factor 1 from the code): the paper's scene edited to gamma = 0.8 compiled a law
+    # module (0.5-0.8 s) or ran the Python loop
+    from lumped.codegen.template_module import template_module
+    from lumped.codegen.templates import law_template
+
+    bingham, spring = get_law("bingham"), get_law("linear_spring")
+    for one, other in ((bingham.bind(gamma=1.0, tau=1.0), bingham.bind(gamma=0.8, tau=1.0)),
+                       (spring.bind(k=1.0), spring.bind(k=1.3))):
+        assert template_module(law_template(one)) is template_module(law_template(other))
+    simulate(_paper(), compiled=True, **KW)  # the shared loop; gamma = 1's templates
+    edited = Scene(_paper().nodes,
+                   [Element("spring", spring.bind(k=1.0), "ground", "mass"),
+                    Element("dashpot", bingham.bind(gamma=0.8, tau=0.05), "ground", "mass")],
+                   {"mass": SineBurst(1.0, 2.0, 1.0)})
+    _fresh_helpers(monkeypatch, tmp_path)
+    with _compiles() as names:
+        got = simulate(edited, **KW)  # compiled=None: compiled from step 0
+    assert names == []
+    assert got.stats["loop"] == "compiled" and got.ok and len(got.events) >= 2
+    _same_run(got, simulate(edited, compiled=False, **KW))
+
+
 def _chain(n: int, spring) -> Scene:
     """``n`` masses in a chain, each link a spring (``spring(i)``, a bound law) and the
-    paper's Bingham dashpot (its template: ``gamma = tau = 1`` drop their factors from the
-    code, another value of either is another template), the burst on the last but one
+    paper's Bingham dashpot, the burst on the last but one
     mass: a structure no other test builds."""
     damp = get_law("bingham").bind(gamma=1.0, tau=1.0)
     nodes = [Mass(f"q{i}", m=1.0 + 0.1 * i, x0=0.0) for i in range(n)]
