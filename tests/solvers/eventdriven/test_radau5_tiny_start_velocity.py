@@ -24,6 +24,7 @@ from _yield_check import check_yield
 from lumped import simulate
 from lumped.laws import get_law
 from lumped.scene import Element, Mass, Scene
+from lumped.scene.forcing import SineBurst
 
 RTOL, ATOL = 1e-10, 1e-13
 
@@ -80,3 +81,33 @@ def test_a_mass_a_stuck_coulomb_link_holds_at_the_start_has_its_other_dashpots_a
     assert abs(sol.F["e0"][0]) <= 1.0 and abs(sol.F["e1"][0]) <= 1.0
     check_yield(scene, sol, 100.0 * RTOL, ATOL + RTOL * 1e-12, RTOL)
     assert np.abs(sol.x["m0"]).max() <= ATOL
+
+
+def _against_the_spring(v0: float) -> Scene:
+    """A draw of the tight property (``LUMPED_LARGE``, seed 25037 of the ``long`` profile,
+    shrunk; its three unit springs as one): one mass released at ``v0`` against a spring
+    whose load (``k x_0 = 1.5``) is beyond the Bingham dashpot's yield force (``tau =
+    1``), under ``3.5 sin t``."""
+    return Scene([Mass("m0", m=1.0, x0=0.5, v0=v0)],
+                 [Element("e0", get_law("linear_spring").bind(k=3.0), "ground", "m0"),
+                  Element("e2", get_law("bingham").bind(gamma=1.0, tau=1.0), "ground", "m0")],
+                 {"m0": SineBurst(3.5, 1.0)})
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_mass_stopped_inside_the_start_probe_slips_on_from_rest(compiled):
+    # v0 = 1e-9 stops at t = 4e-10, inside the start probe (5e-10 s), and the spring
+    # pulls it back beyond the yield force. The probe's lock read 1.5 - m v0 / h_p = 0.5,
+    # within tau: the start put the mass at rest on the stuck branch, which the load does
+    # not hold, and the held interval kept it at x = 0.5 for the whole run (the mass
+    # slips to 0.4942). Chosen again from rest, the start is the v0 = 0 run's.
+    kw = dict(method="radau5", dt=0.025 / 4, t_end=0.5, rtol=RTOL, atol=ATOL,
+              compiled=compiled)
+    scene = _against_the_spring(1e-9)
+    sol = simulate(scene, **kw)
+    assert sol.ok, sol.message
+    assert sol.v["m0"][0] == 0.0 and sol.F["e2"][0] == -1.0  # slips from rest, backwards
+    check_yield(scene, sol, 100.0 * RTOL, ATOL + RTOL, RTOL)
+    rest = simulate(_against_the_spring(0.0), **kw)
+    assert sol.x["m0"][-1] < 0.4943
+    assert np.allclose(sol.data, rest.data, rtol=0.0, atol=1e-12)

@@ -32,6 +32,7 @@ from .creep import creep_floor, creep_stop
 from .landing import Landing
 from .mode_state import ModeState
 from .setup import read_options, scene_plan, structure, time_events
+from .start_mode import start_mode
 from .step import StepPass
 
 __all__ = ["Radau5Run", "DEFAULT_RTOL", "DEFAULT_ATOL"]
@@ -110,13 +111,11 @@ class Radau5Run(StepPass, StepChecks):
         ms.fast = self.fast
         # (the mode's lists, changed in place by ``ms``)
         self.modes, self.kernels, self.guards = ms.modes, ms.kernels, ms.guards
-        self.watched, self.cones = ms.watched, ms.cones
-        self.lbs = plan.branches
-
+        self.watched, self.cones, self.lbs = ms.watched, ms.cones, plan.branches
         # the compiled stage Newton (compiled=True), built on first need: with the compiled
         # loop the attempts need it only after a singular Jacobian (building it costs ~0.7 ms)
         self.stage_solve = None
-        msg = ms.change_mode(0.0, 1e-9 * t_final, "start", x, v, F)
+        msg = start_mode(ms, 1e-9 * t_final, x, v, F)
         ms.events.clear()
         ms.recent.clear()
         # locks in parallel: the first step starts their split from its stages' as after an
