@@ -123,6 +123,22 @@ class StepChecks:
             out.append(_admitted(self.guards[e], q[0], Fe[0], q[1], Fe[1]))
         return out
 
+    def takes_first(self) -> bool:
+        """Whether the compiled loop may take the next step: no event since the last
+        step, or one whose first step it checks
+        (:mod:`lumped.solvers.eventdriven.first_step_jit`: no impact at its start, no locks in
+        parallel, its check compiled). Sets ``held``: per element, 1 where the dense
+        output starts from the stage forces (:meth:`dense_start_forces`), or ``None``."""
+        self.held = None
+        if not self.ms.forces_from_probe:
+            return True
+        if self.ms.after_impact or self.cones or not self.fast.first_step_ready():
+            return False
+        lbs, modes, massless = self.lbs, self.modes, self.massless
+        self.held = [int(bool(lbs[e].info[modes[e]].locks) and not massless[e])
+                     for e in range(self.E)]
+        return True
+
     def crossing(self, U: list[float], h: float):
         """The first guard crossing of a watched element along the step,
         ``(s, (which, guard))`` with ``s`` the fraction of the step, or ``None``; the

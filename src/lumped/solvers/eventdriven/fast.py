@@ -32,6 +32,7 @@ from .attempt_root_jit import compiled_attempt_root
 from .compile_when import waiting
 from .creep import creep_floor
 from .fast_parts import dispatch_pointers, loop_parts
+from .first_step_jit import compiled_first_step
 from .step import NOT_SOUGHT
 
 __all__ = ["CompiledLoop", "compiled_loop", "compiled_stage_solver"]
@@ -83,7 +84,7 @@ class CompiledLoop:
         self.A, self.W = _butcher()
         self.N, self.E = len(js.masses), len(js.ea)
         self.outputs = self.ws = self.wm = self.iw = None  # on the first call
-        self.fst, self.ist = np.zeros(16), np.zeros(22, dtype=np.int64)
+        self.fst, self.ist = np.zeros(16), np.zeros(L.DEFECT_REJECTED + 1, dtype=np.int64)
         self.breaks, self.kinks = np.zeros(0), np.zeros(0, dtype=np.int64)
         self.flat = np.full((self.E, 2), np.nan)  # (the held branches' flat ends: run())
         self._breaks_of: list | None = None  # the run's list they were made from
@@ -196,6 +197,12 @@ class CompiledLoop:
                np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
         return k, out
 
+    def first_step_ready(self) -> bool:
+        """:meth:`run` may take the first step after an event: its check is compiled
+        (:mod:`~lumped.solvers.eventdriven.first_step_jit`, on demand) and no law's folds
+        are checked (their test reads the start forces); else Python's, the same numbers."""
+        return not len(self.checked) and _FIRST_STEP.get() is not None
+
     def forget(self) -> None:
         """The driver changed its state lists in place (an event): convert them again."""
         self._akey = None
@@ -275,10 +282,11 @@ class CompiledLoop:
             rows) -> str:
         """Advance the driver's state ``st`` (keys ``t, h, x, v, F, dF_n, F_seen, h_acc,
         err_acc, h_good, h_big, stalled, creeping, t_stop, t_final, prev_break, rtol, atol,
-        m_min, max_steps, group, flat``; ``group`` the dense output's group of the mode's
-        locks, ``flat`` the held branches' flat ends,
-        :meth:`~lumped.solvers.radau.flat_start.FlatEnds.table`)
-        in place; returns the reason the loop stopped (``REASONS``).
+        m_min, max_steps, group, flat, held``: the dense output's group of the mode's locks,
+        the held branches' flat ends, :meth:`~lumped.solvers.radau.flat_start.FlatEnds.
+        table`, and after an event the elements whose dense output starts from the stage
+        forces, :meth:`~lumped.solvers.eventdriven.checks.StepChecks.takes_first`, else
+        ``None``) in place; returns the reason the loop stopped (``REASONS``).
 
         ``h_big`` is the longest step the run accepted (the scale of a bridge's steps,
         :mod:`lumped.solvers.eventdriven.bridge`): the longest of the steps taken here
@@ -291,6 +299,9 @@ class CompiledLoop:
         if self.ws is None:
             self._workspace()
         self.iw[1, 3] = with_impact_sign(self.iw[1, 3], False)  # (no impact at its start)
+        if st["held"] is not None:  # (the first step after an event: first_step_jit)
+            ist[L.FIRST], self.iw[3, :self.E], self.iw[1, L.FIRST_AT] = 1, st["held"], \
+                _FIRST_STEP.get()
         while True:  # the accepted steps written in place into the output's arrays
             ist[L.N_OUT] = 0
             T0, HS, Y0, D = dense.block(BLOCK)
@@ -308,6 +319,8 @@ class CompiledLoop:
         st["h_big"] = h_big
         for key, i in _COUNTERS:
             stats[key] = int(ist[i])
+        if ist[L.DEFECT_REJECTED]:  # (as the Python loop counts them)
+            stats["defect_rejected"] = stats.get("defect_rejected", 0) + int(ist[L.DEFECT_REJECTED])
         st["t"], st["h"], st["F_seen"] = float(fst[L.T]), float(fst[L.H]), float(fst[L.F_SEEN])
         st["stalled"] = int(ist[L.STALLED])
         if ist[L.HAVE_ACC]:
@@ -328,6 +341,7 @@ _SCAN = OnDemand(compiled_breakout_scan)
 _ROOT = OnDemand(compiled_breakout_root)
 _PROBE = OnDemand(compiled_probe_modes)
 _ATTEMPT_ROOT = OnDemand(compiled_attempt_root)
+_FIRST_STEP = OnDemand(compiled_first_step)
 _BUTCHER: list = []
 
 
@@ -347,17 +361,15 @@ _COUNTERS = (("steps", L.STEPS), ("rejected", L.REJECTED),
 
 
 def compiled_stage_solver(scene: Scene, modes: list[int]):
-    """The stage Newton compiled with numba (:mod:`lumped.solvers.radau.stage_jit`, the same
-    operations as :meth:`StageSystem.solve`, bit for bit), on the scene's generated
-    branch kernels, ``modes`` read at each call (the run's live list);
-    ``(U, h, x, v, f, scale, max_iters, after_impact) -> (U or None, its, nfac)`` (with
-    ``after_impact`` the step starts at an impact, :mod:`lumped.solvers.radau.roundoff`), or
-    ``None`` when a Jacobian was singular but finite: the compiled twin has no
-    minimum-norm solve, so the caller redoes the attempt with :meth:`StageSystem.solve`
-    from the same guess (as the compiled loop hands such a step to Python,
-    :data:`~lumped.solvers.eventdriven.loop_jit.SINGULAR`), and both loops pick the same
-    solution of a singular stage system (e.g. a junction between two slipping Coulomb
-    elements, whose velocity the laws leave free)."""
+    """The stage Newton compiled with numba (:mod:`lumped.solvers.radau.stage_jit`, the
+    operations of :meth:`StageSystem.solve`, bit for bit) on the scene's branch kernels,
+    ``modes`` read at each call (the run's live list): ``(U, h, x, v, f, scale, max_iters,
+    after_impact) -> (U or None, its, nfac)`` (``after_impact``: the step starts at an
+    impact, :mod:`lumped.solvers.radau.roundoff`), or ``None`` for a singular finite
+    Jacobian: the caller redoes the attempt with :meth:`StageSystem.solve`'s minimum-norm
+    solve from the same guess (as the compiled loop does, :data:`~lumped.solvers.
+    eventdriven.loop_jit.SINGULAR`), so both loops pick the same solution of a singular
+    system (a junction between two slipping Coulomb elements)."""
     from ...codegen.dispatch import dispatch_scene
     from ...codegen.jit import jit_scene, numba_enabled
     from ..radau.stage_jit import compiled_stage_solve, workspace

@@ -4,48 +4,41 @@ r"""The inner loop of ``radau5`` compiled with numba: consecutive steps with the
 or ``t_end``) with every element held on its mode's branch, operation for operation as the
 reference loop of :class:`lumped.solvers.eventdriven.run.Radau5Run` (bit for bit):
 
-1. the stage Newton (:func:`lumped.solvers.radau.stage_jit.stage_solve`), scales ``atol +
-   rtol |v_i|`` and ``rtol max(|F_e|, F_ref)``, ``F_ref = max(F_seen, m_min (max |v| +
-   atol / rtol) / h)``;
-2. RADAU5's filtered error estimate and its norm
-   (:func:`lumped.solvers.radau.step_jit.step_error`): ``(mu / h M - J) e = f(y_n) + M
-   sum_k E_k Z_k / h``, RMS of ``e / (atol + rtol max(|y_n|, |y_n+1|))`` over ``x``, the
-   masses' ``v`` and the guarded forces;
-3. Gustafsson's predictive step control, ``h_new = h / max(quot, facgus)``;
-4. the watched guards on the step's collocation polynomial at ``s = k / 8``
-   (:data:`lumped.solvers.radau.tableau.SAMPLES`; only *detected*: the root and the
-   landing are the reference's);
-5. the accepted step's dense-output record ``(t_n, h, y_n, Y_k - y_n)`` and its output row.
+the stage Newton (:func:`lumped.solvers.radau.stage_jit.stage_solve`; scales ``atol +
+rtol |v_i|`` and ``rtol max(|F_e|, F_ref)``, ``F_ref = max(F_seen, m_min (max |v| + atol /
+rtol) / h)``), RADAU5's filtered error estimate and its RMS norm
+(:func:`lumped.solvers.radau.step_jit.step_error`), Gustafsson's predictive step control,
+the watched guards on the collocation polynomial at ``s = k / 8`` (only *detected*: the
+root and the landing are the reference's) and the accepted step's dense-output record
+``(t_n, h, y_n, Y_k - y_n)`` and output row.
 
-It returns to Python, with the state as at the top of the reference loop's pass that must
-run next, when (the code in ``ist[REASON]``): the next step would reach the stop with a room
-below the step floor (:data:`STOP`; else it takes the step to the stop, ``h`` the room left,
-and returns after it: :data:`STOPPED`), a guard turns negative in a candidate step
-(:data:`CROSSING`: Python redoes it and lands on the event), a law not known monotone
-crosses a fold (:data:`FOLD`: Python redoes the step and stops), a Jacobian is singular but
-finite (:data:`SINGULAR`: Python's minimum-norm solve), the step is below its floor
-(:data:`FLOOR`), the output arrays are full (:data:`FULL`), ``ist[MAX_STEPS]`` tries
-(accepted and rejected: :meth:`~lumped.solvers.eventdriven.budget.WorkBudget.compiled_cap`)
-or the stall limit (:data:`LIMIT`), the eighth Newton failure in a row (:data:`DAMPED`:
-Python redoes the pass with its line search), or ``ist[CREEPING]`` accepted steps in a row
-shorter than ``max(step floor, fst[CREEP_FLOOR])`` reach ``CREEP_STEPS`` (:data:`CREEP`,
-after that step, before the controller sizes the next: the creep test of the Python loop,
-``StepPass._accept`` of :mod:`lumped.solvers.eventdriven.step`, which stops the run), or a
-step would start with a held branch's force at its flat end (:data:`FLAT`: Python's stage
-guess starts on the branch there, :mod:`lumped.solvers.radau.flat_start`). With
-``ist[SINGLE] = 1`` it makes one attempt of size ``h`` for the Python loop and returns
-(:data:`ATTEMPT`) its outcome: ``ist[A_OK]`` (1 solved, 0 Newton failed, -1 singular),
-``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]`` and the stage values in ``ws[0]``; the
-crossing's root is :func:`lumped.solvers.eventdriven.attempt_root_jit.attempt_root`'s,
-compiled apart (only when needed).
+With ``ist[FIRST] = 1`` the first step follows an event: its dense output starts from
+:mod:`lumped.solvers.eventdriven.first_step_jit`'s forces (``held`` in ``iw[3]``, the forces in
+``ws[10]``), and a defect above 1 redoes it shorter (``ist[DEFECT_REJECTED]``).
 
-State in and out: ``x, v, F, dF``, ``fst`` (floats, ``T .. CREEP_FLOOR``) and ``ist``
-(ints, ``HAVE_ACC .. CREEPING``). The forcing is ``(fkind, fpar, table)`` of
-:func:`lumped.solvers.radau.forces_jit.forces` (``table``: 0 without a table).
+It returns to Python, the state as at the top of the reference's pass that must run next,
+with ``ist[REASON]`` (:data:`REASONS`): a room to the stop below the step floor
+(:data:`STOP`; else it takes the step to the stop and returns after it, :data:`STOPPED`),
+a guard negative in a candidate step (:data:`CROSSING`: Python redoes it and lands), a
+fold of a law not known monotone (:data:`FOLD`), a singular finite Jacobian
+(:data:`SINGULAR`: the minimum-norm solve), a step below its floor (:data:`FLOOR`), full
+output arrays (:data:`FULL`), ``ist[MAX_STEPS]`` tries
+(:meth:`~lumped.solvers.eventdriven.budget.WorkBudget.compiled_cap`) or the stall limit
+(:data:`LIMIT`), the eighth Newton failure in a row (:data:`DAMPED`: the line search),
+``CREEP_STEPS`` accepted steps in a row shorter than ``max(step floor,
+fst[CREEP_FLOOR])`` (:data:`CREEP`, after that step: the reference's creep test, which
+stops the run), a held branch's force at its flat end (:data:`FLAT`: the stage guess of
+:mod:`lumped.solvers.radau.flat_start`). With ``ist[SINGLE] = 1`` it makes one attempt of
+size ``h`` for the Python loop (:data:`ATTEMPT`): ``ist[A_OK]`` (1 solved, 0 Newton
+failed, -1 singular), ``ist[A_ITS]``, ``ist[A_NFAC]``, ``fst[A_ERR]``, the stage values
+in ``ws[0]``; the crossing's root is :func:`lumped.solvers.eventdriven.attempt_root_jit.
+attempt_root`'s, compiled apart.
 
-The stage solve, error estimate and guard test are called through their addresses
-(``iw[1, STAGE_AT .. CROSSED_AT]``, :func:`loop_workspace`): numba would link a called
-function's code into this loop's module, and LLVM optimise and emit it there again.
+State in and out: ``x, v, F, dF``, ``fst`` (floats, ``T .. CREEP_FLOOR``), ``ist`` (ints,
+``HAVE_ACC .. DEFECT_REJECTED``); the forcing: :func:`lumped.solvers.radau.forces_jit.
+forces`'s ``(fkind, fpar, table)``. The stage solve, error estimate, guard test and
+first-step check are called through their addresses (``iw[1, STAGE_AT .. FIRST_AT]``):
+numba would link a called function's code into this loop's module and emit it again.
 """
 
 from __future__ import annotations
@@ -64,6 +57,7 @@ from ..radau.forces_jit import forces
 from ..radau.stage import DAMPED_AFTER, MAX_NEWTON, STALL_PASSES
 from ..radau.step_jit import FOLDED_TYPE, finite, start_time
 from ..radau.tableau import END_SLOPES, C
+from . import first_step_jit
 from .creep import CREEP_STEPS
 
 __all__ = ["advance", "advance_argument_types", "compiled_advance", "loop_workspace", "STOP",
@@ -76,14 +70,14 @@ __all__ = ["advance", "advance_argument_types", "compiled_advance", "loop_worksp
 # ist: int state and counters
 (HAVE_ACC, HAVE_DF, STALLED, STEPS, REJECTED, NEWTON_ITERATIONS, FACTORIZATIONS, NFEV, NJEV,
  MAX_NEWTON_ITERATIONS, MAX_STEPS, N_OUT, REASON, SINGLE, A_ITS, A_NFAC, A_OK,
- A_HIT, A_W, A_J, BI, CREEPING) = range(22)
+ A_HIT, A_W, A_J, BI, CREEPING, FIRST, DEFECT_REJECTED) = range(24)
 (STOP, CROSSING, SINGULAR, FLOOR, FULL, LIMIT, ATTEMPT, FOLD, STOPPED, DAMPED,
  CREEP, FLAT) = range(1, 13)
 REASONS = {STOP: "stop", CROSSING: "crossing", SINGULAR: "singular", FLOOR: "floor",
            FULL: "full", LIMIT: "limit", ATTEMPT: "attempt", STOPPED: "stopped",
            FOLD: "fold", DAMPED: "damped", CREEP: "creep", FLAT: "flat"}
 
-STAGE_AT, ERROR_AT, CROSSED_AT = 4, 5, 6  # iw[1, ...]: the addresses (see the module notes)
+STAGE_AT, ERROR_AT, CROSSED_AT, FIRST_AT = 4, 5, 6, 7  # iw[1, ...]: addresses (module notes)
 _EPS = 2.220446049250313e-16
 _C0, _C1, _C2 = C
 _S1, _S2, _S3 = END_SLOPES
@@ -94,23 +88,18 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
             ist, T0, HS, Y0, D, ROWS, ws, wm, iw) -> None:
     """Steps with the modes held until a reason to return (see the module notes).
 
-    ``fold_addr``: the fold test's address (:func:`~lumped.solvers.radau.step_jit.fold_test`,
-    compiled for a law not known monotone only; 0 if ``checked`` is empty). ``law_addr``,
-    ``guards_addr``: the addresses of the scene's compiled ``branch_law`` and
-    ``branch_guards`` (the caller keeps them alive; an integer passes in nanoseconds, a
-    first-class function argument in about 3.5 us a call), ``lawc`` their law constants.
-    ``breaks`` are the forcing's breakpoints and ``kinks`` (1 or 0) whether each is a
-    kink (:func:`~lumped.solvers.eventdriven.setup.time_events`): a step that ends on a
-    kink goes on to the next breakpoint, as the Python loop does, instead of returning;
-    ``ist[BI]`` is the next breakpoint's index. ``flat`` (``E x 2``) holds ``(s, d)`` of
-    each held branch flat at its end (``nan`` for the others,
-    :meth:`lumped.solvers.radau.flat_start.FlatEnds.table`): a step that starts with such
-    an element's force at its end is the Python loop's (:data:`FLAT`), whose stage
-    guess starts on the branch there.
-    ``ws`` (vectors), ``wm`` (matrices) and ``iw`` (ints) are :func:`loop_workspace`."""
+    ``law_addr``, ``guards_addr``, ``fold_addr`` (0 without ``checked`` elements): the
+    addresses of the scene's ``branch_law``, ``branch_guards`` and of the fold test
+    (:func:`~lumped.solvers.radau.step_jit.fold_test`), ``lawc`` the law constants.
+    ``breaks`` and ``kinks`` (1 or 0): the forcing's breakpoints and which are kinks
+    (:func:`~lumped.solvers.eventdriven.setup.time_events`; a step onto a kink goes on),
+    ``ist[BI]`` the next one. ``flat`` (``E x 2``): ``(s, d)`` of each held branch flat at
+    its end (:meth:`lumped.solvers.radau.flat_start.FlatEnds.table`). ``ws``, ``wm``,
+    ``iw``: :func:`loop_workspace`."""
     stage_solve = _stage_at(iw[1, STAGE_AT])
     step_error = _error_at(iw[1, ERROR_AT])
     crossed = _crossed_at(iw[1, CROSSED_AT])
+    first_check = _first_at(iw[1, FIRST_AT])
     N = masses.shape[0]
     E = ea.shape[0]
     n = N + E
@@ -124,6 +113,7 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
     nw = max(watched.shape[0], 1)
     qn, Fn = wm[5, :nw, :4], wm[6, :nw, :4]
     perm, out, permm = iw[0, :size], iw[1, :4], iw[2, :ny]  # (out[3]: stage_solve's)
+    held, F0 = iw[3, :E], ws[10, :E]  # (the first step after an event: first_step_jit)
     rtol, atol, m_min = fst[RTOL], fst[ATOL], fst[M_MIN]
     t_stop, t_final, prev_break = fst[T_STOP], fst[T_FINAL], fst[PREV_BREAK]
     t, h, F_seen = fst[T], fst[H], fst[F_SEEN]
@@ -263,7 +253,17 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
             ist[NJEV] -= nfac
             reason = CROSSING if hit else FOLD
             break
-        # accept: the dense record (t, h, y_n, Y_k - y_n) and the output row
+        first = ist[FIRST] == 1
+        if first:  # the first step after an event: its dense output's start and defect
+            d = first_check(law_addr, guards_addr, lawc, ea, eb, spring, modes, held, A, h, x,
+                            v, F, U, N, n, rtol, atol, F_seen, qn[0], Fn[0], gbuf, F0)
+            if d > 1.0:
+                ist[REJECTED] += 1
+                ist[DEFECT_REJECTED] += 1
+                h *= max(0.1, min(0.5, 0.8 / d))
+                ist[HAVE_ACC] = 0
+                continue
+        Fs = F0 if first else F  # accept: the dense record (t, h, y_n, Y_k - y_n), the row
         o = ist[N_OUT]
         T0[o] = t
         HS[o] = h
@@ -271,7 +271,7 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
             Y0[o, i] = x[i]
             Y0[o, N + i] = v[i]
         for e in range(E):
-            Y0[o, 2 * N + e] = F[e]
+            Y0[o, 2 * N + e] = Fs[e]
         for k in range(3):
             for i in range(N):
                 s_ = 0.0
@@ -280,11 +280,12 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
                 D[o, k, i] = (x[i] + h * s_) - x[i]
                 D[o, k, N + i] = U[k * n + i] - v[i]
             for e in range(E):
-                D[o, k, 2 * N + e] = U[k * n + N + e] - F[e]
+                D[o, k, 2 * N + e] = U[k * n + N + e] - Fs[e]
         for e in range(E):
             dF[e] = (_S1 * (U[N + e] - F[e]) + _S2 * (U[n + N + e] - F[e])
                      + _S3 * (U[2 * n + N + e] - F[e])) / h
         ist[HAVE_DF] = 1
+        ist[FIRST] = 0
         t = t_stop if to_stop else t + h
         for i in range(N):
             s_ = 0.0
@@ -303,10 +304,8 @@ def advance(law_addr, guards_addr, fold_addr, lawc, masses, ea, eb, spring, lock
             ROWS[o, 1 + 2 * N + e] = F[e]
         ist[N_OUT] = o + 1
         # the creep test (step.StepPass._accept; the step floor at the step's start)
-        if t - T0[o] < max(16.0 * _EPS * max(abs(T0[o]), t_final * 1e-3), fst[CREEP_FLOOR]):
-            ist[CREEPING] += 1
-        else:
-            ist[CREEPING] = 0
+        short = t - T0[o] < max(16.0 * _EPS * max(abs(T0[o]), t_final * 1e-3), fst[CREEP_FLOOR])
+        ist[CREEPING] = ist[CREEPING] + 1 if short else 0
         if ist[CREEPING] >= CREEP_STEPS:
             reason = CREEP
             break
@@ -348,6 +347,7 @@ if numba_enabled():
     _folded_at = function_at(FOLDED_TYPE)
     _stage_at = function_at(stage_jit.STAGE_TYPE)
     _error_at, _crossed_at = function_at(step_jit.ERROR_TYPE), function_at(step_jit.CROSSED_TYPE)
+    _first_at = function_at(first_step_jit.FIRST_TYPE)
 
 _COMPILED: list = []
 _LOOKED: list = []  # (numba's disk cache looked at for it: compiled_advance)
@@ -355,8 +355,8 @@ _LOOKED: list = []  # (numba's disk cache looked at for it: compiled_advance)
 
 def compiled_advance(compile: bool = True):
     """:func:`advance` compiled once for every scene (numba's disk cache after the first
-    time on a machine), or ``None`` without numba. With ``compile=False`` only loaded
-    from numba's disk cache (looked at once a process; ``None`` if it is not there)."""
+    time on a machine), or ``None`` without numba; ``compile=False``: only loaded from
+    numba's disk cache (looked at once a process)."""
     if not numba_enabled():
         return None
     if not _COMPILED:
@@ -394,7 +394,7 @@ def loop_workspace(N: int, E: int, watched: int, cap: int):
     outputs = (np.zeros(cap), np.zeros(cap), np.zeros((cap, ny)), np.zeros((cap, 3, ny)),
                np.zeros((cap, 1 + ny)))
     big = max(s, ny, 4, watched)
-    iw = np.zeros((3, max(big, CROSSED_AT + 1)), dtype=np.int64)
+    iw = np.zeros((4, max(big, FIRST_AT + 1)), dtype=np.int64)
     iw[1, STAGE_AT] = stage_jit.stage_address()
     iw[1, ERROR_AT], iw[1, CROSSED_AT] = step_jit.error_address(), step_jit.crossed_address()
-    return outputs, np.zeros((10, max(big, GUARD_ROOM))), np.zeros((7, big, big)), iw
+    return outputs, np.zeros((11, max(big, GUARD_ROOM))), np.zeros((7, big, big)), iw

@@ -261,7 +261,7 @@ class Radau5Run(StepPass, StepChecks):
                 "bi": bi, "breaks": breaks, "kinks": self.kinks, "rtol": self.rtol,
                 "atol": self.atol, "m_min": self.m_min,
                 "max_steps": self.budget.compiled_cap(self.stats), "group": self.lock_group(),
-                "flat": self.flat_reader().table(self.modes)}
+                "flat": self.flat_reader().table(self.modes), "held": self.held}
 
     def bridge_over(self) -> bool:
         """Backward Euler over the stop (``status``, ``message``) from the last accepted
@@ -327,7 +327,7 @@ class Radau5Run(StepPass, StepChecks):
                 if self.fast is not None:
                     self.fast.setup(self.t_final, self.rtol, self.atol, self.m_min)
             if self.fast is not None and self.target is None and not self.kept and \
-                    not self.ms.forces_from_probe and not self.flat_ends() and self._fast_steps():
+                    self.takes_first() and not self.flat_ends() and self._fast_steps():
                 continue
             tried = stats["steps"] + stats["rejected"]
             self._step()
@@ -369,7 +369,7 @@ class Radau5Run(StepPass, StepChecks):
             setattr(self, key, st[key])
         self.commit(self.t)
         if stats["steps"] > before:  # (as the Python loop's accepted steps set them)
-            self.kink_cuts, self.ms.hint = 0, None
+            self.kink_cuts, self.ms.hint, self.ms.forces_from_probe = 0, None, False
             if why == "creep":  # (its last step stops the run: Python's order)
                 self.status, self.message = creep_stop(
                     self.t, self.creeping, creep_floor(st["t_prev"], self.t_final), None)

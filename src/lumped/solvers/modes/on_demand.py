@@ -19,7 +19,7 @@ from collections.abc import Callable
 
 from ...codegen.jit import njit, numba_enabled
 
-__all__ = ["AFTER", "OnDemand", "compile_all", "compiled_once"]
+__all__ = ["AFTER", "OnDemand", "compile_all", "compiled_once", "from_disk"]
 
 #: Calls of a shared helper that run its Python reference, in one process, before the
 #: helper is compiled (when numba's disk cache does not hold it). A reference costs about
@@ -43,14 +43,14 @@ def compiled_once(store: list, py_func: Callable, signature: Callable, compile: 
         if compile:
             store.append(njit(signature(), cache=True, **options)(py_func))
         else:
-            got = _from_disk(py_func, signature(), **options)
+            got = from_disk(py_func, signature(), **options)
             if got is None:
                 return None
             store.append(got)
     return store[0]
 
 
-def _from_disk(py_func: Callable, sig, **options):
+def from_disk(py_func: Callable, sig, **options):
     """A dispatcher of ``py_func`` with the overload for ``sig`` loaded from numba's disk
     cache, as :meth:`numba.core.dispatcher.Dispatcher.compile` loads it, or ``None`` when
     the cache does not hold it (then nothing is compiled). These are numba's internal

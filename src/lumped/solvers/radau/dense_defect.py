@@ -41,13 +41,28 @@ from collections.abc import Callable, Sequence
 from .error import FORCE_TOL_FACTOR
 from .tableau import dense_weights
 
-__all__ = ["SAMPLES", "dense_defect"]
+__all__ = ["SAMPLES", "WEIGHTS", "dense_defect", "norm2"]
 
 #: Where the defect is sampled (fractions of the step): the two lobes of the
 #: interpolation error of a ``(t - t_*)^n`` start (for ``n = 0.5`` the cubic through the
 #: nodes is off by 0.076 and 0.069 of the step's change there; 0.082 at most, at 0.03).
 SAMPLES = (0.03, 0.4)
-_WEIGHTS = tuple(dense_weights(s) for s in SAMPLES)
+#: The dense output's weights ``l_1, l_2, l_3`` at :data:`SAMPLES`.
+WEIGHTS = tuple(dense_weights(s) for s in SAMPLES)
+
+
+def norm2(a: float, b: float) -> float:
+    """``sqrt(a^2 + b^2)`` without overflow, as ``m sqrt((a/m)^2 + (b/m)^2)``, ``m =
+    max(|a|, |b|)`` (``m`` itself when it is 0, infinite or NaN): IEEE operations and a
+    square root alone, so the compiled twin (:mod:`lumped.solvers.eventdriven.first_step_jit`)
+    gives the same bits; ``math.hypot`` is CPython's own algorithm, numba's the C
+    library's."""
+    a, b = abs(a), abs(b)
+    m = a if a > b else b
+    if not m > 0.0 or m == math.inf:
+        return m
+    a, b = a / m, b / m
+    return m * math.sqrt(a * a + b * b)
 
 
 def dense_defect(nodes: Sequence[tuple[tuple[float, ...], tuple[float, ...]]],
@@ -87,11 +102,11 @@ def dense_defect(nodes: Sequence[tuple[tuple[float, ...], tuple[float, ...]]],
         sigma_F = rtol_F * max(abs(F[0]), abs(F[3]), F_ref)
         kernel = kernels[e]
         R0 = kernel(q[0], F[0])[0]
-        for w1, w2, w3 in _WEIGHTS:
+        for w1, w2, w3 in WEIGHTS:
             qs = q[0] + w1 * (q[1] - q[0]) + w2 * (q[2] - q[0]) + w3 * (q[3] - q[0])
             Fs = F[0] + w1 * (F[1] - F[0]) + w2 * (F[2] - F[0]) + w3 * (F[3] - F[0])
             R, Rq, RF = kernel(qs, Fs)
-            norm = math.hypot(Rq * sigma_q, RF * sigma_F)
+            norm = norm2(Rq * sigma_q, RF * sigma_F)
             if not norm > 0.0:
                 continue
             d = abs(R - (1.0 - w1 - w2 - w3) * R0) / norm
