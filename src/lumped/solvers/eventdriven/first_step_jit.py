@@ -26,7 +26,7 @@ import math
 from ...codegen.function_types import compiled_address, function_at, guards_type, law_type
 from ...codegen.jit import numba_enabled
 from ..modes.on_demand import from_disk
-from ..radau.dense_defect import WEIGHTS
+from ..radau.dense_defect import WEIGHTS, norm2
 from ..radau.error import FORCE_TOL_FACTOR
 from ..radau.step_jit import element_nodes
 from ..radau.tableau import START_WEIGHTS
@@ -135,18 +135,6 @@ def _lowest(count, gbuf) -> float:
     return m
 
 
-def _norm2(a, b) -> float:
-    """:func:`lumped.solvers.radau.dense_defect.norm2`."""
-    a = abs(a)
-    b = abs(b)
-    m = a if a > b else b
-    if not m > 0.0 or m == math.inf:
-        return m
-    a = a / m
-    b = b / m
-    return m * math.sqrt(a * a + b * b)
-
-
 _FIRST: list = []
 
 if numba_enabled():
@@ -158,15 +146,15 @@ if numba_enabled():
     _guards_at = function_at(guards_type())
     _admitted = njit(cache=True)(_admitted)
     _lowest = njit(cache=True, inline="always")(_lowest)
-    _norm2 = njit(cache=True)(_norm2)
+    _norm2 = njit(cache=True)(norm2)  # (the Python reference's own code)
     _f8, _i8, _v = _T.float64, _T.int64, _T.float64[::1]
     _iv, _b, _mc, _ma = _i8[::1], _T.boolean[::1], _f8[:, ::1], _f8[:, :]
     #: The numba function type of :func:`first_step_check`.
     FIRST_TYPE = _T.FunctionType(_f8(
         _i8, _i8, _v, _iv, _iv, _b, _iv, _iv, _mc, _f8, _v, _v, _v, _v, _i8, _i8, _f8, _f8,
         _f8, _f8[:], _f8[:], _v, _v))
-else:  # pragma: no cover - without numba
-    FIRST_TYPE = None
+else:  # pragma: no cover - without numba (the compiled loop is not used)
+    FIRST_TYPE, _norm2 = None, norm2
 
 
 def compiled_first_step(compile: bool = True) -> int | None:
