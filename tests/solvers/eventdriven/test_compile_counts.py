@@ -25,7 +25,7 @@ from lumped.codegen.jit import njit, numba_enabled
 from lumped.io import Table
 from lumped.laws import ElementLaw
 from lumped.scene.forcing import SineBurst
-from lumped.solvers.eventdriven import attempt_root_jit, loop_jit
+from lumped.solvers.eventdriven import attempt_root_jit, first_step_jit, loop_jit
 from lumped.solvers.eventdriven import fast as fast_mod
 from lumped.solvers.modes import mode_guess_jit, on_demand, stuck_jit
 
@@ -59,13 +59,15 @@ def _fresh_helpers(monkeypatch, cache_dir) -> None:
     from numba.core import config
 
     for mod, name in ((stuck_jit, "_COMPILED"), (stuck_jit, "_SCAN"),
-                      (mode_guess_jit, "_COMPILED"), (attempt_root_jit, "_ROOT")):
+                      (mode_guess_jit, "_COMPILED"), (attempt_root_jit, "_ROOT"),
+                      (first_step_jit, "_FIRST")):
         monkeypatch.setattr(mod, name, [], raising=False)
     for name, make in (("_SCAN", "compiled_breakout_scan"), ("_ROOT", "compiled_breakout_root"),
                        ("_PROBE", "compiled_probe_modes"),
-                       ("_ATTEMPT_ROOT", "compiled_attempt_root")):
-        owner = attempt_root_jit if name == "_ATTEMPT_ROOT" else (
-            mode_guess_jit if name == "_PROBE" else stuck_jit)
+                       ("_ATTEMPT_ROOT", "compiled_attempt_root"),
+                       ("_FIRST_STEP", "compiled_first_step")):
+        owner = {"_ATTEMPT_ROOT": attempt_root_jit, "_PROBE": mode_guess_jit,
+                 "_FIRST_STEP": first_step_jit}.get(name, stuck_jit)
         monkeypatch.setattr(fast_mod, name, on_demand.OnDemand(getattr(owner, make)),
                             raising=False)
     monkeypatch.setattr(config, "CACHE_DIR", str(cache_dir))
@@ -198,7 +200,7 @@ def test_the_event_helpers_compiled_or_not_give_the_python_loop_run(monkeypatch,
     if helpers == "compiled":
         monkeypatch.setattr(on_demand, "AFTER", 1)  # compiled (or loaded) at the first call
     else:
-        for name in ("_SCAN", "_ROOT", "_PROBE", "_ATTEMPT_ROOT"):
+        for name in ("_SCAN", "_ROOT", "_PROBE", "_ATTEMPT_ROOT", "_FIRST_STEP"):
             monkeypatch.setattr(fast_mod, name, on_demand.OnDemand(lambda compile: None))
     scene = impact_scene()
     kw = dict(method="radau5", t_end=1.5, rtol=1e-8, atol=1e-11)
