@@ -194,10 +194,35 @@ def settle_on_rest_set(scene: Scene, pinned: list[float | None], q0: list[float]
 def rest_edge(kernel, F: float) -> float:
     """``F`` if ``R(0, F) = 0`` (or ``F`` not finite, or ``R(0, 0) != 0``), else the float
     ``F*`` on the segment from 0 to ``F`` with ``R(0, F*) = 0`` next to one with
-    ``R != 0``, by bisection (see :func:`settle_on_rest_set`)."""
-    if not math.isfinite(F) or kernel(0.0, F)[0] == 0.0 or kernel(0.0, 0.0)[0] != 0.0:
+    ``R != 0`` (see :func:`settle_on_rest_set`).
+
+    The set at rest is an interval about 0, so ``F*`` is one float, found by bisection
+    between a point inside (``R = 0``) and one outside. Newton steps on ``R(0, .)`` from
+    outside come first (at most :data:`_EDGE_NEWTON`): on an affine slip branch (Bingham,
+    Coulomb, Herschel-Bulkley ``n = 1``) the first lands on the edge or next to it, and
+    the float beside it closes the bracket, in 3 to 5 kernel calls instead of about 55.
+    A step that leaves the bracket, or a flat branch (``dR/dF = 0``), hands over to the
+    bisection, which gives the same ``F*``."""
+    R1, _, RF1 = kernel(0.0, F) if math.isfinite(F) else (0.0, 0.0, 0.0)
+    if R1 == 0.0 or kernel(0.0, 0.0)[0] != 0.0:
         return F
     inside, outside = 0.0, F
+    for _ in range(_EDGE_NEWTON):
+        if not (RF1 != 0.0 and math.isfinite(R1 / RF1)):
+            break
+        guess = outside - R1 / RF1
+        if not (guess != outside and min(inside, outside) < guess < max(inside, outside)):
+            break
+        R_g, _, RF_g = kernel(0.0, guess)
+        if R_g != 0.0:
+            outside, R1, RF1 = guess, R_g, RF_g
+            continue
+        inside = guess
+        beside = math.nextafter(guess, outside)
+        if beside == outside or kernel(0.0, beside)[0] != 0.0:
+            return guess
+        inside = beside
+        break
     while True:
         mid = 0.5 * (inside + outside)
         if mid in (inside, outside):
@@ -206,6 +231,10 @@ def rest_edge(kernel, F: float) -> float:
             inside = mid
         else:
             outside = mid
+
+
+#: Newton steps of :func:`rest_edge` from outside the set at rest, before its bisection.
+_EDGE_NEWTON = 3
 
 
 def start_at_known_rates(scene: Scene, v: list[float], F: list[float],

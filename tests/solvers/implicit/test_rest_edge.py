@@ -1,0 +1,88 @@
+"""The edge of a dashpot's set at rest (:func:`lumped.solvers.implicit.initial_slip.rest_edge`):
+Newton steps from outside, then bisection, give the float the bisection alone gives."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from lumped.laws import ElementLaw, get_law
+from lumped.solvers.implicit.initial_slip import rest_edge
+
+
+def _bisection(kernel, F: float) -> float:
+    """The reference: bisection on ``[0, F]`` alone (the rule before Newton's steps)."""
+    if not math.isfinite(F) or kernel(0.0, F)[0] == 0.0 or kernel(0.0, 0.0)[0] != 0.0:
+        return F
+    inside, outside = 0.0, F
+    while True:
+        mid = 0.5 * (inside + outside)
+        if mid in (inside, outside):
+            return inside
+        if kernel(0.0, mid)[0] == 0.0:
+            inside = mid
+        else:
+            outside = mid
+
+
+_SOFT = ElementLaw("soft_yield_edge", "dashpot", "q = gamma*Max(Abs(F) - tau, 0)**3*sign(F)",
+                   ["gamma", "tau"])
+
+_positive = st.floats(min_value=1e-3, max_value=1e3, allow_nan=False)
+
+
+@st.composite
+def _laws(draw):
+    kind = draw(st.sampled_from(["bingham", "coulomb", "herschel_bulkley", "soft"]))
+    tau = draw(_positive)
+    if kind == "bingham":
+        return get_law("bingham").bind(gamma=draw(_positive), tau=tau), tau
+    if kind == "coulomb":
+        return get_law("coulomb").bind(tau=tau, r=draw(_positive)), tau
+    if kind == "herschel_bulkley":
+        n = draw(st.sampled_from([0.3, 0.5, 1.0, 1.5, 2.0, 3.0]))
+        return get_law("herschel_bulkley").bind(gamma=draw(_positive), tau=tau, n=n), tau
+    return _SOFT.bind(gamma=draw(_positive), tau=tau), tau
+
+
+@given(law=_laws(), offset=st.floats(min_value=-50.0, max_value=2.0), sign=st.sampled_from(
+    [1.0, -1.0]))
+def test_the_edge_is_the_bisections(law, offset, sign):
+    bound, tau = law
+    F = sign * (tau + tau * 10.0 ** offset)  # beyond the yield force by 1e-50 .. 100 tau
+    got = rest_edge(bound.kernel, F)
+    assert got == _bisection(bound.kernel, F)
+    assert bound.kernel(0.0, got)[0] == 0.0
+    beyond = math.nextafter(got, F)
+    assert beyond == F or bound.kernel(0.0, beyond)[0] != 0.0
+
+
+@pytest.mark.parametrize("F", [2.0, -2.0, 1.0 + 2**-40, 1.0 + 2**-52, 1e3])
+def test_a_bingham_edge_in_a_few_kernel_calls(F):
+    kernel = get_law("bingham").bind(gamma=3.0, tau=1.0).kernel
+    calls = []
+
+    def counted(q, f):
+        calls.append(f)
+        return kernel(q, f)
+
+    assert rest_edge(counted, F) == math.copysign(1.0, F) == _bisection(kernel, F)
+    assert len(calls) <= 5  # (the bisection alone: about 55)
+
+
+def test_far_beyond_the_edge_newton_hands_over_to_the_bisection():
+    # F - R / R_F rounds to 0 (1e300 - 1e300): no step inside the bracket, bisection
+    kernel = get_law("bingham").bind(gamma=3.0, tau=1.0).kernel
+    assert rest_edge(kernel, 1e300) == 1.0 == _bisection(kernel, 1e300)
+
+
+def test_inside_or_not_finite_is_left():
+    kernel = get_law("bingham").bind(gamma=3.0, tau=1.0).kernel
+    assert rest_edge(kernel, 0.5) == 0.5
+    assert rest_edge(kernel, math.inf) == math.inf
+    assert math.isnan(rest_edge(kernel, math.nan))
+    newtonian = get_law("newtonian").bind(c=2.0).kernel  # (R(0, 0) = 0 but not set-valued)
+    assert rest_edge(newtonian, 3.0) == _bisection(newtonian, 3.0)
