@@ -283,10 +283,10 @@ class CompiledLoop:
         """Advance the driver's state ``st`` (keys ``t, h, x, v, F, dF_n, F_seen, h_acc,
         err_acc, h_good, h_big, stalled, creeping, t_stop, t_final, prev_break, rtol, atol,
         m_min, max_steps, group, flat, held``: the dense output's group of the mode's locks,
-        the held branches' flat ends, :meth:`~lumped.solvers.radau.flat_start.FlatEnds.
-        table`, and after an event the elements whose dense output starts from the stage
-        forces, :meth:`~lumped.solvers.eventdriven.checks.StepChecks.takes_first`, else
-        ``None``) in place; returns the reason the loop stopped (``REASONS``).
+        the held branches' flat ends (:meth:`~lumped.solvers.radau.flat_start.FlatEnds.table`)
+        and after an event the elements whose dense output starts from the stage forces
+        (:meth:`~lumped.solvers.eventdriven.checks.StepChecks.takes_first`), else ``None``)
+        in place; returns the reason the loop stopped (``REASONS``).
 
         ``h_big`` is the longest step the run accepted (the scale of a bridge's steps,
         :mod:`lumped.solvers.eventdriven.bridge`): the longest of the steps taken here
@@ -367,9 +367,9 @@ def compiled_stage_solver(scene: Scene, modes: list[int]):
     after_impact) -> (U or None, its, nfac)`` (``after_impact``: the step starts at an
     impact, :mod:`lumped.solvers.radau.roundoff`), or ``None`` for a singular finite
     Jacobian: the caller redoes the attempt with :meth:`StageSystem.solve`'s minimum-norm
-    solve from the same guess (as the compiled loop does, :data:`~lumped.solvers.
-    eventdriven.loop_jit.SINGULAR`), so both loops pick the same solution of a singular
-    system (a junction between two slipping Coulomb elements)."""
+    solve from the same guess (as the compiled loop does,
+    :data:`~lumped.solvers.eventdriven.loop_jit.SINGULAR`), so both loops pick the same
+    solution of a singular system (a junction between two slipping Coulomb elements)."""
     from ...codegen.dispatch import dispatch_scene
     from ...codegen.jit import jit_scene, numba_enabled
     from ..radau.stage_jit import compiled_stage_solve, workspace
