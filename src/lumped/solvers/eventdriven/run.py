@@ -16,6 +16,7 @@ import math
 from ...grid import steps_for
 from ...scene import Scene
 from ..implicit.initial_state import consistent_initial_state
+from ..modes.lock_events import hold_taut_strings
 from ..modes.stuck import hold_interval
 from ..radau.dense import DenseOutput, LockedForces
 from ..radau.error import initial_step
@@ -294,8 +295,8 @@ class Radau5Run(StepPass, StepChecks):
         self.tangent.clear()
         self.h = max(self.h_good, delta)
         self.ms.recent.clear()
-        if not to_end:
-            self.stop(self.at_event(self.t, self.h, "start"))
+        if not to_end and not self.stop(self.at_event(self.t, self.h, "start")):
+            self.v = hold_taut_strings(self.scene, self.lbs, self.modes, self.v)  # (BE's v)
         return True
 
     # -----------------------------------------------------------------------------------
