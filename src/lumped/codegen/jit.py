@@ -68,10 +68,10 @@ The scene's structure (arrays, runtime data, not baked into the code) is on
 junction), ``ea, eb`` (element ends, -1 for ground), ``spring`` (True for a spring-like
 law), ``law_index`` (element -> ``j``), ``consts`` and ``offsets``. A number changes the
 code only where it changes the generated source: a parameter equal to 0 (sympy drops the
-term), a sign, an integral exponent or one of 0.5 (1 drops the power, 2 is a product, 0.5
-a square root), a steep branch's inverse form. A factor of 1 is not dropped
-(:func:`~lumped.codegen.rewrite.constant_of`): ``gamma = 1`` shares the module of every
-other ``gamma``.
+term), a sign, an exponent whose power or derivative is written otherwise (1 drops the
+power, 2 and 3 write a product, 0.5 and 1.5 a square root), a steep branch's inverse
+form. A factor of 1 is not dropped (:func:`~lumped.codegen.rewrite.constant_of`):
+``gamma = 1`` shares the module of every other ``gamma``.
 
 Without numba, or with ``NUMBA_DISABLE_JIT=1``, the same module runs as plain Python:
 correct and slow. The disk cache the modules live in is :mod:`lumped.codegen.module_cache`'s.

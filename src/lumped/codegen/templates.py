@@ -8,8 +8,9 @@ each float literal replaced by a name ``_c<k>`` (:func:`lift_constants`), and th
 literals' values in order. A literal's text is ``repr`` of a float, so passing
 ``float(text)`` at run time computes what the literal computed, bit for bit; the text is
 the same for every value of the law's numbers, except where a number changes the
-generated source itself (0, a sign, an integral exponent or one of 0.5, a steep branch's
-inverse form; a factor of 1 stays in the code, :func:`lumped.codegen.rewrite.constant_of`).
+generated source itself (0, a sign, an exponent written as a product or a square root, a
+steep branch's inverse form; a factor of 1 stays in the code,
+:func:`lumped.codegen.rewrite.constant_of`).
 :mod:`lumped.codegen.jit` writes a scene's templates into one module per structure;
 :mod:`lumped.solvers.bdf.fast_codegen` inlines them into a per-structure loop.
 """
