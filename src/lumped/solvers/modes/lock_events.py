@@ -107,7 +107,11 @@ def hold_taut_strings(scene: Scene, branches: Sequence, modes: Sequence[int],
     ``radau5`` step from that state read the string's rate as an error of ``2e4``
     tolerances, whatever its size, down to the step floor; 11 more bridges, each followed
     by the same stop, and the run failed (a draw of the tight-tolerance property, seed
-    25039 of the ``long`` profile: two masses, three strings and a Coulomb element)."""
+    25039 of the ``long`` profile: two masses, three strings and a Coulomb element).
+    With moving supports (a :class:`~lumped.scene.supports.SupportFrame`'s view) a
+    string's rate holds its support's velocity too: ``v`` is left as it is there."""
+    if getattr(scene, "support_frame", None) is not None:
+        return v
     held = [e for e in range(len(scene.elements)) if scene.elements[e].kind == "spring"
             and branches[e].info[modes[e]].locks
             and branches[e].info[modes[e]].lock_value is not None]
