@@ -1,9 +1,10 @@
 """The edge of a dashpot's set at rest (:func:`lumped.solvers.implicit.initial_slip.rest_edge`):
-Newton steps from outside, then bisection, give the float the bisection alone gives."""
+Newton steps from outside, then bisection, give the one float at the edge."""
 
 from __future__ import annotations
 
 import math
+import struct
 
 import pytest
 from hypothesis import given
@@ -14,18 +15,23 @@ from lumped.solvers.implicit.initial_slip import rest_edge
 
 
 def _bisection(kernel, F: float) -> float:
-    """The reference: bisection on ``[0, F]`` alone (the rule before Newton's steps)."""
+    """The reference: the edge by bisection over the floats themselves, their bit patterns
+    from ``0`` to ``|F|`` in order (an oracle apart from :func:`rest_edge`'s midpoints):
+    the largest float on the segment with ``R(0, .) = 0``."""
     if not math.isfinite(F) or kernel(0.0, F)[0] == 0.0 or kernel(0.0, 0.0)[0] != 0.0:
         return F
-    inside, outside = 0.0, F
-    while True:
-        mid = 0.5 * (inside + outside)
-        if mid in (inside, outside):
-            return inside
-        if kernel(0.0, mid)[0] == 0.0:
+
+    def at(k: int) -> float:
+        return math.copysign(struct.unpack("<d", struct.pack("<q", k))[0], F)
+
+    inside, outside = 0, struct.unpack("<q", struct.pack("<d", abs(F)))[0]
+    while outside - inside > 1:
+        mid = (inside + outside) // 2
+        if kernel(0.0, at(mid))[0] == 0.0:
             inside = mid
         else:
             outside = mid
+    return at(inside)
 
 
 _SOFT = ElementLaw("soft_yield_edge", "dashpot", "q = gamma*Max(Abs(F) - tau, 0)**3*sign(F)",
