@@ -77,19 +77,12 @@ def hold_strung_junctions(scene: Scene, branches: Sequence, modes: Sequence[int]
     run's velocity tolerance) every junction keeps the probe's velocity, whose forces it
     matches (set always, a Coulomb element stuck at a junction ``1e-8`` s after an
     impact started ``1.2e-7`` beyond its yield force)."""
-    held, off = [], False
-    for e, el in enumerate(scene.elements):
-        a, b = scene.elem_a[e], scene.elem_b[e]
-        if el.kind != "spring" or not any(
-                i >= 0 and not isinstance(scene.nodes[i], Mass) for i in (a, b)):
-            continue
-        info = branches[e].info[modes[e]]
-        if info.locks and info.lock_value is not None:
-            held.append(e)
-            off = off or abs(across(v, a, b)) > tol
-    if not off:
+    ea, eb, nodes = scene.elem_a, scene.elem_b, scene.nodes
+    held = [e for e in _taut_strings(scene, branches, modes) if any(
+        i >= 0 and not isinstance(nodes[i], Mass) for i in (ea[e], eb[e]))]
+    if not any(abs(across(v, ea[e], eb[e])) > tol for e in held):
         return []
-    v[:] = impact_solve(scene, v, held, 0.0, target=[0.0] * len(held))[0]
+    v[:] = _at_rate_zero(scene, v, held)
     return held
 
 
@@ -112,11 +105,23 @@ def hold_taut_strings(scene: Scene, branches: Sequence, modes: Sequence[int],
     string's rate holds its support's velocity too: ``v`` is left as it is there."""
     if getattr(scene, "support_frame", None) is not None:
         return v
-    held = [e for e in range(len(scene.elements)) if scene.elements[e].kind == "spring"
-            and branches[e].info[modes[e]].locks
-            and branches[e].info[modes[e]].lock_value is not None]
+    held = _taut_strings(scene, branches, modes)
     if all(across(v, scene.elem_a[e], scene.elem_b[e]) == 0.0 for e in held):
         return v
+    return _at_rate_zero(scene, v, held)
+
+
+def _taut_strings(scene: Scene, branches: Sequence, modes: Sequence[int]) -> list[int]:
+    """The springs ``modes`` holds on a position lock (a taut string, ``q = L``)."""
+    return [e for e, el in enumerate(scene.elements) if el.kind == "spring"
+            and branches[e].info[modes[e]].locks
+            and branches[e].info[modes[e]].lock_value is not None]
+
+
+def _at_rate_zero(scene: Scene, v: list[float], held: list[int]) -> list[float]:
+    """The velocities nearest ``v`` in the kinetic-energy norm with every element of
+    ``held`` at rate 0 (:func:`lumped.solvers.nonsmooth.impacts.impact_solve` with targets
+    0), as Python floats."""
     return [float(vi) for vi in impact_solve(scene, v, held, 0.0, target=[0.0] * len(held))[0]]
 
 
