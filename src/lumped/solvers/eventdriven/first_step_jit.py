@@ -10,8 +10,8 @@ output's defect against the held laws (:func:`lumped.solvers.radau.dense_defect.
 dense_defect`) exceeds 1. :func:`first_step_check` ports both, operation for operation,
 for :func:`lumped.solvers.eventdriven.loop_jit.advance`, which takes that step itself
 instead of handing it to the Python loop (one pass of it an event, 60-75 us). It is
-compiled apart (:func:`first_step_address`) and called through its address, as the
-crossing test of :mod:`lumped.solvers.radau.step_jit`.
+compiled apart (:func:`compiled_first_step`, on demand) and called through its address,
+as the crossing test of :mod:`lumped.solvers.radau.step_jit`.
 
 The compiled loop takes no locks in parallel (their split is Python's), so the
 ``cones`` of the Python rule never occur here; nor does it start a step at an impact, or
@@ -49,20 +49,17 @@ def first_step_check(law_addr, guards_addr, lawc, ea, eb, spring, modes, held, A
     branch_law = _law_at(law_addr)
     branch_guards = _guards_at(guards_addr)
     E = ea.shape[0]
-    for e in range(E):  # the stage forces' quadratic at s = 0 (StepChecks.start_forces)
-        s = 0.0
-        s += _S0 * U[N + e]
+    for e in range(E):  # (dense_start_forces: the probe's force where not held)
+        if held[e] == 0:
+            F0[e] = F_n[e]
+            continue
+        s = 0.0  # the stage forces' quadratic at s = 0 (StepChecks.start_forces), which
+        s += _S0 * U[N + e]  # element_nodes reads of element e alone
         s += _S1 * U[n + N + e]
         s += _S2 * U[2 * n + N + e]
         F0[e] = s
-    for e in range(E):  # (dense_start_forces: the probe's force where not held)
-        if held[e] == 0:
-            continue
         element_nodes(ea, eb, spring, A, h, x_n, v_n, F0, U, N, n, e, q, F)
         F0[e] = _admitted(branch_guards, lawc, e, modes[e], q[0], F[0], q[1], F[1], gbuf)
-    for e in range(E):
-        if held[e] == 0:
-            F0[e] = F_n[e]
     v_scale = 0.0
     for i in range(N):
         if i == 0 or abs(v_n[i]) > v_scale:
