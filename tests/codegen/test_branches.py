@@ -182,9 +182,13 @@ def test_the_coulomb_limit_is_solved_for_its_force():
     fwd, back = lb.branch(3.0, 1.0 + 3e-12), lb.branch(-3.0, -1.0 - 3e-12)
     R, Rq, RF = lb.stage_kernel_for(fwd)(3.0, 1.5)
     assert (R, Rq, RF) == (pytest.approx(0.5 - 3e-12, rel=1e-15), -1e-12, 1.0)
-    assert codes_of(lb.stage_guards_for(fwd))[1] == "q"
+    # (the rate with its factor 1.0, the text of every other gamma: 1e12 is no integer
+    # to sympy, rewrite.constant_of)
+    assert codes_of(lb.stage_guards_for(fwd))[1] == "1.0*q"
     assert lb.stage_guards_for(fwd)(2.0, 1.0)[0] == 2.0  # F + tau
-    assert codes_of(lb.stage_guards_for(back)) == ("-q",)
+    assert codes_of(lb.stage_guards_for(back)) == ("-1.0*q",)
+    other = law_branches(get_law("bingham").bind(gamma=1.3e12, tau=1.0))
+    assert codes_of(other.stage_guards_for(other.branch(3.0, 1.0 + 3e-12)))[1] == "1.0*q"
     # the whole law in the form of the mode choice: the same zeros as the law
     law = lb.stage_law_for(get_law("bingham").bind(gamma=1e12, tau=1.0).kernel)
     assert law(0.0, 0.5) == (0.0, 1.0, 0.0) and law(2.0, 1.0 + 2e-12)[0] == 0.0

@@ -15,8 +15,8 @@ import math
 
 import sympy as sp
 
-__all__ = ["admitted", "class_key", "float_content", "numbers_key", "parameter_floats",
-           "sympy_float"]
+__all__ = ["admitted", "class_key", "constant_magnitudes", "float_content", "numbers_key",
+           "parameter_floats", "sympy_float"]
 
 _ADMITTED: dict[object, bool] = {}
 _LAW_CONSTANTS: dict[object, tuple] = {}
@@ -47,10 +47,31 @@ def _lone_comparisons(law) -> bool:
     return True
 
 
-def _special(value: float) -> bool:
-    """A value sympy or the printer takes apart from the rest of its sign class (or not
-    finite: derived from scratch)."""
-    return not math.isfinite(value) or float(value).is_integer() or abs(value) == 0.5
+def _special(value: float, exponent: bool) -> bool:
+    """A value sympy or the printer takes apart from the rest of its sign class: zero
+    (its terms dropped), and in an ``exponent`` an integral value (a product, or no
+    power) or ``+-1/2`` (a square root); or not finite. Derived from scratch. Elsewhere
+    an integral value or ``1/2`` is a float like any other
+    (:func:`~lumped.codegen.rewrite.constant_of`)."""
+    if not math.isfinite(value) or value == 0.0:
+        return True
+    return exponent and (float(value).is_integer() or abs(value) == 0.5)
+
+
+_EXPONENTS: dict[object, tuple[bool, ...]] = {}
+
+
+def _exponent_flags(law) -> tuple[bool, ...]:
+    """Whether each of ``law``'s parameters appears in the exponent of a power of its
+    residual (once per law)."""
+    hit = _EXPONENTS.get(law)
+    if hit is None:
+        exponents: set = set()
+        for node in sp.preorder_traversal(law.residual):
+            if isinstance(node, sp.Pow):
+                exponents |= node.exp.free_symbols
+        hit = _EXPONENTS[law] = tuple(law.symbols[p] in exponents for p in law.parameters)
+    return hit
 
 
 def _constants(law) -> tuple[sp.Float, ...]:
@@ -74,6 +95,12 @@ def _constant_keys(law) -> tuple[list, list]:
     return hit
 
 
+def constant_magnitudes(law) -> set[float]:
+    """The magnitudes of ``law``'s non-integral constants (a parameter equal to one is
+    tied to it in the class key)."""
+    return {abs(c) for c in _constant_keys(law)[0]}
+
+
 def float_content(x: float) -> tuple:
     """``sympy.Float(x)._hashable_content()`` of a finite nonzero float ``x``, in plain
     Python: ``((sign, man, exp, bc), 53)``, ``|x| = man 2^exp`` with ``man`` odd of ``bc``
@@ -87,7 +114,7 @@ def float_content(x: float) -> tuple:
 
 def numbers_key(law, values: tuple[float, ...]) -> tuple | None:
     """:func:`class_key` of ``law`` bound to ``values``, in plain floats (no sympy)."""
-    if not admitted(law) or any(_special(v) for v in values):
+    if not admitted(law) or any(map(_special, values, _exponent_flags(law))):
         return None
     pm, contents = [], []
     for v in values:  # (the content of -v is that of v with the other sign)

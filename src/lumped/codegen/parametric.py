@@ -15,25 +15,38 @@ parameter with another number into a number of the output, and no decision depen
 a parameter's value beyond what the class fixes. The class fixes each parameter's sign,
 the order sympy gives the floats ``+-v_j`` and the law's own constants (by value, and by
 their binary digits: that order decides the order of the terms of a sum in the code),
-and leaves out the values sympy takes apart (an integral float becomes an integer,
-``+-1/2`` a square root). What the class does not fix is decided per law from its
-numbers: the steepness of each affine branch against
+and leaves out the values sympy takes apart (zero, whose terms it drops; in an
+exponent, an integral value, a product or no power, and ``+-1/2``, a square root;
+elsewhere ``1``, ``2`` or ``100`` is a float like any other,
+:func:`~lumped.codegen.rewrite.constant_of`). What the class does not fix is decided per
+law from its numbers: the steepness of each affine branch against
 :data:`~lumped.codegen.stage_forms.STEEP_SPAN` (Bingham's ``gamma tau``; a law whose
 branch would be steep is derived from scratch). :func:`admitted` refuses a law that
 compares numbers alone other than lone parameters (``gamma*tau > 1``, folded by sympy
-without a trace). The first two laws of a class are derived from scratch, as before;
-the class is made when the second has the same code with the recipes' numbers, the
-same expressions, branches and bounds with its floats swapped in, and neither a steep
-branch (:meth:`LawClass.check`). A class that combines numbers (Herschel-Bulkley's
-``n - 1``, a string's ``1/k``) fails the check, and after three failures its laws are
-derived law by law. Every decision is read from the law's expression and numbers,
-never its name. The class key is :mod:`lumped.codegen.float_keys`; a law remade from its
-class is :mod:`lumped.codegen.rebound`.
+without a trace).
+
+A class's first law is derived from scratch. The class is made when a second law has
+the same code with the recipes' numbers, the same expressions, branches and bounds with
+its floats swapped in, and neither a steep branch (:meth:`LawClass.check`). The recipes
+are read by value, so the two laws must differ in every number and have none a
+derivation's own constants often equal (an integral value or ``+-1/2``, :func:`plain`:
+lifted against ``r = 1``, a Coulomb law's derivative ``1.0`` would pass for ``r``).
+Where the second law cannot check the first (a user who edits one number, or the
+paper's ``gamma = tau = 1``), the class is made from two laws of our own in it
+(:func:`near_in_class`: each number moved by ``1e-9 .. 1e-7`` of itself), and the second
+law made from the class: two derivations, once per class. A class that combines numbers
+(Herschel-Bulkley's ``n - 1``, a string's ``1/k``, ``2*gamma``) fails the check; its laws
+are derived law by law (at once where its own pair fails, after three failed checks
+otherwise; every class of a law once three are given up). Every decision is read from
+the law's expression and numbers, never its name. The class key is
+:mod:`lumped.codegen.float_keys`; a law remade from its class is
+:mod:`lumped.codegen.rebound`.
 """
 
 from __future__ import annotations
 
 import math
+import random
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -44,6 +57,7 @@ from .branches import LawBranches
 from .float_keys import (
     admitted,
     class_key,
+    constant_magnitudes,
     float_content,
     numbers_key,
     parameter_floats,
@@ -62,6 +76,13 @@ _FAILURES: dict[tuple, int] = {}
 _REBOUND: dict[object, Rebound | None] = {}
 #: A class's first law, waiting for a second to be checked against.
 _PENDING: dict[tuple, LawClass] = {}
+#: Classes whose first law had a number not :func:`plain` (the next law makes the class).
+_SEEN: set[tuple] = set()
+#: Classes whose own pair was steep (made near a law that is not, :func:`_own_pair`).
+_STEEP: set[tuple] = set()
+#: Classes given up per law, and the laws given up (every class derived law by law).
+_LAW_FAILURES: dict[object, int] = {}
+_GIVEN_UP: set = set()
 #: How many failed checks of a class before its laws are derived law by law.
 _TRIES = 3
 #: Bound laws remembered with their rebound results (the oldest half forgotten past it).
@@ -233,40 +254,125 @@ def _rebound(bound) -> Rebound | None:
     if key is None:
         return None
     cls = _CLASSES.get(key)
-    if cls is not None:
-        return Rebound(cls, values) if cls.forward(values) else None
-    if key in _CLASSES:  # given up: derived law by law
-        return None
-    try:
-        own = LawClass(law, values)  # this law's derivation, exact for it
-    except Exception:  # noqa: BLE001 - derived law by law, where it fails as it did before
-        _fail(key)
-        return None
-    first = _PENDING.get(key)
-    if not own.steep:
-        if first is None:
-            _PENDING[key] = own
-        elif any(abs(a) == abs(b) for a, b in zip(first.values, values, strict=True)):
-            # a number shared by both laws cannot tell a parameter's recipe from a
-            # number made of it (1/k, n - 1) or from a constant: not a check; the first
-            # law waits for one that differs in every number
-            pass
-        else:
+    if cls is None and key not in _CLASSES and law not in _GIVEN_UP:
+        first = _PENDING.get(key)
+        if first is None and key not in _SEEN:  # the class's first law
+            own = _derived(law, values, key)
+            if own is not None and not own.steep:
+                if plain(values):
+                    _PENDING[key] = own
+                else:
+                    _SEEN.add(key)
+            return None if own is None else Rebound(own, values)
+        if first is not None and plain(values) and _apart(first.values, values):
+            own = _derived(law, values, key)
+            if own is None or own.steep:
+                return None if own is None else Rebound(own, values)
             try:
                 first.check(own, parameter_floats(values))
             except ValueError:  # the next law is checked against this one, _TRIES times
                 _PENDING[key] = own
-                _fail(key)
+                _fail(key, law)
             else:
                 _CLASSES[key] = first
                 del _PENDING[key]
-    return Rebound(own, values)
+            return Rebound(own, values)
+        # a second law of the class that cannot check the first: it shares a number
+        # (which cannot tell a parameter's recipe from a number made of it, 1/k, n - 1,
+        # or from a constant) or has one a derivation's constants may equal (1, 2, 1/2).
+        # The class is made from two laws of our own in it, numbers apart from each
+        # other's and from every such value, and this law is made from it
+        _PENDING.pop(key, None)
+        if key not in _STEEP:
+            _own_pair(law, key, values)
+        cls = _CLASSES.get(key)
+    if cls is not None and cls.forward(values):
+        return Rebound(cls, values)
+    if cls is not None or key in _CLASSES or law in _GIVEN_UP:
+        return None  # steep (derived law by law), or the class given up
+    own = _derived(law, values, key)
+    if own is not None and not own.steep and key in _STEEP:
+        _STEEP.discard(key)  # (one more try, near a law that is not steep)
+        _own_pair(law, key, values)
+    return None if own is None else Rebound(own, values)
 
 
-def _fail(key: tuple) -> None:
+def _derived(law, values: tuple[float, ...], key: tuple) -> LawClass | None:
+    """``law`` derived at ``values`` (exact for them), or ``None`` where the derivation
+    fails (derived law by law, where it fails as it did before)."""
+    try:
+        return LawClass(law, values)
+    except Exception:  # noqa: BLE001
+        _fail(key, law)
+        return None
+
+
+def plain(values: tuple[float, ...]) -> bool:
+    """Whether no number of ``values`` is integral or ``+-1/2``, values a derivation's own
+    constants often take (``dR/dF = 1``, the 2 of a square's derivative): lifted against
+    such a value, a constant would pass for the parameter
+    (:func:`~lumped.codegen.rebinding.lift_text`)."""
+    return not any(float(v).is_integer() or abs(v) == 0.5 for v in values)
+
+
+def _apart(a: tuple[float, ...], b: tuple[float, ...]) -> bool:
+    """Whether every number of ``a`` differs from ``b``'s in magnitude (a check needs it:
+    a number shared by both laws cannot tell a parameter's recipe from a number made of
+    it or from a constant)."""
+    return all(abs(x) != abs(y) for x, y in zip(a, b, strict=True))
+
+
+def near_in_class(law, key: tuple, values: tuple[float, ...], salt: int
+                  ) -> tuple[float, ...] | None:
+    """Numbers of the class ``key`` near ``values``, each magnitude moved by a relative
+    ``1e-9 .. 1e-7`` (a law constant's magnitude kept: the class ties them) and
+    :func:`plain`; drawn from ``salt``, the same on every run and machine. ``None`` when
+    no draw of 64 has the class's order of floats."""
+    constants = constant_magnitudes(law)
+    magnitudes = sorted({abs(v) for v in values} - constants)
+    rng = random.Random(0x1A3B + salt)
+    for _ in range(64):
+        moved = {m: m * (1.0 + rng.uniform(1e-9, 1e-7)) for m in magnitudes}
+        out = tuple(math.copysign(moved.get(abs(v), abs(v)), v) for v in values)
+        if plain(tuple(moved.values())) and numbers_key(law, out) == key:
+            return out
+    return None
+
+
+def _own_pair(law, key: tuple, values: tuple[float, ...]) -> None:
+    """Make ``key``'s class from two laws of our own in it (:func:`near_in_class`), or
+    give it up: numbers apart from each other's and from every constant's, so one checks
+    the other as two such laws of a user would (:meth:`LawClass.check`)."""
+    a, b = near_in_class(law, key, values, 1), near_in_class(law, key, values, 2)
+    if a is None or b is None or not _apart(a, b):
+        _fail(key, law)
+        return
+    try:
+        first, second = LawClass(law, a), LawClass(law, b)
+    except Exception:  # noqa: BLE001 - derived law by law, as a user's law would be
+        _fail(key, law)
+        return
+    if first.steep or second.steep:  # (near a steep law: tried again near one that is not)
+        _STEEP.add(key)
+        return
+    try:
+        first.check(second, parameter_floats(b))
+    except ValueError:  # two plain laws apart: the form changes with the numbers
+        _CLASSES[key] = None
+        _fail(key, law)
+    else:
+        _CLASSES[key] = first
+
+
+def _fail(key: tuple, law) -> None:
     """One more failure of ``key``'s class; past :data:`_TRIES` its laws are derived law
-    by law."""
+    by law, and past :data:`_TRIES` classes given up, every class of ``law`` (a law that
+    combines numbers fails in every class)."""
     _FAILURES[key] = _FAILURES.get(key, 0) + 1
     if _FAILURES[key] >= _TRIES:
         _CLASSES[key] = None
         _PENDING.pop(key, None)
+    if _CLASSES.get(key, 0) is None:
+        failed = _LAW_FAILURES[law] = _LAW_FAILURES.get(law, 0) + 1
+        if failed >= _TRIES:
+            _GIVEN_UP.add(law)

@@ -240,16 +240,19 @@ def constant_of(sym: sp.Symbol, value: float, exponent: bool = True) -> sp.Numbe
 
     Integral values become sympy Integers where the parameter is an ``exponent`` (of a
     power in the expression), so that ``n = 1`` gives ``x**1 = x`` and ``n = 2`` a
-    product: the branch's shape, as for the other integral values. Elsewhere ``+-1`` stay
-    floats: sympy drops a factor ``Integer(1)`` from the code, so ``gamma = 1`` gave
-    another text of the compiled module than every other ``gamma``, and a user who
-    edited it compiled a law module (0.5-0.8 s) for one number; ``1.0*y`` is ``y`` to
-    the bit, so the numbers are the same.
+    product: the branch's shape, as for the other integral values. Zero becomes the
+    Integer 0 everywhere: sympy drops a term with a factor 0, the form of the law
+    without it. Every other value stays a float: sympy drops a factor ``Integer(1)``
+    from the code and prints ``Integer(100)`` as ``100``, so ``gamma = 1`` or ``k = 100``
+    gave another text of the compiled module than every other value, and another law
+    class (:mod:`lumped.codegen.parametric`): a user who edited such a number derived
+    the law again in sympy or compiled a law module for one number. ``1.0*y`` is ``y``
+    to the bit, and ``100.0*y`` is ``100*y``: the numbers are the same.
     """
     x = float(value)
     if not math.isfinite(x):
         raise ValueError(f"parameter `{sym}` must be finite, got {x!r}")
-    if not x.is_integer() or abs(x) >= 2**53 or (not exponent and abs(x) == 1.0):
+    if not x.is_integer() or abs(x) >= 2**53 or (not exponent and x != 0.0):
         return sp.Float(x)
     return sp.Integer(int(x))
 

@@ -31,16 +31,23 @@ __all__ = ["kernel_sources", "lift_constants", "lift_function", "slot_arguments"
 def kernel_sources(bound) -> tuple[str, str]:
     """``(kernel, magnitude)`` source of a bound law, unguarded (numba-ready)."""
     from lumped.codegen import compile_kernel
+
+    _generated(bound)
+    law = bound.law
+    params = {law.symbols[p]: v for p, v in bound.params.items()}
+    kernel = compile_kernel(law.residual, law.q, law.F, params, guard=False)
+    return kernel.__source__, kernel.magnitude.__source__
+
+
+def _generated(bound) -> None:
+    """``ValueError`` unless ``bound``'s kernel is its sympy law's (a hand-written kernel
+    has no generated code, whatever law and numbers it names)."""
     from lumped.laws import BoundLaw
 
     if not (isinstance(bound, BoundLaw) and type(bound).kernel is BoundLaw.kernel):
         raise ValueError(
             f"compiled methods need laws given as sympy residuals (ElementLaw.bind); got "
             f"{bound!r}, whose kernel is hand-written")
-    law = bound.law
-    params = {law.symbols[p]: v for p, v in bound.params.items()}
-    kernel = compile_kernel(law.residual, law.q, law.F, params, guard=False)
-    return kernel.__source__, kernel.magnitude.__source__
 
 
 def _exact_powers(source: str) -> str:
@@ -186,6 +193,7 @@ def law_template(bound) -> LawTemplate:
     hit = _BY_LAW.get(key) if key is not None else None
     if hit is not None:
         return hit
+    _generated(bound)  # (before its class: an object naming a law and numbers)
     rebound = law_class(bound)
     hit = rebound.template() if rebound is not None else template_from_scratch(bound)
     if key is not None:

@@ -133,10 +133,13 @@ def test_bad_input():
         simulate(maxwell(), method="jit-bdf2", t_end=1.0)
 
 
-def test_hand_written_kernel_is_refused():
+@pytest.mark.parametrize("c", [1.0, 0.77])
+def test_hand_written_kernel_is_refused(c):
+    # (an object naming a law and numbers of a class, c = 0.77, was given the law's
+    # compiled code for them and ran it, its own kernel never called)
     class HandWritten:
         law = get_law("newtonian")
-        params = {"c": 1.0}
+        params = {"c": c}
 
         @staticmethod
         def kernel(q, F):
