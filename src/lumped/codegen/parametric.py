@@ -33,7 +33,7 @@ derivation's own constants often equal (an integral value or ``+-1/2``, :func:`p
 lifted against ``r = 1``, a Coulomb law's derivative ``1.0`` would pass for ``r``).
 Where the second law cannot check the first (a user who edits one number, or the
 paper's ``gamma = tau = 1``), the class is made from two laws of our own in it
-(:func:`near_in_class`: each number moved by ``1e-9 .. 1e-7`` of itself), and the second
+(:func:`near_in_class`: each number moved by ``1e-9`` to ``1e-7`` of itself), and the second
 law made from the class: two derivations, once per class. A class that combines numbers
 (Herschel-Bulkley's ``n - 1``, a string's ``1/k``, ``2*gamma``) fails the check; its laws
 are derived law by law (at once where its own pair fails, after three failed checks
@@ -325,7 +325,7 @@ def _apart(a: tuple[float, ...], b: tuple[float, ...]) -> bool:
 def near_in_class(law, key: tuple, values: tuple[float, ...], salt: int
                   ) -> tuple[float, ...] | None:
     """Numbers of the class ``key`` near ``values``, each magnitude moved by a relative
-    ``1e-9 .. 1e-7`` (a law constant's magnitude kept: the class ties them) and
+    ``1e-9`` to ``1e-7`` (a law constant's magnitude kept: the class ties them) and
     :func:`plain`; drawn from ``salt``, the same on every run and machine. ``None`` when
     no draw of 64 has the class's order of floats."""
     constants = constant_magnitudes(law)
