@@ -37,6 +37,15 @@ def _junction_scene() -> Scene:
                   Element("e3", get_law("linear_spring").bind(k=8.57), "ground", "m2")])
 
 
+def _string_scene() -> Scene:
+    """A mass thrown from another on a string (taut twice by impacts, then slack), a
+    Bingham dashpot to ground that reverses: candidates with the string taut."""
+    return Scene([Mass("m0", 1.0, x0=0.0), Mass("m1", 2.0, x0=0.3, v0=1.0)],
+                 [Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m0"),
+                  Element("r", get_law("string_spring").bind(k=1.0, L=0.35), "m0", "m1"),
+                  Element("d", get_law("bingham").bind(gamma=1.0, tau=0.5), "ground", "m1")])
+
+
 def _recorded_probes() -> list[tuple]:
     """The arguments of every probe of compiled ``radau5`` runs on a few scenes (events
     of every kind: stick, slip, reversal, break-out, at masses and junctions)."""
@@ -55,7 +64,8 @@ def _recorded_probes() -> list[tuple]:
     runs = [(*_bench("stick-breakout"), 1e-6), (*_bench("forcing-F2"), 1e-8),
             (*_bench("release-0.5"), 1e-4), (*_bench("forcing-F1"), 1e-4),
             (bingham_chain(3), 5.0, 1e-6), (_junction_scene(), 2.0, 1e-6),
-            (yielding_junction(), 0.5, 6.25e-4)]  # (a steep branch read by its rate)
+            (yielding_junction(), 0.5, 6.25e-4),  # (a steep branch read by its rate)
+            (_string_scene(), 3.0, 1e-8)]  # (a taut string: its lock's velocity form)
     adaptive_modes.try_modes = record
     rest_run, runner.rest_run = runner.rest_run, lambda scene, settings: None  # (Python)
     try:

@@ -180,11 +180,11 @@ class CompiledLoop:
             self._probe = (fn, *probe_workspace(self.N, self.E))
         return True
 
-    def probe_modes(self, candidates, current, f: list[float], x: list[float],
-                    v: list[float], F: list[float], h_p: float) -> tuple[int, np.ndarray]:
-        """:func:`lumped.solvers.modes.mode_guess_jit.probe_modes` on the scene's kernels:
-        ``(the index of the confirmed candidate or UNDECIDED or REFUSED, out)`` with
-        ``v_p, F_p`` in ``out`` (see :func:`lumped.solvers.modes.mode_guess.try_modes`)."""
+    def probe_modes(self, candidates, current, f: list[float], x: list[float], v: list[float],
+                    F: list[float], h_p: float, locks: np.ndarray) -> tuple[int, np.ndarray]:
+        """:func:`lumped.solvers.modes.mode_guess_jit.probe_modes` on the scene's kernels
+        (``locks``: :func:`~lumped.solvers.modes.mode_guess.lock_rows`): ``(the index of the
+        confirmed candidate or UNDECIDED or REFUSED, out)``, ``v_p, F_p`` in ``out``."""
         if self._probe is None:
             self._probe = (compiled_probe_modes(), *probe_workspace(self.N, self.E))
         fn, out, wm = self._probe
@@ -194,7 +194,7 @@ class CompiledLoop:
         branch = self._branch()
         k = fn(self.law.addr, branch.addr, self.guards.addr, js.consts, js.masses, js.ea,
                js.eb, js.spring, cands, cur, np.array(f, dtype=float), np.array(x, dtype=float),
-               np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm)
+               np.array(v, dtype=float), np.array(F, dtype=float), h_p, out, wm, locks)
         return k, out
 
     def first_step_ready(self) -> bool:

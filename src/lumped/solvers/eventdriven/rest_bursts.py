@@ -29,7 +29,7 @@ import struct
 import numpy as np
 
 from ...scene import Scene
-from ..modes.mode_guess import try_modes
+from ..modes.mode_guess import lock_rows, try_modes
 from ..modes.stuck import StaticHold, forcing_kinds, static_hold
 from ..nonsmooth.locks import IntervalLog, indeterminate_elements
 from ..radau.dense import DenseOutput
@@ -199,7 +199,8 @@ def _kept_at_time_event(scene: Scene, plan, modes: tuple[int, ...], t: float, h:
         return None if got is None else got[2]
     f = scene.external_forces(t + h_p)
     with plan.lock:  # (the loop's probe workspace is shared by the runs at rest)
-        k, out = fast.probe_modes([list(modes)], None, f, x, v, F, h_p)
+        k, out = fast.probe_modes([list(modes)], None, f, x, v, F, h_p,
+                                  lock_rows(scene, plan.branches, [modes]))
         return out[len(x):].tolist() if k >= 0 else None
 
 

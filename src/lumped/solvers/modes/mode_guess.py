@@ -35,7 +35,7 @@ import numpy as np
 from ...scene import Mass, Scene
 from ...scene.supports import support_time, support_time_restored
 
-__all__ = ["probe_state", "read_branches", "try_modes", "UNDECIDED", "REFUSED"]
+__all__ = ["lock_rows", "probe_state", "read_branches", "try_modes", "UNDECIDED", "REFUSED"]
 
 #: The probe's verdicts besides a mode: no mode decided yet, or the guess refused
 #: (shared with its compiled twin, :mod:`lumped.solvers.modes.mode_guess_jit`).
@@ -72,7 +72,8 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
             support_time(scene, t + h_p)
             f = scene.external_forces(t + h_p)
             if fast is not None:
-                k, out = fast.probe_modes(candidates, current, f, x, v, F, h_p)
+                k, out = fast.probe_modes(candidates, current, f, x, v, F, h_p,
+                                          lock_rows(scene, branches, candidates))
                 if k >= 0:
                     N = len(x)
                     if used is not None:
@@ -84,7 +85,7 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
                 continue
             undecided = False
             for modes in candidates:
-                got = _probe(scene, branches, modes, f, x, v, F, h_p, min_norm)
+                got = _probe(scene, branches, modes, f, x, v, F, h_p, min_norm, True)
                 if got is None:
                     continue
                 v_p, F_p, q = got
@@ -98,6 +99,21 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
                 return None
             h_p *= 1000.0
         return None
+
+
+def lock_rows(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[int]]
+              ) -> np.ndarray:
+    """Each candidate's position locks for the compiled probe: ``[c, e]`` the value a
+    spring ``e`` is held at on the branch ``candidates[c][e]`` (a taut string's length),
+    NaN where none (:func:`_elongation`)."""
+    out = np.full((len(candidates), len(scene.elements)), np.nan)
+    for e, el in enumerate(scene.elements):
+        if el.kind == "spring":
+            for c, modes in enumerate(candidates):
+                lock = getattr(branches[e].stage_kernel_for(modes[e]), "lock_value", None)
+                if lock is not None:
+                    out[c, e] = lock
+    return out
 
 
 def read_branches(branches: Sequence, modes: Sequence[int], q: Sequence[float],
@@ -144,8 +160,8 @@ def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float
            min_norm: bool = False, velocity_locks: bool = False):
     """The held-mode probe step by Newton's method: ``(v_p, F_p, q)`` or ``None``
     (``min_norm``: a singular matrix by the minimum-norm correction; ``velocity_locks``:
-    a held position lock on the velocity level, :func:`_elongation`; the mode guesses
-    keep the positions' form, that of their compiled twin)."""
+    a held position lock on the velocity level, :func:`_elongation`, as the mode guesses
+    and their compiled twin hold it)."""
     N, E = len(scene.nodes), len(scene.elements)
     n = N + E
     ea, eb = scene.elem_a, scene.elem_b

@@ -33,12 +33,14 @@ CONFIRMED = 0  # (and above: the index of the confirmed candidate)
 
 
 def probe_modes(law_addr, branch_addr, guards_addr, lawc, masses, ea, eb, spring, cands, current,
-                f, x, v, F, h_p, out, wm):
+                f, x, v, F, h_p, out, wm, locks):
     """The first of the candidate modes (rows of ``cands``) that the full laws confirm
     after the probe step of size ``h_p`` (see :func:`lumped.solvers.modes.mode_guess.try_modes`):
     its index, with ``v_p`` and ``F_p`` in ``out[:N]`` and ``out[N:N + E]``; else
     :data:`UNDECIDED` when one candidate's result reads as ``current`` (an empty array:
-    no current mode), or :data:`REFUSED`. ``lawc``: the scene's law constants. ``wm``
+    no current mode), or :data:`REFUSED`. ``lawc``: the scene's law constants; ``locks``:
+    each candidate's position locks, held on the velocity level
+    (:func:`~lumped.solvers.modes.mode_guess.lock_rows`). ``wm``
     is work space, at least ``(n + 4, n)`` with ``n = N + E`` and room in its last row
     for a branch's guards (:func:`probe_workspace`). The branch read is
     :func:`~lumped.solvers.modes.mode_guess.read_branches`: the held branch where all its
@@ -57,7 +59,8 @@ def probe_modes(law_addr, branch_addr, guards_addr, lawc, masses, ea, eb, spring
     undecided = False
     for c in range(cands.shape[0]):
         modes = cands[c]
-        ok = _probe(branch_law, lawc, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, G, u, q)
+        ok = _probe(branch_law, lawc, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, G, u, q,
+                    locks[c])
         if not ok:
             continue
         same = True
@@ -82,8 +85,10 @@ def probe_modes(law_addr, branch_addr, guards_addr, lawc, masses, ea, eb, spring
 
 
 @njit(cache=True)
-def _probe(branch_law, lawc, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, G, u, q) -> bool:
-    """:func:`lumped.solvers.modes.mode_guess._probe` into ``u`` (``v_p, F_p``) and ``q``;
+def _probe(branch_law, lawc, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, G, u, q,
+           lock) -> bool:
+    """:func:`lumped.solvers.modes.mode_guess._probe` (``velocity_locks``: ``lock[e]`` a
+    held position lock's value, NaN where none) into ``u`` (``v_p, F_p``) and ``q``;
     whether it converged."""
     N = masses.shape[0]
     E = ea.shape[0]
@@ -112,8 +117,7 @@ def _probe(branch_law, lawc, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, 
                 G[b] += Fe
                 J[b, N + e] += 1.0
             if spring[e]:
-                qe = ((x[b] + h_p * u[b]) if b >= 0 else 0.0) - (
-                    (x[a] + h_p * u[a]) if a >= 0 else 0.0)
+                qe = _elongation(x, u, a, b, h_p, lock[e])
                 dq = h_p
             else:
                 qe = (u[b] if b >= 0 else 0.0) - (u[a] if a >= 0 else 0.0)
@@ -137,12 +141,19 @@ def _probe(branch_law, lawc, masses, ea, eb, spring, modes, f, x, v, F, h_p, J, 
                 a = ea[e]
                 b = eb[e]
                 if spring[e]:
-                    q[e] = ((x[b] + h_p * u[b]) if b >= 0 else 0.0) - (
-                        (x[a] + h_p * u[a]) if a >= 0 else 0.0)
+                    q[e] = _elongation(x, u, a, b, h_p, lock[e])
                 else:
                     q[e] = (u[b] if b >= 0 else 0.0) - (u[a] if a >= 0 else 0.0)
             return True
     return False
+
+
+@njit(cache=True)
+def _elongation(x, u, a, b, h_p, lock) -> float:
+    """:func:`lumped.solvers.modes.mode_guess._elongation` (``lock`` NaN: none)."""
+    if lock == lock:
+        return lock + h_p * ((u[b] if b >= 0 else 0.0) - (u[a] if a >= 0 else 0.0))
+    return ((x[b] + h_p * u[b]) if b >= 0 else 0.0) - ((x[a] + h_p * u[a]) if a >= 0 else 0.0)
 
 
 @njit(cache=True)
@@ -201,7 +212,7 @@ def _signature():
     f8, i8 = T_.float64, T_.int64
     v, m = f8[::1], f8[:, ::1]
     iv = i8[::1]
-    return i8(i8, i8, i8, v, v, iv, iv, T_.boolean[::1], i8[:, ::1], iv, v, v, v, v, f8, v, m)
+    return i8(i8, i8, i8, v, v, iv, iv, T_.boolean[::1], i8[:, ::1], iv, v, v, v, v, f8, v, m, m)
 
 
 def probe_workspace(N: int, E: int) -> tuple[np.ndarray, np.ndarray]:
