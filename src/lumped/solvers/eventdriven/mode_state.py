@@ -17,7 +17,12 @@ from collections import deque
 from ...scene import Mass, Scene
 from ...scene.supports import support_time
 from ..implicit.initial_slip import start_at_known_rates
-from ..modes.after_impact import held_through, hold_impacted_locks, release_resting_locks
+from ..modes.after_impact import (
+    beside_released,
+    held_through,
+    hold_impacted_locks,
+    release_resting_locks,
+)
 from ..modes.choice import select_modes
 from ..modes.finite_stop import take_stop
 from ..modes.force_bounds import group_modes, onto_slip_ends
@@ -32,14 +37,12 @@ from ..modes.mode_guess import probe_state, try_modes
 from ..modes.probe_locks import lock_probe_rates
 from ..nonsmooth.locks import IntervalLog, indeterminate_elements
 from ..status import Event, Status
+from .kept_state import state_stays
 from .mode_parts import laws_hold, mode_cones, mode_parts
 from .setup import accumulating, too_many
 
 __all__ = ["ModeState"]
 _EPS = 2.220446049250313e-16
-#: A kept choice at a guard at most this many accepted steps after the last one keeps the
-#: state at ``t`` (:meth:`ModeState.state_stays`).
-_AGAIN = 1
 
 
 class ModeState:
@@ -174,11 +177,17 @@ class ModeState:
             new, v_p, F_p = sel
             hold_impacted_locks(scene, lbs, t, held_through(scene, lbs, modes, hit[0]),
                                 scale_v, x, v, F, new, F_p, rtol)
-            new, v_p, F_p = self._locked((new, v_p, F_p), h0 * 1000.0 ** k, x)  # (at rate 0)
+            chosen, h_p = list(new), h0 * 1000.0 ** k
+            new, v_p, F_p = self._locked((new, v_p, F_p), h_p, x)  # (at rate 0)
         was = list(new)
-        for e in release_resting_locks(scene, lbs, t, modes, scale_v, x, v, F, new, F_p):
+        released = release_resting_locks(scene, lbs, t, modes, scale_v, x, v, F, new, F_p)
+        for e in released:
             if any(e == k for k, _ in hit[0]):  # (impacted, then slack at once: recorded)
                 events.append(Event(t, names[e], "switch", was[e], new[e]))
+        again = beside_released(scene, lbs, t, x, v, F, h_p, chosen, new, released) \
+            if released and hit[0] else None  # (a lock added beside a released string)
+        if again is not None:
+            new, v_p, F_p = again
         if not self.state_stays(t, cause, new, bool(hit[0]), x, v, F):
             # the probe's junction velocities, at t = 0 those of t itself (junctions_at),
             # where the initial forces stay unless they miss a law (a junction between two
@@ -215,25 +224,8 @@ class ModeState:
 
     def state_stays(self, t: float, cause: str, new: list[int], impact: bool,
                     x: list[float], v: list[float], F: list[float]) -> bool:
-        """Whether the junction velocities and forces at ``t`` stay as they are after the
-        mode ``new`` is chosen, rather than the deciding probe's: when the full laws keep
-        the mode at a guard (a tangency; ``impact``: an impact was applied) *again*, within
-        :data:`_AGAIN` accepted steps of the last such choice (the run landed on the guard
-        at once after taking the probe's state), and every law of that mode holds at
-        ``(x, v, F)`` (the end of the step on it: a consistent state at ``t``). A first
-        kept choice takes the probe's state, which carries a split held at its bound on
-        (a held share of a stuck cycle: its break-out time to 1e-10 at rtol 4e-5, against
-        5e-6 from the state at ``t``).
-
-        A junction hung on a mass by a stuck Coulomb element took the state of a probe
-        ``1e-3`` s long (a rate ``0.04`` to ``0.23`` off the mass's), crossed its guard at
-        ``t`` again, and crept on by ``3e-14`` s a step until bridged (issue 29)."""
-        kept = cause == "guard" and new == self.modes and not impact
-        steps = self.stats["steps"]
-        again = kept and steps - self.kept_at_step <= _AGAIN
-        if kept:
-            self.kept_at_step = steps
-        return again and laws_hold(self.kernels, self.scene.elongations(x, v), F)
+        """:func:`~lumped.solvers.eventdriven.kept_state.state_stays` of this state."""
+        return state_stays(self, t, cause, new, impact, x, v, F)
 
     def _note_left(self, t: float) -> None:
         """Record that the mode held now is left (or kept) at ``t``: the modes held at one

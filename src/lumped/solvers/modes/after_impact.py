@@ -1,7 +1,8 @@
 """The mode right after an impact: impacted locks held or released, and the forces of
 the dashpots the impact stopped.
 
-This module owns :func:`hold_impacted_locks` and :func:`release_resting_locks`, which
+This module owns :func:`hold_impacted_locks`, :func:`release_resting_locks` and
+:func:`beside_released`, which
 correct the mode choice after an impact (:meth:`lumped.solvers.eventdriven.mode_state.
 ModeState.change_mode`) where its vanishing probe step cannot see a lock at rest: they
 decide by the balance of accelerations
@@ -11,6 +12,7 @@ probe's size.
 
 from __future__ import annotations
 
+import itertools
 import math
 import sys
 from collections.abc import Sequence
@@ -21,8 +23,9 @@ from ..newton.scalar_root import scalar_root
 from .force_bounds import onto_rest_edges
 from .guards import guard_tolerance
 from .lock_events import after_impact_forces
+from .mode_guess import try_modes
 
-__all__ = ["held_through", "hold_impacted_locks", "release_resting_locks"]
+__all__ = ["beside_released", "held_through", "hold_impacted_locks", "release_resting_locks"]
 
 _EPS = sys.float_info.epsilon
 
@@ -175,3 +178,33 @@ def release_resting_locks(scene: Scene, branches: Sequence, t: float, old: Seque
                 out.append(e)
                 break
     return out
+
+
+def beside_released(scene: Scene, branches: Sequence, t: float, x: list[float],
+                    v: list[float], F: list[float], h_p: float, chosen: Sequence[int],
+                    new: list[int], released: Sequence[int]) -> tuple | None:
+    """The mode after an impact again where :func:`release_resting_locks` released a
+    string that the choice had read taut: each element the choice then put on a lock
+    besides (``new`` locks it, ``chosen``, the probe's own reading, did not: a dashpot
+    at rate 0 whose ends the taut string joined) is read again by a probe of size
+    ``h_p`` with the string slack (``new``), its probe's branch first, then its others
+    (:func:`~lumped.solvers.modes.mode_guess.try_modes`): ``(modes, v_p, F_p)``, or
+    ``None`` when no such element or no probe confirms one.
+
+    A Coulomb element beside a string that went taut by a plastic impact (seed 25039 of
+    the tight property) was locked at its yield force ``+tau`` because the string joined
+    its ends; the string was then released, and the element stayed stuck where the load
+    on it was ``-10.85``: the next probe's forces read ``9e7`` and the run was bridged."""
+    added = [e for e in range(len(new)) if e not in released and new[e] != chosen[e]
+             and branches[e].info[new[e]].locks]
+    if not added:
+        return None
+    options = [[chosen[e]] + [b for b in range(branches[e].count) if b != chosen[e]]
+               for e in added]
+    candidates = []
+    for combo in itertools.product(*options):
+        mode = list(new)
+        for e, b in zip(added, combo, strict=True):
+            mode[e] = b
+        candidates.append(mode)
+    return try_modes(scene, branches, candidates, t, x, v, F, h_p)
