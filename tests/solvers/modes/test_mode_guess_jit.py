@@ -4,12 +4,14 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from _yielding_junction import yielding_junction
 
 from lumped import simulate
 from lumped.bench.network_scenes import bingham_chain
 from lumped.bench.scenes import OWN_SCENES, PAPER_SCENES, generic_scene
+from lumped.codegen.branches import law_branches
 from lumped.codegen.jit import numba_enabled
 from lumped.laws import get_law
 from lumped.scene import Element, Junction, Mass, Scene
@@ -94,3 +96,21 @@ def test_compiled_probe_agrees_with_the_python_probe():
                 assert py == jit, (t, cands, py, jit)  # lists of floats: bit for bit
                 outcomes.add(py is None)
     assert outcomes == {True, False}  # both confirmed and refused guesses were compared
+
+
+def test_lock_rows_hold_only_strings_at_their_length():
+    """A guess's taut string is held on the velocity level where it is at its length to
+    ``sqrt(eps)`` of the positions (a drift of ``1.6e-14`` included), in positions' form
+    where it is not (a guess that makes a slack string taut)."""
+    scene = _string_scene()
+    branches = [law_branches(el.law) for el in scene.elements]
+    taut, slack = [0, 1, 0], [0, 0, 0]
+    L = 0.35
+    for x1, held in ((0.3 + L, True), (0.3 + L + 1.6e-14, True), (0.3 + L - 1e-6, False)):
+        rows = mode_guess.lock_rows(scene, branches, [taut, slack], [0.3, x1])
+        if held:
+            assert rows[0, 1] == L
+        else:
+            assert np.isnan(rows[0, 1])
+        assert np.isnan(rows[1]).all()  # (no lock on the slack branch, nor elsewhere)
+        assert np.isnan(rows[0, 0]) and np.isnan(rows[0, 2])

@@ -200,7 +200,7 @@ def _kept_at_time_event(scene: Scene, plan, modes: tuple[int, ...], t: float, h:
     f = scene.external_forces(t + h_p)
     with plan.lock:  # (the loop's probe workspace is shared by the runs at rest)
         k, out = fast.probe_modes([list(modes)], None, f, x, v, F, h_p,
-                                  lock_rows(scene, plan.branches, [modes]))
+                                  lock_rows(scene, plan.branches, [modes], x))
         return out[len(x):].tolist() if k >= 0 else None
 
 
