@@ -364,6 +364,25 @@ def test_integral_numbers_as_from_scratch(gamma, tau, k, c, r) -> None:
     _check_as_from_scratch(get_law("coulomb"), {"tau": tau, "r": r})
     _check_as_from_scratch(get_law("linear_spring"), {"k": k})
     _check_as_from_scratch(get_law("newtonian"), {"c": c})
+    _check_as_from_scratch(COMPARED, {"k": r})
+
+
+#: A law whose code a comparison of its parameter with an integer decides.
+COMPARED = ElementLaw("compared_k", "spring", "F - Piecewise((q*k, k > 1), (q - k, True))",
+                      ["k"])
+
+
+def test_a_parameter_compared_with_an_integer_keys_its_class():
+    """``k > 1`` decides the code by ``k``'s value: the class key orders ``k`` against the
+    comparison's 1 (before, only non-integral constants: a class made of ``k = 1.3, 1.5,
+    1.7`` gave ``k = 0.7`` the ``k > 1`` branch's kernel, ``R(1, 0) = -0.7`` where the
+    law gives ``-0.3``, with no error)."""
+    law = ElementLaw("compared_k_alone", "spring",
+                     "F - Piecewise((q*k, k > 1), (q - k, True))", ["k"])
+    for k in (1.3, 1.5, 1.7, 1.9, 0.7, 0.6, 0.45, 0.35):
+        _check_as_from_scratch(law, {"k": k})
+    assert class_key(law.bind(k=1.3)) != class_key(law.bind(k=0.7))
+    assert law.bind(k=0.6).kernel(1.0, 0.0)[0] == pytest.approx(-0.4)
 
 
 def _counting(monkeypatch) -> dict:

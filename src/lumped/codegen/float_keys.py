@@ -2,9 +2,9 @@ r"""The class key of a bound law's numbers, in plain Python floats.
 
 A law is derived once per *class* of its numbers (:mod:`lumped.codegen.parametric`).
 The class fixes each parameter's sign, the order sympy gives the floats ``+-v_j`` and the
-law's own constants (by value, and by their binary digits: that order decides the order
-of the terms of a sum in the generated code). :func:`class_key` reads that order without
-making a sympy number (:func:`float_content` is sympy's content of a float, from
+law's own constants (:func:`_constants`; by value, and by their binary digits: that order
+decides the order of the terms of a sum in the generated code). :func:`class_key` reads
+that order without making a sympy number (:func:`float_content` is sympy's content of a float, from
 ``float.as_integer_ratio``), and :func:`sympy_float` makes the sympy float a swap needs
 from that content, about ten times cheaper than ``sympy.Float``.
 """
@@ -33,11 +33,13 @@ def admitted(law) -> bool:
     return hit
 
 
+_COMPARISONS = (sp.Min, sp.Max, sp.Abs, sp.sign, sp.Heaviside, sp.core.relational.Relational)
+
+
 def _lone_comparisons(law) -> bool:
-    kinds = (sp.Min, sp.Max, sp.Abs, sp.sign, sp.Heaviside, sp.core.relational.Relational)
     params = set(law.symbols.values())
     for node in sp.preorder_traversal(law.residual):
-        if not isinstance(node, kinds):
+        if not isinstance(node, _COMPARISONS):
             continue
         for arg in node.args:
             if arg.has(law.q, law.F) or arg.is_Number:
@@ -75,10 +77,18 @@ def _exponent_flags(law) -> tuple[bool, ...]:
 
 
 def _constants(law) -> tuple[sp.Float, ...]:
+    """The law's constants its class orders the parameters against: its non-integral
+    numbers, and every number a comparison of numbers alone reads (``k > 1``: an integer
+    there decides a branch of the code by the parameter's value, so ``k = 1.3`` and
+    ``k = 0.7`` are two classes)."""
     hit = _LAW_CONSTANTS.get(law)
     if hit is None:
-        hit = _LAW_CONSTANTS[law] = tuple(
-            sp.Float(c) for c in law.residual.atoms(sp.Number) if not c.is_Integer)
+        numbers = {c for c in law.residual.atoms(sp.Number) if not c.is_Integer}
+        for node in sp.preorder_traversal(law.residual):
+            if isinstance(node, _COMPARISONS):
+                numbers |= {a for a in node.args
+                            if a.is_Number and not a.has(law.q, law.F)}
+        hit = _LAW_CONSTANTS[law] = tuple(sp.Float(c) for c in sorted(numbers, key=float))
     return hit
 
 

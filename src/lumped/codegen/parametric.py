@@ -13,8 +13,9 @@ That is exact, the code and the numbers a derivation from scratch gives, where t
 derivation's shape does not depend on the numbers within the class: no step combines a
 parameter with another number into a number of the output, and no decision depends on
 a parameter's value beyond what the class fixes. The class fixes each parameter's sign,
-the order sympy gives the floats ``+-v_j`` and the law's own constants (by value, and by
-their binary digits: that order decides the order of the terms of a sum in the code),
+the order sympy gives the floats ``+-v_j`` and the law's own constants (its non-integral
+numbers and the numbers its comparisons of numbers alone read, ``k > 1``; by value, and
+by their binary digits: that order decides the order of the terms of a sum in the code),
 and leaves out the values sympy takes apart (zero, whose terms it drops; in an
 exponent, an integral value, a product or no power, and ``+-1/2``, a square root;
 elsewhere ``1``, ``2`` or ``100`` is a float like any other,
