@@ -118,8 +118,9 @@ def lock_rows(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
             continue
         a, b = scene.elem_a[e], scene.elem_b[e]
         xa, xb = (x[a] if a >= 0 else 0.0), (x[b] if b >= 0 else 0.0)
+        info = branches[e].info  # (a stage kernel's lock_value is its branch's)
         for c, modes in enumerate(candidates):
-            lock = getattr(branches[e].stage_kernel_for(modes[e]), "lock_value", None)
+            lock = info[modes[e]].lock_value if info[modes[e]].locks else None
             if lock is not None and abs((xb - xa) - lock) <= _SQRT_EPS * max(
                     abs(lock), abs(xa), abs(xb)):
                 out[c, e] = lock
