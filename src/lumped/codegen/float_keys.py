@@ -4,9 +4,9 @@ A law is derived once per *class* of its numbers (:mod:`lumped.codegen.parametri
 The class fixes each parameter's sign, the order sympy gives the floats ``+-v_j`` and the
 law's own constants (:func:`_constants`; by value, and by their binary digits: that order
 decides the order of the terms of a sum in the generated code). :func:`class_key` reads
-that order without making a sympy number (:func:`float_content` is sympy's content of a float, from
-``float.as_integer_ratio``), and :func:`sympy_float` makes the sympy float a swap needs
-from that content, about ten times cheaper than ``sympy.Float``.
+that order without making a sympy number (:func:`float_content` is sympy's content of a
+float, from ``float.as_integer_ratio``), and :func:`sympy_float` makes the sympy float a
+swap needs from that content, about ten times cheaper than ``sympy.Float``.
 """
 
 from __future__ import annotations
@@ -14,6 +14,8 @@ from __future__ import annotations
 import math
 
 import sympy as sp
+
+from .rewrite import exponent_symbols
 
 __all__ = ["admitted", "class_key", "constant_magnitudes", "float_content", "numbers_key",
            "parameter_floats", "sympy_float"]
@@ -68,10 +70,7 @@ def _exponent_flags(law) -> tuple[bool, ...]:
     residual (once per law)."""
     hit = _EXPONENTS.get(law)
     if hit is None:
-        exponents: set = set()
-        for node in sp.preorder_traversal(law.residual):
-            if isinstance(node, sp.Pow):
-                exponents |= node.exp.free_symbols
+        exponents = exponent_symbols(law.residual)
         hit = _EXPONENTS[law] = tuple(law.symbols[p] in exponents for p in law.parameters)
     return hit
 
@@ -106,8 +105,8 @@ def _constant_keys(law) -> tuple[list, list]:
 
 
 def constant_magnitudes(law) -> set[float]:
-    """The magnitudes of ``law``'s non-integral constants (a parameter equal to one is
-    tied to it in the class key)."""
+    """The magnitudes of ``law``'s constants (:func:`_constants`: a parameter equal to one
+    is tied to it in the class key)."""
     return {abs(c) for c in _constant_keys(law)[0]}
 
 

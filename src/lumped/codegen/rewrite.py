@@ -33,6 +33,7 @@ __all__ = [
     "constant_of",
     "constants_of",
     "diff_branchwise",
+    "exponent_symbols",
     "magnitude_expression",
     "prepare",
     "rewrite_kinks",
@@ -257,13 +258,19 @@ def constant_of(sym: sp.Symbol, value: float, exponent: bool = True) -> sp.Numbe
     return sp.Integer(int(x))
 
 
-def constants_of(expr: sp.Expr, params: Mapping[sp.Symbol, float]) -> dict:
-    """``{symbol: constant_of(symbol, value, exponent)}`` for ``params`` in ``expr``,
-    ``exponent`` whether the symbol appears in the exponent of one of its powers."""
+def exponent_symbols(expr: sp.Expr) -> set:
+    """The symbols that appear in the exponent of a power of ``expr``."""
     exponents: set = set()
     for node in sp.preorder_traversal(expr):
         if isinstance(node, sp.Pow):
             exponents |= node.exp.free_symbols
+    return exponents
+
+
+def constants_of(expr: sp.Expr, params: Mapping[sp.Symbol, float]) -> dict:
+    """``{symbol: constant_of(symbol, value, exponent)}`` for ``params`` in ``expr``,
+    ``exponent`` whether the symbol appears in the exponent of one of its powers."""
+    exponents = exponent_symbols(expr)
     return {sym: constant_of(sym, value, sym in exponents) for sym, value in params.items()}
 
 
