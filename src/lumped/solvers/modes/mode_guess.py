@@ -68,11 +68,11 @@ def try_modes(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
     size of the probe that decided."""
     if fast is not None and not fast.can_probe():  # (not compiled yet: the reference)
         fast = None
+    rows = lock_rows(scene, branches, candidates, x)  # (x is the same at every size)
     with support_time_restored(scene, t):  # (moving supports: the laws at t + h_p)
         for _ in range(longer):
             support_time(scene, t + h_p)
             f = scene.external_forces(t + h_p)
-            rows = lock_rows(scene, branches, candidates, x)
             if fast is not None:
                 k, out = fast.probe_modes(candidates, current, f, x, v, F, h_p, rows)
                 if k >= 0:
@@ -118,13 +118,19 @@ def lock_rows(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
             continue
         a, b = scene.elem_a[e], scene.elem_b[e]
         xa, xb = (x[a] if a >= 0 else 0.0), (x[b] if b >= 0 else 0.0)
-        info = branches[e].info  # (a stage kernel's lock_value is its branch's)
         for c, modes in enumerate(candidates):
-            lock = info[modes[e]].lock_value if info[modes[e]].locks else None
+            lock = _lock_value(branches[e], modes[e])
             if lock is not None and abs((xb - xa) - lock) <= _SQRT_EPS * max(
                     abs(lock), abs(xa), abs(xb)):
                 out[c, e] = lock
     return out
+
+
+def _lock_value(lb, branch: int) -> float | None:
+    """The ``q`` the branch ``branch`` of ``lb`` locks (its stage kernel's
+    ``lock_value``), or ``None``."""
+    info = lb.info[branch]
+    return info.lock_value if info.locks else None
 
 
 def read_branches(branches: Sequence, modes: Sequence[int], q: Sequence[float],
@@ -162,27 +168,24 @@ def probe_state(scene: Scene, branches: Sequence, modes: Sequence[int], t: float
     with support_time_restored(scene, t):
         support_time(scene, t + h_p)
         got = _probe(scene, branches, modes, scene.external_forces(t + h_p), x, v, F, h_p,
-                     velocity_locks=True)
+                     locks=[_lock_value(branches[e], m) for e, m in enumerate(modes)])
     return None if got is None else (got[0], got[1])
 
 
 def _probe(scene: Scene, branches: Sequence, modes: Sequence[int], f: list[float],
            x: list[float], v: list[float], F: list[float], h_p: float,
-           min_norm: bool = False, velocity_locks: bool | list = False):
+           min_norm: bool = False, locks: Sequence[float | None] | None = None):
     """The held-mode probe step by Newton's method: ``(v_p, F_p, q)`` or ``None``
-    (``min_norm``: a singular matrix by the minimum-norm correction; ``velocity_locks``:
-    a held position lock on the velocity level, :func:`_elongation`; a list: each
-    element's lock value so held, or ``None``, as the mode guesses and their compiled
-    twin take them from :func:`lock_rows`)."""
+    (``min_norm``: a singular matrix by the minimum-norm correction; ``locks``: each
+    element's position lock held on the velocity level, :func:`_elongation`, or ``None``
+    for its positions' form; none given: every element in positions' form)."""
     N, E = len(scene.nodes), len(scene.elements)
     n = N + E
     ea, eb = scene.elem_a, scene.elem_b
     kernels = [branches[e].stage_kernel_for(modes[e]) for e in range(E)]
     spring = [el.kind == "spring" for el in scene.elements]
-    if not isinstance(velocity_locks, bool):  # (each element's lock value, or None)
-        locks = list(velocity_locks)
-    else:
-        locks = [getattr(k, "lock_value", None) if velocity_locks else None for k in kernels]
+    if locks is None:
+        locks = [None] * E
     cm = [nd.m / h_p if isinstance(nd, Mass) else 0.0 for nd in scene.nodes]
     u = list(v) + list(F)
     for _ in range(_MAX_ITERS):
