@@ -12,7 +12,7 @@ from __future__ import annotations
 from lumped.laws import get_law
 from lumped.scene import Element, Mass, Scene
 
-__all__ = ["string_beside_stick"]
+__all__ = ["string_beside_stick", "string_thrown"]
 
 
 def string_beside_stick() -> Scene:
@@ -33,3 +33,13 @@ def string_beside_stick() -> Scene:
          Element("e4", law("string_spring").bind(k=1.0, L=1.0), "m1", "m2"),
          Element("e5", law("string_spring").bind(k=4.993805194394897,
                                                  L=0.005249326026062739), "m0", "m2")])
+
+
+def string_thrown() -> Scene:
+    """A mass thrown from another on a string (taut twice by impacts, then slack), a
+    Bingham dashpot to ground that reverses: a run whose mode guesses hold a taut string,
+    in the compiled loop (no locks in parallel)."""
+    return Scene([Mass("m0", 1.0, x0=0.0), Mass("m1", 2.0, x0=0.3, v0=1.0)],
+                 [Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m0"),
+                  Element("r", get_law("string_spring").bind(k=1.0, L=0.35), "m0", "m1"),
+                  Element("d", get_law("bingham").bind(gamma=1.0, tau=0.5), "ground", "m1")])

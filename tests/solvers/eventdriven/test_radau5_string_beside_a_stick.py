@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _string_beside_stick import string_beside_stick
+from _string_beside_stick import string_beside_stick, string_thrown
 
 from lumped import simulate
 from lumped.codegen.jit import numba_enabled
@@ -38,15 +38,10 @@ def test_the_string_stays_taut_at_the_stick_and_the_run_ends():
 def test_both_loops_give_the_same_run_with_a_taut_string():
     # (seed 25049's scene runs in Python: its string e4 and dashpot e3 join the same two
     # masses, locks in parallel; here the compiled probe holds a taut string too)
-    from lumped.laws import get_law
-    from lumped.scene import Element, Mass, Scene
     from lumped.solvers.modes.on_demand import compile_all
 
     compile_all()  # (the compiled probe and the other event helpers, from the first event)
-    scene = Scene([Mass("m0", 1.0, x0=0.0), Mass("m1", 2.0, x0=0.3, v0=1.0)],
-                  [Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m0"),
-                   Element("r", get_law("string_spring").bind(k=1.0, L=0.35), "m0", "m1"),
-                   Element("d", get_law("bingham").bind(gamma=1.0, tau=0.5), "ground", "m1")])
+    scene = string_thrown()
     kw = dict(method="radau5", t_end=3.0, rtol=1e-8)
     py = simulate(scene, compiled=False, **kw)
     jit = simulate(scene, compiled=True, **kw)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _string_beside_stick import string_thrown
 from _yielding_junction import yielding_junction
 
 from lumped import simulate
@@ -39,15 +40,6 @@ def _junction_scene() -> Scene:
                   Element("e3", get_law("linear_spring").bind(k=8.57), "ground", "m2")])
 
 
-def _string_scene() -> Scene:
-    """A mass thrown from another on a string (taut twice by impacts, then slack), a
-    Bingham dashpot to ground that reverses: candidates with the string taut."""
-    return Scene([Mass("m0", 1.0, x0=0.0), Mass("m1", 2.0, x0=0.3, v0=1.0)],
-                 [Element("s", get_law("linear_spring").bind(k=10.0), "ground", "m0"),
-                  Element("r", get_law("string_spring").bind(k=1.0, L=0.35), "m0", "m1"),
-                  Element("d", get_law("bingham").bind(gamma=1.0, tau=0.5), "ground", "m1")])
-
-
 def _recorded_probes() -> list[tuple]:
     """The arguments of every probe of compiled ``radau5`` runs on a few scenes (events
     of every kind: stick, slip, reversal, break-out, at masses and junctions)."""
@@ -67,7 +59,7 @@ def _recorded_probes() -> list[tuple]:
             (*_bench("release-0.5"), 1e-4), (*_bench("forcing-F1"), 1e-4),
             (bingham_chain(3), 5.0, 1e-6), (_junction_scene(), 2.0, 1e-6),
             (yielding_junction(), 0.5, 6.25e-4),  # (a steep branch read by its rate)
-            (_string_scene(), 3.0, 1e-8)]  # (a taut string: its lock's velocity form)
+            (string_thrown(), 3.0, 1e-8)]  # (a taut string: its lock's velocity form)
     adaptive_modes.try_modes = record
     rest_run, runner.rest_run = runner.rest_run, lambda scene, settings: None  # (Python)
     try:
@@ -102,7 +94,7 @@ def test_lock_rows_hold_only_strings_at_their_length():
     """A guess's taut string is held on the velocity level where it is at its length to
     ``sqrt(eps)`` of the positions (a drift of ``1.6e-14`` included), in positions' form
     where it is not (a guess that makes a slack string taut)."""
-    scene = _string_scene()
+    scene = string_thrown()
     branches = [law_branches(el.law) for el in scene.elements]
     taut, slack = [0, 1, 0], [0, 0, 0]
     L = 0.35
