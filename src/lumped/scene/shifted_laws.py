@@ -14,7 +14,7 @@ import dataclasses
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["ShiftedLaw", "ShiftedBranches", "branches_of"]
+__all__ = ["ShiftedLaw", "ShiftedBranches", "branches_of", "shifted_by"]
 
 
 class _ShiftedKernel:
@@ -72,6 +72,12 @@ def _shifted(fn: Callable, offsets: list[float], e: int) -> Callable:
     if mag is not None:
         shifted.magnitude = _shifted_magnitude(fn, mag, offsets, e)  # type: ignore[attr-defined]
     return shifted
+
+
+def shifted_by(fn: Callable, offset: float) -> Callable:
+    """``fn(q + offset, F)`` for a fixed ``offset`` (a kernel, guard or selector), with
+    ``fn``'s ``magnitude`` shifted the same way (the rounding of the sum included)."""
+    return _shifted(fn, [offset], 0)
 
 
 def _shifted_magnitude(kernel: Callable, mag: Callable, offsets: list[float], e: int

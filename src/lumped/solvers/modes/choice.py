@@ -19,6 +19,7 @@ import sys
 from collections.abc import Sequence
 
 from ...scene import Mass, Scene
+from ...scene.shifted_laws import shifted_by
 from ...scene.supports import support_time, support_time_restored
 from ..implicit.conditioned import conditioned_law
 from ..implicit.globalize import solve_globalized
@@ -26,6 +27,7 @@ from ..implicit.step_system import make_evaluate
 from ..newton.criteria import residual_ok
 from ..newton.options import NewtonCode, NewtonOptions, NewtonResult
 from ..newton.semismooth import newton_solve
+from .mode_guess import lock_drifts
 
 __all__ = ["select_modes"]
 
@@ -85,6 +87,11 @@ def _select_modes(scene: Scene, branches: Sequence, t: float, x: list[float],
     # rate, at every probe up to 2e-7 s (issue 29, seed 22228's start)
     kernels = [conditioned_law(branches[e], el.law.kernel) or el.law.kernel
                for e, el in enumerate(scene.elements)]
+    steep = [kernels[e] is not el.law.kernel for e, el in enumerate(scene.elements)]
+    # a string at its length held on the velocity level, L + h_p (v_b - v_a), whatever
+    # the drift of the positions (mode_guess.lock_drifts)
+    drift = lock_drifts(scene, branches, x)
+    kernels = [shifted_by(k, d) if d else k for k, d in zip(kernels, drift, strict=True)]
     evaluate = make_evaluate(scene, h_probe, cm, [0.0] * N, [1.0] * N, uref, x_hat, f,
                               qs, rq, rf, roundoff=True, kernels=kernels)
     probe_opts = _probe_options(options)
@@ -109,8 +116,7 @@ def _select_modes(scene: Scene, branches: Sequence, t: float, x: list[float],
     F_p = res.u[N:]
     x_p = [x[i] + h_probe * v_p[i] for i in range(N)]
     q = scene.elongations(x_p, v_p)
-    modes = [_branch_read(branches[e], q[e], F_p[e], kernels[e] is not
-                          scene.elements[e].law.kernel) for e in range(E)]
+    modes = [_branch_read(branches[e], q[e] + drift[e], F_p[e], steep[e]) for e in range(E)]
     return modes, v_p, F_p
 
 

@@ -35,7 +35,8 @@ import numpy as np
 from ...scene import Mass, Scene
 from ...scene.supports import support_time, support_time_restored
 
-__all__ = ["lock_rows", "probe_state", "read_branches", "try_modes", "UNDECIDED", "REFUSED"]
+__all__ = ["at_its_lock", "lock_drifts", "lock_rows", "probe_state", "read_branches",
+           "try_modes", "UNDECIDED", "REFUSED"]
 
 #: The probe's verdicts besides a mode: no mode decided yet, or the guess refused
 #: (shared with its compiled twin, :mod:`lumped.solvers.modes.mode_guess_jit`).
@@ -108,21 +109,56 @@ def lock_rows(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
     """Each candidate's position locks held on the velocity level (:func:`_elongation`):
     ``[c, e]`` the value a spring ``e`` is held at on the branch ``candidates[c][e]`` (a
     taut string's length ``L``) where its elongation at ``x`` is ``L`` to
-    ``sqrt(eps) max(|L|, |x_a|, |x_b|)`` (the positions' rounding, and the drift a lock
-    held on the velocity level by the steps leaves: ``1.6e-14`` after 0.25 s taut in
-    seed 25039's scene); NaN elsewhere, where the probe holds it in positions' form (a
-    guess that puts a string far from its length taut)."""
+    ``sqrt(eps) max(|L|, |x_a|, |x_b|)`` (:func:`at_its_lock`); NaN elsewhere, where the
+    probe holds it in positions' form (a guess that puts a string far from its length
+    taut)."""
     out = np.full((len(candidates), len(scene.elements)), np.nan)
     for e, el in enumerate(scene.elements):
         if el.kind != "spring":
             continue
-        a, b = scene.elem_a[e], scene.elem_b[e]
-        xa, xb = (x[a] if a >= 0 else 0.0), (x[b] if b >= 0 else 0.0)
         for c, modes in enumerate(candidates):
             lock = _lock_value(branches[e], modes[e])
-            if lock is not None and abs((xb - xa) - lock) <= _SQRT_EPS * max(
-                    abs(lock), abs(xa), abs(xb)):
+            if lock is not None and at_its_lock(scene, e, x, lock):
                 out[c, e] = lock
+    return out
+
+
+def at_its_lock(scene: Scene, e: int, x: Sequence[float], lock: float) -> bool:
+    """Whether the spring ``e``'s elongation at ``x`` is its lock ``lock`` (a taut
+    string's length ``L``) to ``sqrt(eps) max(|L|, |x_a|, |x_b|)``: the positions'
+    rounding, and the drift a lock held on the velocity level by the steps leaves
+    (``1.6e-14`` after 0.25 s taut in seed 25039's scene)."""
+    a, b = scene.elem_a[e], scene.elem_b[e]
+    xa, xb = (x[a] if a >= 0 else 0.0), (x[b] if b >= 0 else 0.0)
+    return abs((xb - xa) - lock) <= _SQRT_EPS * max(abs(lock), abs(xa), abs(xb))
+
+
+def lock_drifts(scene: Scene, branches: Sequence, x: Sequence[float]) -> list[float]:
+    """Per element, ``L - (x_b - x_a)``: how far the positions ``x`` have drifted off the
+    lock ``L`` of a spring at its lock (:func:`at_its_lock`, a string at its length, taut
+    or not); ``0.0`` for every other element (and on a moving support, whose branches
+    carry no ``lock_value``).
+
+    A law read at ``q + drift`` holds such a spring on the velocity level,
+    ``L + h_p (v_b - v_a)``, as the stage solve and the guesses' probe do
+    (:func:`_elongation`): the full laws' probe of
+    :func:`~lumped.solvers.modes.choice.select_modes` read a taut string stretched
+    ``1.4e-14`` past its length in positions' form, which asked a force of ``m
+    1.4e-14 / h_p^2`` (2178 where it carried 0.57, on a probe of ``1e-9`` s) and read
+    two Coulomb dashpots in parallel beside it slipping on where they reverse: a guard
+    every ``1.5e-8`` s, each crossing a full mode choice of 0.3 s (the property of both
+    loops, seed 25171)."""
+    out = [0.0] * len(scene.elements)
+    for e, el in enumerate(scene.elements):
+        if el.kind != "spring":
+            continue
+        lb = branches[e]
+        for j in range(lb.count):
+            lock = _lock_value(lb, j)
+            if lock is not None and at_its_lock(scene, e, x, lock):
+                a, b = scene.elem_a[e], scene.elem_b[e]
+                out[e] = lock - ((x[b] if b >= 0 else 0.0) - (x[a] if a >= 0 else 0.0))
+                break
     return out
 
 
