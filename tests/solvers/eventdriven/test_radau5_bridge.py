@@ -14,8 +14,9 @@ import pytest
 from _yield_check import check_yield
 
 from lumped import simulate
+from lumped.codegen.jit import numba_enabled
 from lumped.laws import get_law
-from lumped.scene import Element, Junction, Mass, Scene
+from lumped.scene import Element, Junction, Mass, Scene, SineBurst
 from lumped.solvers.eventdriven import mode_state as mode_state_module
 from lumped.solvers.eventdriven import run as run_module
 from lumped.solvers.eventdriven.bridge import (
@@ -484,3 +485,35 @@ def test_a_bridge_ends_with_its_taut_strings_at_rate_zero(monkeypatch):
     assert sol.ok, sol.message
     assert sol.stats["bridges"] == 1 and sol.stats["steps"] <= 1000, sol.stats
     _against_bdf2(scene, sol)
+
+
+def string_tangent_at_a_junction() -> Scene:
+    """Seed 25440 of the property of both loops: a string ``e5`` from a junction held by
+    a Bingham dashpot to a mass thrown at it reaches its length where its spring's force
+    is the junction's: an impact of ``3e-16``, the string slack at once, again ``1e-16``
+    s later, and a step below its floor there: a bridge."""
+    law = get_law
+    return Scene(
+        [Junction("j0"), Mass("m1", 1.0, v0=1.0), Mass("m2", 1.0), Junction("j3")],
+        [Element("e0", law("bingham").bind(gamma=1.0, tau=1.0), "ground", "j0"),
+         Element("e1", law("linear_spring").bind(k=1.0), "ground", "m1"),
+         Element("e2", law("linear_spring").bind(k=1.0), "ground", "m2"),
+         Element("e3", law("newtonian").bind(c=1.0), "ground", "j3"),
+         Element("e4", law("linear_spring").bind(k=1.0), "ground", "j0"),
+         Element("e5", law("string_spring").bind(k=1.0, L=0.1), "j0", "m1")],
+        {"m1": SineBurst(-3.0, 1.0, math.inf)})
+
+
+@pytest.mark.skipif(not numba_enabled(), reason="needs numba")
+def test_both_loops_bridge_from_the_same_state():
+    # The stop came in a pass of the compiled loop that took no step, which kept the
+    # state after the event at t (the string taut, the junction dragged) as the one a
+    # bridge starts from; the Python loop bridges from its last accepted step's end
+    # (4.7e-15 apart at the run's end, the property of both loops, seed 25440).
+    kw = dict(method="radau5", dt=0.025, t_end=0.5, rtol=0.025**2, atol=0.025**3)
+    py = simulate(string_tangent_at_a_junction(), compiled=False, **kw)
+    jit = simulate(string_tangent_at_a_junction(), compiled=True, **kw)
+    assert py.ok and jit.ok and jit.stats["loop"] == "compiled"
+    assert py.stats["bridges"] == jit.stats["bridges"] == 1
+    assert np.array_equal(py.data, jit.data)
+    assert py.stats["bridge_work"] == jit.stats["bridge_work"]

@@ -368,8 +368,8 @@ class Radau5Run(StepPass, StepChecks):
         for key in ("t", "h", "x", "v", "F", "dF_n", "F_seen", "h_acc", "err_acc", "h_good",
                     "h_big", "stalled", "bi", "creeping"):  # (bi: the kinks it stepped onto)
             setattr(self, key, st[key])
-        self.commit(self.t)
         if stats["steps"] > before:  # (as the Python loop's accepted steps set them)
+            self.commit(self.t)  # (no step taken: the state a bridge starts from stays)
             self.kink_cuts, self.ms.hint, self.ms.forces_from_probe = 0, None, False
             if why == "creep":  # (its last step stops the run: Python's order)
                 self.status, self.message = creep_stop(
