@@ -84,7 +84,14 @@ def test_a_series_of_kept_choices_is_at_a_hopeless_pace_only():
     # at one t, or crept on by 5.9e-12 s a choice: a series
     assert [b.kept(0.1, stats) for _ in range(3)] == [1, 2, 3]
     assert [b.kept(T_STAR + k * 5.87e-12, stats) for k in range(4)] == [1, 2, 3, 4]
-    # kept choices 1 us apart (2e5 choices to t_end, 1e6 tries left): no series
-    assert [b.kept(0.2 + k * 1e-6, stats) for k in range(4)] == [1, 1, 1, 1]
+    # kept choices 10 us apart (3e4 choices to t_end, 1e6 tries left): no series
+    assert [b.kept(0.2 + k * 1e-5, stats) for k in range(4)] == [1, 1, 1, 1]
+    # 1 us apart, 3e5 choices to t_end: a series whatever the budget (KEPT_CHOICES)
+    assert [b.kept(0.21 + k * 1e-6, stats) for k in range(4)] == [1, 2, 3, 4]
+    huge = budget.WorkBudget(10**12, 0.5)
+    assert [huge.kept(0.22 + k * 1e-6, stats) for k in range(4)] == [1, 2, 3, 4]
+    # ... and at a small budget its tries left decide (100 left: 1e4 choices)
+    small = budget.WorkBudget(530, 0.5)
+    assert [small.kept(0.2 + k * 1e-5, stats) for k in range(4)] == [1, 2, 3, 4]
     # the pace is that of the series since its first choice
-    assert [b.kept(0.3 + t, stats) for t in (0.0, 1e-9, 1e-9, 8e-9)] == [1, 2, 3, 1]
+    assert [b.kept(0.3 + t, stats) for t in (0.0, 1e-9, 1e-9, 1e-5)] == [1, 2, 3, 1]

@@ -94,3 +94,31 @@ def test_lock_drifts_reads_strings_at_their_length_only():
     # beyond sqrt(eps) max(|L|, |x_a|, |x_b|) of its length: positions' form
     far = 0.3 + L + 10 * math.sqrt(np.finfo(float).eps) * 0.33
     assert lock_drifts(scene, lbs, [0.3, far, 0.3])[0] == 0.0
+
+
+def test_the_old_creep_is_a_stall_at_the_default_budget(monkeypatch):
+    # the full laws' probe in positions' form again (the creep before lock_drifts): its
+    # kept choices, 1.5e-8 s apart with 0.17 s to go, are a stall after four of them
+    # (budget.KEPT_CHOICES) and the run is bridged; before, the default budget's series
+    # test needed a pace 100 times slower than 1e6 tries left: a choice of 0.3 s every
+    # 1.5e-8 s for 12 minutes, to the pace test's window
+    import lumped.solvers.eventdriven.mode_state as mode_state
+    import lumped.solvers.modes.choice as choice
+
+    monkeypatch.setattr(choice, "lock_drifts", lambda scene, *args: [0.0] * len(
+        scene.elements))
+    calls = []
+    at_event = mode_state.ModeState.at_event
+
+    def counted(self, t, *args):
+        calls.append(t)
+        assert len(calls) < 60, f"{len(calls)} events, the last at t = {t!r}"
+        return at_event(self, t, *args)
+
+    monkeypatch.setattr(mode_state.ModeState, "at_event", counted)
+    sol = simulate(friction_beside_string(), method="radau5", dt=DT, t_end=T_END,
+                   rtol=DT**2, atol=DT**3, compiled=False)
+    assert sol.ok, sol.message
+    assert sol.stats["bridges"] == 1, sol.stats
+    assert "kept the mode there 4 times" in sol.message
+

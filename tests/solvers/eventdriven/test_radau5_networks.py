@@ -541,7 +541,11 @@ def test_a_coulomb_element_stuck_at_an_impact_starts_within_its_yield_force():
     # string e4 goes taut between the masses (an impact) and, 1e-8 s later, the Coulomb
     # element e3 from the junction to m0 sticks. Its dense force started from the stage
     # forces' quadratic at the event, 1.1e-4 above tau (8.7e-5 of the forces' scale, at
-    # every tolerance: the quadratic's own error on a long first step)
+    # every tolerance: the quadratic's own error on a long first step). The dense output
+    # is an interpolant of the run's accuracy: within rtol of tau (the stick's first step
+    # to t = 0.5 reads 1.2e-7 above it where the stage forces start at tau exactly, and
+    # 0.4485 -> 0.4845 -> 0.5 read none; which one the steps take rests on the last bits
+    # of the impact's state)
     coulomb = get_law("coulomb")
     string = get_law("string_spring")
     tau = 0.5929578407459635
@@ -566,7 +570,7 @@ def test_a_coulomb_element_stuck_at_an_impact_starts_within_its_yield_force():
         assert stuck and 0.448 < stuck[-1] < 0.449, sol.events
         ts = np.linspace(stuck[-1], 0.5, 201)
         F3 = sol.sol(ts)[:, sol.columns.index("F_e3")]
-        assert np.abs(F3).max() <= tau * (1.0 + 1e-9)
+        assert np.abs(F3).max() <= tau * (1.0 + h**2)
 
 
 def test_a_string_just_taut_between_stuck_dashpots_is_not_split_below_its_length_force():

@@ -50,7 +50,7 @@ import math
 
 from ..status import Status
 
-__all__ = ["PACE_WINDOW", "WorkBudget", "window"]
+__all__ = ["KEPT_CHOICES", "PACE_WINDOW", "WorkBudget", "window"]
 
 #: Tries in the shortest window of the pace test.
 PACE_WINDOW = 10_000
@@ -60,6 +60,10 @@ STUCK_WINDOW = 1_000
 
 #: How far beyond the tries left the stuck test's pace must need to stop the run.
 STUCK_MARGIN = 100
+
+#: The most kept choices a series of them may need at its pace to reach the end before
+#: it is a stall, whatever the budget (:meth:`WorkBudget.kept`).
+KEPT_CHOICES = 100_000
 
 
 def window(max_steps: int) -> int:
@@ -87,14 +91,20 @@ class WorkBudget:
 
         A series of kept choices starts at ``t_k`` and goes on while the ``c`` choices
         after its first moved ``t`` so little that the time left at their pace needs more
-        than :data:`STUCK_MARGIN` times the tries left, ``(t - t_k) * STUCK_MARGIN * left
-        < c * (t_final - t)`` (every kept choice costs a pass of the loop): at one ``t``,
-        or crept on by an accepted step as short as ``5e-12 s`` after each (a junction's
-        Herschel-Bulkley n = 0.3 dashpot whose guard read crossed at ``t = 0.13772``
-        after every step, a full mode choice of 18 000 residual evaluations each, 2 s,
-        that the stuck test saw once per 250 of them, issue 29)."""
+        than :data:`STUCK_MARGIN` times the tries left, or more than
+        :data:`KEPT_CHOICES` choices, ``(t - t_k) * min(STUCK_MARGIN * left,
+        KEPT_CHOICES) < c * (t_final - t)`` (every kept choice costs a pass of the loop
+        and a full mode choice): at one ``t``, or crept on by an accepted step as short as
+        ``5e-12 s`` after each (a junction's Herschel-Bulkley n = 0.3 dashpot whose guard
+        read crossed at ``t = 0.13772`` after every step, a full mode choice of 18 000
+        residual evaluations each, 2 s, that the stuck test saw once per 250 of them,
+        issue 29). The cap holds whatever ``max_steps`` is: two Coulomb dashpots in
+        parallel kept slipping at rate 0 where they reverse, a choice of 0.3 s every
+        ``1.5e-8`` s with 0.17 s to go (1.2e7 choices, which the default budget's
+        ``1e8`` admitted: 40 days; seed 25171 of the property of both loops)."""
         left = max(1, self.max_steps - self.tries(stats))
-        if (t - self.kept_at) * STUCK_MARGIN * left < self.kept_count * (self.t_final - t):
+        need = min(STUCK_MARGIN * left, KEPT_CHOICES)
+        if (t - self.kept_at) * need < self.kept_count * (self.t_final - t):
             self.kept_count += 1
         else:
             self.kept_at, self.kept_count = t, 1
