@@ -35,7 +35,7 @@ import numpy as np
 from ...scene import Mass, Scene
 from ...scene.supports import support_time, support_time_restored
 
-__all__ = ["at_its_lock", "lock_drifts", "lock_rows", "probe_state", "read_branches",
+__all__ = ["lock_drifts", "lock_rows", "probe_state", "read_branches",
            "try_modes", "UNDECIDED", "REFUSED"]
 
 #: The probe's verdicts besides a mode: no mode decided yet, or the guess refused
@@ -109,7 +109,7 @@ def lock_rows(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
     """Each candidate's position locks held on the velocity level (:func:`_elongation`):
     ``[c, e]`` the value a spring ``e`` is held at on the branch ``candidates[c][e]`` (a
     taut string's length ``L``) where its elongation at ``x`` is ``L`` to
-    ``sqrt(eps) max(|L|, |x_a|, |x_b|)`` (:func:`at_its_lock`); NaN elsewhere, where the
+    ``sqrt(eps) max(|L|, |x_a|, |x_b|)`` (:func:`_at_its_lock`); NaN elsewhere, where the
     probe holds it in positions' form (a guess that puts a string far from its length
     taut)."""
     out = np.full((len(candidates), len(scene.elements)), np.nan)
@@ -118,24 +118,29 @@ def lock_rows(scene: Scene, branches: Sequence, candidates: Sequence[Sequence[in
             continue
         for c, modes in enumerate(candidates):
             lock = _lock_value(branches[e], modes[e])
-            if lock is not None and at_its_lock(scene, e, x, lock):
+            if lock is not None and _at_its_lock(scene, e, x, lock):
                 out[c, e] = lock
     return out
 
 
-def at_its_lock(scene: Scene, e: int, x: Sequence[float], lock: float) -> bool:
+def _at_its_lock(scene: Scene, e: int, x: Sequence[float], lock: float) -> bool:
     """Whether the spring ``e``'s elongation at ``x`` is its lock ``lock`` (a taut
     string's length ``L``) to ``sqrt(eps) max(|L|, |x_a|, |x_b|)``: the positions'
     rounding, and the drift a lock held on the velocity level by the steps leaves
     (``1.6e-14`` after 0.25 s taut in seed 25039's scene)."""
-    a, b = scene.elem_a[e], scene.elem_b[e]
-    xa, xb = (x[a] if a >= 0 else 0.0), (x[b] if b >= 0 else 0.0)
+    xa, xb = _ends(scene, e, x)
     return abs((xb - xa) - lock) <= _SQRT_EPS * max(abs(lock), abs(xa), abs(xb))
+
+
+def _ends(scene: Scene, e: int, x: Sequence[float]) -> tuple[float, float]:
+    """The positions ``(x_a, x_b)`` of element ``e``'s ends (ground at 0)."""
+    a, b = scene.elem_a[e], scene.elem_b[e]
+    return (x[a] if a >= 0 else 0.0), (x[b] if b >= 0 else 0.0)
 
 
 def lock_drifts(scene: Scene, branches: Sequence, x: Sequence[float]) -> list[float]:
     """Per element, ``L - (x_b - x_a)``: how far the positions ``x`` have drifted off the
-    lock ``L`` of a spring at its lock (:func:`at_its_lock`, a string at its length, taut
+    lock ``L`` of a spring at its lock (:func:`_at_its_lock`, a string at its length, taut
     or not); ``0.0`` for every other element (and on a moving support, whose branches
     carry no ``lock_value``).
 
@@ -155,9 +160,9 @@ def lock_drifts(scene: Scene, branches: Sequence, x: Sequence[float]) -> list[fl
         lb = branches[e]
         for j in range(lb.count):
             lock = _lock_value(lb, j)
-            if lock is not None and at_its_lock(scene, e, x, lock):
-                a, b = scene.elem_a[e], scene.elem_b[e]
-                out[e] = lock - ((x[b] if b >= 0 else 0.0) - (x[a] if a >= 0 else 0.0))
+            if lock is not None and _at_its_lock(scene, e, x, lock):
+                xa, xb = _ends(scene, e, x)
+                out[e] = lock - (xb - xa)
                 break
     return out
 
